@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs exactly the Debian 12 packages pteryla needs to build, test and render headlessly.
+# Idempotent and quiet: packages already present are skipped; apt-get update runs at most once.
+set -euo pipefail
+PACKAGES=(
+  build-essential cmake ninja-build pkg-config ccache git ca-certificates
+  libglm-dev libopenmesh-dev libcgal-dev libgmp-dev libmpfr-dev libeigen3-dev libtbb-dev
+  libopenimageio-dev libosmesa6-dev libglfw3-dev libgl-dev libimgui-dev
+  nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
+  xvfb xauth
+)
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+echo "pteryla bootstrap: installing ${#missing[@]} packages: ${missing[*]}" >&2
+$SUDO apt-get update -qq >/dev/null
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
