@@ -1,2 +1,114 @@
+// pteryla: headless batch tool. Every subcommand evaluates scenes through the pipeline.
+// Exit codes: 0 success, 2 bad input (scene, mesh, feather file, option), 1 internal failure.
+#include <CLI/CLI.hpp>
+
 #include <cstdio>
-int main() { std::puts("pteryla: skeleton"); return 0; }
+#include <exception>
+
+#include "commands.hpp"
+#include "pteryla/core/error.hpp"
+
+using namespace pteryla::cli;
+
+namespace {
+
+void addSceneOptions(CLI::App* sub, SceneArgs& a, bool withSize) {
+  sub->add_option("scene", a.scene, "Scene file (.json) or a bare mesh (.obj/.ply/.off/.stl) to feather with defaults")
+      ->required();
+  sub->add_option("--time,-t", a.time, "Time on the scene's timeline (moult, skinning, controls); default: scene time");
+  sub->add_option("--lod", a.lod, "Fraction of feather geometry in (0,1]; default: the scene's render.lod");
+  sub->add_option("--seed", a.seed, "Override the scene's master seed");
+  if (withSize) sub->add_option("--size", a.size, "Image size WxH; default: the scene's render.size");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"pteryla: bird feather coats (Streit 2003) from the command line.\n"
+               "Scenes are JSON files (docs/scene-format.md) or bare meshes."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "pteryla 0.1.0");
+  Common common;
+  app.add_flag("--quiet,-q", common.quiet, "No progress or info on stderr")->configurable(false);
+
+  RenderArgs render;
+  auto* cRender = app.add_subcommand("render", "Render a scene to a PNG headlessly (OSMesa)");
+  addSceneOptions(cRender, render, true);
+  cRender->add_option("--out,-o", render.out, "Output image (.png, .jpg, .tif, .exr)")->required();
+  cRender->add_option("--style", render.style, "Render style: shaded or scratchboard; default: the scene's render.style")
+      ->check(CLI::IsMember({"shaded", "scratchboard"}));
+
+  SceneArgs check;
+  auto* cCheck = app.add_subcommand(
+      "check", "Print one JSON object of quality metrics on stdout: follicles, hex_fraction, nn_cv, feathers,\n"
+               "intersecting_pairs, intersecting_pairs_unpacked, skin_penetrations, coverage (null = not computed)");
+  addSceneOptions(cCheck, check, false);
+
+  SceneArgs bench;
+  auto* cBench = app.add_subcommand(
+      "bench", "Print one JSON object of per-stage seconds (load, distribute, interpolate, pack, mesh, render),\n"
+               "triangles and peak_rss_mb on stdout");
+  addSceneOptions(cBench, bench, true);
+
+  ExportArgs exportArgs;
+  auto* cExport = app.add_subcommand("export", "Write the coat (and skin) geometry with UVs to .obj or .ply");
+  addSceneOptions(cExport, exportArgs, false);
+  cExport->add_option("--out,-o", exportArgs.out, "Output mesh (.obj or .ply)")->required();
+
+  FeatherArgs feather;
+  auto* cFeather = app.add_subcommand("feather", "Build one feather from a feather file: geometry (.obj/.ply) or an image (.png)");
+  cFeather->add_option("file", feather.file, "Feather file (.json, docs/feather-format.md)")->required();
+  cFeather->add_option("--out,-o", feather.out, "Output: .obj/.ply mesh or .png image")->required();
+  cFeather->add_option("--age", feather.age, "Feather age in [0,1] (growth); values in (1,2] add wear")
+      ->check(CLI::Range(0.0, 2.0));
+  cFeather->add_option("--lod", feather.lod, "Fraction of geometry in (0,1]")->check(CLI::Range(0.0, 1.0));
+  cFeather->add_option("--size", feather.size, "Image size WxH for .png output");
+
+  FramesArgs frames;
+  auto* cFrames = app.add_subcommand("frames", "Render a time range to a PNG sequence DIR/frame_0000.png ...");
+  addSceneOptions(cFrames, frames, true);
+  cFrames->add_option("--from", frames.from, "Start time")->required();
+  cFrames->add_option("--to", frames.to, "End time (inclusive)")->required();
+  cFrames->add_option("--fps", frames.fps, "Frames per unit of time")->check(CLI::Range(0.001, 10000.0));
+  cFrames->add_option("--out,-o", frames.out, "Output directory")->required();
+  cFrames->add_option("--style", frames.style, "shaded or scratchboard")->check(CLI::IsMember({"shaded", "scratchboard"}));
+
+  for (auto* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    sub->add_flag("--quiet,-q", common.quiet, "No progress or info on stderr");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "pteryla: error: %s\n", e.what());
+    std::fprintf(stderr, "Run 'pteryla --help' or 'pteryla <command> --help'.\n");
+    return 2;
+  }
+
+  try {
+    if (*cRender) return cmdRender(common, render);
+    if (*cCheck) return cmdCheck(common, check);
+    if (*cBench) return cmdBench(common, bench);
+    if (*cExport) return cmdExport(common, exportArgs);
+    if (*cFeather) return cmdFeather(common, feather);
+    if (*cFrames) return cmdFrames(common, frames);
+  } catch (const pteryla::Error& e) {
+    endProgress(common);
+    std::fprintf(stderr, "pteryla: error: %s\n", e.what());
+    return 2;
+  } catch (const std::bad_alloc&) {
+    endProgress(common);
+    std::fprintf(stderr, "pteryla: internal error: out of memory\n");
+    return 1;
+  } catch (const std::exception& e) {
+    endProgress(common);
+    std::fprintf(stderr, "pteryla: internal error: %s\n", e.what());
+    return 1;
+  }
+  return 1;
+}

@@ -53,6 +53,8 @@ class JsonReader {
   JsonReader object(const std::string& key);
   std::vector<JsonReader> objects(const std::string& key);  // array of objects (missing -> empty)
   const Json& raw(const std::string& key);                   // marks used, no type check
+  // Marks an optional key as known without reading it (so finish() accepts it).
+  void allow(const std::string& key) { used_.insert(key); }
 
   // Throws for any key not consumed. Call after reading all fields.
   void finish() const;

@@ -1,0 +1,44 @@
+#pragma once
+#include <optional>
+#include <string>
+
+#include "cli_support.hpp"
+
+namespace pteryla::cli {
+
+struct SceneArgs {
+  std::string scene;
+  std::optional<double> time;
+  std::optional<double> lod;
+  std::optional<uint64_t> seed;
+  std::string size;  // "WxH" or empty for the scene's render size
+};
+
+struct RenderArgs : SceneArgs {
+  std::string out;
+  std::string style;  // empty = scene's style
+};
+struct ExportArgs : SceneArgs {
+  std::string out;
+};
+struct FramesArgs : SceneArgs {
+  double from = 0, to = 1, fps = 24;
+  std::string out;
+  std::string style;
+};
+struct FeatherArgs {
+  std::string file, out;
+  double age = 1.0;
+  double lod = 1.0;
+  std::string size = "512x512";
+};
+
+// Each returns the process exit code; bad input throws pteryla::Error (main maps it to exit 2).
+int cmdRender(const Common&, const RenderArgs&);
+int cmdCheck(const Common&, const SceneArgs&);
+int cmdBench(const Common&, const SceneArgs&);
+int cmdExport(const Common&, const ExportArgs&);
+int cmdFeather(const Common&, const FeatherArgs&);
+int cmdFrames(const Common&, const FramesArgs&);
+
+}  // namespace pteryla::cli

@@ -1,0 +1,70 @@
+#pragma once
+// Scene: everything needed to evaluate a feather coat, as read from a scene file (docs/scene-format.md).
+// Pure data; the Pipeline turns it into results. Paths are absolute (resolved against the scene file).
+#include <glm/vec3.hpp>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pteryla/core/json.hpp"
+
+namespace pteryla::pipeline {
+
+struct CameraSpec {
+  bool autoFrame = true;  // frame the skin's bounds when eye/target are not given
+  glm::dvec3 eye{0, 0, 5}, target{0, 0, 0}, up{0, 1, 0};
+  double fovDeg = 35;           // vertical field of view, degrees
+  glm::dvec3 viewDir{-0.4, -0.35, -1.0};  // used by autoFrame: direction the camera looks along
+};
+
+struct LightSpec {
+  glm::dvec3 direction{-0.5, -1.0, -0.6};  // direction the light travels (world)
+  glm::dvec3 color{1, 1, 1};
+  double intensity = 1.0;
+};
+
+struct RenderSpec {
+  int width = 960, height = 720;
+  double lod = 1.0;             // fraction of feather geometry in (0,1]
+  bool lodByScreenSize = false; // pick per-feather LOD from screen size (7.1.3)
+  std::string style = "shaded"; // shaded | scratchboard
+  glm::dvec3 background{0.82, 0.86, 0.9};
+  glm::dvec3 skinColor{0.78, 0.62, 0.52};
+  double brdfD = 1.0, brdfH = 0.0;  // Poulin-Fournier barbule spacing and floor height
+  double ambient = 0.35;
+};
+
+struct Scene {
+  int version = 1;
+  std::string file;        // absolute path of the scene file ("" for in-memory scenes)
+  std::string name;
+  uint64_t seed = 1;
+  double time = 0.0;       // default evaluation time
+  std::string meshPath;    // absolute
+  bool meshRepair = false;
+  bool fromBareMesh = false;
+  // Module sections, kept as validated JSON so each module owns its schema (see docs/scene-format.md).
+  Json feathers = Json::object();   // name -> file path (absolute after load) or inline feather object
+  Json tracts = Json::array();
+  Json directions = Json::object();
+  Json moult = Json::object();
+  Json skeleton = Json::object();
+  Json controls = Json::array();
+  Json packing = Json::object();
+  CameraSpec camera;
+  std::vector<LightSpec> lights;
+  RenderSpec render;
+};
+
+// Loads a scene file, or a bare mesh (.obj/.ply/.off/.stl) as a one-tract scene with default feathers.
+// Throws pteryla::Error with file and key path for anything malformed or unknown.
+Scene loadScene(const std::string& path);
+// Serialises a scene so that loadScene(saveScene(s)) evaluates to the same coat. Paths are written
+// relative to `path`'s directory.
+void saveScene(const std::string& path, const Scene& scene);
+Json sceneToJson(const Scene& scene, const std::string& relativeTo);
+Scene sceneFromJson(const Json& j, const std::string& file);
+
+}  // namespace pteryla::pipeline

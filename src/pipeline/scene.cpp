@@ -1,0 +1,177 @@
+// Scene file reading and writing (docs/scene-format.md). Every section is checked here with the strict
+// JsonReader so unknown keys and bad values fail at load with their key path; module-specific
+// sections are validated by the module parsers that the pipeline also uses (scene_sections.cpp).
+#include "pteryla/pipeline/scene.hpp"
+
+#include <filesystem>
+
+#include "pteryla/core/error.hpp"
+#include "pteryla/core/paths.hpp"
+#include "scene_sections.hpp"
+
+namespace pteryla::pipeline {
+namespace {
+
+bool isMeshPath(const std::string& p) {
+  const std::string e = extensionOf(p);
+  return e == ".obj" || e == ".ply" || e == ".off" || e == ".stl";
+}
+
+glm::dvec3 color(JsonReader& r, const std::string& key, const glm::dvec3& def) {
+  const glm::dvec3 c = r.vec3(key, def);
+  for (int i = 0; i < 3; ++i)
+    if (c[i] < 0 || c[i] > 1) r.fail(key, "colour components must be in [0, 1]");
+  return c;
+}
+
+CameraSpec readCamera(JsonReader r) {
+  CameraSpec c;
+  c.fovDeg = r.number("fov", c.fovDeg, 1.0, 170.0);
+  c.up = r.vec3("up", c.up);
+  c.viewDir = r.vec3("view_direction", c.viewDir);
+  const bool hasEye = r.has("eye"), hasTarget = r.has("target");
+  if (hasEye != hasTarget) r.fail(hasEye ? "target" : "eye", "eye and target must be given together");
+  if (hasEye) {
+    c.eye = r.vec3("eye");
+    c.target = r.vec3("target");
+    c.autoFrame = false;
+    if (glm::dvec3 d = c.target - c.eye; d.x * d.x + d.y * d.y + d.z * d.z < 1e-18) r.fail("target", "must differ from eye");
+  }
+  c.autoFrame = r.boolean("auto_frame", c.autoFrame);
+  r.finish();
+  return c;
+}
+
+LightSpec readLight(JsonReader r) {
+  LightSpec l;
+  l.direction = r.vec3("direction", l.direction);
+  l.color = color(r, "color", l.color);
+  l.intensity = r.number("intensity", l.intensity, 0.0, 100.0);
+  if (l.direction.x == 0 && l.direction.y == 0 && l.direction.z == 0) r.fail("direction", "must be non-zero");
+  r.finish();
+  return l;
+}
+
+RenderSpec readRender(JsonReader r) {
+  RenderSpec s;
+  if (r.has("size")) {
+    const auto n = r.numbers("size");
+    if (n.size() != 2 || n[0] < 16 || n[1] < 16 || n[0] > 16384 || n[1] > 16384 || n[0] != int(n[0]) || n[1] != int(n[1]))
+      r.fail("size", "expected [width, height] integers in [16, 16384]");
+    s.width = int(n[0]);
+    s.height = int(n[1]);
+  } else {
+    r.allow("size");
+  }
+  s.lod = r.number("lod", s.lod, 1e-3, 1.0);
+  s.lodByScreenSize = r.boolean("lod_by_screen_size", s.lodByScreenSize);
+  s.style = r.oneOf("style", s.style, {"shaded", "scratchboard"});
+  s.background = color(r, "background", s.background);
+  s.skinColor = color(r, "skin_color", s.skinColor);
+  s.ambient = r.number("ambient", s.ambient, 0.0, 1.0);
+  if (r.has("brdf")) {
+    JsonReader b = r.object("brdf");
+    s.brdfD = b.number("d", s.brdfD, 1e-3, 20.0);
+    s.brdfH = b.number("h", s.brdfH, 0.0, 0.999);
+    b.finish();
+  } else {
+    r.allow("brdf");
+  }
+  r.finish();
+  return s;
+}
+
+Json takeSection(JsonReader& r, const std::string& key, Json def) {
+  if (!r.has(key)) {
+    r.allow(key);
+    return def;
+  }
+  return r.raw(key);
+}
+
+}  // namespace
+
+Scene sceneFromJson(const Json& j, const std::string& file) {
+  JsonReader r(j, file);
+  Scene s;
+  s.file = file;
+  if (!r.has("pteryla")) r.fail("pteryla", "missing version field: a scene starts with \"pteryla\": 1");
+  s.version = static_cast<int>(r.integer("pteryla", 1, 1));
+  s.name = r.string("name", std::filesystem::path(file).stem().string());
+  s.seed = r.seed("seed", s.seed);
+  s.time = r.number("time", s.time, -1e9, 1e9);
+  s.meshPath = resolveRelative(file, r.string("mesh"));
+  s.meshRepair = r.boolean("mesh_repair", false);
+  s.feathers = takeSection(r, "feathers", Json::object());
+  s.tracts = takeSection(r, "tracts", Json::array());
+  s.directions = takeSection(r, "directions", Json::object());
+  s.moult = takeSection(r, "moult", Json::object());
+  s.skeleton = takeSection(r, "skeleton", Json::object());
+  s.controls = takeSection(r, "controls", Json::array());
+  s.packing = takeSection(r, "packing", Json::object());
+  if (r.has("camera")) s.camera = readCamera(r.object("camera")); else r.allow("camera");
+  for (auto& l : r.objects("lights")) s.lights.push_back(readLight(l));
+  if (r.has("render")) s.render = readRender(r.object("render")); else r.allow("render");
+  r.finish();
+  if (s.lights.empty()) {
+    s.lights.push_back(LightSpec{});
+    s.lights.push_back(LightSpec{{0.7, -0.3, 0.6}, {0.55, 0.6, 0.7}, 0.5});
+  }
+  // Module sections: validated (and relative paths resolved) by their own parsers.
+  validateSections(s);
+  return s;
+}
+
+Scene loadScene(const std::string& path) {
+  if (path.empty()) throw Error("no scene given");
+  const std::string abs = std::filesystem::absolute(path).lexically_normal().string();
+  if (!fileExists(abs)) throw Error("file not found", path);
+  if (isMeshPath(abs)) return bareMeshScene(abs);
+  if (extensionOf(abs) != ".json")
+    throw Error("unsupported scene type: expected a .json scene or a .obj/.ply/.off/.stl mesh", path);
+  return sceneFromJson(readJsonFile(abs), abs);
+}
+
+Json sceneToJson(const Scene& s, const std::string& relativeTo) {
+  auto rel = [&](const std::string& p) {
+    if (relativeTo.empty()) return p;
+    return std::filesystem::path(p).lexically_relative(std::filesystem::path(relativeTo).parent_path()).string();
+  };
+  auto vec = [](const glm::dvec3& v) { return Json::array({v.x, v.y, v.z}); };
+  Json j;
+  j["pteryla"] = 1;
+  j["name"] = s.name;
+  j["seed"] = s.seed;
+  j["time"] = s.time;
+  j["mesh"] = rel(s.meshPath);
+  if (s.meshRepair) j["mesh_repair"] = true;
+  j["feathers"] = sectionsRelativeTo(s, s.feathers, "feathers", relativeTo);
+  j["tracts"] = sectionsRelativeTo(s, s.tracts, "tracts", relativeTo);
+  if (!s.directions.empty()) j["directions"] = s.directions;
+  if (!s.moult.empty()) j["moult"] = s.moult;
+  if (!s.skeleton.empty()) j["skeleton"] = sectionsRelativeTo(s, s.skeleton, "skeleton", relativeTo);
+  if (!s.controls.empty()) j["controls"] = s.controls;
+  if (!s.packing.empty()) j["packing"] = s.packing;
+  Json cam;
+  cam["fov"] = s.camera.fovDeg;
+  cam["up"] = vec(s.camera.up);
+  cam["view_direction"] = vec(s.camera.viewDir);
+  if (!s.camera.autoFrame) {
+    cam["eye"] = vec(s.camera.eye);
+    cam["target"] = vec(s.camera.target);
+  }
+  j["camera"] = cam;
+  j["lights"] = Json::array();
+  for (const auto& l : s.lights) j["lights"].push_back({{"direction", vec(l.direction)}, {"color", vec(l.color)}, {"intensity", l.intensity}});
+  const RenderSpec& rs = s.render;
+  j["render"] = {{"size", {rs.width, rs.height}}, {"lod", rs.lod}, {"lod_by_screen_size", rs.lodByScreenSize},
+                 {"style", rs.style}, {"background", vec(rs.background)}, {"skin_color", vec(rs.skinColor)},
+                 {"ambient", rs.ambient}, {"brdf", {{"d", rs.brdfD}, {"h", rs.brdfH}}}};
+  return j;
+}
+
+void saveScene(const std::string& path, const Scene& scene) {
+  writeJsonFile(path, sceneToJson(scene, std::filesystem::absolute(path).lexically_normal().string()));
+}
+
+}  // namespace pteryla::pipeline

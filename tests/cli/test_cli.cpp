@@ -1,0 +1,74 @@
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "run.hpp"
+
+namespace {
+bool contains(const std::string& s, const std::string& sub) { return s.find(sub) != std::string::npos; }
+int lineCount(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += (c == '\n');
+  return n;
+}
+}  // namespace
+
+TEST(Cli, MissingSceneExits2WithOneLine) {
+  auto r = runPteryla("render does-not-exist.json --out x.png");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "pteryla: error:")) << r.err;
+  EXPECT_TRUE(contains(r.err, "does-not-exist.json")) << r.err;
+  EXPECT_EQ(lineCount(r.err), 1) << r.err;
+}
+
+TEST(Cli, EverySubcommandHasHelp) {
+  for (const char* sub : {"render", "check", "bench", "export", "feather", "frames"}) {
+    auto r = runPteryla(std::string(sub) + " --help");
+    EXPECT_EQ(r.code, 0) << sub;
+    EXPECT_TRUE(contains(r.out, "--quiet")) << sub << r.out;
+  }
+  auto top = runPteryla("--help");
+  EXPECT_EQ(top.code, 0);
+  for (const char* sub : {"render", "check", "bench", "export", "feather", "frames"}) EXPECT_TRUE(contains(top.out, sub));
+}
+
+TEST(Cli, UnknownOptionExits2) {
+  auto r = runPteryla("render scene.json --out x.png --bogus");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "pteryla: error:"));
+}
+
+TEST(Cli, MalformedJsonNamesFileAndLine) {
+  const auto p = writeTemp("bad_syntax.json", "{\n  \"pteryla\": 1,\n  \"mesh\": \"x.obj\",,\n}\n");
+  auto r = runPteryla("check " + p);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "bad_syntax.json")) << r.err;
+  EXPECT_TRUE(contains(r.err, "line 3")) << r.err;
+  EXPECT_TRUE(r.out.empty());
+}
+
+TEST(Cli, UnknownSceneKeyIsRejectedWithItsPath) {
+  const auto mesh = writeTemp("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const auto p = writeTemp("unknown_key.json",
+                           "{\"pteryla\": 1, \"mesh\": \"tri.obj\", \"render\": {\"lod\": 0.5, \"colour\": 1}}");
+  auto r = runPteryla("check " + p);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "render.colour")) << r.err;
+  (void)mesh;
+}
+
+TEST(Cli, MissingVersionAndOutOfRangeValues) {
+  writeTemp("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  auto r = runPteryla("check " + writeTemp("noversion.json", "{\"mesh\": \"tri.obj\"}"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "pteryla")) << r.err;
+  r = runPteryla("check " + writeTemp("badlod.json", "{\"pteryla\": 1, \"mesh\": \"tri.obj\", \"render\": {\"lod\": 7}}"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "render.lod")) << r.err;
+}
+
+TEST(Cli, BadSizeOptionExits2) {
+  writeTemp("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  auto r = runPteryla("render " + std::string(PTERYLA_BUILD_DIR) + "/tri.obj --out x.png --size 12by3");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "--size")) << r.err;
+}
