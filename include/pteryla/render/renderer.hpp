@@ -1,0 +1,148 @@
+#pragma once
+// Renderer: draws a skin mesh and a feather coat with OpenGL 3.3 core (Streit 2003, chapter 7).
+//  - 7.1.1-7.1.3 per-feather material: colour pattern texture x base colour, barb alpha texture
+//    repeated barbCount times across a polygon, per-vertex alpha, and the Poulin-Fournier barbule
+//    reflection looked up twice per fragment (barbules on each side of the barb) in a tabulated
+//    BRDF texture (brdf_table.hpp);
+//  - 7.1.2 / 7.2 draw order for alpha blending: the skin first writing depth, then the feathers in
+//    the order of their draw ranges (layer order) with depth test on and depth writes off, each
+//    feather's parts in view-dependent (octant) order.
+// The renderer owns no model state: setSkin / setCoat copy the TriMesh attributes into GL buffers
+// (reusing buffers when sizes match) and keep no reference to the mesh; call them again whenever
+// the mesh changes. All calls need the renderer's context to be current (the renderer makes it
+// current in its constructor and in each call that touches GL).
+//
+// Vertex attributes read from TriMesh (absent arrays take the defaults of TriMesh::append):
+//  positions, normals (macro normal; the renderer flips it toward the viewer, so both sides of a
+//  vane shade), tangents (barb direction, for the BRDF), uvGlobal / uvBarb / uvGrowth (colour UVs,
+//  chosen per material), uvBarb also addresses the alpha mask: uvBarb.x in [0,1] across the polygon,
+//  uvBarb.y in [0,1] along the barb from the rachis to the barb tip; the mask is sampled at
+//  (uvBarb.x * barbCount, uvBarb.y) with repeat across. alpha multiplies opacity; sheath in [0,1]
+//  blends toward the opaque sheath colour (pin feathers, 8.1). featherId is not used for drawing.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "pteryla/core/trimesh.hpp"
+#include "pteryla/render/brdf_table.hpp"
+#include "pteryla/render/camera.hpp"
+#include "pteryla/render/context.hpp"
+#include "pteryla/render/image.hpp"
+
+namespace pteryla::render {
+
+enum class ColorUv { Global, Barb, Growth };  // which TriMesh uv set addresses the colour texture
+
+// One feather type's look. A texture comes from `...Texture` (a file path; loaded with
+// OpenImageIO) or, when the path is empty, from `...Image` (in memory, e.g. generatePattern()).
+// Neither: the colour texture is white, the alpha mask is opaque.
+struct FeatherMaterial {
+  std::string name;                         // for error messages
+  glm::vec3 baseColor{1.0f};                // multiplies the colour texture, linear [0,1]
+  std::string colorTexture;
+  Image colorImage;
+  ColorUv colorUv = ColorUv::Global;
+  std::string alphaTexture;                 // barb alpha mask, red channel used
+  Image alphaImage;
+  bool useBrdf = true;                      // false: Lambertian vane
+  BarbuleParams barbules{1.0, 0.0, 0.2};    // Poulin-Fournier d, h, sigma
+  float barbuleAngle = 0.7f;                // radians between barb and its barbules (both sides)
+  float specular = 0.25f;                   // weight of the S channel
+  float coneSigma = 0.35f;                  // width of the glint cone exp(-(L.T+V.T)^2 / 2 s^2)
+  float translucency = 0.15f;               // light passed through a vane lit from behind
+  glm::vec3 sheathColor{0.55f, 0.60f, 0.68f};
+};
+
+// Where one feather's triangles sit in the coat index buffer, and how to order them.
+// Indices [firstIndex, firstIndex + indexCount) of coat.indices belong to the feather (a multiple of
+// 3). When partCount is all zero the range is drawn as one block, front-to-back or back-to-front
+// along the shaft by the view direction (fallback). Otherwise the range is split into consecutive
+// parts in the order shaft, left vane, right vane, afterfeather, with partCount[k] indices each
+// (summing to indexCount; any may be 0). The mesher emits each vane's barbs in barb order from the
+// feather base to the tip, each barb's triangles from the rachis toward the barb tip.
+//
+// Octant rule (7.1.2), with v the direction from `origin` to the eye and Z = axisX x axisY (dorsal):
+//  - parts far from the viewer first: if v.Z > 0 (dorsal view) afterfeather, right/left vanes by
+//    v.axisY (v.axisY > 0: the left vane is nearer, so right vane first), shaft last; if v.Z <= 0
+//    the shaft first, then the vanes, the afterfeather last;
+//  - inside a vane (and for the fallback block): when the tip is nearer (v.axisX > 0) barbs are drawn
+//    base-to-tip (forward), else tip-to-base (backward). Backward order reverses whole triangles, so
+//    each barb is then also drawn tip-to-rachis (a documented simplification of the thesis' separate
+//    per-barb direction choice).
+// v is taken per feather (from its own origin), so near views stay locally correct (7.1.2).
+struct FeatherDrawRange {
+  uint32_t firstIndex = 0;
+  uint32_t indexCount = 0;
+  uint32_t material = 0;                 // index into setMaterials(); out of range -> Error
+  glm::vec3 origin{0.0f};                // follicle position, world
+  glm::vec3 axisX{1.0f, 0.0f, 0.0f};     // feather-local +x (shaft, base to tip) in world, unit
+  glm::vec3 axisY{0.0f, 1.0f, 0.0f};     // feather-local +y (toward the left vane) in world, unit
+  uint32_t partCount[4] = {0, 0, 0, 0};  // shaft, left vane, right vane, afterfeather
+};
+
+struct RenderSettings {
+  int width = 512;                          // pixels
+  int height = 512;
+  glm::vec4 background{1.0f, 1.0f, 1.0f, 1.0f};
+  glm::vec3 ambient{0.18f};                 // ambient light, linear
+  glm::vec3 skinColor{0.62f, 0.50f, 0.45f};
+  bool drawSkin = true;
+  bool drawCoat = true;
+  bool useAlphaTexture = true;              // false: per-vertex alpha only (Fig. 7.2 b)
+  bool useBrdf = true;                      // global switch over FeatherMaterial::useBrdf
+  bool viewDependentOrder = true;           // false: every range drawn forward (for comparisons)
+  int msaaSamples = 0;                      // renderImage only; 0 for golden images
+};
+
+struct RenderStats {
+  size_t drawCalls = 0;
+  size_t triangles = 0;
+  size_t backwardParts = 0;  // parts drawn in reverse order (view-dependent ordering at work)
+};
+
+class Renderer {
+ public:
+  // Makes `context` current, loads the GL functions it needs through it, compiles the shaders.
+  // Throws pteryla::Error if the context lacks OpenGL 3.3 functionality. `context` must outlive
+  // the renderer.
+  explicit Renderer(RenderContext& context);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Uploads the skin (drawn opaque, Lambert + ambient). An empty mesh removes it. Needs normals
+  // (computed per face-vertex average if absent). Throws pteryla::Error for out-of-range indices.
+  void setSkin(const TriMesh& skin);
+  // Uploads the coat and its per-feather ranges in layer order (drawn first to last). An empty
+  // `ranges` draws the whole mesh as one feather with material 0. Validates ranges against the
+  // mesh (pteryla::Error with element "ranges[i]").
+  void setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>& ranges);
+  // Loads textures and builds one BRDF table per material. Throws pteryla::Error naming the file
+  // (and the element "materials[i].colorTexture") for a missing or unreadable texture. With no
+  // materials set, a default material (white, BRDF d=1 h=0) is used.
+  void setMaterials(const std::vector<FeatherMaterial>& materials);
+
+  // Draws into the framebuffer currently bound (framebuffer 0 of the context unless the caller bound
+  // another) with viewport (0, 0, settings.width, settings.height). Up to 4 lights are used.
+  void render(const Camera& camera, const std::vector<Light>& lights, const RenderSettings& settings);
+  // Renders into an internal off-screen framebuffer of settings.width x settings.height (MSAA when
+  // settings.msaaSamples > 0) and reads it back. Independent of the context's own framebuffer size.
+  Image renderImage(const Camera& camera, const std::vector<Light>& lights, const RenderSettings& settings);
+  // Reads the currently bound framebuffer's [0,w) x [0,h) region as RGBA8, top row first.
+  Image readPixels(int width, int height);
+
+  const RenderStats& lastStats() const { return stats_; }
+  // GL_VERSION and GL_RENDERER of the context, for logs and golden-image READMEs.
+  std::string glVersion() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  RenderStats stats_;
+};
+
+}  // namespace pteryla::render

@@ -1,0 +1,615 @@
+// OpenGL 3.3 core renderer for skins and feather coats (Streit 2003, chapter 7): textured, alpha
+// blended feathers with the Poulin-Fournier barbule reflection (7.1.1-7.1.3), drawn after the skin
+// with depth test but no depth writes, in layer order, each feather in view-dependent order (7.1.2,
+// 7.2).
+#include "pteryla/render/renderer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <tuple>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "gl_api.hpp"
+#include "pteryla/core/error.hpp"
+#include "shaders.hpp"
+
+namespace pteryla::render {
+namespace {
+
+enum Attr : GLuint { kPos, kNormal, kTangent, kUvGlobal, kUvBarb, kUvGrowth, kAlpha, kSheath, kBarbCount, kAttrCount };
+
+struct Program {
+  GLuint id = 0;
+  std::map<std::string, GLint> loc;
+};
+
+struct GpuMesh {
+  GLuint vao = 0;
+  GLuint vbo[kAttrCount] = {};
+  size_t vboBytes[kAttrCount] = {};
+  bool present[kAttrCount] = {};
+  GLuint ebo = 0;
+  size_t eboBytes = 0;
+  size_t indexCount = 0;  // forward indices; the buffer holds forward then reversed triangles
+};
+
+struct GpuMaterial {
+  GLuint colorTex = 0, alphaTex = 0, brdfTex = 0;
+  FeatherMaterial desc;
+};
+
+struct Target {
+  GLuint fbo = 0, color = 0, depth = 0;
+  GLuint msFbo = 0, msColor = 0, msDepth = 0;
+  int width = 0, height = 0, samples = 0;
+};
+
+}  // namespace
+
+struct Renderer::Impl {
+  RenderContext& ctx;
+  GlApi gl;
+  Program skinProg, coatProg;
+  GpuMesh skin, coat;
+  std::vector<FeatherDrawRange> ranges;
+  std::vector<GpuMaterial> materials;
+  std::map<std::string, GLuint> fileTextures;            // path -> texture, per setMaterials
+  std::map<std::tuple<double, double, double>, GLuint> brdfCache;
+  GLuint white = 0;
+  Target target;
+
+  explicit Impl(RenderContext& c) : ctx(c) {}
+
+  GLuint compile(GLenum type, const char* src) {
+    GLuint s = gl.CreateShader(type);
+    gl.ShaderSource(s, 1, &src, nullptr);
+    gl.CompileShader(s);
+    GLint ok = 0;
+    gl.GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+      char log[4096] = {};
+      gl.GetShaderInfoLog(s, sizeof log, nullptr, log);
+      gl.DeleteShader(s);
+      PTERYLA_CHECK(false, std::string("shader compilation failed: ") + log);
+    }
+    return s;
+  }
+
+  Program link(const char* vs, const char* fs, std::initializer_list<const char*> uniforms) {
+    Program p;
+    GLuint v = compile(GL_VERTEX_SHADER, vs), f = compile(GL_FRAGMENT_SHADER, fs);
+    p.id = gl.CreateProgram();
+    gl.AttachShader(p.id, v);
+    gl.AttachShader(p.id, f);
+    gl.LinkProgram(p.id);
+    gl.DeleteShader(v);
+    gl.DeleteShader(f);
+    GLint ok = 0;
+    gl.GetProgramiv(p.id, GL_LINK_STATUS, &ok);
+    if (!ok) {
+      char log[4096] = {};
+      gl.GetProgramInfoLog(p.id, sizeof log, nullptr, log);
+      PTERYLA_CHECK(false, std::string("shader link failed: ") + log);
+    }
+    for (const char* u : uniforms) p.loc[u] = gl.GetUniformLocation(p.id, u);
+    return p;
+  }
+
+  GLint U(const Program& p, const char* name) const {
+    auto it = p.loc.find(name);
+    return it == p.loc.end() ? -1 : it->second;
+  }
+
+  GLuint makeTexture(const Image& img, bool mipmap, GLint wrapS, GLint wrapT) {
+    // Image rows are top-first; texture t = 0 is the bottom row.
+    std::vector<uint8_t> flipped(img.rgba.size());
+    const size_t row = static_cast<size_t>(img.width) * 4;
+    for (int y = 0; y < img.height; ++y)
+      std::memcpy(flipped.data() + row * (img.height - 1 - y), img.rgba.data() + row * y, row);
+    GLuint t = 0;
+    gl.GenTextures(1, &t);
+    gl.BindTexture(GL_TEXTURE_2D, t);
+    gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, flipped.data());
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, mipmap ? GL_LINEAR_MIPMAP_LINEAR : GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrapT);
+    if (mipmap) gl.GenerateMipmap(GL_TEXTURE_2D);
+    return t;
+  }
+
+  GLuint brdfTexture(const BarbuleParams& b) {
+    const auto key = std::make_tuple(b.d, b.h, b.sigma);
+    auto it = brdfCache.find(key);
+    if (it != brdfCache.end()) return it->second;
+    const BrdfTable table = buildBrdfTable(b, 128);
+    GLuint t = 0;
+    gl.GenTextures(1, &t);
+    gl.BindTexture(GL_TEXTURE_2D, t);
+    gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, table.size, table.size, 0, GL_RG, GL_FLOAT, table.data.data());
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    brdfCache[key] = t;
+    return t;
+  }
+
+  void releaseMaterials() {
+    for (auto& [path, t] : fileTextures) gl.DeleteTextures(1, &t);
+    fileTextures.clear();
+    for (auto& m : materials) {
+      // Textures from files are shared through fileTextures; in-memory ones are owned here.
+      if (m.desc.colorTexture.empty() && m.colorTex != white) gl.DeleteTextures(1, &m.colorTex);
+      if (m.desc.alphaTexture.empty() && m.alphaTex != white) gl.DeleteTextures(1, &m.alphaTex);
+    }
+    materials.clear();
+  }
+
+  void releaseMesh(GpuMesh& m) {
+    if (m.vao) gl.DeleteVertexArrays(1, &m.vao);
+    gl.DeleteBuffers(kAttrCount, m.vbo);
+    if (m.ebo) gl.DeleteBuffers(1, &m.ebo);
+    m = GpuMesh();
+  }
+
+  void releaseTarget() {
+    Target& t = target;
+    if (t.fbo) gl.DeleteFramebuffers(1, &t.fbo);
+    if (t.msFbo) gl.DeleteFramebuffers(1, &t.msFbo);
+    GLuint rbs[4] = {t.color, t.depth, t.msColor, t.msDepth};
+    for (GLuint rb : rbs)
+      if (rb) gl.DeleteRenderbuffers(1, &rb);
+    t = Target();
+  }
+
+  template <class T>
+  void syncAttr(GpuMesh& m, Attr a, const std::vector<T>& data, size_t vertexCount, int comps, const char* name) {
+    if (data.empty()) {
+      m.present[a] = false;
+      gl.DisableVertexAttribArray(a);
+      return;
+    }
+    if (data.size() != vertexCount)
+      throw Error(std::string("mesh attribute '") + name + "' has " + std::to_string(data.size()) +
+                      " entries for " + std::to_string(vertexCount) + " vertices",
+                  {}, name);
+    const size_t bytes = data.size() * sizeof(T);
+    if (!m.vbo[a]) gl.GenBuffers(1, &m.vbo[a]);
+    gl.BindBuffer(GL_ARRAY_BUFFER, m.vbo[a]);
+    if (bytes == m.vboBytes[a]) {
+      gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), data.data());
+    } else {
+      gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), data.data(), GL_STATIC_DRAW);
+      m.vboBytes[a] = bytes;
+    }
+    gl.VertexAttribPointer(a, comps, GL_FLOAT, GL_FALSE, 0, nullptr);
+    gl.EnableVertexAttribArray(a);
+    m.present[a] = true;
+  }
+
+  // Generic attribute values are context state, not VAO state: set them before each mesh's draw.
+  void applyDefaults(const GpuMesh& m) {
+    if (!m.present[kNormal]) gl.VertexAttrib3f(kNormal, 0, 0, 1);
+    if (!m.present[kTangent]) gl.VertexAttrib3f(kTangent, 1, 0, 0);
+    if (!m.present[kUvGlobal]) gl.VertexAttrib2f(kUvGlobal, 0, 0);
+    if (!m.present[kUvBarb]) gl.VertexAttrib2f(kUvBarb, 0.5f, 0.5f);
+    if (!m.present[kUvGrowth]) gl.VertexAttrib2f(kUvGrowth, 0, 0);
+    if (!m.present[kAlpha]) gl.VertexAttrib1f(kAlpha, 1.0f);
+    if (!m.present[kSheath]) gl.VertexAttrib1f(kSheath, 0.0f);
+    if (!m.present[kBarbCount]) gl.VertexAttrib1f(kBarbCount, 1.0f);
+  }
+
+  void upload(GpuMesh& m, const TriMesh& mesh, const std::vector<glm::vec3>* normalsOverride) {
+    if (mesh.indices.size() % 3 != 0) throw Error("mesh index count is not a multiple of 3", {}, "indices");
+    const size_t nv = mesh.vertexCount();
+    for (size_t i = 0; i < mesh.indices.size(); ++i)
+      if (mesh.indices[i] >= nv)
+        throw Error("mesh index " + std::to_string(mesh.indices[i]) + " out of range (" + std::to_string(nv) +
+                        " vertices)",
+                    {}, "face " + std::to_string(i / 3));
+    if (!m.vao) gl.GenVertexArrays(1, &m.vao);
+    gl.BindVertexArray(m.vao);
+    syncAttr(m, kPos, mesh.positions, nv, 3, "positions");
+    syncAttr(m, kNormal, normalsOverride ? *normalsOverride : mesh.normals, nv, 3, "normals");
+    syncAttr(m, kTangent, mesh.tangents, nv, 3, "tangents");
+    syncAttr(m, kUvGlobal, mesh.uvGlobal, nv, 2, "uvGlobal");
+    syncAttr(m, kUvBarb, mesh.uvBarb, nv, 2, "uvBarb");
+    syncAttr(m, kUvGrowth, mesh.uvGrowth, nv, 2, "uvGrowth");
+    syncAttr(m, kAlpha, mesh.alpha, nv, 1, "alpha");
+    syncAttr(m, kSheath, mesh.sheath, nv, 1, "sheath");
+    syncAttr(m, kBarbCount, mesh.barbCount, nv, 1, "barbCount");
+    // Forward triangles followed by the same triangles in reverse order, so any index range can be
+    // drawn backward from one buffer (view-dependent order, 7.1.2).
+    const size_t n = mesh.indices.size();
+    std::vector<uint32_t> both(2 * n);
+    std::copy(mesh.indices.begin(), mesh.indices.end(), both.begin());
+    const size_t tris = n / 3;
+    for (size_t t = 0; t < tris; ++t)
+      for (int k = 0; k < 3; ++k) both[n + 3 * (tris - 1 - t) + k] = mesh.indices[3 * t + k];
+    if (!m.ebo) gl.GenBuffers(1, &m.ebo);
+    gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
+    const size_t bytes = both.size() * sizeof(uint32_t);
+    if (bytes == m.eboBytes && bytes > 0) {
+      gl.BufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), both.data());
+    } else {
+      gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), both.empty() ? nullptr : both.data(),
+                    GL_STATIC_DRAW);
+      m.eboBytes = bytes;
+    }
+    m.indexCount = n;
+    gl.BindVertexArray(0);
+  }
+
+  void drawIndices(const GpuMesh& m, uint32_t first, uint32_t count, bool backward) {
+    if (count == 0) return;
+    const size_t start = backward ? m.indexCount + (m.indexCount - first - count) : first;
+    gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                    reinterpret_cast<const void*>(start * sizeof(uint32_t)));
+  }
+
+  void ensureTarget(int w, int h, int samples) {
+    Target& t = target;
+    if (t.fbo && t.width == w && t.height == h && t.samples == samples) return;
+    releaseTarget();
+    t.width = w;
+    t.height = h;
+    t.samples = samples;
+    auto makeFbo = [&](GLuint& fbo, GLuint& color, GLuint& depth, int s) {
+      gl.GenFramebuffers(1, &fbo);
+      gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+      gl.GenRenderbuffers(1, &color);
+      gl.BindRenderbuffer(GL_RENDERBUFFER, color);
+      if (s > 0) gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_RGBA8, w, h);
+      else gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+      gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
+      gl.GenRenderbuffers(1, &depth);
+      gl.BindRenderbuffer(GL_RENDERBUFFER, depth);
+      if (s > 0) gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_DEPTH24_STENCIL8, w, h);
+      else gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, w, h);
+      gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
+      if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw Error("cannot create an off-screen framebuffer of " + std::to_string(w) + "x" + std::to_string(h) +
+                    (s > 0 ? " with " + std::to_string(s) + " samples" : std::string()));
+    };
+    makeFbo(t.fbo, t.color, t.depth, 0);
+    if (samples > 0) makeFbo(t.msFbo, t.msColor, t.msDepth, samples);
+  }
+};
+
+Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(context)) {
+  Impl& r = *impl_;
+  context.makeCurrent();
+  r.gl.load(context);
+  GLint major = 0, minor = 0;
+  r.gl.GetIntegerv(GL_MAJOR_VERSION, &major);
+  r.gl.GetIntegerv(GL_MINOR_VERSION, &minor);
+  if (major * 10 + minor < 33)
+    throw Error("OpenGL 3.3 is required, the context offers " + std::to_string(major) + "." + std::to_string(minor));
+  r.skinProg = r.link(shaders::kMeshVertex, shaders::kSkinFragment,
+                      {"uViewProj", "uColorUv", "uEye", "uSkinColor", "uAmbient", "uLightCount", "uLightDir",
+                       "uLightColor"});
+  r.coatProg = r.link(shaders::kMeshVertex, shaders::kCoatFragment,
+                      {"uViewProj", "uColorUv", "uColorTex", "uAlphaTex", "uBrdfTex", "uEye", "uAmbient",
+                       "uLightCount", "uLightDir", "uLightColor", "uUseAlphaTex", "uUseBrdf", "uBaseColor",
+                       "uSheathColor", "uBarbuleAngle", "uSpecular", "uConeSigma", "uTranslucency"});
+  r.white = r.makeTexture(Image(1, 1, 255, 255, 255, 255), false, GL_REPEAT, GL_REPEAT);
+  setMaterials({});
+}
+
+Renderer::~Renderer() {
+  Impl& r = *impl_;
+  try {
+    r.ctx.makeCurrent();
+  } catch (...) {
+    return;  // the context is gone: nothing can be released
+  }
+  r.releaseMaterials();
+  for (auto& [k, t] : r.brdfCache) r.gl.DeleteTextures(1, &t);
+  r.gl.DeleteTextures(1, &r.white);
+  r.releaseMesh(r.skin);
+  r.releaseMesh(r.coat);
+  r.releaseTarget();
+  r.gl.DeleteProgram(r.skinProg.id);
+  r.gl.DeleteProgram(r.coatProg.id);
+}
+
+void Renderer::setSkin(const TriMesh& skin) {
+  Impl& r = *impl_;
+  r.ctx.makeCurrent();
+  if (!skin.normals.empty() || skin.positions.empty()) {
+    r.upload(r.skin, skin, nullptr);
+    return;
+  }
+  // Area-weighted vertex normals when the skin has none.
+  std::vector<glm::vec3> normals(skin.positions.size(), glm::vec3(0.0f));
+  const size_t nv = skin.positions.size();
+  for (size_t t = 0; t + 2 < skin.indices.size(); t += 3) {
+    const uint32_t a = skin.indices[t], b = skin.indices[t + 1], c = skin.indices[t + 2];
+    if (a >= nv || b >= nv || c >= nv) continue;  // reported by upload()
+    const glm::vec3 n = glm::cross(skin.positions[b] - skin.positions[a], skin.positions[c] - skin.positions[a]);
+    normals[a] += n;
+    normals[b] += n;
+    normals[c] += n;
+  }
+  for (auto& n : normals) {
+    const float len = glm::length(n);
+    n = len > 0.0f ? n / len : glm::vec3(0, 0, 1);
+  }
+  r.upload(r.skin, skin, &normals);
+}
+
+void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>& ranges) {
+  const size_t n = coat.indices.size();
+  for (size_t i = 0; i < ranges.size(); ++i) {
+    const FeatherDrawRange& f = ranges[i];
+    const std::string el = "ranges[" + std::to_string(i) + "]";
+    if (f.firstIndex % 3 != 0 || f.indexCount % 3 != 0)
+      throw Error("feather draw range must start and span whole triangles (multiples of 3)", {}, el);
+    if (static_cast<size_t>(f.firstIndex) + f.indexCount > n)
+      throw Error("feather draw range [" + std::to_string(f.firstIndex) + ", +" + std::to_string(f.indexCount) +
+                      ") exceeds the " + std::to_string(n) + " coat indices",
+                  {}, el);
+    uint64_t sum = 0;
+    for (uint32_t c : f.partCount) {
+      if (c % 3 != 0) throw Error("feather part index counts must be multiples of 3", {}, el + ".partCount");
+      sum += c;
+    }
+    if (sum != 0 && sum != f.indexCount)
+      throw Error("feather part counts sum to " + std::to_string(sum) + ", expected indexCount " +
+                      std::to_string(f.indexCount),
+                  {}, el + ".partCount");
+  }
+  Impl& r = *impl_;
+  r.ctx.makeCurrent();
+  r.upload(r.coat, coat, nullptr);
+  r.ranges = ranges;
+  if (r.ranges.empty() && n > 0) {
+    FeatherDrawRange all;
+    all.indexCount = static_cast<uint32_t>(n);
+    all.origin = glm::vec3(0.0f);
+    r.ranges.push_back(all);
+  }
+}
+
+void Renderer::setMaterials(const std::vector<FeatherMaterial>& materials) {
+  Impl& r = *impl_;
+  // Read and validate everything on the CPU first so a bad file leaves the renderer unchanged.
+  std::map<std::string, Image> files;
+  for (size_t i = 0; i < materials.size(); ++i) {
+    const FeatherMaterial& m = materials[i];
+    const std::string el = "materials[" + std::to_string(i) + "]";
+    try {
+      validate(m.barbules);
+    } catch (const Error& e) {
+      throw Error(e.detail(), {}, el + ".barbules." + e.element());
+    }
+    for (const auto& [path, field] : {std::pair{m.colorTexture, ".colorTexture"}, {m.alphaTexture, ".alphaTexture"}}) {
+      if (path.empty() || files.count(path)) continue;
+      try {
+        files[path] = loadImage(path);
+      } catch (const Error& e) {
+        throw Error("cannot load texture" + (m.name.empty() ? std::string() : " of material '" + m.name + "'") +
+                        ": " + e.detail(),
+                    path, el + field);
+      }
+    }
+  }
+  r.ctx.makeCurrent();
+  r.releaseMaterials();
+  for (auto& [path, img] : files) {
+    const bool isAlpha = std::any_of(materials.begin(), materials.end(),
+                                     [&](const FeatherMaterial& m) { return m.alphaTexture == path; });
+    r.fileTextures[path] = r.makeTexture(img, true, isAlpha ? GL_REPEAT : GL_CLAMP_TO_EDGE, GL_CLAMP_TO_EDGE);
+  }
+  std::vector<FeatherMaterial> list = materials;
+  if (list.empty()) list.emplace_back();
+  for (const FeatherMaterial& m : list) {
+    GpuMaterial g;
+    g.desc = m;
+    g.desc.colorImage = Image();
+    g.desc.alphaImage = Image();
+    if (!m.colorTexture.empty()) g.colorTex = r.fileTextures.at(m.colorTexture);
+    else if (!m.colorImage.empty()) g.colorTex = r.makeTexture(m.colorImage, true, GL_CLAMP_TO_EDGE, GL_CLAMP_TO_EDGE);
+    else g.colorTex = r.white;
+    if (!m.alphaTexture.empty()) g.alphaTex = r.fileTextures.at(m.alphaTexture);
+    else if (!m.alphaImage.empty()) g.alphaTex = r.makeTexture(m.alphaImage, true, GL_REPEAT, GL_CLAMP_TO_EDGE);
+    else g.alphaTex = r.white;
+    g.brdfTex = r.brdfTexture(m.barbules);
+    r.materials.push_back(std::move(g));
+  }
+}
+
+void Renderer::render(const Camera& camera, const std::vector<Light>& lights, const RenderSettings& s) {
+  if (s.width <= 0 || s.height <= 0) throw Error("render size must be positive", {}, "width/height");
+  Impl& r = *impl_;
+  GlApi& gl = r.gl;
+  r.ctx.makeCurrent();
+  stats_ = RenderStats();
+
+  const glm::mat4 viewProj = camera.projection(float(s.width) / float(s.height)) * camera.view();
+  const int lightCount = static_cast<int>(std::min<size_t>(lights.size(), 4));
+  glm::vec3 dirs[4], colors[4];
+  for (int i = 0; i < lightCount; ++i) {
+    dirs[i] = lights[i].direction;
+    colors[i] = lights[i].color;
+  }
+  auto setCommon = [&](const Program& p) {
+    gl.UseProgram(p.id);
+    gl.UniformMatrix4fv(r.U(p, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
+    gl.Uniform3f(r.U(p, "uEye"), camera.eye.x, camera.eye.y, camera.eye.z);
+    gl.Uniform3f(r.U(p, "uAmbient"), s.ambient.x, s.ambient.y, s.ambient.z);
+    gl.Uniform1i(r.U(p, "uLightCount"), lightCount);
+    if (lightCount > 0) {
+      gl.Uniform3fv(r.U(p, "uLightDir"), lightCount, glm::value_ptr(dirs[0]));
+      gl.Uniform3fv(r.U(p, "uLightColor"), lightCount, glm::value_ptr(colors[0]));
+    }
+    gl.Uniform1i(r.U(p, "uColorUv"), 0);
+  };
+
+  gl.Viewport(0, 0, s.width, s.height);
+  gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl.DepthMask(GL_TRUE);
+  gl.ClearColor(s.background.r, s.background.g, s.background.b, s.background.a);
+  gl.ClearDepth(1.0);
+  gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  gl.Enable(GL_DEPTH_TEST);
+  gl.DepthFunc(GL_LEQUAL);
+  gl.Disable(GL_CULL_FACE);
+  gl.Disable(GL_BLEND);
+  gl.Disable(GL_DITHER);
+
+  // Skin first, writing depth (7.2).
+  if (s.drawSkin && r.skin.indexCount > 0) {
+    setCommon(r.skinProg);
+    gl.Uniform3f(r.U(r.skinProg, "uSkinColor"), s.skinColor.r, s.skinColor.g, s.skinColor.b);
+    gl.BindVertexArray(r.skin.vao);
+    r.applyDefaults(r.skin);
+    r.drawIndices(r.skin, 0, static_cast<uint32_t>(r.skin.indexCount), false);
+    ++stats_.drawCalls;
+    stats_.triangles += r.skin.indexCount / 3;
+  }
+
+  // Feathers: depth test on, depth writes off, blended in layer order (7.2).
+  if (s.drawCoat && r.coat.indexCount > 0 && !r.ranges.empty()) {
+    const Program& p = r.coatProg;
+    setCommon(p);
+    gl.Uniform1i(r.U(p, "uColorTex"), 0);
+    gl.Uniform1i(r.U(p, "uAlphaTex"), 1);
+    gl.Uniform1i(r.U(p, "uBrdfTex"), 2);
+    gl.Uniform1i(r.U(p, "uUseAlphaTex"), s.useAlphaTexture ? 1 : 0);
+    gl.Enable(GL_BLEND);
+    gl.BlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    gl.DepthMask(GL_FALSE);
+    gl.BindVertexArray(r.coat.vao);
+    r.applyDefaults(r.coat);
+
+    uint32_t bound = UINT32_MAX;
+    for (size_t i = 0; i < r.ranges.size(); ++i) {
+      const FeatherDrawRange& f = r.ranges[i];
+      if (f.indexCount == 0) continue;
+      if (f.material >= r.materials.size())
+        throw Error("feather draw range uses material " + std::to_string(f.material) + " but " +
+                        std::to_string(r.materials.size()) + " materials are set",
+                    {}, "ranges[" + std::to_string(i) + "].material");
+      if (f.material != bound) {
+        bound = f.material;
+        const GpuMaterial& m = r.materials[bound];
+        const FeatherMaterial& d = m.desc;
+        gl.ActiveTexture(GL_TEXTURE0);
+        gl.BindTexture(GL_TEXTURE_2D, m.colorTex);
+        gl.ActiveTexture(GL_TEXTURE1);
+        gl.BindTexture(GL_TEXTURE_2D, m.alphaTex);
+        gl.ActiveTexture(GL_TEXTURE2);
+        gl.BindTexture(GL_TEXTURE_2D, m.brdfTex);
+        gl.Uniform1i(r.U(p, "uColorUv"), static_cast<int>(d.colorUv));
+        gl.Uniform1i(r.U(p, "uUseBrdf"), (s.useBrdf && d.useBrdf) ? 1 : 0);
+        gl.Uniform3f(r.U(p, "uBaseColor"), d.baseColor.r, d.baseColor.g, d.baseColor.b);
+        gl.Uniform3f(r.U(p, "uSheathColor"), d.sheathColor.r, d.sheathColor.g, d.sheathColor.b);
+        gl.Uniform1f(r.U(p, "uBarbuleAngle"), d.barbuleAngle);
+        gl.Uniform1f(r.U(p, "uSpecular"), d.specular);
+        gl.Uniform1f(r.U(p, "uConeSigma"), std::max(d.coneSigma, 1e-3f));
+        gl.Uniform1f(r.U(p, "uTranslucency"), d.translucency);
+      }
+      // Octant rule (7.1.2): farther substructures first, from this feather's own view direction.
+      const glm::vec3 toEye = camera.eye - f.origin;
+      const glm::vec3 axisZ = glm::cross(f.axisX, f.axisY);
+      const bool ordered = s.viewDependentOrder;
+      const bool backward = ordered && glm::dot(toEye, f.axisX) <= 0.0f;
+      const bool hasParts = f.partCount[0] + f.partCount[1] + f.partCount[2] + f.partCount[3] > 0;
+      if (!hasParts) {
+        r.drawIndices(r.coat, f.firstIndex, f.indexCount, backward);
+        ++stats_.drawCalls;
+        stats_.backwardParts += backward ? 1 : 0;
+        stats_.triangles += f.indexCount / 3;
+        continue;
+      }
+      uint32_t start[4];
+      start[0] = f.firstIndex;
+      for (int k = 1; k < 4; ++k) start[k] = start[k - 1] + f.partCount[k - 1];
+      int order[4] = {0, 1, 2, 3};  // shaft, left, right, afterfeather
+      if (ordered) {
+        const bool leftNear = glm::dot(toEye, f.axisY) > 0.0f;
+        const int farVane = leftNear ? 2 : 1, nearVane = leftNear ? 1 : 2;
+        if (glm::dot(toEye, axisZ) > 0.0f) {
+          const int o[4] = {3, farVane, nearVane, 0};
+          std::copy(o, o + 4, order);
+        } else {
+          const int o[4] = {0, farVane, nearVane, 3};
+          std::copy(o, o + 4, order);
+        }
+      }
+      for (int k : order) {
+        if (f.partCount[k] == 0) continue;
+        r.drawIndices(r.coat, start[k], f.partCount[k], backward);
+        ++stats_.drawCalls;
+        stats_.backwardParts += backward ? 1 : 0;
+        stats_.triangles += f.partCount[k] / 3;
+      }
+    }
+    gl.DepthMask(GL_TRUE);
+    gl.Disable(GL_BLEND);
+  }
+  gl.BindVertexArray(0);
+  gl.UseProgram(0);
+  const GLenum err = gl.GetError();
+  PTERYLA_CHECK(err == GL_NO_ERROR, "OpenGL error " + std::to_string(err) + " while rendering");
+}
+
+Image Renderer::renderImage(const Camera& camera, const std::vector<Light>& lights, const RenderSettings& s) {
+  if (s.width <= 0 || s.height <= 0) throw Error("render size must be positive", {}, "width/height");
+  Impl& r = *impl_;
+  r.ctx.makeCurrent();
+  GLint maxSamples = 0;
+  r.gl.GetIntegerv(GL_MAX_SAMPLES, &maxSamples);
+  const int samples = std::clamp(s.msaaSamples, 0, std::max(0, int(maxSamples)));
+  r.ensureTarget(s.width, s.height, samples);
+  GLint previous = 0;
+  r.gl.GetIntegerv(GL_FRAMEBUFFER_BINDING, &previous);
+  r.gl.BindFramebuffer(GL_FRAMEBUFFER, samples > 0 ? r.target.msFbo : r.target.fbo);
+  render(camera, lights, s);
+  if (samples > 0) {
+    r.gl.BindFramebuffer(GL_READ_FRAMEBUFFER, r.target.msFbo);
+    r.gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, r.target.fbo);
+    r.gl.BlitFramebuffer(0, 0, s.width, s.height, 0, 0, s.width, s.height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  }
+  r.gl.BindFramebuffer(GL_FRAMEBUFFER, r.target.fbo);
+  Image img = readPixels(s.width, s.height);
+  r.gl.BindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(previous));
+  return img;
+}
+
+Image Renderer::readPixels(int width, int height) {
+  if (width <= 0 || height <= 0) throw Error("readback size must be positive");
+  Impl& r = *impl_;
+  r.ctx.makeCurrent();
+  Image img(width, height);
+  std::vector<uint8_t> raw(img.rgba.size());
+  r.gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  r.gl.Finish();
+  r.gl.ReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, raw.data());
+  const size_t row = static_cast<size_t>(width) * 4;
+  for (int y = 0; y < height; ++y)
+    std::memcpy(img.rgba.data() + row * y, raw.data() + row * (height - 1 - y), row);
+  const GLenum err = r.gl.GetError();
+  PTERYLA_CHECK(err == GL_NO_ERROR, "OpenGL error " + std::to_string(err) + " while reading pixels");
+  return img;
+}
+
+std::string Renderer::glVersion() const {
+  Impl& r = *impl_;
+  r.ctx.makeCurrent();
+  auto str = [&](GLenum e) {
+    const GLubyte* s = r.gl.GetString(e);
+    return s ? std::string(reinterpret_cast<const char*>(s)) : std::string("?");
+  };
+  return str(GL_VERSION) + " / " + str(GL_RENDERER);
+}
+
+}  // namespace pteryla::render
