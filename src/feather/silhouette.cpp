@@ -210,51 +210,71 @@ SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteIm
     const double f = seg > 0 ? (s - cum[k - 1]) / seg : 0;
     pts[i] = opt.rachis[k - 1] * (1 - f) + opt.rachis[k] * f;
   }
+  // Fits a circular arc to the samples: the deviation from the chord of a shallow arc is ~4h u(1-u).
+  auto fitArc = [](const std::vector<glm::dvec2>& q) {
+    const glm::dvec2 a = q.front(), b = q.back();
+    const double chord = glm::length(b - a);
+    const glm::dvec2 e = (b - a) / chord, nl = imageLeft(e);
+    double num = 0, den = 0;
+    for (const auto& x : q) {
+      const double u = glm::dot(x - a, e) / chord;
+      const double basis = 4 * u * (1 - u);
+      num += glm::dot(x - a, nl) * basis;
+      den += basis * basis;
+    }
+    const double sag = den > 0 ? num / den : 0;  // bulge toward the viewer's left
+    // An arc turning left bulges to the right of its chord.
+    ImageArc arc;
+    arc.theta = std::clamp(-4 * std::atan(2 * sag / chord), -kPi, kPi);
+    arc.start = a;
+    arc.t0 = std::cos(-arc.theta / 2) * e + std::sin(-arc.theta / 2) * nl;
+    arc.n0 = imageLeft(arc.t0);
+    arc.len = std::abs(arc.theta) < 1e-9 ? chord : chord * (arc.theta / 2) / std::sin(arc.theta / 2);
+    return arc;
+  };
+  ImageArc arc = fitArc(pts);
   if (opt.refineRachis && opt.searchRadius > 0) {
+    // Move interior samples onto the rachis ridge (the line contrasting most with the vane around it),
+    // refit, and search again around the fitted arc until it settles.
     std::vector<glm::dvec2> refined = pts;
     std::vector<double> window;
-    for (int i = 1; i < nr; ++i) {  // the marked end points stay fixed
-      const glm::dvec2 t = glm::normalize(pts[std::min(i + 1, nr)] - pts[std::max(i - 1, 0)]);
-      const glm::dvec2 n = imageLeft(t);
-      // Vane level: median intensity of foreground samples across a wider window.
-      window.clear();
-      for (double o = -3 * opt.searchRadius; o <= 3 * opt.searchRadius; o += 0.5) {
-        const glm::dvec2 q = pts[i] + o * n;
-        if (bilinear(dist, w, h, q.x, q.y) > res.threshold) window.push_back(bilinear(img.pixels, w, h, q.x, q.y));
+    for (int iter = 0; iter < 8; ++iter) {
+      std::vector<glm::dvec2> guess(pts.size());
+      for (int i = 0; i <= nr; ++i) {
+        glm::dvec2 t;
+        arc.at(static_cast<double>(i) / nr, guess[i], t);
       }
-      if (window.size() < 4) continue;
-      std::nth_element(window.begin(), window.begin() + window.size() / 2, window.end());
-      const double vane = window[window.size() / 2];
-      double best = 0, bestO = 0;
-      for (double o = -opt.searchRadius; o <= opt.searchRadius; o += 0.25) {
-        const glm::dvec2 q = pts[i] + o * n;
-        const double c = std::abs(bilinear(img.pixels, w, h, q.x, q.y) - vane);
-        if (c > best + 1e-9) { best = c; bestO = o; }
+      guess.front() = pts.front();
+      guess.back() = pts.back();
+      refined = guess;
+      for (int i = 1; i < nr; ++i) {
+        const glm::dvec2 t = glm::normalize(guess[i + 1] - guess[i - 1]);
+        const glm::dvec2 n = imageLeft(t);
+        // Vane level: median intensity of foreground samples across a wider window.
+        window.clear();
+        for (double o = -3 * opt.searchRadius; o <= 3 * opt.searchRadius; o += 0.5) {
+          const glm::dvec2 q = guess[i] + o * n;
+          if (bilinear(dist, w, h, q.x, q.y) > res.threshold) window.push_back(bilinear(img.pixels, w, h, q.x, q.y));
+        }
+        if (window.size() < 4) continue;
+        std::nth_element(window.begin(), window.begin() + window.size() / 2, window.end());
+        const double vane = window[window.size() / 2];
+        double best = 0, bestO = 0;
+        for (double o = -opt.searchRadius; o <= opt.searchRadius; o += 0.25) {
+          const glm::dvec2 q = guess[i] + o * n;
+          const double c = std::abs(bilinear(img.pixels, w, h, q.x, q.y) - vane);
+          if (c > best + 1e-9) { best = c; bestO = o; }
+        }
+        // Only trust a ridge that stands out from the vane.
+        if (best > 0.25 * res.threshold) refined[i] = guess[i] + bestO * n;
       }
-      // Only trust a ridge that stands out from the vane.
-      if (best > 0.25 * res.threshold) refined[i] = pts[i] + bestO * n;
+      const ImageArc next = fitArc(refined);
+      const bool settled = std::abs(next.theta - arc.theta) < 1e-4;
+      arc = next;
+      if (settled) break;
     }
     pts = refined;
   }
-  const glm::dvec2 a = pts.front(), b = pts.back();
-  const double chord = glm::length(b - a);
-  const glm::dvec2 e = (b - a) / chord, nl = imageLeft(e);
-  double num = 0, den = 0;
-  for (const auto& q : pts) {
-    const double u = glm::dot(q - a, e) / chord;
-    const double d = glm::dot(q - a, nl);
-    const double basis = 4 * u * (1 - u);
-    num += d * basis;
-    den += basis * basis;
-  }
-  const double sag = den > 0 ? num / den : 0;  // bulge toward the viewer's left
-  // An arc turning left bulges to the right of its chord.
-  ImageArc arc;
-  arc.theta = -4 * std::atan(2 * sag / chord);
-  arc.start = a;
-  arc.t0 = std::cos(-arc.theta / 2) * e + std::sin(-arc.theta / 2) * nl;
-  arc.n0 = imageLeft(arc.t0);
-  arc.len = std::abs(arc.theta) < 1e-9 ? chord : chord * (arc.theta / 2) / std::sin(arc.theta / 2);
   res.lateralCurvature = arc.theta;
   res.rachisLengthPixels = arc.len;
   res.rachis.clear();
