@@ -155,7 +155,7 @@ inline QuadCage subdivide(QuadCage cage, int levels) {
 inline void finishSurface(GroupedMesh& mesh, const QuadCage& cage) {
   const QuadCage reference = subdivide(cage, 3);
   improveByFlips(mesh, kFlipDihedralDeg);
-  relaxOnSurface(mesh, reference, 10, 0.5);
+  relaxOnSurface(mesh, reference, 25, 0.5);
   improveByFlips(mesh, kFlipDihedralDeg);
 }
 
