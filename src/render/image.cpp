@@ -36,6 +36,8 @@ void saveImage(const std::string& path, const Image& image) {
   const int channels = jpeg ? 3 : 4;
   OIIO::ImageSpec spec(image.width, image.height, channels, exr ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8);
   if (jpeg) spec.attribute("CompressionQuality", 95);
+  // Image holds straight (unassociated) alpha: keep colours under transparent pixels intact.
+  spec.attribute("oiio:UnassociatedAlpha", 1);
   if (!out->open(path, spec)) throw Error("cannot open image for writing: " + out->geterror(), path);
   bool ok;
   if (jpeg) {
@@ -59,7 +61,9 @@ void saveImage(const std::string& path, const Image& image) {
 
 Image loadImage(const std::string& path) {
   if (!fileExists(path)) throw Error("image file not found", path);
-  auto in = OIIO::ImageInput::open(path);
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);  // straight alpha, as Image stores it
+  auto in = OIIO::ImageInput::open(path, &config);
   if (!in) throw Error("cannot read image: " + OIIO::geterror(), path);
   const OIIO::ImageSpec& spec = in->spec();
   const int w = spec.width, h = spec.height, nc = spec.nchannels;

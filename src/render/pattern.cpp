@@ -82,14 +82,14 @@ Image generatePattern(const PatternParams& p) {
           break;
         }
         case PatternKind::Scalloped: {
-          // Dark bands following the feather outline, a pale fringe at the edge.
-          const float rel = hw > 1e-3f ? r / hw : 2.0f;  // 1 at the outline
-          const float dist = (1.0f - rel) + (1.0f - v) * 0.15f;
-          const float phase = dist * p.frequency * 0.5f;
+          // Arcs concentric about the feather base: U-shaped bands that repeat as scallops across a
+          // coat, with a pale fringe beyond the last band.
+          const float rho = std::sqrt(r * r + v * v);
+          const float phase = rho * p.frequency * 0.5f;
           const float f = phase - std::floor(phase);
           const float e = soft * p.frequency * 0.5f;
-          mark = dist > 0.04f ? smoothstep(0.0f, e, f) * (1.0f - smoothstep(p.markWidth * 0.5f - e, p.markWidth * 0.5f, f))
-                              : 0.0f;
+          const float w = p.markWidth * 0.5f;
+          mark = rho < 0.93f ? smoothstep(0.0f, e, f) * (1.0f - smoothstep(w - e, w, f)) : 0.0f;
           break;
         }
         case PatternKind::Spotted: {

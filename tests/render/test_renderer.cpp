@@ -1,0 +1,435 @@
+// Renderer tests in an OSMesa context: analytic coverage, draw-order and blending rules (7.1.2, 7.2),
+// textures, the BRDF's Lambert limit (7.1.3), errors, and golden images.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "pteryla/core/error.hpp"
+#include "pteryla/render/osmesa_context.hpp"
+#include "pteryla/render/pattern.hpp"
+#include "pteryla/render/renderer.hpp"
+#include "pteryla/render/synthetic.hpp"
+
+using namespace pteryla;
+using namespace pteryla::render;
+
+namespace {
+
+OsMesaContext& context() {
+  static OsMesaContext ctx(64, 64);
+  return ctx;
+}
+
+// Quad centred at c spanning c +- a +- b, normal n, tangent t; uv (0,0) at c - a - b, (1,1) at c + a + b.
+TriMesh quad(glm::vec3 c, glm::vec3 a, glm::vec3 b, float alpha = 1.0f, glm::vec3 t = {1, 0, 0}, float barbCount = 1.0f) {
+  TriMesh m;
+  const glm::vec3 n = glm::normalize(glm::cross(a, b));
+  const glm::vec2 uv[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  const glm::vec3 p[4] = {c - a - b, c + a - b, c + a + b, c - a + b};
+  for (int i = 0; i < 4; ++i) {
+    m.positions.push_back(p[i]);
+    m.normals.push_back(n);
+    m.tangents.push_back(t);
+    m.uvGlobal.push_back(uv[i]);
+    m.uvBarb.push_back(uv[i]);
+    m.alpha.push_back(alpha);
+    m.barbCount.push_back(barbCount);
+  }
+  m.indices = {0, 1, 2, 0, 2, 3};
+  return m;
+}
+
+Camera frontCamera(float dist = 5.0f, float fov = 40.0f) {
+  Camera c;
+  c.eye = {0, 0, dist};
+  c.target = {0, 0, 0};
+  c.fovYDegrees = fov;
+  c.zNear = 0.1f;
+  c.zFar = 100.0f;
+  return c;
+}
+
+RenderSettings flatSettings(int size = 64) {
+  RenderSettings s;
+  s.width = s.height = size;
+  s.background = {0, 0, 0, 1};
+  s.ambient = glm::vec3(0.0f);
+  return s;
+}
+
+const std::vector<Light> kFrontLight{Light{{0, 0, 1}, {1, 1, 1}}};
+
+FeatherMaterial lambert(glm::vec3 color) {
+  FeatherMaterial m;
+  m.baseColor = color;
+  m.useBrdf = false;
+  m.translucency = 0.0f;
+  return m;
+}
+
+FeatherDrawRange whole(const TriMesh& m, uint32_t first = 0, uint32_t material = 0) {
+  FeatherDrawRange r;
+  r.firstIndex = first;
+  r.indexCount = static_cast<uint32_t>(m.indices.size()) - first;
+  r.material = material;
+  return r;
+}
+
+const uint8_t* centre(const Image& img) { return img.pixel(img.width / 2, img.height / 2); }
+
+}  // namespace
+
+TEST(Renderer, ContextIsCoreProfile33) {
+  EXPECT_TRUE(context().isCoreProfile());
+  Renderer r(context());
+  EXPECT_NE(r.glVersion().find("Mesa"), std::string::npos) << r.glVersion();
+}
+
+TEST(Renderer, ClearsToBackgroundAtAnySize) {
+  Renderer r(context());
+  RenderSettings s = flatSettings();
+  s.width = 200;
+  s.height = 100;
+  s.background = {0.2f, 0.4f, 0.6f, 1.0f};
+  const Image img = r.renderImage(frontCamera(), kFrontLight, s);
+  ASSERT_EQ(img.width, 200);
+  ASSERT_EQ(img.height, 100);
+  for (size_t i = 0; i < img.rgba.size(); i += 4) {
+    ASSERT_NEAR(img.rgba[i], 51, 1);
+    ASSERT_NEAR(img.rgba[i + 1], 102, 1);
+    ASSERT_NEAR(img.rgba[i + 2], 153, 1);
+  }
+}
+
+TEST(Renderer, ReadbackIsTopRowFirstAndMatchesDefaultFramebuffer) {
+  Renderer r(context());
+  // Skin quad covering only the upper half of the view.
+  r.setSkin(quad({0, 1, 0}, {3, 0, 0}, {0, 1, 0}));
+  RenderSettings s = flatSettings(64);
+  s.skinColor = {1, 1, 1};
+  const Image img = r.renderImage(frontCamera(), kFrontLight, s);
+  EXPECT_GT(img.pixel(32, 5)[0], 200);   // top row area covered
+  EXPECT_EQ(img.pixel(32, 58)[0], 0);    // bottom is background
+  // The same frame drawn into the context's own framebuffer reads back identically.
+  r.render(frontCamera(), kFrontLight, s);
+  const Image direct = r.readPixels(64, 64);
+  EXPECT_EQ(meanAbsoluteError(img, direct), 0.0);
+}
+
+TEST(Renderer, FlatQuadCoverageMatchesProjectedArea) {
+  Renderer r(context());
+  const float dist = 5.0f, fov = 40.0f, half = 0.6f;
+  const TriMesh q = quad({0, 0, 0}, {half, 0, 0}, {0, half, 0});
+  r.setCoat(q, {whole(q)});
+  r.setMaterials({lambert({1, 1, 1})});
+  RenderSettings s = flatSettings(256);
+  const Image img = r.renderImage(frontCamera(dist, fov), kFrontLight, s);
+  const double ndcHalf = half / (dist * std::tan(fov * 0.5 * 3.14159265358979 / 180.0));
+  const uint8_t black[3] = {0, 0, 0};
+  EXPECT_NEAR(coveredFraction(img, black), ndcHalf * ndcHalf, 0.004);
+  // Tilted 60 degrees about y, seen from far away with a narrow field (nearly orthographic): area x cos.
+  const float c60 = 0.5f, s60 = std::sqrt(3.0f) / 2.0f;
+  const TriMesh t = quad({0, 0, 0}, {half * c60, 0, -half * s60}, {0, half, 0});
+  r.setCoat(t, {whole(t)});
+  const float far = 100.0f, narrow = 2.0f;
+  const double h = half / (far * std::tan(narrow * 0.5 * 3.14159265358979 / 180.0));
+  RenderSettings s2 = s;
+  Camera cam = frontCamera(far, narrow);
+  cam.zFar = 200.0f;
+  const Image tilted = r.renderImage(cam, {Light{{0, 0, 1}, {1, 1, 1}}}, s2);
+  EXPECT_NEAR(coveredFraction(tilted, black), h * h * c60, 0.006);
+}
+
+TEST(Renderer, SkinWritesDepthFeathersTestButDoNotWriteDepth) {
+  Renderer r(context());
+  RenderSettings s = flatSettings(32);
+  s.skinColor = {0.0f, 0.0f, 1.0f};
+  r.setSkin(quad({0, 0, 0}, {2, 0, 0}, {0, 2, 0}));
+  // Layer order: A behind the skin, B in front (alpha 0.5), C between skin and B drawn after B.
+  TriMesh coat = quad({0, 0, -0.5f}, {2, 0, 0}, {0, 2, 0}, 1.0f);
+  coat.append(quad({0, 0, 0.5f}, {2, 0, 0}, {0, 2, 0}, 0.5f));
+  coat.append(quad({0, 0, 0.3f}, {2, 0, 0}, {0, 2, 0}, 0.5f));
+  std::vector<FeatherDrawRange> ranges = {whole(coat), whole(coat), whole(coat)};
+  for (int i = 0; i < 3; ++i) {
+    ranges[i].firstIndex = 6 * i;
+    ranges[i].indexCount = 6;
+    ranges[i].material = i;
+  }
+  r.setCoat(coat, ranges);
+  r.setMaterials({lambert({1, 1, 0}), lambert({1, 0, 0}), lambert({0, 1, 0})});
+  const uint8_t* p = centre(r.renderImage(frontCamera(), kFrontLight, s));
+  // A (yellow) is hidden by the skin; B (red, 0.5) over blue; C (green, 0.5) drawn over that although
+  // it is behind B: B wrote no depth.
+  const double red = 0.5 * 0.5, green = 0.5, blue = 0.5 * 0.5;
+  EXPECT_NEAR(p[0], 255 * red, 2);
+  EXPECT_NEAR(p[1], 255 * green, 2);
+  EXPECT_NEAR(p[2], 255 * blue, 2);
+}
+
+TEST(Renderer, LayerOrderFollowsDrawRanges) {
+  Renderer r(context());
+  RenderSettings s = flatSettings(32);
+  TriMesh coat = quad({0, 0, 0.1f}, {2, 0, 0}, {0, 2, 0}, 0.5f);
+  coat.append(quad({0, 0, 0.0f}, {2, 0, 0}, {0, 2, 0}, 0.5f));
+  FeatherDrawRange a = whole(coat), b = whole(coat);
+  a.indexCount = b.indexCount = 6;
+  b.firstIndex = 6;
+  b.material = 1;
+  r.setMaterials({lambert({1, 0, 0}), lambert({0, 1, 0})});
+  r.setCoat(coat, {a, b});
+  const Image ab = r.renderImage(frontCamera(), kFrontLight, s);
+  r.setCoat(coat, {b, a});
+  const Image ba = r.renderImage(frontCamera(), kFrontLight, s);
+  // Last drawn dominates: red then green -> green 0.5, red 0.25; reversed -> red 0.5, green 0.25.
+  EXPECT_NEAR(centre(ab)[0], 64, 2);
+  EXPECT_NEAR(centre(ab)[1], 128, 2);
+  EXPECT_NEAR(centre(ba)[0], 128, 2);
+  EXPECT_NEAR(centre(ba)[1], 64, 2);
+}
+
+TEST(Renderer, OctantRuleOrdersVanesAndBarbsByViewDirection) {
+  Renderer r(context());
+  RenderSettings s = flatSettings(32);
+  // One feather: shaft (empty), left vane (red) and right vane (green) overlapping on screen.
+  TriMesh coat = quad({0, 0, 0.01f}, {2, 0, 0}, {0, 2, 0}, 0.5f);
+  coat.append(quad({0, 0, 0.0f}, {2, 0, 0}, {0, 2, 0}, 0.5f));
+  FeatherDrawRange f = whole(coat);
+  f.partCount[1] = 6;  // left vane: red through the colour texture
+  f.partCount[2] = 6;  // right vane: green
+  for (int i = 0; i < 4; ++i) coat.uvGlobal[i] = {0.25f, 0.5f};      // left vane samples red
+  for (int i = 4; i < 8; ++i) coat.uvGlobal[i] = {0.75f, 0.5f};      // right vane samples green
+  Image tex(2, 1);
+  tex.pixel(0, 0)[0] = 255, tex.pixel(0, 0)[1] = 0, tex.pixel(0, 0)[2] = 0;
+  tex.pixel(1, 0)[0] = 0, tex.pixel(1, 0)[1] = 255, tex.pixel(1, 0)[2] = 0;
+  FeatherMaterial m = lambert({1, 1, 1});
+  m.colorImage = tex;
+  r.setMaterials({m});
+  f.origin = {0, 0, 0};
+  f.axisX = {1, 0, 0};
+  f.axisY = {0, 1, 0};
+  r.setCoat(coat, {f});
+  auto look = [&](glm::vec3 eye, bool ordered) {
+    Camera c = frontCamera();
+    c.eye = eye;
+    RenderSettings t = s;
+    t.viewDependentOrder = ordered;
+    const Image img = r.renderImage(c, kFrontLight, t);
+    return std::pair<int, int>(centre(img)[0], centre(img)[1]);
+  };
+  // Viewer on the left-vane side (+y): the right vane is farther and drawn first, left on top.
+  auto [rl, gl] = look({0, 1.0f, 5}, true);
+  EXPECT_GT(rl, gl + 40);
+  // Viewer on the right-vane side: left first, right on top.
+  auto [rr, gr] = look({0, -1.0f, 5}, true);
+  EXPECT_GT(gr, rr + 40);
+  // Without view-dependent order the stored order (left then right) is always used.
+  auto [ru, gu] = look({0, 1.0f, 5}, false);
+  EXPECT_GT(gu, ru + 40);
+  // Barb order: forward when the tip (+x) side faces the viewer, backward otherwise.
+  look({2, 0.5f, 5}, true);
+  EXPECT_EQ(r.lastStats().backwardParts, 0u);
+  look({-2, 0.5f, 5}, true);
+  EXPECT_EQ(r.lastStats().backwardParts, 2u);
+  EXPECT_EQ(r.lastStats().drawCalls, 2u);
+}
+
+TEST(Renderer, ColourTextureOrientationAndUvSets) {
+  Renderer r(context());
+  // Texture: top half (v = 1) red, bottom half blue.
+  Image tex(4, 4);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      uint8_t* p = tex.pixel(x, y);
+      p[0] = y < 2 ? 255 : 0;
+      p[1] = 0;
+      p[2] = y < 2 ? 0 : 255;
+    }
+  FeatherMaterial m = lambert({1, 1, 1});
+  m.colorImage = tex;
+  r.setMaterials({m});
+  const TriMesh q = quad({0, 0, 0}, {2, 0, 0}, {0, 2, 0});
+  r.setCoat(q, {whole(q)});
+  const Image img = r.renderImage(frontCamera(), kFrontLight, flatSettings(64));
+  EXPECT_GT(img.pixel(32, 10)[0], 200);
+  EXPECT_LT(img.pixel(32, 10)[2], 50);
+  EXPECT_GT(img.pixel(32, 54)[2], 200);
+  EXPECT_LT(img.pixel(32, 54)[0], 50);
+  // The growth uv set (absent here, so 0,0 -> bottom-left texel: blue) is selected per material.
+  m.colorUv = ColorUv::Growth;
+  r.setMaterials({m});
+  const Image g = r.renderImage(frontCamera(), kFrontLight, flatSettings(64));
+  EXPECT_GT(g.pixel(32, 10)[2], 200);
+}
+
+TEST(Renderer, AlphaMaskRepeatsBarbCountTimesAcrossPolygon) {
+  Renderer r(context());
+  Image mask(8, 1);
+  for (int x = 0; x < 8; ++x) {
+    uint8_t* p = mask.pixel(x, 0);
+    p[0] = p[1] = p[2] = p[3] = x < 4 ? 255 : 0;
+  }
+  FeatherMaterial m = lambert({1, 1, 1});
+  m.alphaImage = mask;
+  r.setMaterials({m});
+  const TriMesh q = quad({0, 0, 0}, {1.5f, 0, 0}, {0, 1.5f, 0}, 1.0f, {0, 1, 0}, 4.0f);
+  r.setCoat(q, {whole(q)});
+  RenderSettings s = flatSettings(256);
+  const Image img = r.renderImage(frontCamera(), kFrontLight, s);
+  // Count dark/bright transitions along the middle row inside the quad: 4 repeats -> 8 edges.
+  int transitions = 0;
+  bool prev = img.pixel(0, 128)[0] > 128;
+  for (int x = 1; x < 256; ++x) {
+    const bool cur = img.pixel(x, 128)[0] > 128;
+    transitions += cur != prev;
+    prev = cur;
+  }
+  EXPECT_GE(transitions, 7);
+  EXPECT_LE(transitions, 8);
+  s.useAlphaTexture = false;
+  const Image solid = r.renderImage(frontCamera(), kFrontLight, s);
+  EXPECT_GT(centre(solid)[0], 250);
+}
+
+TEST(Renderer, BrdfReducesToLambertForThinBarbulesAndIsAnisotropic) {
+  Renderer r(context());
+  const TriMesh q = quad({0, 0, 0}, {2, 0, 0}, {0, 2, 0});
+  r.setCoat(q, {whole(q)});
+  const std::vector<Light> light{Light{{0.7f, 0.2f, 0.6f}, {1, 1, 1}}};
+  Camera cam = frontCamera();
+  cam.eye = {-1, 0.5f, 5};
+  RenderSettings s = flatSettings(32);
+  FeatherMaterial m = lambert({0.8f, 0.8f, 0.8f});
+  r.setMaterials({m});
+  const Image lam = r.renderImage(cam, light, s);
+  m.useBrdf = true;
+  m.specular = 0.0f;
+  m.barbules = {0.01, 0.0, 0.2};
+  r.setMaterials({m});
+  const Image thin = r.renderImage(cam, light, s);
+  EXPECT_LT(meanAbsoluteError(lam, thin), 1.0 / 255.0);
+  EXPECT_NEAR(centre(lam)[0], centre(thin)[0], 2);
+  // Dense cylinders (d = 1.9) shade differently depending on the barb direction.
+  m.barbules = {1.9, 0.0, 0.2};
+  m.barbuleAngle = 0.0f;
+  r.setMaterials({m});
+  const Image alongX = r.renderImage(cam, light, s);
+  TriMesh turned = q;
+  for (auto& t : turned.tangents) t = {0, 1, 0};
+  r.setCoat(turned, {whole(turned)});
+  const Image alongY = r.renderImage(cam, light, s);
+  EXPECT_GT(std::abs(int(centre(alongX)[0]) - int(centre(alongY)[0])), 8);
+  // ... while a Lambertian vane does not care.
+  s.useBrdf = false;
+  const Image lamY = r.renderImage(cam, light, s);
+  EXPECT_EQ(meanAbsoluteError(lam, lamY), 0.0);
+}
+
+TEST(Renderer, MissingOrUnreadableTextureNamesTheFile) {
+  Renderer r(context());
+  FeatherMaterial m;
+  m.name = "contour";
+  m.colorTexture = "/nonexistent/pteryla/texture.png";
+  try {
+    r.setMaterials({FeatherMaterial{}, m});
+    FAIL() << "expected pteryla::Error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.file(), m.colorTexture);
+    EXPECT_EQ(e.element(), "materials[1].colorTexture");
+    EXPECT_NE(std::string(e.what()).find("contour"), std::string::npos) << e.what();
+  }
+  const std::string bad = std::string(PTERYLA_BUILD_DIR) + "/tests/render/not_an_image.png";
+  std::filesystem::create_directories(std::filesystem::path(bad).parent_path());
+  std::ofstream(bad) << "this is not a PNG";
+  m.colorTexture.clear();
+  m.alphaTexture = bad;
+  try {
+    r.setMaterials({m});
+    FAIL() << "expected pteryla::Error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.file(), bad);
+    EXPECT_EQ(e.element(), "materials[0].alphaTexture");
+  }
+  // The renderer is still usable with its previous materials.
+  EXPECT_NO_THROW(r.renderImage(frontCamera(), kFrontLight, flatSettings(16)));
+}
+
+TEST(Renderer, RejectsInvalidRangesAndMeshes) {
+  Renderer r(context());
+  const TriMesh q = quad({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  FeatherDrawRange f = whole(q);
+  f.indexCount = 9;
+  EXPECT_THROW(r.setCoat(q, {f}), Error);
+  f = whole(q);
+  f.partCount[1] = 3;
+  try {
+    r.setCoat(q, {whole(q), f});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.element(), "ranges[1].partCount");
+  }
+  TriMesh broken = q;
+  broken.indices[2] = 99;
+  EXPECT_THROW(r.setSkin(broken), Error);
+  broken = q;
+  broken.alpha.pop_back();
+  EXPECT_THROW(r.setCoat(broken, {}), Error);
+  f = whole(q);
+  f.material = 3;
+  r.setCoat(q, {f});
+  EXPECT_THROW(r.renderImage(frontCamera(), kFrontLight, flatSettings(16)), Error);
+}
+
+TEST(Renderer, MsaaSmoothsEdges) {
+  Renderer r(context());
+  const TriMesh q = quad({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  TriMesh tilted = q;
+  for (auto& p : tilted.positions) p = glm::vec3(p.x * 0.8f - p.y * 0.6f, p.x * 0.6f + p.y * 0.8f, 0);
+  r.setCoat(tilted, {whole(tilted)});
+  r.setMaterials({lambert({1, 1, 1})});
+  RenderSettings s = flatSettings(64);
+  auto partial = [](const Image& img) {
+    int n = 0;
+    for (size_t i = 0; i < img.rgba.size(); i += 4) n += img.rgba[i] > 10 && img.rgba[i] < 245;
+    return n;
+  };
+  const Image plain = r.renderImage(frontCamera(), kFrontLight, s);
+  s.msaaSamples = 4;
+  const Image smooth = r.renderImage(frontCamera(), kFrontLight, s);
+  EXPECT_EQ(partial(plain), 0);
+  EXPECT_GT(partial(smooth), 20);
+  const uint8_t black[3] = {0, 0, 0};
+  EXPECT_NEAR(coveredFraction(plain, black), coveredFraction(smooth, black), 0.02);
+}
+
+TEST(Renderer, FewerBarbsWithTexturesStayCloseToFullGeometry) {
+  // 7.1.3: lower geometric detail with alpha + BRDF textures keeps the look; error grows as detail drops.
+  Renderer r(context());
+  const std::vector<NamedImage> textures = standardTextures(1);
+  FeatherMaterial m;
+  m.colorImage = textures[0].image;
+  m.alphaImage = textures[7].image;
+  m.baseColor = glm::vec3(1.0f);
+  r.setMaterials({m});
+  Camera cam;
+  cam.eye = {0.5f, -0.3f, 2.0f};
+  cam.target = {0.5f, 0.0f, 0.0f};
+  RenderSettings s;
+  s.width = s.height = 128;
+  auto renderAt = [&](float lod) {
+    SyntheticFeatherParams p;
+    p.lodFraction = lod;
+    const SyntheticFeather f = makeSyntheticFeather(p);
+    FeatherDrawRange range;
+    range.indexCount = static_cast<uint32_t>(f.mesh.indices.size());
+    std::copy(f.partCount, f.partCount + 4, range.partCount);
+    r.setCoat(f.mesh, {range});
+    return r.renderImage(cam, {Light{}}, s);
+  };
+  const Image full = renderAt(1.0f), sixty = renderAt(0.6f), fifth = renderAt(0.2f);
+  const double e60 = meanAbsoluteError(full, sixty), e20 = meanAbsoluteError(full, fifth);
+  EXPECT_LT(e60, 0.05);
+  EXPECT_LT(e60, e20);
+}
+
