@@ -1,0 +1,159 @@
+#pragma once
+// Feather packing after Streit 2003, 6.3.2-6.3.4, 6.4 and 8.3: feathers are laid bottom to top in layer
+// order; each shaft is rotated down about its bitangent B as far as the already packed feathers (and the
+// skin) under it allow, then its key barbs are elevated where a neighbour would pass through them.
+//
+// Terms (docs/packing.md has the full description):
+//  - elevation e: rotation about B from the surface tangent T (e = 0 lies flat) toward the normal N
+//    (e = pi/2 stands up); docs/architecture.md "Placement with elevation e".
+//  - footprint: the box the feather covers in its follicle frame, x along T from the follicle to the
+//    farthest reach of shaft and barbs, y across the widest vane extent; its points are the candidates.
+//  - shaft height field: candidate points projected to the NT (shaft slicing) plane, kept as the largest
+//    polar angle (plus clearance) per radius bin; the smallest e that keeps the shaft polyline, extended
+//    past the tip along its tangent to the footprint's reach, above it.
+//  - barb height field: per key barb, candidates on the barb's side of the shaft between the neighbouring
+//    key barbs' slicing planes, projected to the barb slicing plane (barb direction x dorsal) and binned
+//    along the barb; the key barb's control vertices are raised in that plane only (lateral curvature kept)
+//    by one flattening fraction (never past flat, so no inverse curvature) and, only if flattening cannot
+//    clear the field, a rotation of the barb about its root.
+//
+// Each feather's key barbs are first refined: keyBarbsPerVane key barbs at uniform rp are inserted with
+// the interpolated shape (the feather's shape is unchanged; the default tip barb becomes a real key barb),
+// so the vane is packed at that resolution.
+//
+// Determinism: results are bit-identical for any thread count and between full and incremental packing.
+// A feather's result depends only on its own input and on the packed points of the feathers before it
+// whose reach can touch its footprint (the dependency graph); threads work on feathers whose
+// dependencies are done.
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/coat/style.hpp"
+#include "pteryla/core/json.hpp"
+#include "pteryla/feather/params.hpp"
+
+namespace pteryla::coat {
+
+struct PackOptions {
+  double clearance = 0;        // scene units kept between a feather and what is under it; 0 = auto (0.25 x median rachis width)
+  double skinClearance = 0;    // scene units kept above the skin; 0 = auto (= clearance)
+  double minElevation = 0;     // radians; lower bound for every computed elevation
+  double maxElevation = 1.5707963267948966;  // radians; upper bound (pi/2 = upright)
+  double openingAge = 0.8;     // feathers with age < openingAge are unopened: straight shaft only, no barb elevation (8.3)
+  double baseAllowance = 0.08; // fraction of the feather's total length around the follicle where the shaft may sink
+                               // into the skin (the calamus sits in the follicle); clearance ramps up over it
+  int keyBarbsPerVane = 5;     // key barbs inserted per vane at uniform rp (>= 2)
+  int barbSamples = 6;         // points per key barb handed to later feathers
+  int shaftSamples = 12;       // rachis segments of the shaft polyline
+  int heightFieldBins = 48;    // radius bins of the shaft height field
+  int barbFieldBins = 16;      // bins along a key barb of its height field
+  double maxFlatten = 1.0;     // flattening fraction limit (1 = flat; up to 2 allows reverse curvature)
+  double maxBarbLift = 1.0;    // radians a key barb may rotate up about its root when flattening is not enough
+  bool elevateBarbs = true;    // 6.3.3 barb elevation
+  bool extendShaft = true;     // extend the shaft past its tip along the tip tangent to the footprint reach
+  bool skin = true;            // pack against the skin surface
+  double skinSampleSpacing = 0;  // scene units between skin samples; 0 = auto (0.05 x median feather reach)
+  int threads = 0;             // 0 = all available, 1 = sequential
+  // Per feather: a fixed elevation in radians, NaN = computed by packing. Empty = none fixed.
+  // Styling selections are resolved into this by resolveStyling() (style.hpp).
+  std::vector<double> fixedElevation;
+  std::vector<StyleSelection> styling;  // parsed selections (kept for the pipeline; pack() ignores them)
+  bool captureFields = false;  // keep every key barb height field in PackResult::barbFields (tests, debugging)
+};
+
+// One binned height field along an axis: h[b] is the largest height seen in [origin + b cell,
+// origin + (b+1) cell); -infinity for an empty bin.
+struct HeightField1D {
+  double origin = 0, cell = 1;
+  std::vector<float> h;
+  double at(double s) const;  // value of the bin holding s (-inf outside)
+};
+
+// A captured barb height field (captureFields): feather, vane, key barb index in the packed key barbs,
+// the slicing frame in world coordinates (root, along = barb direction, up = dorsal) and the field of
+// raw candidate heights (without clearance) along `along`.
+struct BarbField {
+  uint32_t feather = 0;
+  uint8_t vane = 0;
+  uint16_t key = 0;
+  glm::dvec3 root{0}, along{1, 0, 0}, up{0, 0, 1};
+  double length = 0;       // extent of the field along the barb
+  HeightField1D field;
+};
+
+struct PackStats {
+  size_t packed = 0;           // feathers packed (present and in layer order)
+  size_t recomputed = 0;       // feathers whose packing was computed (the rest were reused: repack)
+  size_t fixed = 0;            // feathers with a fixed elevation
+  size_t unopened = 0;         // packed as straight shafts (age < openingAge)
+  size_t free = 0;             // no candidate constrained the shaft (rested at the skin/minimum elevation)
+  size_t shaftClamped = 0;     // the height field asked for more than maxElevation
+  size_t barbsElevated = 0;    // key barbs raised by flattening
+  size_t barbsLifted = 0;      // key barbs that also needed the rotation fallback
+  size_t barbsUnresolved = 0;  // key barbs still below their height field at the limits
+  size_t candidatePoints = 0;  // candidate points examined (feather + skin)
+  size_t dependencies = 0;     // edges in the dependency graph
+  size_t skinSamples = 0;
+  double seconds = 0;
+};
+
+struct PackResult {
+  std::vector<uint32_t> order;                   // layer order used (copy of CoatFeathers::layerOrder)
+  std::vector<double> elevation;                 // radians per feather (0 for feathers not packed)
+  std::vector<feather::FeatherParams> packedParams;  // per feather: params with elevated key barbs
+  std::vector<uint8_t> barbsChanged;             // 1 when packedParams[i] differs from the input params
+  std::vector<uint8_t> recomputed;               // 1 when this call computed feather i (else reused)
+  // Packed geometry handed to later feathers, world coordinates: xyz and a thickness radius (shaft
+  // points carry the shaft radius, barb points 0). Points of feather i: points[pointOffset[i] .. [i+1]).
+  std::vector<uint32_t> pointOffset;
+  std::vector<glm::vec4> points;
+  std::vector<glm::dvec4> bounds;                // per feather: sphere (centre, radius) around its points
+  std::vector<BarbField> barbFields;             // captureFields only
+  PackStats stats;
+};
+
+// Packs every present feather of `coat` (in coat.layerOrder, or index order when it is empty) against
+// the feathers packed before it and the skin. Throws Error for inconsistent input (array sizes, indices).
+PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options = {});
+
+// Incremental repack after a small change: `changed` lists the feathers whose input differs from the
+// one `previous` was computed from (frame, params, age, presence or fixed elevation). Only feathers whose
+// dependency chain reaches a changed feather are recomputed; the result equals pack() bit for bit. Falls
+// back to a full pack when the layer order or feather count changed. The skin must be unchanged (after a
+// skin deformation every frame changes: call pack()).
+PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& previous,
+                  const std::vector<uint32_t>& changed, const PackOptions& options = {});
+
+// Feathers whose packing input differs between two coats of equal size (frame, params, age, presence),
+// plus those whose fixed elevation differs between two option sets.
+std::vector<uint32_t> changedFeathers(const CoatFeathers& before, const CoatFeathers& after,
+                                      const std::vector<double>& fixedBefore = {},
+                                      const std::vector<double>& fixedAfter = {});
+
+// Placement (docs/architecture.md): world position of feather-local point p for frame f and elevation e.
+glm::dvec3 placePoint(const FeatherFrame& f, double elevation, const glm::dvec3& p);
+// World direction of feather-local direction d.
+glm::dvec3 placeDirection(const FeatherFrame& f, double elevation, const glm::dvec3& d);
+
+// World-space control vertices of every key barb of feather i as packed (effective key barbs of
+// result.packedParams[i], placed with result.elevation[i]): one vector per key barb, left vane first.
+struct PlacedKeyBarb {
+  uint8_t vane = 0;
+  double rp = 0;
+  std::vector<glm::dvec3> cvs;   // world coordinates
+  glm::dvec3 root{0}, along{1, 0, 0}, up{0, 0, 1};  // barb slicing frame (world)
+  double length = 0;             // barb length (scene units)
+};
+std::vector<PlacedKeyBarb> placedKeyBarbs(const CoatFeathers& coat, const PackResult& result, uint32_t feather);
+
+// Reads a scene's "packing" object (docs/packing.md). Unknown keys are errors.
+PackOptions parsePackOptions(JsonReader& r);
+Json packOptionsToJson(const PackOptions& o);
+
+}  // namespace pteryla::coat

@@ -1,0 +1,981 @@
+// Feather packing: Streit 2003, 6.3.2 (shaft rotation against a height field in the shaft slicing plane),
+// 6.3.3 (key barb elevation against height fields in the barb slicing planes), 6.3.4 (summary), 6.4
+// (key-barb control vertices bound the feather), 8.3 (unopened feathers pack as straight shafts; fixed
+// angles for styling) and 9.1.2 (the skin under the feather is part of what the feather packs against).
+//
+// Differences from the thesis, all on the conservative side:
+//  - candidates are selected per point (any packed point inside the footprint), not per follicle, so a
+//    neighbour whose follicle lies outside the footprint but whose vane reaches in is still seen;
+//  - the shaft height field is kept in polar form (largest angle per radius bin), which makes "the
+//    largest rotation such that the shaft stays above it" exact for the shaft polyline;
+//  - the skin is sampled into points that join the candidates, so convex and concave skin, coarse
+//    facets and skin outside the follicle's polygon are all handled by the same height fields;
+//  - barb fitting uses one flattening fraction per key barb (the smallest that clears every bin), so
+//    barbs flatten smoothly and never take inverse curvature; only if a flat barb still cannot clear the
+//    field is it rotated up about its root (reported in stats.barbsLifted).
+#include "pteryla/coat/pack.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include <glm/geometric.hpp>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_for_each.h>
+#include <tbb/task_arena.h>
+
+#include "pteryla/core/error.hpp"
+#include "pteryla/feather/barbs.hpp"
+#include "pteryla/feather/bezier.hpp"
+#include "spatial.hpp"
+
+namespace pteryla::coat {
+
+using glm::dvec3;
+using feather::kPi;
+
+double HeightField1D::at(double s) const {
+  const double b = std::floor((s - origin) / cell);
+  if (!(b >= 0) || b >= static_cast<double>(h.size())) return -std::numeric_limits<double>::infinity();
+  return h[static_cast<size_t>(b)];
+}
+
+glm::dvec3 placeDirection(const FeatherFrame& f, double e, const glm::dvec3& d) {
+  const double c = std::cos(e), s = std::sin(e);
+  const dvec3 t = c * f.tangent + s * f.normal;
+  const dvec3 n = -s * f.tangent + c * f.normal;
+  return d.x * t + d.y * f.binormal + d.z * n;
+}
+
+glm::dvec3 placePoint(const FeatherFrame& f, double e, const glm::dvec3& p) { return f.origin + placeDirection(f, e, p); }
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// ------------------------------------------------------------------ feather-local geometry
+
+struct LocalKey {
+  double rp = 0;
+  uint8_t vane = 0;
+  dvec3 root{0}, u{1, 0, 0}, w{0, 1, 0}, d{0, 0, 1}, left{0, 1, 0};
+  double len = 0;
+  double sExt = 0;  // extent along u (len * max cv.x)
+  uint32_t cvOff = 0;
+  uint16_t cvCount = 0;
+};
+
+struct LocalFeather {
+  bool packable = false;
+  bool unopened = false;
+  double reach = 0;            // bound on |p| for every point in any packed state
+  double yMin = 0, yMax = 0;   // lateral footprint (bound over packed states)
+  double totalLength = 0;
+  std::vector<dvec3> shaft;    // polyline from the follicle to the tip, feather-local
+  std::vector<double> shaftRad;
+  std::vector<LocalKey> keys;  // left vane first, ascending rp within a vane
+  uint32_t leftKeys = 0;
+  std::vector<dvec3> cvs;      // key barb control vertices, barb-local unit frame
+  uint32_t pointCount = 0;
+};
+
+void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, LocalFeather& L) {
+  const feather::FeatherParams& p = coat.params[i];
+  L.unopened = !coat.age.empty() && coat.age[i] < o.openingAge;
+  L.totalLength = p.totalLength();
+  L.shaft.clear();
+  L.shaftRad.clear();
+  L.keys.clear();
+  L.cvs.clear();
+  L.leftKeys = 0;
+  const int segs = std::max(2, o.shaftSamples);
+  if (L.unopened) {
+    // 8.3: a pin or partly opened feather is straight and stiff.
+    const double r = 0.5 * p.rachisWidth;
+    for (int k = 0; k <= segs; ++k) {
+      L.shaft.emplace_back(L.totalLength * k / segs, 0, 0);
+      L.shaftRad.push_back(r);
+    }
+  } else {
+    const double wBase = p.calamusWidthRatio * p.rachisWidth;
+    if (p.calamusLength > 0) {
+      L.shaft.emplace_back(0, 0, 0);
+      L.shaftRad.push_back(0.5 * wBase);
+      L.shaft.emplace_back(0.5 * p.calamusLength, 0, 0);
+      L.shaftRad.push_back(0.25 * (wBase + p.rachisWidth));
+    }
+    for (int k = 0; k <= segs; ++k) {
+      const feather::RachisFrame f = feather::rachisFrame(p, static_cast<double>(k) / segs);
+      L.shaft.push_back(f.point);
+      L.shaftRad.push_back(0.5 * f.width);
+    }
+    // Refined key barbs (6.3.3: the default tip barb becomes a real key barb; more key barbs pack the
+    // vane at a finer resolution without changing its shape).
+    std::vector<glm::dvec3> shape;
+    for (int v = 0; v < 2; ++v) {
+      const std::vector<feather::KeyBarb> eff = feather::effectiveKeyBarbs(p, v);
+      std::vector<feather::KeyBarb> keys = eff;
+      const int nk = std::max(2, o.keyBarbsPerVane);
+      for (int k = 0; k < nk; ++k) {
+        const double rp = static_cast<double>(k) / (nk - 1);
+        bool present = false;
+        for (const auto& e : eff) present = present || std::abs(e.rp - rp) < 1e-9;
+        if (present) continue;
+        feather::barbShapeAt(eff, rp, shape);
+        keys.push_back({rp, shape});
+      }
+      std::stable_sort(keys.begin(), keys.end(), [](const feather::KeyBarb& a, const feather::KeyBarb& b) { return a.rp < b.rp; });
+      const feather::VaneParams& vp = p.vane(v);
+      const double side = v == 0 ? 1.0 : -1.0;
+      for (const auto& kb : keys) {
+        LocalKey k;
+        k.rp = kb.rp;
+        k.vane = static_cast<uint8_t>(v);
+        const feather::RachisFrame f = feather::rachisFrame(p, kb.rp);
+        const double angle = std::clamp(vp.baseAngle * (1 - kb.rp) + vp.tipAngle * kb.rp, 0.01, kPi - 0.01);
+        const double ca = std::cos(angle), sa = std::sin(angle);
+        k.u = ca * f.tangent + (side * sa) * f.left;
+        k.w = sa * f.tangent - (side * ca) * f.left;
+        k.d = f.dorsal;
+        k.left = f.left;
+        k.root = f.point + (side * 0.5 * f.width) * f.left;
+        k.len = p.barbLengthAt(v, kb.rp);
+        k.cvOff = static_cast<uint32_t>(L.cvs.size());
+        k.cvCount = static_cast<uint16_t>(kb.cvs.size());
+        double xmax = 0;
+        for (const auto& c : kb.cvs) {
+          L.cvs.push_back(c);
+          xmax = std::max(xmax, c.x);
+        }
+        k.sExt = k.len * xmax;
+        L.keys.push_back(k);
+        if (v == 0) ++L.leftKeys;
+      }
+    }
+  }
+  // Bounds over every packed state: elevation is a rotation about the follicle, flattening moves control
+  // vertices toward the barb's plane and the lift rotates a barb about its root, so |p| <= |root| + len |cv|.
+  double reach = 0, yMin = 0, yMax = 0;
+  for (size_t k = 0; k < L.shaft.size(); ++k) {
+    reach = std::max(reach, glm::length(L.shaft[k]) + L.shaftRad[k]);
+    yMin = std::min(yMin, L.shaft[k].y - L.shaftRad[k]);
+    yMax = std::max(yMax, L.shaft[k].y + L.shaftRad[k]);
+  }
+  for (const LocalKey& k : L.keys) {
+    double cm = 0;
+    for (uint32_t c = 0; c < k.cvCount; ++c) cm = std::max(cm, glm::length(L.cvs[k.cvOff + c]));
+    reach = std::max(reach, glm::length(k.root) + k.len * cm);
+    yMin = std::min(yMin, k.root.y - k.len * cm);
+    yMax = std::max(yMax, k.root.y + k.len * cm);
+  }
+  L.reach = reach;
+  L.yMin = yMin;
+  L.yMax = yMax;
+  const uint32_t barbPts = static_cast<uint32_t>(std::max(1, o.barbSamples));
+  L.pointCount = static_cast<uint32_t>(L.shaft.size()) + static_cast<uint32_t>(L.keys.size()) * barbPts;
+}
+
+// ------------------------------------------------------------------ context
+
+struct Candidate {
+  double t, b, n;   // follicle frame: along T, B, N
+  double rad;       // thickness radius of the point
+  bool skin;
+};
+
+struct Scratch {
+  std::vector<Candidate> cand;
+  std::vector<double> hf, psiMin, shaftRadBin;
+  std::vector<double> bh, bhRaw;        // barb field bins
+  std::vector<glm::dvec3> curve, flat;  // barb samples
+  std::vector<glm::dvec3> cvs;
+  PackStats stats;
+  std::vector<BarbField> fields;
+};
+
+struct Context {
+  Context(const SkinMesh& s, const CoatFeathers& c, const PackOptions& o) : skin(s), coat(c), opt(o) {}
+  const SkinMesh& skin;
+  const CoatFeathers& coat;
+  const PackOptions& opt;
+  double clearance = 0, skinClearance = 0;
+  std::vector<LocalFeather> local;
+  std::vector<uint32_t> order, pos;  // pos[i] = position in order, UINT32_MAX if not packed
+  // dependency graph (CSR)
+  std::vector<uint32_t> depOff, deps, succOff, succ;
+  detail::PointGrid originGrid;  // over origins of packed feathers, indexed by position in `order`
+  double maxReach = 0;
+  // skin samples
+  std::vector<glm::dvec3> skinPts;
+  detail::PointGrid skinGrid;
+  std::vector<double> fixed;
+};
+
+dvec3 toFrame(const FeatherFrame& F, const dvec3& q) {
+  const dvec3 r = q - F.origin;
+  return {glm::dot(r, F.tangent), glm::dot(r, F.binormal), glm::dot(r, F.normal)};
+}
+
+// Rotation by elevation e in the follicle frame (t, b, n): local (x, y, z) -> (x c - z s, y, x s + z c).
+struct Rot {
+  double c, s;
+  dvec3 operator()(const dvec3& p) const { return {p.x * c - p.z * s, p.y, p.x * s + p.z * c}; }
+};
+
+bool inFootprint(const LocalFeather& L, double t, double b, double n, double margin) {
+  if (t < 0 || t > L.reach + margin) return false;
+  if (b < L.yMin - margin || b > L.yMax + margin) return false;
+  return t * t + b * b + n * n <= (L.reach + margin) * (L.reach + margin);
+}
+
+// Minimum of the shaft's polar angle psi(r) per radius bin, over the shaft polyline (and its extension
+// along the tip tangent to `rMax`), and the largest shaft radius per bin. Exact for the polyline: the polar
+// angle is monotone along a straight segment, so a bin's minimum sits at a segment end or a bin edge.
+void shaftProfile(const LocalFeather& L, double rMax, int bins, bool extend, std::vector<double>& psiMin,
+                  std::vector<double>& radBin) {
+  psiMin.assign(bins, kInf);
+  radBin.assign(bins, 0.0);
+  const double cell = rMax / bins;
+  auto binOf = [&](double r) { return std::min(bins - 1, std::max(0, static_cast<int>(std::floor(r / cell)))); };
+  auto note = [&](int b, double psi, double rad) {
+    psiMin[b] = std::min(psiMin[b], psi);
+    radBin[b] = std::max(radBin[b], rad);
+  };
+  auto segment = [&](glm::dvec2 a, glm::dvec2 c, double ra, double rc) {
+    const glm::dvec2 dd = c - a;
+    const double la = glm::length(a), lc = glm::length(c);
+    const double psiA = la > 0 ? std::atan2(a.y, a.x) : std::atan2(dd.y, dd.x);
+    const double psiC = lc > 0 ? std::atan2(c.y, c.x) : psiA;
+    const double rad = std::max(ra, rc);
+    if (la <= rMax) note(binOf(la), psiA, rad);
+    if (lc <= rMax) note(binOf(lc), psiC, rad);
+    // Bin edges crossed by the segment: solve |a + s dd| = edge.
+    const double A = glm::dot(dd, dd);
+    if (A <= 0) return;
+    const double lo = std::min(la, lc), hi = std::max(la, lc);
+    // The segment's closest approach to the origin may lie inside it.
+    const double sMin = std::clamp(-glm::dot(a, dd) / A, 0.0, 1.0);
+    const double rLow = glm::length(a + sMin * dd);
+    const int b0 = binOf(std::min(lo, rLow)), b1 = binOf(std::min(hi, rMax));
+    for (int b = b0 + 1; b <= b1; ++b) {
+      const double e = b * cell;
+      const double B = 2 * glm::dot(a, dd), C = glm::dot(a, a) - e * e;
+      const double disc = B * B - 4 * A * C;
+      if (disc < 0) continue;
+      const double sq = std::sqrt(disc);
+      for (double s : {(-B - sq) / (2 * A), (-B + sq) / (2 * A)}) {
+        if (s < 0 || s > 1) continue;
+        const glm::dvec2 q = a + s * dd;
+        const double psi = std::atan2(q.y, q.x);
+        note(b - 1, psi, rad);
+        note(b, psi, rad);
+      }
+    }
+  };
+  for (size_t k = 0; k + 1 < L.shaft.size(); ++k) {
+    segment({L.shaft[k].x, L.shaft[k].z}, {L.shaft[k + 1].x, L.shaft[k + 1].z}, L.shaftRad[k], L.shaftRad[k + 1]);
+  }
+  if (extend && L.shaft.size() >= 2) {
+    const glm::dvec2 tip(L.shaft.back().x, L.shaft.back().z);
+    const glm::dvec2 prev(L.shaft[L.shaft.size() - 2].x, L.shaft[L.shaft.size() - 2].z);
+    glm::dvec2 dir = tip - prev;
+    const double ld = glm::length(dir);
+    if (ld > 0) {
+      dir /= ld;
+      // Extend until the radius exceeds rMax.
+      const double bq = glm::dot(tip, dir), cq = glm::dot(tip, tip) - rMax * rMax;
+      const double disc = bq * bq - cq;
+      const double s = disc > 0 ? -bq + std::sqrt(disc) : 0.0;
+      if (s > 0) segment(tip, tip + s * dir, 0.0, 0.0);
+    }
+  }
+}
+
+// Fits one key barb to its height field (6.3.3). Curve samples are in the barb slicing plane: x = along
+// (scene units from the root), z = up. Returns the flattening fraction mu and the lift angle alpha.
+struct BarbFit {
+  double mu = 0, alpha = 0;
+  bool resolved = true;
+};
+
+// Samples (s, z) of the barb: cvs in barb-local unit frame (x along, y toward tip, z dorsal), scaled by len,
+// after flattening mu and lift alpha.
+void barbSamples(const std::vector<glm::dvec3>& cvs, double len, double mu, double alpha, int count,
+                 std::vector<glm::dvec3>& out, std::vector<glm::dvec3>& tmp) {
+  tmp.resize(cvs.size());
+  const double ca = std::cos(alpha), sa = std::sin(alpha);
+  for (size_t j = 0; j < cvs.size(); ++j) {
+    const double z = cvs[j].z + mu * std::max(0.0, -cvs[j].z);
+    tmp[j] = {cvs[j].x * ca - z * sa, cvs[j].y, cvs[j].x * sa + z * ca};
+  }
+  out.resize(count);
+  for (int k = 0; k < count; ++k) {
+    const double u = static_cast<double>(k) / (count - 1);
+    out[k] = len * feather::bezierPoint(tmp.data(), tmp.size(), u);
+  }
+}
+
+// Largest field value over the bins overlapping [s0, s1].
+double fieldMax(const std::vector<double>& bh, double cell, double s0, double s1) {
+  if (s1 < 0) return -kInf;
+  const int nb = static_cast<int>(bh.size());
+  const int b0 = std::max(0, static_cast<int>(std::floor(s0 / cell)));
+  const int b1 = std::min(nb - 1, static_cast<int>(std::floor(s1 / cell)));
+  double m = -kInf;
+  for (int b = b0; b <= b1; ++b) m = std::max(m, bh[b]);
+  return m;
+}
+
+// Does the sampled curve clear the field everywhere beyond the root zone?
+bool clears(const std::vector<glm::dvec3>& c, const std::vector<double>& bh, double cell, double sRoot) {
+  for (size_t k = 0; k + 1 < c.size(); ++k) {
+    const double s0 = std::min(c[k].x, c[k + 1].x), s1 = std::max(c[k].x, c[k + 1].x);
+    if (s1 < sRoot) continue;
+    const double H = fieldMax(bh, cell, std::max(s0, 0.0), s1);
+    if (H == -kInf) continue;
+    if (c[k].z < H || c[k + 1].z < H) return false;
+  }
+  return true;
+}
+
+BarbFit fitBarb(const std::vector<glm::dvec3>& cvs, double len, double sExt, const std::vector<double>& bh,
+                const PackOptions& o, Scratch& S) {
+  BarbFit fit;
+  const int nb = static_cast<int>(bh.size());
+  const double cell = sExt / nb;
+  const int samples = 4 * nb + 1;
+  const double sRoot = 0.05 * sExt;  // the root zone belongs to the shaft (it sits on the rachis)
+  barbSamples(cvs, len, 0, 0, samples, S.curve, S.cvs);
+  if (clears(S.curve, bh, cell, sRoot)) return fit;
+  // Flattening lift profile f(u) = len * sum B_j(u) max(0, -z_j).
+  S.flat.resize(cvs.size());
+  for (size_t j = 0; j < cvs.size(); ++j) S.flat[j] = {0, 0, std::max(0.0, -cvs[j].z)};
+  double mu = 0;
+  bool feasible = true;
+  for (size_t k = 0; k + 1 < S.curve.size(); ++k) {
+    const double s0 = std::min(S.curve[k].x, S.curve[k + 1].x), s1 = std::max(S.curve[k].x, S.curve[k + 1].x);
+    if (s1 < sRoot) continue;
+    const double H = fieldMax(bh, cell, std::max(s0, 0.0), s1);
+    if (H == -kInf) continue;
+    for (size_t e : {k, k + 1}) {
+      const double z = S.curve[e].z;
+      if (z >= H) continue;
+      const double u = static_cast<double>(e) / (samples - 1);
+      const double f = len * feather::bezierPoint(S.flat.data(), S.flat.size(), u).z;
+      if (f <= 1e-12 * len) {
+        feasible = false;
+        continue;
+      }
+      mu = std::max(mu, (H - z) / f);
+    }
+  }
+  if (mu > o.maxFlatten) {
+    mu = o.maxFlatten;
+    feasible = false;
+  }
+  fit.mu = mu;
+  if (feasible) {
+    // Guard against sampling slop: confirm, else fall through to the lift.
+    barbSamples(cvs, len, mu, 0, samples, S.curve, S.cvs);
+    if (clears(S.curve, bh, cell, sRoot)) return fit;
+  }
+  // Lift: rotate the flattened barb about its root (monotone in alpha for a barb pointing away from the
+  // rachis); bisection for the smallest angle that clears.
+  double lo = 0, hi = o.maxBarbLift;
+  barbSamples(cvs, len, mu, hi, samples, S.curve, S.cvs);
+  if (!clears(S.curve, bh, cell, sRoot)) {
+    fit.alpha = hi;
+    fit.resolved = false;
+    return fit;
+  }
+  for (int it = 0; it < 30; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    barbSamples(cvs, len, mu, mid, samples, S.curve, S.cvs);
+    if (clears(S.curve, bh, cell, sRoot)) hi = mid;
+    else lo = mid;
+  }
+  fit.alpha = hi;
+  return fit;
+}
+
+struct Output {
+  std::vector<double>& elevation;
+  std::vector<feather::FeatherParams>& params;
+  std::vector<uint8_t>& barbsChanged;
+  std::vector<uint32_t>& pointOffset;
+  std::vector<glm::vec4>& points;
+  std::vector<glm::dvec4>& bounds;
+};
+
+// Packs feather i against its dependencies' packed points (already in `out`) and the skin.
+void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
+  const LocalFeather& L = ctx.local[i];
+  const FeatherFrame& F = ctx.coat.frames[i];
+  const PackOptions& o = ctx.opt;
+  PackStats& st = S.stats;
+  ++st.recomputed;
+  // Candidate points in the follicle frame (6.3.2: "the data points of the surrounding feathers").
+  S.cand.clear();
+  const double margin = 0;
+  for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k) {
+    const uint32_t j = ctx.deps[k];
+    const glm::dvec4& bj = out.bounds[j];
+    const dvec3 c = toFrame(F, dvec3(bj));
+    if (c.x + bj.w < 0) continue;
+    if (c.x - bj.w > L.reach || c.y + bj.w < L.yMin || c.y - bj.w > L.yMax) continue;
+    if (glm::length(c) > L.reach + bj.w) continue;
+    for (uint32_t q = out.pointOffset[j]; q < out.pointOffset[j + 1]; ++q) {
+      const glm::vec4& pq = out.points[q];
+      const dvec3 l = toFrame(F, dvec3(pq.x, pq.y, pq.z));
+      if (!inFootprint(L, l.x, l.y, l.z, pq.w + margin)) continue;
+      S.cand.push_back({l.x, l.y, l.z, pq.w, false});
+    }
+  }
+  if (o.skin && !ctx.skinPts.empty()) {
+    // World bounds of the footprint box (t in [0, R], b in [yMin, yMax], n in [-R, R]) clipped to the ball.
+    detail::Box box;
+    for (int k = 0; k < 8; ++k) {
+      const dvec3 lp((k & 1) ? L.reach : 0.0, (k & 2) ? L.yMax : L.yMin, (k & 4) ? L.reach : -L.reach);
+      box.add(F.origin + lp.x * F.tangent + lp.y * F.binormal + lp.z * F.normal);
+    }
+    box.lo = glm::max(box.lo, F.origin - dvec3(L.reach));
+    box.hi = glm::min(box.hi, F.origin + dvec3(L.reach));
+    ctx.skinGrid.query(box.lo, box.hi, [&](uint32_t k) {
+      const dvec3 l = toFrame(F, ctx.skinPts[k]);
+      if (!inFootprint(L, l.x, l.y, l.z, 0)) return;
+      S.cand.push_back({l.x, l.y, l.z, 0.0, true});
+    });
+  }
+  st.candidatePoints += S.cand.size();
+
+  // ---- 6.3.2 shaft rotation
+  const double rMax = L.reach;
+  const int bins = std::max(4, o.heightFieldBins);
+  const double cell = rMax / bins;
+  const double ramp = std::max(1e-12, o.baseAllowance * L.totalLength);
+  double e;
+  const double fixedE = ctx.fixed.empty() ? kNaN : ctx.fixed[i];
+  if (!std::isnan(fixedE)) {
+    e = fixedE;
+    ++st.fixed;
+  } else {
+    shaftProfile(L, rMax, bins, o.extendShaft, S.psiMin, S.shaftRadBin);
+    S.hf.assign(bins, -kInf);
+    for (const Candidate& c : S.cand) {
+      const double r = std::hypot(c.t, c.n);
+      if (!(r > 1e-12 * rMax) || r > rMax) continue;
+      const int b = std::min(bins - 1, static_cast<int>(r / cell));
+      if (S.psiMin[b] == kInf) continue;  // beyond the shaft's reach
+      const double phi = std::atan2(c.n, c.t);
+      const double gap = c.skin ? (S.shaftRadBin[b] + ctx.skinClearance) * std::min(1.0, r / ramp)
+                                : c.rad + S.shaftRadBin[b] + ctx.clearance;
+      const double delta = std::asin(std::min(1.0, gap / r));
+      S.hf[b] = std::max(S.hf[b], phi + delta);
+    }
+    double req = -kInf;
+    for (int b = 0; b < bins; ++b)
+      if (S.hf[b] > -kInf && S.psiMin[b] < kInf) req = std::max(req, S.hf[b] - S.psiMin[b]);
+    if (req == -kInf || req <= o.minElevation) ++st.free;
+    e = std::max(o.minElevation, req);
+    if (e > o.maxElevation) {
+      ++st.shaftClamped;
+      e = o.maxElevation;
+    }
+  }
+  if (L.unopened) ++st.unopened;
+  out.elevation[i] = e;
+  const Rot R{std::cos(e), std::sin(e)};
+
+  // ---- 6.3.3 barb elevation
+  const size_t nKeys = L.keys.size();
+  // Final control vertices per key (flattened/lifted), written into the packed params.
+  feather::FeatherParams& P = out.params[i];
+  P = ctx.coat.params[i];
+  bool anyChanged = false;
+  const int fb = std::max(2, o.barbFieldBins);
+  std::vector<feather::KeyBarb> vaneKeys[2];
+  for (size_t kk = 0; kk < nKeys; ++kk) {
+    const LocalKey& k = L.keys[kk];
+    std::vector<glm::dvec3> cvs(L.cvs.begin() + k.cvOff, L.cvs.begin() + k.cvOff + k.cvCount);
+    BarbFit fit;
+    if (o.elevateBarbs && !L.unopened && k.sExt > 0) {
+      const dvec3 root = R(k.root), u = R(k.u), d = R(k.d), left = R(k.left);
+      const double side = k.vane == 0 ? 1.0 : -1.0;
+      const size_t first = k.vane == 0 ? 0 : L.leftKeys;
+      const size_t last = k.vane == 0 ? L.leftKeys : nKeys;
+      const bool hasPrev = kk > first, hasNext = kk + 1 < last;
+      dvec3 rootPrev{0}, wPrev{0}, rootNext{0}, wNext{0};
+      if (hasPrev) { rootPrev = R(L.keys[kk - 1].root); wPrev = R(L.keys[kk - 1].w); }
+      if (hasNext) { rootNext = R(L.keys[kk + 1].root); wNext = R(L.keys[kk + 1].w); }
+      const double bcell = k.sExt / fb;
+      S.bh.assign(fb, -kInf);
+      if (o.captureFields) S.bhRaw.assign(fb, -kInf);
+      const double sideTol = 0.5 * ctx.coat.params[i].rachisWidth;
+      const double rootDist = glm::length(k.root);
+      for (const Candidate& c : S.cand) {
+        const dvec3 q(c.t, c.b, c.n);
+        const dvec3 rq = q - root;
+        if (side * glm::dot(rq, left) < -sideTol) continue;
+        if (hasPrev && glm::dot(q - rootPrev, wPrev) < 0) continue;
+        if (hasNext && glm::dot(q - rootNext, wNext) > 0) continue;
+        const double s = glm::dot(rq, u);
+        if (s < 0 || s > k.sExt) continue;
+        const double h = glm::dot(rq, d);
+        const double gap = c.skin ? ctx.skinClearance * std::min(1.0, (rootDist + s) / ramp) : c.rad + ctx.clearance;
+        const int b = std::min(fb - 1, static_cast<int>(s / bcell));
+        S.bh[b] = std::max(S.bh[b], h + gap);
+        if (o.captureFields) S.bhRaw[b] = std::max(S.bhRaw[b], h);
+      }
+      fit = fitBarb(cvs, k.len, k.sExt, S.bh, o, S);
+      if (fit.mu > 0 || fit.alpha > 0) {
+        ++st.barbsElevated;
+        anyChanged = true;
+      }
+      if (fit.alpha > 0) ++st.barbsLifted;
+      if (!fit.resolved) ++st.barbsUnresolved;
+      if (o.captureFields) {
+        BarbField bf;
+        bf.feather = i;
+        bf.vane = k.vane;
+        bf.key = static_cast<uint16_t>(kk - first);
+        bf.root = F.origin + root.x * F.tangent + root.y * F.binormal + root.z * F.normal;
+        bf.along = u.x * F.tangent + u.y * F.binormal + u.z * F.normal;
+        bf.up = d.x * F.tangent + d.y * F.binormal + d.z * F.normal;
+        bf.length = k.sExt;
+        bf.field.origin = 0;
+        bf.field.cell = bcell;
+        bf.field.h.resize(fb);
+        for (int b = 0; b < fb; ++b) bf.field.h[b] = static_cast<float>(S.bhRaw[b]);
+        S.fields.push_back(std::move(bf));
+      }
+      if (fit.mu > 0 || fit.alpha > 0) {
+        const double ca = std::cos(fit.alpha), sa = std::sin(fit.alpha);
+        for (auto& c : cvs) {
+          const double z = c.z + fit.mu * std::max(0.0, -c.z);
+          c = {c.x * ca - z * sa, c.y, c.x * sa + z * ca};
+        }
+      }
+    }
+    if (!L.unopened) vaneKeys[k.vane].push_back({k.rp, cvs});
+  }
+  if (!L.unopened) {
+    P.left.keyBarbs = std::move(vaneKeys[0]);
+    P.right.keyBarbs = std::move(vaneKeys[1]);
+  }
+  out.barbsChanged[i] = anyChanged ? 1 : 0;
+
+  // ---- packed points for later feathers
+  uint32_t q = out.pointOffset[i];
+  double rad = 0;
+  auto emit = [&](const dvec3& local, double r) {
+    const dvec3 f = R(local);
+    const dvec3 w = F.origin + f.x * F.tangent + f.y * F.binormal + f.z * F.normal;
+    out.points[q++] = glm::vec4(static_cast<float>(w.x), static_cast<float>(w.y), static_cast<float>(w.z),
+                                static_cast<float>(r));
+    rad = std::max(rad, glm::length(f) + r);
+  };
+  for (size_t k = 0; k < L.shaft.size(); ++k) emit(L.shaft[k], L.shaftRad[k]);
+  const int bs = std::max(1, o.barbSamples);
+  for (size_t kk = 0; kk < nKeys; ++kk) {
+    const LocalKey& k = L.keys[kk];
+    const std::vector<feather::KeyBarb>& vk = k.vane == 0 ? P.left.keyBarbs : P.right.keyBarbs;
+    const size_t idx = k.vane == 0 ? kk : kk - L.leftKeys;
+    const std::vector<glm::dvec3>& cv = vk[idx].cvs;
+    for (int s = 1; s <= bs; ++s) {
+      const glm::dvec3 c = feather::bezierPoint(cv.data(), cv.size(), static_cast<double>(s) / bs);
+      emit(k.root + k.len * (c.x * k.u + c.y * k.w + c.z * k.d), 0.0);
+    }
+  }
+  PTERYLA_CHECK(q == out.pointOffset[i + 1], "packed point count mismatch");
+  // float rounding of the stored points: pad the sphere slightly
+  out.bounds[i] = glm::dvec4(F.origin, rad * (1 + 1e-6) + 1e-9);
+}
+
+// ------------------------------------------------------------------ setup
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  const size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + m, v.end());
+  return v[m];
+}
+
+void checkInput(const CoatFeathers& c, const PackOptions& o) {
+  const size_t n = c.size();
+  auto need = [&](size_t got, const char* what) {
+    if (got != n)
+      throw Error(std::string("CoatFeathers.") + what + " has " + std::to_string(got) + " entries, expected " +
+                      std::to_string(n),
+                  {}, what);
+  };
+  need(c.params.size(), "params");
+  need(c.frames.size(), "frames");
+  if (!c.tract.empty()) need(c.tract.size(), "tract");
+  if (!c.age.empty()) need(c.age.size(), "age");
+  if (!c.present.empty()) need(c.present.size(), "present");
+  if (!o.fixedElevation.empty() && o.fixedElevation.size() != n)
+    throw Error("fixedElevation has " + std::to_string(o.fixedElevation.size()) + " entries, expected " +
+                    std::to_string(n),
+                {}, "fixedElevation");
+  std::vector<uint8_t> seen(n, 0);
+  for (size_t k = 0; k < c.layerOrder.size(); ++k) {
+    const uint32_t i = c.layerOrder[k];
+    if (i >= n) throw Error("layer order names feather " + std::to_string(i) + " of " + std::to_string(n), {}, "layerOrder[" + std::to_string(k) + "]");
+    if (seen[i]) throw Error("layer order lists feather " + std::to_string(i) + " twice", {}, "layerOrder[" + std::to_string(k) + "]");
+    seen[i] = 1;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const FeatherFrame& f = c.frames[i];
+    for (const dvec3* v : {&f.origin, &f.normal, &f.tangent, &f.binormal})
+      if (!std::isfinite(v->x) || !std::isfinite(v->y) || !std::isfinite(v->z))
+        throw Error("feather frame is not finite", {}, "frames[" + std::to_string(i) + "]");
+  }
+  if (!(o.maxElevation >= o.minElevation)) throw Error("maxElevation below minElevation", {}, "maxElevation");
+  if (!(o.maxFlatten >= 0 && o.maxFlatten <= 2)) throw Error("maxFlatten must be in [0, 2]", {}, "maxFlatten");
+}
+
+void setup(Context& ctx) {
+  const CoatFeathers& coat = ctx.coat;
+  const PackOptions& o = ctx.opt;
+  const size_t n = coat.size();
+  ctx.fixed = o.fixedElevation;
+  ctx.order.clear();
+  if (coat.layerOrder.empty()) {
+    for (uint32_t i = 0; i < n; ++i) ctx.order.push_back(i);
+  } else {
+    ctx.order = coat.layerOrder;
+  }
+  ctx.order.erase(std::remove_if(ctx.order.begin(), ctx.order.end(),
+                                 [&](uint32_t i) { return !coat.present.empty() && coat.present[i] == 0; }),
+                  ctx.order.end());
+  ctx.pos.assign(n, UINT32_MAX);
+  for (size_t k = 0; k < ctx.order.size(); ++k) ctx.pos[ctx.order[k]] = static_cast<uint32_t>(k);
+
+  ctx.local.resize(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      ctx.local[i].packable = ctx.pos[i] != UINT32_MAX;
+      if (ctx.local[i].packable) buildLocal(coat, static_cast<uint32_t>(i), o, ctx.local[i]);
+      else ctx.local[i].pointCount = 0;
+    }
+  });
+
+  // Clearances.
+  std::vector<double> widths, reaches;
+  for (uint32_t i : ctx.order) {
+    widths.push_back(coat.params[i].rachisWidth);
+    reaches.push_back(ctx.local[i].reach);
+  }
+  ctx.clearance = o.clearance > 0 ? o.clearance : 0.25 * median(widths);
+  ctx.skinClearance = o.skinClearance > 0 ? o.skinClearance : ctx.clearance;
+  const double medReach = std::max(1e-12, median(reaches));
+  double maxReach = 0;
+  for (double r : reaches) maxReach = std::max(maxReach, r);
+  ctx.maxReach = maxReach;
+
+  // Dependency graph: j before i whose reach ball can touch i's footprint.
+  std::vector<glm::dvec3> origins(ctx.order.size());
+  for (size_t k = 0; k < ctx.order.size(); ++k) origins[k] = coat.frames[ctx.order[k]].origin;
+  detail::PointGrid& grid = ctx.originGrid;
+  grid.build(origins, std::max(maxReach, 1e-9));
+  std::vector<std::vector<uint32_t>> depLists(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ctx.order.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const uint32_t i = ctx.order[k];
+      const LocalFeather& L = ctx.local[i];
+      const FeatherFrame& F = coat.frames[i];
+      const double range = L.reach + maxReach;
+      std::vector<uint32_t>& d = depLists[i];
+      grid.query(F.origin - dvec3(range), F.origin + dvec3(range), [&](uint32_t kj) {
+        if (kj >= k) return;
+        const uint32_t j = ctx.order[kj];
+        const double Rj = ctx.local[j].reach;
+        const dvec3 c = toFrame(F, coat.frames[j].origin);
+        if (glm::length(c) > L.reach + Rj) return;
+        if (c.x < -Rj || c.y < L.yMin - Rj || c.y > L.yMax + Rj) return;
+        d.push_back(j);
+      });
+      std::sort(d.begin(), d.end());
+    }
+  });
+  ctx.depOff.assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) ctx.depOff[i + 1] = ctx.depOff[i] + static_cast<uint32_t>(depLists[i].size());
+  ctx.deps.resize(ctx.depOff[n]);
+  std::vector<uint32_t> succCount(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) {
+    std::copy(depLists[i].begin(), depLists[i].end(), ctx.deps.begin() + ctx.depOff[i]);
+    for (uint32_t j : depLists[i]) ++succCount[j + 1];
+  }
+  ctx.succOff.assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) ctx.succOff[i + 1] = ctx.succOff[i] + succCount[i + 1];
+  ctx.succ.resize(ctx.succOff[n]);
+  std::vector<uint32_t> fill(ctx.succOff.begin(), ctx.succOff.end() - 1);
+  for (uint32_t i = 0; i < n; ++i)
+    for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k) ctx.succ[fill[ctx.deps[k]]++] = i;
+
+  // Skin samples (9.1.2: the surface under the feather, including neighbouring polygons).
+  ctx.skinPts.clear();
+  if (o.skin && !ctx.skin.faces.empty()) {
+    const double h = o.skinSampleSpacing > 0 ? o.skinSampleSpacing : 0.05 * medReach;
+    std::vector<uint32_t> faceOff(ctx.skin.faces.size() + 1, 0);
+    std::vector<int> faceN(ctx.skin.faces.size());
+    for (size_t f = 0; f < ctx.skin.faces.size(); ++f) {
+      const auto& t = ctx.skin.faces[f];
+      const dvec3 a = ctx.skin.positions[t[0]], b = ctx.skin.positions[t[1]], c = ctx.skin.positions[t[2]];
+      const double le = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+      const int m = std::clamp(static_cast<int>(std::ceil(le / h)), 1, 32);
+      faceN[f] = m;
+      faceOff[f + 1] = faceOff[f] + static_cast<uint32_t>((m + 1) * (m + 2) / 2);
+    }
+    ctx.skinPts.resize(faceOff.back());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ctx.skin.faces.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t f = r.begin(); f < r.end(); ++f) {
+        const auto& t = ctx.skin.faces[f];
+        const dvec3 a = ctx.skin.positions[t[0]], b = ctx.skin.positions[t[1]], c = ctx.skin.positions[t[2]];
+        const int m = faceN[f];
+        uint32_t q = faceOff[f];
+        for (int x = 0; x <= m; ++x)
+          for (int y = 0; y <= m - x; ++y) {
+            const double u = static_cast<double>(x) / m, v = static_cast<double>(y) / m;
+            ctx.skinPts[q++] = a + u * (b - a) + v * (c - a);
+          }
+      }
+    });
+    ctx.skinGrid.build(ctx.skinPts, std::max(0.5 * medReach, 2 * h));
+  }
+}
+
+std::vector<uint32_t> pointOffsets(const Context& ctx) {
+  const size_t n = ctx.coat.size();
+  std::vector<uint32_t> off(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) off[i + 1] = off[i] + ctx.local[i].pointCount;
+  return off;
+}
+
+// Runs task(i) for every packed feather after all of its dependencies; deterministic results because
+// each task reads only its dependencies' outputs.
+template <class Task>
+void schedule(const Context& ctx, int threads, Task&& task) {
+  if (threads == 1 || ctx.order.size() < 64) {
+    for (uint32_t i : ctx.order) task(i);
+    return;
+  }
+  const size_t n = ctx.coat.size();
+  std::vector<std::atomic<uint32_t>> pending(n);
+  std::vector<uint32_t> ready;
+  for (uint32_t i : ctx.order) {
+    const uint32_t c = ctx.depOff[i + 1] - ctx.depOff[i];
+    pending[i].store(c, std::memory_order_relaxed);
+    if (c == 0) ready.push_back(i);
+  }
+  auto body = [&](uint32_t i, tbb::feeder<uint32_t>& feeder) {
+    task(i);
+    for (uint32_t k = ctx.succOff[i]; k < ctx.succOff[i + 1]; ++k) {
+      const uint32_t s = ctx.succ[k];
+      if (pending[s].fetch_sub(1, std::memory_order_acq_rel) == 1) feeder.add(s);
+    }
+  };
+  tbb::parallel_for_each(ready.begin(), ready.end(), body);
+}
+
+void initResult(const Context& ctx, PackResult& res) {
+  const size_t n = ctx.coat.size();
+  res.order = ctx.order;
+  res.elevation.assign(n, 0.0);
+  res.packedParams.resize(n);
+  res.barbsChanged.assign(n, 0);
+  res.recomputed.assign(n, 0);
+  res.pointOffset = pointOffsets(ctx);
+  res.points.assign(res.pointOffset.back(), glm::vec4(0));
+  res.bounds.assign(n, glm::dvec4(0));
+  res.barbFields.clear();
+  res.stats = {};
+}
+
+void finish(const Context& ctx, tbb::enumerable_thread_specific<Scratch>& scratch, PackResult& res,
+            std::chrono::steady_clock::time_point t0) {
+  PackStats& st = res.stats;
+  for (Scratch& s : scratch) {
+    st.recomputed += s.stats.recomputed;
+    st.fixed += s.stats.fixed;
+    st.unopened += s.stats.unopened;
+    st.free += s.stats.free;
+    st.shaftClamped += s.stats.shaftClamped;
+    st.barbsElevated += s.stats.barbsElevated;
+    st.barbsLifted += s.stats.barbsLifted;
+    st.barbsUnresolved += s.stats.barbsUnresolved;
+    st.candidatePoints += s.stats.candidatePoints;
+    for (auto& f : s.fields) res.barbFields.push_back(std::move(f));
+  }
+  std::sort(res.barbFields.begin(), res.barbFields.end(), [](const BarbField& a, const BarbField& b) {
+    return a.feather != b.feather ? a.feather < b.feather : (a.vane != b.vane ? a.vane < b.vane : a.key < b.key);
+  });
+  st.packed = ctx.order.size();
+  st.dependencies = ctx.deps.size();
+  st.skinSamples = ctx.skinPts.size();
+  // Feathers that are not packed keep their input parameters.
+  for (size_t i = 0; i < ctx.coat.size(); ++i)
+    if (!ctx.local[i].packable) res.packedParams[i] = ctx.coat.params[i];
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  checkInput(coat, options);
+  Context ctx(skin, coat, options);
+  auto run = [&](PackResult& res) {
+    setup(ctx);
+    initResult(ctx, res);
+    tbb::enumerable_thread_specific<Scratch> scratch;
+    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds};
+    schedule(ctx, options.threads, [&](uint32_t i) {
+      packFeather(ctx, i, scratch.local(), out);
+      res.recomputed[i] = 1;
+    });
+    finish(ctx, scratch, res, t0);
+  };
+  PackResult res;
+  if (options.threads >= 1) {
+    tbb::task_arena arena(options.threads);
+    arena.execute([&] { run(res); });
+  } else {
+    run(res);
+  }
+  return res;
+}
+
+PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& prev,
+                  const std::vector<uint32_t>& changed, const PackOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  checkInput(coat, options);
+  const size_t n = coat.size();
+  std::vector<uint32_t> order = coat.layerOrder;
+  if (order.empty())
+    for (uint32_t i = 0; i < n; ++i) order.push_back(i);
+  order.erase(std::remove_if(order.begin(), order.end(), [&](uint32_t i) { return !coat.present.empty() && coat.present[i] == 0; }),
+              order.end());
+  // The previous result must describe the same feathers in the same order.
+  if (prev.elevation.size() != n || prev.pointOffset.size() != n + 1 || prev.order != order || changed.size() * 2 > n)
+    return pack(skin, coat, options);
+  std::vector<uint8_t> isChanged(n, 0);
+  for (uint32_t c : changed) {
+    if (c >= n) throw Error("changed feather " + std::to_string(c) + " out of range", {}, "changed");
+    isChanged[c] = 1;
+  }
+  Context ctx(skin, coat, options);
+  PackResult res;
+  auto run = [&] {
+    setup(ctx);
+    initResult(ctx, res);
+    // Feathers whose old packed points (previous bounds) touch i's footprint: a changed feather that
+    // moved away must still dirty what it used to cover.
+    std::vector<uint8_t> touched(n, 0);
+    for (uint32_t j : changed) {
+      if (prev.bounds[j].w <= 0) continue;
+      const dvec3 c(prev.bounds[j]);
+      const double rj = prev.bounds[j].w;
+      const uint32_t pj = ctx.pos[j];
+      const double range = rj + ctx.maxReach;
+      ctx.originGrid.query(c - dvec3(range), c + dvec3(range), [&](uint32_t ki) {
+        const uint32_t i = ctx.order[ki];
+        if (pj != UINT32_MAX && ki <= pj) return;
+        const LocalFeather& L = ctx.local[i];
+        const dvec3 l = toFrame(coat.frames[i], c);
+        if (glm::length(l) > L.reach + rj || l.x < -rj || l.y < L.yMin - rj || l.y > L.yMax + rj) return;
+        touched[i] = 1;
+      });
+    }
+    std::vector<uint8_t> outChanged(n, 0);
+    tbb::enumerable_thread_specific<Scratch> scratch;
+    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds};
+    schedule(ctx, options.threads, [&](uint32_t i) {
+      bool dirty = isChanged[i] || touched[i];
+      for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !dirty; ++k) dirty = outChanged[ctx.deps[k]] != 0;
+      const uint32_t cnt = res.pointOffset[i + 1] - res.pointOffset[i];
+      const bool sameShape = prev.pointOffset[i + 1] - prev.pointOffset[i] == cnt;
+      if (!dirty && sameShape) {
+        res.elevation[i] = prev.elevation[i];
+        res.packedParams[i] = prev.packedParams[i];
+        res.barbsChanged[i] = prev.barbsChanged[i];
+        std::copy(prev.points.begin() + prev.pointOffset[i], prev.points.begin() + prev.pointOffset[i + 1],
+                  res.points.begin() + res.pointOffset[i]);
+        res.bounds[i] = prev.bounds[i];
+        return;
+      }
+      packFeather(ctx, i, scratch.local(), out);
+      res.recomputed[i] = 1;
+      bool diff = !sameShape || std::memcmp(&res.elevation[i], &prev.elevation[i], sizeof(double)) != 0 ||
+                  res.bounds[i] != prev.bounds[i];
+      if (!diff)
+        diff = std::memcmp(res.points.data() + res.pointOffset[i], prev.points.data() + prev.pointOffset[i],
+                           cnt * sizeof(glm::vec4)) != 0;
+      outChanged[i] = diff ? 1 : 0;
+    });
+    finish(ctx, scratch, res, t0);
+  };
+  if (options.threads >= 1) {
+    tbb::task_arena arena(options.threads);
+    arena.execute(run);
+  } else {
+    run();
+  }
+  return res;
+}
+
+std::vector<uint32_t> changedFeathers(const CoatFeathers& a, const CoatFeathers& b, const std::vector<double>& fa,
+                                      const std::vector<double>& fb) {
+  PTERYLA_CHECK(a.size() == b.size(), "changedFeathers needs coats of equal size");
+  std::vector<uint32_t> out;
+  auto bitsEq = [](double x, double y) { return std::memcmp(&x, &y, sizeof(double)) == 0; };
+  for (uint32_t i = 0; i < a.size(); ++i) {
+    const FeatherFrame &x = a.frames[i], &y = b.frames[i];
+    bool d = x.origin != y.origin || x.normal != y.normal || x.tangent != y.tangent || x.binormal != y.binormal;
+    d = d || a.params[i] != b.params[i];
+    const double ageA = a.age.empty() ? 1.0 : a.age[i], ageB = b.age.empty() ? 1.0 : b.age[i];
+    d = d || !bitsEq(ageA, ageB);
+    const uint8_t pa = a.present.empty() ? 1 : a.present[i], pb = b.present.empty() ? 1 : b.present[i];
+    d = d || pa != pb;
+    const double ea = fa.empty() ? kNaN : fa[i], eb = fb.empty() ? kNaN : fb[i];
+    d = d || !(bitsEq(ea, eb) || (std::isnan(ea) && std::isnan(eb)));
+    if (d) out.push_back(i);
+  }
+  return out;
+}
+
+std::vector<PlacedKeyBarb> placedKeyBarbs(const CoatFeathers& coat, const PackResult& result, uint32_t i) {
+  PTERYLA_CHECK(i < coat.size() && i < result.packedParams.size(), "feather index out of range");
+  const feather::FeatherParams& p = result.packedParams[i];
+  const FeatherFrame& F = coat.frames[i];
+  const double e = result.elevation[i];
+  std::vector<PlacedKeyBarb> out;
+  for (int v = 0; v < 2; ++v) {
+    const double side = v == 0 ? 1.0 : -1.0;
+    const feather::VaneParams& vp = p.vane(v);
+    for (const feather::KeyBarb& kb : feather::effectiveKeyBarbs(p, v)) {
+      const feather::RachisFrame f = feather::rachisFrame(p, kb.rp);
+      const double angle = std::clamp(vp.baseAngle * (1 - kb.rp) + vp.tipAngle * kb.rp, 0.01, kPi - 0.01);
+      const dvec3 u = std::cos(angle) * f.tangent + (side * std::sin(angle)) * f.left;
+      const dvec3 w = std::sin(angle) * f.tangent - (side * std::cos(angle)) * f.left;
+      const dvec3 root = f.point + (side * 0.5 * f.width) * f.left;
+      const double len = p.barbLengthAt(v, kb.rp);
+      PlacedKeyBarb pk;
+      pk.vane = static_cast<uint8_t>(v);
+      pk.rp = kb.rp;
+      pk.length = len;
+      pk.root = placePoint(F, e, root);
+      pk.along = placeDirection(F, e, u);
+      pk.up = placeDirection(F, e, f.dorsal);
+      for (const auto& c : kb.cvs) pk.cvs.push_back(placePoint(F, e, root + len * (c.x * u + c.y * w + c.z * f.dorsal)));
+      out.push_back(std::move(pk));
+    }
+  }
+  return out;
+}
+
+}  // namespace pteryla::coat

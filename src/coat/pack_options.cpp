@@ -1,0 +1,71 @@
+// The scene file's "packing" object (docs/packing.md): packing settings of Streit 2003, 6.3.2-6.3.3 and
+// the styling selections of 8.3.
+#include <cmath>
+#include <limits>
+
+#include "pteryla/coat/pack.hpp"
+#include "pteryla/core/error.hpp"
+
+namespace pteryla::coat {
+
+namespace {
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}  // namespace
+
+PackOptions parsePackOptions(JsonReader& r) {
+  PackOptions o;
+  o.clearance = r.number("clearance", 0.0, 0.0, kInf);
+  o.skinClearance = r.number("skin_clearance", 0.0, 0.0, kInf);
+  o.minElevation = r.number("min_elevation_deg", 0.0, -90.0, 180.0) * kDeg;
+  o.maxElevation = r.number("max_elevation_deg", 90.0, -90.0, 180.0) * kDeg;
+  if (o.maxElevation < o.minElevation) r.fail("max_elevation_deg", "must not be below min_elevation_deg");
+  o.openingAge = r.number("opening_age", o.openingAge, 0.0, 1.0);
+  o.baseAllowance = r.number("base_allowance", o.baseAllowance, 0.0, 1.0);
+  o.keyBarbsPerVane = static_cast<int>(r.integer("key_barbs_per_vane", o.keyBarbsPerVane, 2, 64));
+  o.barbSamples = static_cast<int>(r.integer("barb_samples", o.barbSamples, 1, 64));
+  o.shaftSamples = static_cast<int>(r.integer("shaft_samples", o.shaftSamples, 2, 256));
+  o.heightFieldBins = static_cast<int>(r.integer("height_field_bins", o.heightFieldBins, 4, 4096));
+  o.barbFieldBins = static_cast<int>(r.integer("barb_field_bins", o.barbFieldBins, 2, 1024));
+  o.maxFlatten = r.number("max_flatten", o.maxFlatten, 0.0, 2.0);
+  o.maxBarbLift = r.number("max_barb_lift_deg", o.maxBarbLift / kDeg, 0.0, 90.0) * kDeg;
+  o.elevateBarbs = r.boolean("elevate_barbs", o.elevateBarbs);
+  o.extendShaft = r.boolean("extend_shaft", o.extendShaft);
+  o.skin = r.boolean("skin", o.skin);
+  o.skinSampleSpacing = r.number("skin_sample_spacing", 0.0, 0.0, kInf);
+  o.threads = static_cast<int>(r.integer("threads", 0, 0, 1024));
+  for (JsonReader& s : r.objects("styling")) o.styling.push_back(parseStyleSelection(s));
+  r.finish();
+  return o;
+}
+
+Json packOptionsToJson(const PackOptions& o) {
+  const PackOptions d;
+  Json j = Json::object();
+  if (o.clearance != d.clearance) j["clearance"] = o.clearance;
+  if (o.skinClearance != d.skinClearance) j["skin_clearance"] = o.skinClearance;
+  if (o.minElevation != d.minElevation) j["min_elevation_deg"] = o.minElevation / kDeg;
+  if (o.maxElevation != d.maxElevation) j["max_elevation_deg"] = o.maxElevation / kDeg;
+  if (o.openingAge != d.openingAge) j["opening_age"] = o.openingAge;
+  if (o.baseAllowance != d.baseAllowance) j["base_allowance"] = o.baseAllowance;
+  if (o.keyBarbsPerVane != d.keyBarbsPerVane) j["key_barbs_per_vane"] = o.keyBarbsPerVane;
+  if (o.barbSamples != d.barbSamples) j["barb_samples"] = o.barbSamples;
+  if (o.shaftSamples != d.shaftSamples) j["shaft_samples"] = o.shaftSamples;
+  if (o.heightFieldBins != d.heightFieldBins) j["height_field_bins"] = o.heightFieldBins;
+  if (o.barbFieldBins != d.barbFieldBins) j["barb_field_bins"] = o.barbFieldBins;
+  if (o.maxFlatten != d.maxFlatten) j["max_flatten"] = o.maxFlatten;
+  if (o.maxBarbLift != d.maxBarbLift) j["max_barb_lift_deg"] = o.maxBarbLift / kDeg;
+  if (o.elevateBarbs != d.elevateBarbs) j["elevate_barbs"] = o.elevateBarbs;
+  if (o.extendShaft != d.extendShaft) j["extend_shaft"] = o.extendShaft;
+  if (o.skin != d.skin) j["skin"] = o.skin;
+  if (o.skinSampleSpacing != d.skinSampleSpacing) j["skin_sample_spacing"] = o.skinSampleSpacing;
+  if (o.threads != d.threads) j["threads"] = o.threads;
+  if (!o.styling.empty()) {
+    Json a = Json::array();
+    for (const auto& s : o.styling) a.push_back(styleSelectionToJson(s));
+    j["styling"] = a;
+  }
+  return j;
+}
+
+}  // namespace pteryla::coat

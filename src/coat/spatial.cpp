@@ -1,0 +1,433 @@
+// Spatial helpers for packing (Streit 2003, 6.3.2: "a subset of the surrounding feathers") and the coat
+// checker: uniform point grid, binned-SAH triangle BVH, and Moeller's triangle-triangle interval test
+// (T. Moeller, "A Fast Triangle-Triangle Intersection Test", J. Graphics Tools 2(2), 1997).
+#include "spatial.hpp"
+
+#include <algorithm>
+#include <array>
+
+#include <glm/geometric.hpp>
+
+#include "pteryla/core/error.hpp"
+
+namespace pteryla::coat::detail {
+
+// ---------------------------------------------------------------- PointGrid
+
+void PointGrid::build(const std::vector<glm::dvec3>& points, double cell) {
+  count_ = points.size();
+  offsets_.clear();
+  items_.clear();
+  if (points.empty()) return;
+  PTERYLA_CHECK(cell > 0 && std::isfinite(cell), "grid cell must be positive");
+  Box b;
+  for (const auto& p : points) b.add(p);
+  // Keep the cell count bounded (a few cells per point at most).
+  const glm::dvec3 ext = b.hi - b.lo;
+  double c = cell;
+  for (;;) {
+    const double n = std::floor(ext.x / c + 1) * std::floor(ext.y / c + 1) * std::floor(ext.z / c + 1);
+    if (n <= 4.0 * static_cast<double>(points.size()) + 64) break;
+    c *= 1.5;
+  }
+  cell_ = c;
+  origin_ = b.lo;
+  for (int k = 0; k < 3; ++k) dims_[k] = static_cast<int>(std::floor(ext[k] / c)) + 1;
+  const size_t cells = static_cast<size_t>(dims_.x) * dims_.y * dims_.z;
+  offsets_.assign(cells + 1, 0);
+  std::vector<uint32_t> cellOfPoint(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const glm::ivec3 q = cellOf(points[i]);
+    const size_t ci = (static_cast<size_t>(q.z) * dims_.y + q.y) * dims_.x + q.x;
+    cellOfPoint[i] = static_cast<uint32_t>(ci);
+    ++offsets_[ci + 1];
+  }
+  for (size_t i = 0; i < cells; ++i) offsets_[i + 1] += offsets_[i];
+  items_.resize(points.size());
+  std::vector<uint32_t> fill(offsets_.begin(), offsets_.end() - 1);
+  for (size_t i = 0; i < points.size(); ++i) items_[fill[cellOfPoint[i]]++] = static_cast<uint32_t>(i);
+}
+
+// ---------------------------------------------------------------- TriangleBvh
+
+namespace {
+
+struct PrimInfo {
+  Box box;
+  glm::dvec3 centroid;
+};
+
+constexpr int kBins = 16;
+constexpr uint32_t kLeafSize = 4;
+constexpr int kMaxSahDepth = 48;
+
+struct Builder {
+  std::vector<PrimInfo> info;
+  std::vector<uint32_t>& prims;
+  std::vector<TriangleBvh::Node>& nodes;
+
+  uint32_t build(uint32_t begin, uint32_t end, int depth) {
+    const uint32_t ni = static_cast<uint32_t>(nodes.size());
+    nodes.emplace_back();
+    Box bounds, cb;
+    for (uint32_t i = begin; i < end; ++i) {
+      bounds.add(info[prims[i]].box);
+      cb.add(info[prims[i]].centroid);
+    }
+    for (int k = 0; k < 3; ++k) {
+      nodes[ni].lo[k] = static_cast<float>(bounds.lo[k]);
+      nodes[ni].hi[k] = static_cast<float>(bounds.hi[k]);
+      // Round outward so float bounds contain the double geometry.
+      nodes[ni].lo[k] = std::nextafter(nodes[ni].lo[k], -std::numeric_limits<float>::infinity());
+      nodes[ni].hi[k] = std::nextafter(nodes[ni].hi[k], std::numeric_limits<float>::infinity());
+    }
+    const uint32_t count = end - begin;
+    auto makeLeaf = [&] {
+      nodes[ni].first = begin;
+      nodes[ni].count = count;
+      return ni;
+    };
+    if (count <= kLeafSize) return makeLeaf();
+    const glm::dvec3 ext = cb.hi - cb.lo;
+    int axis = 0;
+    if (ext.y > ext[axis]) axis = 1;
+    if (ext.z > ext[axis]) axis = 2;
+    uint32_t mid = begin;
+    bool split = false;
+    if (ext[axis] > 0 && depth < kMaxSahDepth) {
+      Box binBox[kBins];
+      uint32_t binCount[kBins] = {};
+      const double scale = kBins / ext[axis];
+      auto binOf = [&](uint32_t p) {
+        const int b = static_cast<int>((info[p].centroid[axis] - cb.lo[axis]) * scale);
+        return std::min(std::max(b, 0), kBins - 1);
+      };
+      for (uint32_t i = begin; i < end; ++i) {
+        const int b = binOf(prims[i]);
+        binBox[b].add(info[prims[i]].box);
+        ++binCount[b];
+      }
+      double rightArea[kBins];
+      uint32_t rightCount[kBins];
+      Box acc;
+      uint32_t cnt = 0;
+      for (int b = kBins - 1; b > 0; --b) {
+        acc.add(binBox[b]);
+        cnt += binCount[b];
+        rightArea[b] = acc.area();
+        rightCount[b] = cnt;
+      }
+      Box left;
+      uint32_t lc = 0;
+      double best = std::numeric_limits<double>::infinity();
+      int bestB = -1;
+      for (int b = 1; b < kBins; ++b) {
+        left.add(binBox[b - 1]);
+        lc += binCount[b - 1];
+        if (lc == 0 || rightCount[b] == 0) continue;
+        const double cost = left.area() * lc + rightArea[b] * rightCount[b];
+        if (cost < best) {
+          best = cost;
+          bestB = b;
+        }
+      }
+      if (bestB > 0) {
+        const double leafCost = bounds.area() * count;
+        if (best >= leafCost && count <= 2 * kLeafSize) return makeLeaf();
+        mid = static_cast<uint32_t>(std::partition(prims.begin() + begin, prims.begin() + end,
+                                                   [&](uint32_t p) { return binOf(p) < bestB; }) -
+                                    prims.begin());
+        split = mid > begin && mid < end;
+      }
+    }
+    if (!split) {
+      // Median by (centroid, index): a total order, so the split is deterministic.
+      mid = begin + count / 2;
+      std::nth_element(prims.begin() + begin, prims.begin() + mid, prims.begin() + end, [&](uint32_t a, uint32_t b) {
+        const double ca = info[a].centroid[axis], cb2 = info[b].centroid[axis];
+        return ca < cb2 || (ca == cb2 && a < b);
+      });
+    }
+    build(begin, mid, depth + 1);
+    const uint32_t right = build(mid, end, depth + 1);
+    nodes[ni].first = right;
+    nodes[ni].count = 0;
+    return ni;
+  }
+};
+
+}  // namespace
+
+void TriangleBvh::build(const glm::vec3* positions, const uint32_t* indices, size_t triangleCount) {
+  posF_ = positions;
+  posD_ = nullptr;
+  idx_ = indices;
+  buildNodes(triangleCount);
+}
+
+void TriangleBvh::build(const glm::dvec3* positions, const uint32_t* indices, size_t triangleCount) {
+  posF_ = nullptr;
+  posD_ = positions;
+  idx_ = indices;
+  buildNodes(triangleCount);
+}
+
+void TriangleBvh::buildNodes(size_t triangleCount) {
+  nodes_.clear();
+  prims_.clear();
+  if (triangleCount == 0) return;
+  PTERYLA_CHECK(triangleCount < (1u << 31), "too many triangles for the BVH");
+  Builder b{std::vector<PrimInfo>(triangleCount), prims_, nodes_};
+  prims_.resize(triangleCount);
+  for (uint32_t t = 0; t < triangleCount; ++t) {
+    prims_[t] = t;
+    PrimInfo& pi = b.info[t];
+    for (int c = 0; c < 3; ++c) pi.box.add(vertex(t, c));
+    pi.centroid = 0.5 * (pi.box.lo + pi.box.hi);
+  }
+  nodes_.reserve(2 * triangleCount / kLeafSize + 1);
+  b.build(0, static_cast<uint32_t>(triangleCount), 0);
+}
+
+double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,
+                   const glm::dvec3& c) {
+  const glm::dvec3 e1 = b - a, e2 = c - a;
+  const glm::dvec3 p = glm::cross(d, e2);
+  const double det = glm::dot(e1, p);
+  if (std::abs(det) < 1e-300) return -1;
+  const double inv = 1.0 / det;
+  const glm::dvec3 s = o - a;
+  const double u = glm::dot(s, p) * inv;
+  if (u < 0 || u > 1) return -1;
+  const glm::dvec3 q = glm::cross(s, e1);
+  const double v = glm::dot(d, q) * inv;
+  if (v < 0 || u + v > 1) return -1;
+  return glm::dot(e2, q) * inv;
+}
+
+bool TriangleBvh::anyHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax) const {
+  if (nodes_.empty()) return false;
+  glm::dvec3 inv;
+  for (int k = 0; k < 3; ++k) inv[k] = dir[k] != 0 ? 1.0 / dir[k] : std::copysign(1e300, dir[k] == 0 ? 1.0 : dir[k]);
+  uint32_t stack[128];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const Node& n = nodes_[stack[--sp]];
+    double t0 = tMin, t1 = tMax;
+    bool miss = false;
+    for (int k = 0; k < 3 && !miss; ++k) {
+      double ta = (n.lo[k] - origin[k]) * inv[k], tb = (n.hi[k] - origin[k]) * inv[k];
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+      miss = t0 > t1;
+    }
+    if (miss) continue;
+    if (n.count > 0) {
+      for (uint32_t k = 0; k < n.count; ++k) {
+        const uint32_t t = prims_[n.first + k];
+        const double h = rayTriangle(origin, dir, vertex(t, 0), vertex(t, 1), vertex(t, 2));
+        if (h > tMin && h <= tMax) return true;
+      }
+    } else {
+      const uint32_t ni = static_cast<uint32_t>(&n - nodes_.data());
+      stack[sp++] = n.first;
+      stack[sp++] = ni + 1;
+    }
+  }
+  return false;
+}
+
+namespace {
+
+double boxDist2(const TriangleBvh::Node& n, const glm::dvec3& p) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double v = p[k] < n.lo[k] ? n.lo[k] - p[k] : (p[k] > n.hi[k] ? p[k] - n.hi[k] : 0.0);
+    d2 += v * v;
+  }
+  return d2;
+}
+
+glm::dvec3 closestOnTriangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
+                             glm::dvec3& bary) {
+  // Ericson, Real-Time Collision Detection 5.1.5 (Voronoi regions).
+  auto out = [&](double u, double v, double w) {
+    bary = {u, v, w};
+    return u * a + v * b + w * c;
+  };
+  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return out(1, 0, 0);
+  const glm::dvec3 bp = p - b;
+  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return out(0, 1, 0);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return out(1 - v, v, 0);
+  }
+  const glm::dvec3 cp = p - c;
+  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return out(0, 0, 1);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    return out(1 - w, 0, w);
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return out(0, 1 - w, w);
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  return out(1 - v - w, v, w);
+}
+
+}  // namespace
+
+int64_t TriangleBvh::nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& bary, double& dist2) const {
+  int64_t best = -1;
+  double bestD = maxDist2;
+  if (nodes_.empty()) return best;
+  uint32_t stack[128];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const uint32_t ni = stack[--sp];
+    const Node& n = nodes_[ni];
+    if (boxDist2(n, p) > bestD) continue;
+    if (n.count > 0) {
+      for (uint32_t k = 0; k < n.count; ++k) {
+        const uint32_t t = prims_[n.first + k];
+        glm::dvec3 b;
+        const glm::dvec3 q = closestOnTriangle(p, vertex(t, 0), vertex(t, 1), vertex(t, 2), b);
+        const glm::dvec3 d = q - p;
+        const double dd = glm::dot(d, d);
+        // Ties go to the lower triangle index, so the answer does not depend on traversal order.
+        if (dd < bestD || (dd == bestD && best >= 0 && t < best) || (dd == bestD && best < 0)) {
+          bestD = dd;
+          best = t;
+          bary = b;
+        }
+      }
+    } else {
+      const uint32_t l = ni + 1, r = n.first;
+      const double dl = boxDist2(nodes_[l], p), dr = boxDist2(nodes_[r], p);
+      // Push the farther child first so the nearer one is visited next.
+      if (dl <= dr) {
+        stack[sp++] = r;
+        stack[sp++] = l;
+      } else {
+        stack[sp++] = l;
+        stack[sp++] = r;
+      }
+    }
+  }
+  dist2 = bestD;
+  return best;
+}
+
+// ---------------------------------------------------------------- triangle / triangle
+
+namespace {
+
+using V3 = glm::dvec3;
+
+// 2D segment intersection (closed).
+bool segments2d(const double* p0, const double* p1, const double* q0, const double* q1) {
+  auto orient = [](const double* a, const double* b, const double* c) {
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+  };
+  auto onSeg = [](const double* a, const double* b, const double* c) {
+    return std::min(a[0], b[0]) <= c[0] && c[0] <= std::max(a[0], b[0]) && std::min(a[1], b[1]) <= c[1] &&
+           c[1] <= std::max(a[1], b[1]);
+  };
+  const double d1 = orient(q0, q1, p0), d2 = orient(q0, q1, p1), d3 = orient(p0, p1, q0), d4 = orient(p0, p1, q1);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+  if (d1 == 0 && onSeg(q0, q1, p0)) return true;
+  if (d2 == 0 && onSeg(q0, q1, p1)) return true;
+  if (d3 == 0 && onSeg(p0, p1, q0)) return true;
+  if (d4 == 0 && onSeg(p0, p1, q1)) return true;
+  return false;
+}
+
+bool pointInTri2d(const double* p, const double (*t)[2]) {
+  auto orient = [](const double* a, const double* b, const double* c) {
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+  };
+  const double a = orient(t[0], t[1], p), b = orient(t[1], t[2], p), c = orient(t[2], t[0], p);
+  return (a >= 0 && b >= 0 && c >= 0) || (a <= 0 && b <= 0 && c <= 0);
+}
+
+bool coplanar(const V3& n, const V3* a, const V3* b) {
+  int i0 = 0, i1 = 1;
+  const V3 an = glm::abs(n);
+  if (an.x >= an.y && an.x >= an.z) { i0 = 1; i1 = 2; }
+  else if (an.y >= an.z) { i0 = 0; i1 = 2; }
+  double pa[3][2], pb[3][2];
+  for (int k = 0; k < 3; ++k) {
+    pa[k][0] = a[k][i0]; pa[k][1] = a[k][i1];
+    pb[k][0] = b[k][i0]; pb[k][1] = b[k][i1];
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (segments2d(pa[i], pa[(i + 1) % 3], pb[j], pb[(j + 1) % 3])) return true;
+  return pointInTri2d(pa[0], pb) || pointInTri2d(pb[0], pa);
+}
+
+// Interval of the line of intersection covered by a triangle, given projections p and plane distances d.
+// Returns false when the triangle's vertices all lie in the other plane (coplanar).
+bool interval(const double p[3], const double d[3], double& t0, double& t1) {
+  auto from = [&](int k, int i, int j) {
+    t0 = p[k] + (p[i] - p[k]) * d[k] / (d[k] - d[i]);
+    t1 = p[k] + (p[j] - p[k]) * d[k] / (d[k] - d[j]);
+    if (t0 > t1) std::swap(t0, t1);
+    return true;
+  };
+  if (d[0] * d[1] > 0) return from(2, 0, 1);
+  if (d[0] * d[2] > 0) return from(1, 0, 2);
+  if (d[1] * d[2] > 0 || d[0] != 0) return from(0, 1, 2);
+  if (d[1] != 0) return from(1, 0, 2);
+  if (d[2] != 0) return from(2, 0, 1);
+  return false;
+}
+
+}  // namespace
+
+bool trianglesIntersect(const V3& a0, const V3& a1, const V3& a2, const V3& b0, const V3& b1, const V3& b2) {
+  const V3 A[3] = {a0, a1, a2}, B[3] = {b0, b1, b2};
+  const V3 nb = glm::cross(b1 - b0, b2 - b0);
+  const V3 na = glm::cross(a1 - a0, a2 - a0);
+  const double lnb = glm::length(nb), lna = glm::length(na);
+  if (!(lnb > 0) || !(lna > 0)) return false;
+  double scale = 0;
+  for (int k = 0; k < 3; ++k) scale = std::max({scale, glm::length(A[k] - A[(k + 1) % 3]), glm::length(B[k] - B[(k + 1) % 3])});
+  const double eps = 1e-12 * scale;
+  double da[3], db[3];
+  for (int k = 0; k < 3; ++k) {
+    da[k] = glm::dot(nb, A[k] - b0) / lnb;
+    if (std::abs(da[k]) < eps) da[k] = 0;
+  }
+  if ((da[0] > 0 && da[1] > 0 && da[2] > 0) || (da[0] < 0 && da[1] < 0 && da[2] < 0)) return false;
+  for (int k = 0; k < 3; ++k) {
+    db[k] = glm::dot(na, B[k] - a0) / lna;
+    if (std::abs(db[k]) < eps) db[k] = 0;
+  }
+  if ((db[0] > 0 && db[1] > 0 && db[2] > 0) || (db[0] < 0 && db[1] < 0 && db[2] < 0)) return false;
+  if (da[0] == 0 && da[1] == 0 && da[2] == 0) return coplanar(na, A, B);
+  const V3 dir = glm::cross(na, nb);
+  int ax = 0;
+  const V3 ad = glm::abs(dir);
+  if (ad.y > ad[ax]) ax = 1;
+  if (ad.z > ad[ax]) ax = 2;
+  const double pa[3] = {A[0][ax], A[1][ax], A[2][ax]}, pb[3] = {B[0][ax], B[1][ax], B[2][ax]};
+  double s0, s1, t0, t1;
+  if (!interval(pa, da, s0, s1)) return coplanar(na, A, B);
+  if (!interval(pb, db, t0, t1)) return coplanar(na, A, B);
+  return !(s1 < t0 || t1 < s0);
+}
+
+}  // namespace pteryla::coat::detail

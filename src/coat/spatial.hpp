@@ -1,0 +1,136 @@
+#pragma once
+// Spatial helpers shared by packing and the coat checker (internal to pteryla_coat):
+//  - PointGrid: uniform grid over points (counting-sort CSR, deterministic), box queries;
+//  - TriangleBvh: binned-SAH bounding volume hierarchy over triangles, box / ray / nearest queries;
+//  - trianglesIntersect: Moeller's interval test (J. Graphics Tools 2(2), 1997) in double precision
+//    with a separate 2D test for coplanar triangles.
+#include <glm/common.hpp>
+#include <glm/vec3.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace pteryla::coat::detail {
+
+struct Box {
+  glm::dvec3 lo{std::numeric_limits<double>::infinity()};
+  glm::dvec3 hi{-std::numeric_limits<double>::infinity()};
+  void add(const glm::dvec3& p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  void add(const Box& b) {
+    lo = glm::min(lo, b.lo);
+    hi = glm::max(hi, b.hi);
+  }
+  bool empty() const { return lo.x > hi.x; }
+  bool overlaps(const Box& b) const {
+    return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y && lo.z <= b.hi.z && b.lo.z <= hi.z;
+  }
+  double area() const {
+    if (empty()) return 0;
+    const glm::dvec3 d = hi - lo;
+    return 2 * (d.x * d.y + d.y * d.z + d.z * d.x);
+  }
+};
+
+// Uniform grid: cells of edge `cell`, points bucketed in input order, so queries visit points in a
+// deterministic order.
+class PointGrid {
+ public:
+  void build(const std::vector<glm::dvec3>& points, double cell);
+  // Calls f(index) for every point in a cell overlapping [lo, hi] (a superset of the points in the box).
+  template <class F>
+  void query(const glm::dvec3& lo, const glm::dvec3& hi, F&& f) const {
+    if (count_ == 0) return;
+    const glm::ivec3 a = cellOf(lo), b = cellOf(hi);
+    for (int z = a.z; z <= b.z; ++z)
+      for (int y = a.y; y <= b.y; ++y)
+        for (int x = a.x; x <= b.x; ++x) {
+          const size_t c = (static_cast<size_t>(z) * dims_.y + y) * dims_.x + x;
+          for (uint32_t k = offsets_[c]; k < offsets_[c + 1]; ++k) f(items_[k]);
+        }
+  }
+  double cell() const { return cell_; }
+
+ private:
+  glm::ivec3 cellOf(const glm::dvec3& p) const {
+    glm::ivec3 c;
+    for (int k = 0; k < 3; ++k) {
+      const double v = std::floor((p[k] - origin_[k]) / cell_);
+      c[k] = v < 0 ? 0 : (v >= dims_[k] - 1 ? dims_[k] - 1 : static_cast<int>(v));
+    }
+    return c;
+  }
+  glm::dvec3 origin_{0};
+  glm::ivec3 dims_{1};
+  double cell_ = 1;
+  size_t count_ = 0;
+  std::vector<uint32_t> offsets_, items_;
+};
+
+// BVH over triangles given as positions + index triples (float, like TriMesh).
+class TriangleBvh {
+ public:
+  struct Node {
+    float lo[3], hi[3];
+    uint32_t first;  // leaf: first primitive slot; inner: right child (left child = this + 1)
+    uint32_t count;  // leaf: primitive count (> 0); inner: 0
+  };
+  // Positions (float or double) and indices must outlive the BVH.
+  void build(const glm::vec3* positions, const uint32_t* indices, size_t triangleCount);
+  void build(const glm::dvec3* positions, const uint32_t* indices, size_t triangleCount);
+  glm::dvec3 vertex(uint32_t triangle, int corner) const {
+    const uint32_t v = idx_[3 * static_cast<size_t>(triangle) + corner];
+    return posD_ ? posD_[v] : glm::dvec3(posF_[v]);
+  }
+  bool empty() const { return nodes_.empty(); }
+  size_t triangleCount() const { return prims_.size(); }
+
+  // Calls f(triangle) for each triangle whose bounds overlap the box.
+  template <class F>
+  void queryBox(const float lo[3], const float hi[3], F&& f) const {
+    if (nodes_.empty()) return;
+    uint32_t stack[64];
+    int sp = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+      const uint32_t ni = stack[--sp];
+      const Node& n = nodes_[ni];
+      if (n.lo[0] > hi[0] || n.hi[0] < lo[0] || n.lo[1] > hi[1] || n.hi[1] < lo[1] || n.lo[2] > hi[2] ||
+          n.hi[2] < lo[2])
+        continue;
+      if (n.count > 0) {
+        for (uint32_t k = 0; k < n.count; ++k) f(prims_[n.first + k]);
+      } else {
+        stack[sp++] = n.first;
+        stack[sp++] = ni + 1;
+      }
+    }
+  }
+  // Any triangle hit by the ray origin + t dir, t in (tMin, tMax]?
+  bool anyHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax) const;
+  // Nearest triangle to p (squared distance <= maxDist2); returns -1 when none, else the triangle and
+  // writes the closest point's barycentric coordinates.
+  int64_t nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& bary, double& dist2) const;
+
+ private:
+  void buildNodes(size_t triangleCount);
+  const glm::vec3* posF_ = nullptr;
+  const glm::dvec3* posD_ = nullptr;
+  const uint32_t* idx_ = nullptr;
+  std::vector<Node> nodes_;
+  std::vector<uint32_t> prims_;
+};
+
+// Do the closed triangles (a0,a1,a2) and (b0,b1,b2) share a point? Degenerate triangles never intersect.
+bool trianglesIntersect(const glm::dvec3& a0, const glm::dvec3& a1, const glm::dvec3& a2, const glm::dvec3& b0,
+                        const glm::dvec3& b1, const glm::dvec3& b2);
+
+// Ray / triangle (Moeller-Trumbore); returns t or a negative value.
+double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,
+                   const glm::dvec3& c);
+
+}  // namespace pteryla::coat::detail
