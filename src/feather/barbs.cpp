@@ -11,10 +11,26 @@
 #include "pteryla/core/rng.hpp"
 #include "pteryla/feather/bezier.hpp"
 #include "pteryla/feather/generator.hpp"
+#include "keys_internal.hpp"
 
 namespace pteryla::feather {
 
 namespace {
+
+// sin and cos for |x| <= pi to ~1e-7 (float output precision) with short polynomials; libm's sincos
+// was a quarter of the barb generation time.
+inline void fastSinCos(double x, double& s, double& c) {
+  double r = x;
+  int quadrant = 0;  // 0: |x| <= pi/2, 1: x > pi/2, 2: x < -pi/2
+  if (x > kPi / 2) { r = x - kPi / 2; quadrant = 1; }
+  else if (x < -kPi / 2) { r = x + kPi / 2; quadrant = 2; }
+  const double r2 = r * r;
+  const double sr = r * (1 + r2 * (-1.0 / 6 + r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 + r2 * (-1.0 / 39916800))))));
+  const double cr = 1 + r2 * (-0.5 + r2 * (1.0 / 24 + r2 * (-1.0 / 720 + r2 * (1.0 / 40320 + r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600))))));
+  if (quadrant == 0) { s = sr; c = cr; }
+  else if (quadrant == 1) { s = cr; c = -sr; }
+  else { s = -cr; c = sr; }
+}
 
 // The rachis: a circular arc of length L starting at `base` along +x, bending in the plane spanned by
 // +x and n = (0, ny, nz) by a total turning angle theta; frames rotate about b = x cross n.
@@ -32,7 +48,7 @@ struct Arc {
     if (theta > 0) { ny = lat / theta; nz = -vd / theta; }
   }
 
-  void frame(double rp, RachisFrame& f) const {
+  void frame(double rp, RachisFrame& f, bool fast = false) const {
     f.width = width * (1 - rp);
     if (theta < 1e-12) {
       f.point = base + glm::dvec3(length * rp, 0, 0);
@@ -42,7 +58,13 @@ struct Arc {
       return;
     }
     const double phi = theta * rp;
-    const double s = std::sin(phi), c = std::cos(phi);
+    double s, c;
+    if (fast) {
+      fastSinCos(phi, s, c);
+    } else {
+      s = std::sin(phi);
+      c = std::cos(phi);
+    }
     const double r = length / theta;
     const double oneMinusC = s * s / (1 + c);  // stable 1 - cos
     // point = base + r (s x + (1 - c) n)
@@ -97,6 +119,8 @@ struct Scratch {
   std::vector<RachisFrame> frames;
   std::vector<double> angleDelta;
   std::vector<uint8_t> flags;  // bit 0 split edge, bit 1 split after, bit 2 key
+  std::vector<KeyBarb> keys;
+  std::vector<glm::vec3> keyCvs;  // keys flattened to float, nk * n
 };
 
 void generatePart(const FeatherParams& p, const glm::dvec3& origin, uint8_t part, FeatherCurves& out,
@@ -108,14 +132,18 @@ void generatePart(const FeatherParams& p, const glm::dvec3& origin, uint8_t part
   barbPositions(p, s.rps);
   const size_t count = s.rps.size();
   s.frames.resize(count);
-  for (size_t i = 0; i < count; ++i) arc.frame(s.rps[i], s.frames[i]);
+  for (size_t i = 0; i < count; ++i) arc.frame(s.rps[i], s.frames[i], true);
 
   for (int v = 0; v < 2; ++v) {
     const VaneParams& vp = p.vane(v);
-    const double side = v == 0 ? 1.0 : -1.0;
-    const std::vector<KeyBarb> keys = effectiveKeyBarbs(p, v);
+    const float side = v == 0 ? 1.0f : -1.0f;
+    effectiveKeyBarbsInto(p, v, s.keys);
+    const std::vector<KeyBarb>& keys = s.keys;
     const size_t n = keys.front().cvs.size();
     const size_t nk = keys.size();
+    s.keyCvs.resize(nk * n);
+    for (size_t k = 0; k < nk; ++k)
+      for (size_t c = 0; c < n; ++c) s.keyCvs[k * n + c] = glm::vec3(keys[k].cvs[c]);
 
     s.angleDelta.assign(count, 0.0);
     s.flags.assign(count, 0);
@@ -142,43 +170,64 @@ void generatePart(const FeatherParams& p, const glm::dvec3& origin, uint8_t part
     }
 
     const LengthProfile& prof = v == 0 ? p.silhouette.left : p.silhouette.right;
-    size_t j = 0;  // last key barb with rp <= current rp
+    const std::vector<glm::dvec2>& pp = prof.points;
+    size_t pc = 0;  // profile cursor: last point with rp <= current rp
+    size_t j = 0;   // last key barb with rp <= current rp
+    const size_t barb0 = out.barbs.size();
+    const size_t cv0 = out.cvs.size();
+    out.barbs.resize(barb0 + count);
+    out.cvs.resize(cv0 + count * n);
+    BarbCurve* barbOut = out.barbs.data() + barb0;
+    glm::vec3* cvOut = out.cvs.data() + cv0;
     for (size_t i = 0; i < count; ++i) {
       const double rp = s.rps[i];
       while (j + 1 < nk && keys[j + 1].rp <= rp) ++j;
-      const glm::dvec3* lo = keys[j].cvs.data();
-      const glm::dvec3* hi = lo;
-      double t = 0;
+      const glm::vec3* lo = &s.keyCvs[j * n];
+      const glm::vec3* hi = lo;
+      float t = 0;
       if (j + 1 < nk) {
-        hi = keys[j + 1].cvs.data();
-        t = (rp - keys[j].rp) / (keys[j + 1].rp - keys[j].rp);
+        hi = lo + n;
+        t = static_cast<float>((rp - keys[j].rp) / (keys[j + 1].rp - keys[j].rp));
       }
       double angle = vp.baseAngle * (1 - rp) + vp.tipAngle * rp + s.angleDelta[i];
       angle = std::clamp(angle, 0.01, kPi - 0.01);
-      const double len = prof.empty() ? p.barbLength : prof.at(rp);
+      double len = p.barbLength;
+      if (!pp.empty()) {
+        while (pc + 1 < pp.size() && pp[pc + 1].x <= rp) ++pc;
+        if (rp < pp.front().x || pc + 1 == pp.size() || pp[pc].x == rp) {
+          len = rp < pp.front().x ? pp.front().y : pp[pc].y;
+        } else {
+          const double u = (rp - pp[pc].x) / (pp[pc + 1].x - pp[pc].x);
+          len = pp[pc].y * (1 - u) + pp[pc + 1].y * u;
+        }
+      }
       const RachisFrame& f = s.frames[i];
-      const double ca = std::cos(angle), sa = std::sin(angle);
-      const glm::dvec3 u = ca * f.tangent + (side * sa) * f.left;   // along the barb
-      const glm::dvec3 w = sa * f.tangent - (side * ca) * f.left;   // toward the tip
-      const glm::dvec3 root = f.point + (side * 0.5 * f.width) * f.left;
-      const glm::dvec3 ul = len * u, wl = len * w, dl = len * f.dorsal;
+      double sinA, cosA;
+      fastSinCos(angle, sinA, cosA);
+      const float ca = static_cast<float>(cosA), sa = static_cast<float>(sinA);
+      const glm::vec3 T(f.tangent), L(f.left), D(f.dorsal);
+      const glm::vec3 root = glm::vec3(f.point) + (side * 0.5f * static_cast<float>(f.width)) * L;
+      const float lf = static_cast<float>(len);
+      const glm::vec3 ul = lf * (ca * T + (side * sa) * L);   // along the barb
+      const glm::vec3 wl = lf * (sa * T - (side * ca) * L);   // toward the tip
+      const glm::vec3 dl = lf * D;
 
-      BarbCurve b;
-      b.root = glm::vec3(root);
+      BarbCurve& b = barbOut[i];
+      b.root = root;
       b.rp = static_cast<float>(rp);
       b.angle = static_cast<float>(angle);
-      b.length = static_cast<float>(len);
-      b.cvOffset = static_cast<uint32_t>(out.cvs.size());
+      b.length = lf;
+      b.cvOffset = static_cast<uint32_t>(cv0 + i * n);
       b.cvCount = static_cast<uint16_t>(n);
       b.vane = static_cast<uint8_t>(v);
       b.part = part;
       b.isKey = (s.flags[i] & 4) != 0;
       b.isSplitEdge = (s.flags[i] & 1) != 0;
       b.splitAfter = (s.flags[i] & 2) != 0;
-      out.barbs.push_back(b);
+      glm::vec3* o = cvOut + i * n;
       for (size_t c = 0; c < n; ++c) {
-        const glm::dvec3 q = (1 - t) * lo[c] + t * hi[c];
-        out.cvs.emplace_back(root + q.x * ul + q.y * wl + q.z * dl);
+        const glm::vec3 q = lo[c] + t * (hi[c] - lo[c]);
+        o[c] = root + q.x * ul + q.y * wl + q.z * dl;
       }
     }
   }

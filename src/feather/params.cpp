@@ -2,6 +2,7 @@
 #include "pteryla/feather/params.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -10,6 +11,7 @@
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/rng.hpp"
 #include "pteryla/feather/bezier.hpp"
+#include "keys_internal.hpp"
 
 namespace pteryla::feather {
 
@@ -44,11 +46,11 @@ bool FeatherParams::operator==(const FeatherParams& o) const {
          spacingTip == o.spacingTip && splits == o.splits && seed == o.seed && material == o.material;
 }
 
-std::vector<glm::dvec3> defaultPlumulaceousBarb(uint64_t seed) {
+void fillPlumulaceousBarb(uint64_t seed, glm::dvec3* cvs) {
   // Four control vertices evenly spaced on a unit line, jittered along it, then displaced in the two
   // directions across it by [-0.5, 0.5] weighted by the distance along the barb (more toward the tip).
   Rng rng(seed, 0xD0F1);
-  std::vector<glm::dvec3> cvs(4);
+  cvs[0] = glm::dvec3(0.0);
   for (int i = 1; i < 4; ++i) {
     const double w = i / 3.0;
     const double x = w + (i < 3 ? rng.uniform(-0.06, 0.06) : 0.0);
@@ -57,14 +59,25 @@ std::vector<glm::dvec3> defaultPlumulaceousBarb(uint64_t seed) {
     cvs[i] = {x, y, z};
   }
   const double chord = glm::length(cvs[3]);
-  if (chord > 1) for (auto& c : cvs) c /= chord;
+  if (chord > 1)
+    for (int i = 0; i < 4; ++i) cvs[i] /= chord;
+}
+
+std::array<glm::dvec3, 4> defaultPennaceousBarbArray() {
+  // Straight barb with a slight front-to-back curvature: bulges dorsally, tip curls ventrally; chord 1.
+  const double a = 0.06;  // tip droop, radians
+  return {glm::dvec3(0, 0, 0), glm::dvec3(0.34, 0, 0.035), glm::dvec3(0.68, 0, 0.03), glm::dvec3(std::cos(a), 0, -std::sin(a))};
+}
+
+std::vector<glm::dvec3> defaultPlumulaceousBarb(uint64_t seed) {
+  std::vector<glm::dvec3> cvs(4);
+  fillPlumulaceousBarb(seed, cvs.data());
   return cvs;
 }
 
 std::vector<glm::dvec3> defaultPennaceousBarb() {
-  // Straight barb with a slight front-to-back curvature: bulges dorsally, tip curls ventrally; chord 1.
-  const double a = 0.06;  // tip droop, radians
-  return {{0, 0, 0}, {0.34, 0, 0.035}, {0.68, 0, 0.03}, {std::cos(a), 0, -std::sin(a)}};
+  const auto a = defaultPennaceousBarbArray();
+  return {a.begin(), a.end()};
 }
 
 namespace {
@@ -76,28 +89,58 @@ void normalizeCvs(std::vector<glm::dvec3>& cvs) {
 }
 }  // namespace
 
-std::vector<KeyBarb> effectiveKeyBarbs(const FeatherParams& p, int vane) {
+void effectiveKeyBarbsInto(const FeatherParams& p, int vane, std::vector<KeyBarb>& keys) {
+  // Reuses the storage of `keys` (element vectors keep their capacity) so the barb generator does not
+  // allocate once warmed up.
   const VaneParams& vp = p.vane(vane);
-  std::vector<KeyBarb> keys;
-  keys.reserve(vp.keyBarbs.size() + 2);
+  size_t m = 0;
+  auto next = [&]() -> KeyBarb& {
+    if (keys.size() <= m) keys.emplace_back();
+    return keys[m++];
+  };
+  auto setDf1 = [&](KeyBarb& k, double rp) {
+    k.rp = rp;
+    k.cvs.resize(4);
+    fillPlumulaceousBarb(p.seed, k.cvs.data());
+  };
   if (vp.keyBarbs.empty()) {
-    auto df1 = defaultPlumulaceousBarb(p.seed);
-    keys.push_back({0.0, df1});
-    keys.push_back({1.0, df1});
+    setDf1(next(), 0.0);
+    setDf1(next(), 1.0);
   } else {
+    bool sorted = true;
+    for (size_t i = 1; i < vp.keyBarbs.size(); ++i) sorted = sorted && vp.keyBarbs[i - 1].rp <= vp.keyBarbs[i].rp;
+    const double first = sorted ? vp.keyBarbs.front().rp
+                                : std::min_element(vp.keyBarbs.begin(), vp.keyBarbs.end(),
+                                                   [](const KeyBarb& a, const KeyBarb& b) { return a.rp < b.rp; })->rp;
+    if (first > 0) setDf1(next(), 0.0);
+    const size_t begin = m;
     for (const KeyBarb& k : vp.keyBarbs) {
-      keys.push_back(k);
-      if (keys.back().cvs.size() < 2) throw Error("a key barb needs at least 2 control vertices", p.sourceFile, "key_barbs.cvs");
-      normalizeCvs(keys.back().cvs);
+      if (k.cvs.size() < 2) throw Error("a key barb needs at least 2 control vertices", p.sourceFile, "key_barbs.cvs");
+      KeyBarb& d = next();
+      d.rp = k.rp;
+      d.cvs.assign(k.cvs.begin(), k.cvs.end());
+      normalizeCvs(d.cvs);
     }
-    std::stable_sort(keys.begin(), keys.end(), [](const KeyBarb& a, const KeyBarb& b) { return a.rp < b.rp; });
-    if (keys.front().rp > 0) keys.insert(keys.begin(), KeyBarb{0.0, defaultPlumulaceousBarb(p.seed)});
-    if (keys.back().rp < 1) keys.push_back(KeyBarb{1.0, defaultPennaceousBarb()});
+    if (!sorted)
+      std::stable_sort(keys.begin() + static_cast<std::ptrdiff_t>(begin), keys.begin() + static_cast<std::ptrdiff_t>(m),
+                       [](const KeyBarb& a, const KeyBarb& b) { return a.rp < b.rp; });
+    if (keys[m - 1].rp < 1) {
+      KeyBarb& d = next();
+      d.rp = 1.0;
+      const auto df2 = defaultPennaceousBarbArray();
+      d.cvs.assign(df2.begin(), df2.end());
+    }
   }
+  keys.resize(m);
   size_t n = 0;
   for (const auto& k : keys) n = std::max(n, k.cvs.size());
   for (auto& k : keys)
     if (k.cvs.size() < n) k.cvs = elevateTo(k.cvs, n);
+}
+
+std::vector<KeyBarb> effectiveKeyBarbs(const FeatherParams& p, int vane) {
+  std::vector<KeyBarb> keys;
+  effectiveKeyBarbsInto(p, vane, keys);
   return keys;
 }
 
