@@ -1,0 +1,59 @@
+#pragma once
+// Layer order for packing (Streit 2003, 6.3: "The feathers are packed by traversing the feathers in layered
+// order from bottom to top. The order is determined from the parameterization of the tract"; 9.2.1: across
+// tracts "by ordering the tracts or the individual follicles using projection to a body axis vector").
+//
+// Feathers overlap like roof tiles: a feather lies over the feathers its direction points at, so the
+// feathers furthest downstream (toward where the feathers point) are the bottom layer and packed first.
+//  - Tracts: tract by tract (OrderOptions::tractOrder, bottom first; unlisted tracts follow in index
+//    order); within a tract by s = dot(uv, flow) descending, where flow is the tract's mean feather
+//    direction in (u,v) (each follicle's direction mapped through its face's parameterization).
+//  - Axis: one global order by the arc length of the follicle's closest point on a body-axis polyline
+//    (head to tail), tail-most first; tracts are ignored.
+// Ties are broken by follicle id (Follicles::id), then by feather index, so the order is total and
+// deterministic.
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <string>
+#include <vector>
+
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/directions.hpp"
+#include "pteryla/coat/follicles.hpp"
+#include "pteryla/coat/parameterize.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/coat/tracts.hpp"
+#include "pteryla/core/json.hpp"
+
+namespace pteryla::coat {
+
+enum class OrderMethod { Tracts, Axis };
+
+struct OrderOptions {
+  OrderMethod method = OrderMethod::Tracts;
+  std::vector<std::string> tractOrder;  // Tracts: names, bottom layer first
+  std::vector<glm::dvec3> axis;         // Axis: polyline head to tail, >= 2 distinct points
+};
+
+struct OrderResult {
+  std::vector<double> key;              // per feather: s (Tracts) or axis arc length (Axis); larger = lower
+  std::vector<glm::dvec2> tractFlow;    // per tract: unit mean direction in (u,v) (Tracts)
+  std::vector<uint32_t> tractRank;      // per tract: position in the tract order (Tracts)
+};
+
+// Arc length along `axis` of the point of the polyline closest to p (ties: the earliest segment).
+double axisArcLength(const std::vector<glm::dvec3>& axis, const glm::dvec3& p);
+
+// Fills coat.layerOrder (a permutation of the feather indices, bottom first). `params[t]` is tract t's
+// parameterization (Tracts only; may be empty for Axis); directions as from computeSurfaceDirections on
+// `restSkin`. Throws Error for unknown tract names or a missing axis.
+OrderResult orderLayers(const SkinMesh& restSkin, const std::vector<Tract>& tracts,
+                        const std::vector<TractParameterization>& params, const Follicles& follicles,
+                        const SurfaceDirections& directions, const OrderOptions& options, CoatFeathers& coat);
+
+// JSON (docs/coat.md): {"method": "tracts"|"axis", "tracts": [names], "axis": [[x,y,z], ...]}.
+// Calls r.finish().
+OrderOptions parseOrdering(JsonReader& r);
+
+}  // namespace pteryla::coat

@@ -1,0 +1,95 @@
+#pragma once
+// Tract parameterization (Streit 2003, 6.2.1 "Imposed Parameterization", 9.1.2): every follicle of a tract
+// gets a (u,v) coordinate that relates it to its neighbours, used to interpolate key feathers (6.2) and
+// to order the layers for packing (6.3, 9.2.1).
+//
+// Methods:
+//  - Projection: the thesis' method, a grid projected from a view direction onto the tract (orthographic:
+//    u along the screen's right, v along its up). Distorts where the tract is far from planar; faces
+//    seen from behind are reported in `flippedFaces`.
+//  - Lscm / Arap: automatic low-distortion parameterizations (least-squares conformal maps; as-rigid-
+//    as-possible) of a disk-like tract: one connected component, one boundary loop, Euler
+//    characteristic 1. Anything else is a pteryla::Error suggesting a split or the projection method.
+//  - Auto: Lscm for disk-like tracts; otherwise Projection along the tract's mean normal when that view
+//    sees (almost) the whole tract from the front, else the same Error as Lscm.
+//
+// Per-vertex (u,v) is computed for the tract's vertices, follicles interpolate it with their face's
+// barycentric coordinates. The result is normalised to the unit square keeping the aspect ratio (min
+// corner at 0, the longer side spans [0,1]) and oriented so that faces are counter-clockwise in (u,v)
+// when seen from the normal side (a mirrored solution is flipped in u).
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pteryla/coat/follicles.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/coat/tracts.hpp"
+#include "pteryla/core/json.hpp"
+
+namespace pteryla::coat {
+
+enum class ParamMethod { Projection, Lscm, Arap, Auto };
+
+const char* paramMethodName(ParamMethod m);  // "projection", "lscm", "arap", "auto"
+
+struct ParameterizeOptions {
+  ParamMethod method = ParamMethod::Auto;
+  // Projection only. viewDirection: the direction the (orthographic) camera looks along; zero = the
+  // negated area-weighted mean normal of the tract (looking at it from outside). up: the screen's up
+  // vector (made orthogonal to the view direction); zero = world +y, or +z when the view is along y.
+  glm::dvec3 viewDirection{0.0};
+  glm::dvec3 up{0.0};
+  int arapIterations = 50;      // Arap only: local/global iterations
+  // Auto only: largest fraction of the tract's area allowed to face away from the mean-normal view
+  // before a non-disk tract is rejected instead of projected.
+  double autoMaxBackfacing = 0.01;
+};
+
+struct TractParameterization {
+  ParamMethod method = ParamMethod::Projection;  // the method actually used (never Auto)
+  // Tract vertices (global skin vertex indices, ascending) and their (u,v).
+  std::vector<uint32_t> vertices;
+  std::vector<glm::dvec2> vertexUv;
+  // Follicles of the tract (indices into Follicles, ascending) and their (u,v).
+  std::vector<uint32_t> follicles;
+  std::vector<glm::dvec2> follicleUv;
+  // Diagnostics.
+  size_t flippedFaces = 0;       // tract faces with non-positive signed (u,v) area
+  double scale = 1.0;            // scene units per unit of normalised (u,v) (the longer bbox side)
+  glm::dvec3 viewDirection{0.0}; // Projection: the view direction used
+  std::string note;              // why Auto chose what it chose
+
+  // (u,v) of tract vertex `globalVertex`; PTERYLA_CHECKs that it belongs to the tract.
+  glm::dvec2 uvOfVertex(uint32_t globalVertex) const;
+};
+
+// Topology of a tract's faces as a surface: for the disk check and error messages.
+struct TractTopology {
+  size_t vertices = 0, edges = 0, faces = 0;
+  size_t boundaryLoops = 0;
+  size_t components = 0;
+  bool nonManifold = false;       // a vertex whose faces do not form a single fan/disk (bow-tie)
+  long eulerCharacteristic() const { return static_cast<long>(vertices) - static_cast<long>(edges) + static_cast<long>(faces); }
+  bool isDisk() const { return components == 1 && boundaryLoops == 1 && eulerCharacteristic() == 1 && !nonManifold; }
+};
+
+TractTopology tractTopology(const SkinMesh& skin, const Tract& tract);
+
+// Parameterizes tract `tractIndex` (= tracts[tractIndex]); follicles are those with
+// follicles.tract[i] == tractIndex. Throws pteryla::Error (element "tracts.<name>") for an empty tract,
+// a non-disk tract with Lscm/Arap/Auto, a degenerate projection, or a follicle on a face outside the tract.
+TractParameterization parameterizeTract(const SkinMesh& skin, const Tract& tract, uint32_t tractIndex,
+                                        const Follicles& follicles, const ParameterizeOptions& options = {});
+
+// Signed area of each tract face in (u,v) (positive = counter-clockwise = not flipped); tract.faces order.
+std::vector<double> uvFaceAreas(const SkinMesh& skin, const Tract& tract, const TractParameterization& param);
+
+// Reads a "parameterization" object: {"method": "auto"|"projection"|"lscm"|"arap",
+// "view_direction": [x,y,z], "up": [x,y,z], "arap_iterations": n, "auto_max_backfacing": f}.
+// Calls r.finish() (unknown keys rejected).
+ParameterizeOptions parseParameterization(JsonReader& r);
+
+}  // namespace pteryla::coat

@@ -1,0 +1,170 @@
+// Tract parameterization (Streit 2003, 6.2.1): projection, LSCM/ARAP on disk-like tracts, rejection of
+// tracts that are not disks.
+#include <gtest/gtest.h>
+
+#include "coat2_fixtures.hpp"
+#include "pteryla/coat/parameterize.hpp"
+#include "pteryla/core/error.hpp"
+
+using namespace coat2test;
+
+namespace {
+
+void expectUnitSquare(const TractParameterization& p) {
+  double maxCoord = 0;
+  for (const auto& uv : p.vertexUv) {
+    EXPECT_GE(uv.x, -1e-12);
+    EXPECT_GE(uv.y, -1e-12);
+    EXPECT_LE(uv.x, 1 + 1e-12);
+    EXPECT_LE(uv.y, 1 + 1e-12);
+    maxCoord = std::max({maxCoord, uv.x, uv.y});
+  }
+  EXPECT_NEAR(maxCoord, 1.0, 1e-12);
+}
+
+std::string errorText(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+}  // namespace
+
+TEST(Coat2Parameterize, LscmOnSphericalCapHasNoFlippedTriangles) {
+  const SkinMesh sphere = makeIcosphere(3);
+  const std::vector<Tract> tracts{tractWhere(sphere, "cap", [](const glm::dvec3& c) { return c.z > 0.2; })};
+  const TractTopology topo = tractTopology(sphere, tracts[0]);
+  EXPECT_TRUE(topo.isDisk());
+  EXPECT_EQ(topo.boundaryLoops, 1u);
+  EXPECT_EQ(topo.eulerCharacteristic(), 1);
+  const Follicles fol = scatterTracts(sphere, tracts, 300);
+  for (ParamMethod m : {ParamMethod::Lscm, ParamMethod::Arap, ParamMethod::Auto}) {
+    ParameterizeOptions o;
+    o.method = m;
+    const TractParameterization p = parameterizeTract(sphere, tracts[0], 0, fol, o);
+    EXPECT_EQ(p.method, m == ParamMethod::Arap ? ParamMethod::Arap : ParamMethod::Lscm);
+    EXPECT_EQ(p.flippedFaces, 0u) << paramMethodName(m);
+    for (double a : uvFaceAreas(sphere, tracts[0], p)) EXPECT_GT(a, 0.0);
+    expectUnitSquare(p);
+    EXPECT_EQ(p.follicles.size(), 300u);
+    EXPECT_GT(p.scale, 0.5);  // the cap is ~1.7 units across
+    EXPECT_LT(p.scale, 3.0);
+  }
+}
+
+TEST(Coat2Parameterize, FollicleUvInterpolatesVertexUv) {
+  const SkinMesh grid = makeGridPatch(8, 4, 2.0, 1.0);
+  const std::vector<Tract> tracts{wholeMeshTract(grid)};
+  const Follicles fol = scatterTracts(grid, tracts, 50);
+  ParameterizeOptions o;
+  o.method = ParamMethod::Projection;
+  o.viewDirection = {0, 0, -1};
+  o.up = {0, 1, 0};
+  const TractParameterization p = parameterizeTract(grid, tracts[0], 0, fol, o);
+  EXPECT_EQ(p.flippedFaces, 0u);
+  EXPECT_NEAR(p.scale, 2.0, 1e-9);
+  // Orthographic projection along -z of a flat patch: (u,v) = (x, y) / 2.
+  for (size_t k = 0; k < p.follicles.size(); ++k) {
+    const glm::dvec3 x = fol.position[p.follicles[k]];
+    EXPECT_NEAR(p.follicleUv[k].x, x.x / 2.0, 1e-12);
+    EXPECT_NEAR(p.follicleUv[k].y, x.y / 2.0, 1e-12);
+  }
+}
+
+TEST(Coat2Parameterize, LscmOfFlatPatchIsASimilarity) {
+  const SkinMesh grid = makeGridPatch(6, 6, 3.0, 1.5);
+  const std::vector<Tract> tracts{wholeMeshTract(grid)};
+  const Follicles fol = scatterTracts(grid, tracts, 40);
+  ParameterizeOptions o;
+  o.method = ParamMethod::Lscm;
+  const TractParameterization p = parameterizeTract(grid, tracts[0], 0, fol, o);
+  EXPECT_EQ(p.flippedFaces, 0u);
+  const double ratio0 = glm::length(p.follicleUv[1] - p.follicleUv[0]) /
+                        glm::length(fol.position[p.follicles[1]] - fol.position[p.follicles[0]]);
+  for (size_t k = 2; k < p.follicles.size(); ++k) {
+    const double r = glm::length(p.follicleUv[k] - p.follicleUv[0]) /
+                     glm::length(fol.position[p.follicles[k]] - fol.position[p.follicles[0]]);
+    EXPECT_NEAR(r, ratio0, 1e-6);
+  }
+  EXPECT_NEAR(p.scale, 1.0 / ratio0, 1e-6);
+}
+
+TEST(Coat2Parameterize, ClosedSphereIsRejected) {
+  const SkinMesh sphere = makeIcosphere(2);
+  const std::vector<Tract> tracts{wholeMeshTract(sphere)};
+  const Follicles fol = scatterTracts(sphere, tracts, 20);
+  const TractTopology topo = tractTopology(sphere, tracts[0]);
+  EXPECT_EQ(topo.boundaryLoops, 0u);
+  EXPECT_EQ(topo.eulerCharacteristic(), 2);
+  for (ParamMethod m : {ParamMethod::Lscm, ParamMethod::Arap, ParamMethod::Auto}) {
+    ParameterizeOptions o;
+    o.method = m;
+    const std::string msg = errorText([&] { parameterizeTract(sphere, tracts[0], 0, fol, o); });
+    EXPECT_NE(msg.find("not a topological disk"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("split"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("projection"), std::string::npos) << msg;
+  }
+  // Projection without a view direction has nothing to look along on a closed sphere.
+  ParameterizeOptions o;
+  o.method = ParamMethod::Projection;
+  EXPECT_THROW(parameterizeTract(sphere, tracts[0], 0, fol, o), Error);
+}
+
+TEST(Coat2Parameterize, AnnulusAndCylinderAreRejected) {
+  const SkinMesh grid = makeGridPatch(10, 10, 1.0, 1.0);
+  const std::vector<Tract> ring{tractWhere(grid, "ring", [](const glm::dvec3& c) {
+    return std::abs(c.x - 0.5) > 0.2 || std::abs(c.y - 0.5) > 0.2;
+  })};
+  const TractTopology topo = tractTopology(grid, ring[0]);
+  EXPECT_EQ(topo.boundaryLoops, 2u);
+  EXPECT_EQ(topo.eulerCharacteristic(), 0);
+  EXPECT_FALSE(topo.isDisk());
+  const Follicles fol = scatterTracts(grid, ring, 30);
+  ParameterizeOptions lscm;
+  lscm.method = ParamMethod::Lscm;
+  const std::string msg = errorText([&] { parameterizeTract(grid, ring[0], 0, fol, lscm); });
+  EXPECT_NE(msg.find("2 boundary loop"), std::string::npos) << msg;
+  // Auto: the flat annulus is seen entirely from the front, so it falls back to projection.
+  const TractParameterization p = parameterizeTract(grid, ring[0], 0, fol, ParameterizeOptions{});
+  EXPECT_EQ(p.method, ParamMethod::Projection);
+  EXPECT_FALSE(p.note.empty());
+  EXPECT_EQ(p.flippedFaces, 0u);
+
+  const SkinMesh tube = makeCylinder(12, 6);
+  const std::vector<Tract> all{wholeMeshTract(tube)};
+  const Follicles tf = scatterTracts(tube, all, 10);
+  EXPECT_THROW(parameterizeTract(tube, all[0], 0, tf, lscm), Error);
+  EXPECT_THROW(parameterizeTract(tube, all[0], 0, tf, ParameterizeOptions{}), Error);
+}
+
+TEST(Coat2Parameterize, BowTieTractIsNotADisk) {
+  // Two opposite corner quads of a 2x2 grid touch only at the centre vertex.
+  const SkinMesh grid = makeGridPatch(2, 2, 2.0, 2.0);
+  const Tract t = tractWhere(grid, "bowtie", [](const glm::dvec3& c) { return (c.x < 1) == (c.y < 1); });
+  const TractTopology topo = tractTopology(grid, t);
+  EXPECT_FALSE(topo.isDisk());
+}
+
+TEST(Coat2Parameterize, FollicleOutsideTractIsAnError) {
+  const SkinMesh grid = makeGridPatch(4, 4);
+  const std::vector<Tract> tracts{tractWhere(grid, "left", [](const glm::dvec3& c) { return c.x < 0.5; })};
+  Follicles fol = scatterTracts(grid, {wholeMeshTract(grid)}, 40);  // all on tract index 0, some outside "left"
+  EXPECT_THROW(parameterizeTract(grid, tracts[0], 0, fol), Error);
+}
+
+TEST(Coat2Parameterize, ParseRejectsUnknownKeysAndMethods) {
+  const Json good = Json::parse(R"({"method": "projection", "view_direction": [0, 0, -1], "up": [0, 1, 0]})");
+  JsonReader r(good, "scene.json", "tracts[0].parameterization");
+  const ParameterizeOptions o = parseParameterization(r);
+  EXPECT_EQ(o.method, ParamMethod::Projection);
+  EXPECT_EQ(o.viewDirection, glm::dvec3(0, 0, -1));
+  const Json unknown = Json::parse(R"({"method": "lscm", "metod": 1})");
+  JsonReader r2(unknown, "scene.json", "p");
+  EXPECT_THROW(parseParameterization(r2), Error);
+  const Json badMethod = Json::parse(R"({"method": "conformal"})");
+  JsonReader r3(badMethod, "scene.json", "p");
+  EXPECT_THROW(parseParameterization(r3), Error);
+}
