@@ -57,7 +57,8 @@ struct ShaftCurve {
 };
 
 struct FeatherCurves {
-  // parts[0]: the main feather, parts[1]: the afterfeather when present. Barbs of part i are
+  // parts[0]: the main feather, parts[1]: the afterfeather when present (generated in the main
+  // feather's frame, translated to the superior umbilicus (calamusLength, 0, -rachisWidth / 2)). Barbs of part i are
   // barbs[barbBegin[i] .. barbEnd[i]); left-vane barbs come first, each vane ordered base to tip.
   std::vector<ShaftCurve> shafts;
   std::vector<uint32_t> barbBegin, barbEnd;
@@ -80,7 +81,9 @@ void generateBarbs(const FeatherParams& p, FeatherCurves& out, const GenerateOpt
 // Sampled barb polyline (segments+1 points) for barb `b` of `c`.
 void barbPolyline(const FeatherCurves& c, const BarbCurve& b, int segments, std::vector<glm::vec3>& out);
 
-// Wear splits of one vane (5.2.5), reproducible from p.seed.
+// Wear splits of one vane (5.2.5), reproducible from p.seed. In generateBarbs the two barbs around each
+// split get isSplitEdge (the lower one splitAfter) and open away from each other by opening/2 each;
+// up to SplitParams::reach barbs per side follow their edge barb with a linearly falling share.
 struct VaneSplit {
   double rp;       // split location
   double opening;  // radians

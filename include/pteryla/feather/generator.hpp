@@ -3,7 +3,8 @@
 // Other generators (e.g. "helical", Zhang & Kanai) register hooks by name; a feather file selects one
 // with "generator": "<name>". Static libraries drop unreferenced registrar objects, so register
 // explicitly: builtin generators are registered inside registerBuiltinFeatherGenerators()
-// (src/feather/generator.cpp), which the registry runs once on first use.
+// (src/feather/generator.cpp), which the registry runs once on first use. The Table 5.1 fields stay
+// required for every generator (shaft, spacing and angles are shared); a generator adds its own keys.
 #include <functional>
 #include <string>
 #include <vector>
