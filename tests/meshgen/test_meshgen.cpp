@@ -9,8 +9,11 @@
 #include <nlohmann/json.hpp>
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/trigonometric.hpp>
 
 #include <algorithm>
+#include <utility>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -273,4 +276,89 @@ TEST(MeshgenChecker, CatchesHolesFlipsAndBadFiles) {
     EXPECT_EQ(e.element(), "line 6");
   }
   EXPECT_THROW(mg::readObj(std::string(PTERYLA_BUILD_DIR) + "/does_not_exist.obj"), pteryla::Error);
+}
+
+namespace {
+
+// Linear blend skinning with per-joint rotations about the joints' rest positions (docs/skeleton-format.md).
+mg::GroupedMesh pose(const std::string& name, const std::map<std::string, glm::dvec3>& rotationsDeg) {
+  const auto& m = loaded(name);
+  const auto j = loadJson(name + ".skeleton.json");
+  const auto& joints = j.at("joints");
+  std::vector<glm::dmat4> world(joints.size());
+  for (size_t i = 0; i < joints.size(); ++i) {
+    const auto& p = joints[i].at("position");
+    const glm::dvec3 pos(p.at(0).get<double>(), p.at(1).get<double>(), p.at(2).get<double>());
+    glm::dmat4 local(1.0);
+    const auto it = rotationsDeg.find(joints[i].at("name").get<std::string>());
+    if (it != rotationsDeg.end()) {
+      const glm::dvec3 r = glm::radians(it->second);
+      glm::dmat4 rot = glm::rotate(glm::dmat4(1.0), r.z, glm::dvec3(0, 0, 1));
+      rot = rot * glm::rotate(glm::dmat4(1.0), r.y, glm::dvec3(0, 1, 0));
+      rot = rot * glm::rotate(glm::dmat4(1.0), r.x, glm::dvec3(1, 0, 0));
+      local = glm::translate(glm::dmat4(1.0), pos) * rot * glm::translate(glm::dmat4(1.0), -pos);
+    }
+    const int parent = joints[i].at("parent").get<int>();
+    world[i] = parent < 0 ? local : world[static_cast<size_t>(parent)] * local;
+  }
+  mg::GroupedMesh out = m;
+  std::vector<glm::dvec3> acc(m.positions.size(), glm::dvec3(0.0));
+  for (const auto& w : j.at("weights")) {
+    const auto v = w.at(0).get<size_t>(), ji = w.at(1).get<size_t>();
+    acc[v] += w.at(2).get<double>() * glm::dvec3(world[ji] * glm::dvec4(m.positions[v], 1.0));
+  }
+  out.positions = acc;
+  return out;
+}
+
+// Largest change of the angle between the normals of two faces sharing an edge (degrees): a
+// deformation concentrated in one ring of faces (rigid skinning) shows up as a big jump.
+double maxCreaseChange(const mg::GroupedMesh& rest, const mg::GroupedMesh& bent) {
+  auto normal = [](const mg::GroupedMesh& m, size_t t) {
+    const auto& tri = m.triangles[t];
+    return glm::normalize(glm::cross(m.positions[tri[1]] - m.positions[tri[0]], m.positions[tri[2]] - m.positions[tri[0]]));
+  };
+  std::map<std::pair<uint32_t, uint32_t>, size_t> firstFace;
+  double worst = 0;
+  for (size_t t = 0; t < rest.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = rest.triangles[t][k], b = rest.triangles[t][(k + 1) % 3];
+      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+      auto it = firstFace.find(key);
+      if (it == firstFace.end()) {
+        firstFace[key] = t;
+        continue;
+      }
+      auto angle = [&](const mg::GroupedMesh& m) {
+        return glm::degrees(std::acos(std::clamp(glm::dot(normal(m, it->second), normal(m, t)), -1.0, 1.0)));
+      };
+      worst = std::max(worst, std::abs(angle(bent) - angle(rest)));
+    }
+  return worst;
+}
+
+}  // namespace
+
+TEST(MeshgenFiles, BendingJointsDeformsSmoothly) {
+  // Fig. 8.6: the wing bent down and up at elbow and wrist (rotation about the chord axis, Z).
+  for (double deg : {-35.0, 35.0}) {
+    const auto bent = pose("wing", {{"elbow", {0, 0, deg}}, {"wrist", {0, 0, deg * 0.8}}});
+    const auto c = mg::checkMesh(bent, true);
+    EXPECT_TRUE(c.ok()) << mg::formatCheck("bent wing", c);
+    EXPECT_GT(c.minAngleDeg, 8.0);
+    // A 35 deg bend spread over about five rings of faces; rigid binding puts it all on one.
+    EXPECT_LT(maxCreaseChange(loaded("wing"), bent), 18.0) << "bend not spread over several rings of faces";
+    glm::dvec3 lo, hi;
+    bounds(bent, lo, hi);
+    EXPECT_GT(deg > 0 ? hi.y : -lo.y, 0.5) << "the tip actually moved";
+  }
+  // Wings raised and lowered at the shoulders (rotation about the body axis, X), elbows flexed.
+  for (double deg : {-30.0, 30.0}) {
+    const auto flap = pose("bird", {{"shoulder_left", {deg, 0, 0}}, {"shoulder_right", {-deg, 0, 0}},
+                                    {"elbow_left", {0, 20, 0}}, {"elbow_right", {0, -20, 0}}});
+    const auto c = mg::checkMesh(flap, true);
+    EXPECT_TRUE(c.ok()) << mg::formatCheck("flapping bird", c);
+    EXPECT_GT(c.minAngleDeg, 5.0);
+    EXPECT_LT(maxCreaseChange(loaded("bird"), flap), 22.0);
+  }
 }

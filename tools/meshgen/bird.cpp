@@ -43,6 +43,7 @@ constexpr int kWingRing = 5;   // wing root spans rings 5..7, angles 1..2 (mirro
 constexpr int kLegRing = 3;    // leg root: rings 3..4, angles 3..4 (mirrored 4..5)
 constexpr double kBeakS = 12.45;
 constexpr int kWristSection = 4;
+constexpr double kBirdBlendWidth = 0.14;  // elbow and wrist blend half-width, units
 
 // Left wing sections (z-planes): span z, leading/trailing edge x, centre height, thickness.
 struct WingSection {
@@ -215,14 +216,31 @@ Generated makeBird() {
     sk.joints.push_back({std::string("wrist_") + names[side], base + 1, m(kWrist)});
     sk.joints.push_back({std::string("wingtip_") + names[side], base + 2, m(kTipJoint)});
   }
+  // The shoulder blend runs along the wing's root tube (section param w in [0, 2]) and reaches into
+  // the body around the wing root, so raising a wing stretches the flank instead of creasing it.
+  constexpr double kRootShare = 0.3, kBodyReach = 0.14;  // shoulder weight at the root ring; units
   const auto wingParamL = vertexParams(fine, kWingL), wingParamR = vertexParams(fine, kWingR);
+  std::vector<glm::dvec3> rootRing[2];
+  for (uint32_t v = 0; v < g.mesh.positions.size(); ++v)
+    for (int side = 0; side < 2; ++side)
+      if (!std::isnan((side == 0 ? wingParamL : wingParamR)[v].x) && !std::isnan(bodyParam[v].x))
+        rootRing[side].push_back(g.mesh.positions[v]);
   for (uint32_t v = 0; v < g.mesh.positions.size(); ++v) {
     std::vector<SkinWeight> ws;
+    const glm::dvec3 p = g.mesh.positions[v];
     for (int side = 0; side < 2; ++side) {
       const auto& wp = side == 0 ? wingParamL : wingParamR;
-      if (std::isnan(wp[v].x)) continue;
+      double beta0 = 0;
+      if (!std::isnan(wp[v].x)) {
+        beta0 = kRootShare + (1 - kRootShare) * smoothstep(0.0, 2.0, wp[v].x);
+      } else if (!std::isnan(bodyParam[v].x) && (side == 0 ? p.z > 0 : p.z < 0)) {
+        double d = 1e30;
+        for (const auto& q : rootRing[side]) d = std::min(d, glm::length(p - q));
+        beta0 = kRootShare * (1 - smoothstep(0.0, kBodyReach, d));
+      }
+      if (beta0 <= 0) continue;
       const uint32_t b = 1 + 4 * side;
-      ws = chainWeights(v, g.mesh.positions[v], smoothstep(0.0, 1.0, wp[v].x), {0, b, b + 1, b + 2, b + 3}, sk, 0.07);
+      ws = chainWeights(v, p, beta0, {0, b, b + 1, b + 2, b + 3}, sk, kBirdBlendWidth);
     }
     if (ws.empty()) ws.push_back({v, 0, 1.0});
     sk.weights.insert(sk.weights.end(), ws.begin(), ws.end());

@@ -65,7 +65,7 @@ Generated makeWing() {
                {"wrist", 1, {1.22, 0.0, -0.05}},
                {"wingtip", 2, {1.97, 0.0, 0.06}}};
   for (uint32_t v = 0; v < g.mesh.positions.size(); ++v) {
-    const auto ws = chainWeights(v, g.mesh.positions[v], 1.0, {0, 0, 1, 2, 3}, sk, 0.12);
+    const auto ws = chainWeights(v, g.mesh.positions[v], 1.0, {0, 0, 1, 2, 3}, sk, 0.25);
     sk.weights.insert(sk.weights.end(), ws.begin(), ws.end());
   }
   g.hasSkeleton = true;
