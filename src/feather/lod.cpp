@@ -1,0 +1,136 @@
+// Barb collapse order for feather level of detail, Streit 2003, 5.3 (Fig. 5.8): key barbs kept to the
+// end, barbs between them collapsed in a dispersed, divide-and-conquer order, those nearest key barbs
+// last.
+#include "pteryla/feather/lod.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pteryla/core/error.hpp"
+
+namespace pteryla::feather {
+
+namespace {
+
+struct Interval {
+  uint32_t gap;      // b - a
+  uint32_t keyDist;  // distance (barbs) from the middle barb to the nearest key barb of its vane
+  uint32_t a, b;     // kept barbs bounding the interval (global barb indices)
+  uint32_t mid() const { return a + gap / 2; }
+};
+
+// True when x should be split before y.
+struct Before {
+  bool operator()(const Interval& x, const Interval& y) const {
+    if (x.gap != y.gap) return x.gap > y.gap;
+    if (x.keyDist != y.keyDist) return x.keyDist < y.keyDist;
+    return x.mid() < y.mid();
+  }
+};
+// std heap keeps the "largest" on top: invert.
+struct HeapLess {
+  bool operator()(const Interval& x, const Interval& y) const { return Before()(y, x); }
+};
+
+struct Scratch {
+  std::vector<uint32_t> keyDist;
+  std::vector<uint8_t> pinned;
+  std::vector<Interval> heap;
+};
+
+}  // namespace
+
+void computeLodOrder(const FeatherCurves& c, LodOrder& out) {
+  static thread_local Scratch s;
+  const size_t n = c.barbs.size();
+  PTERYLA_CHECK(n < std::numeric_limits<uint32_t>::max() / 2, "too many barbs");
+  out.rank.assign(n, std::numeric_limits<uint32_t>::max());
+  out.pinned = 0;
+  s.keyDist.assign(n, std::numeric_limits<uint32_t>::max());
+  s.pinned.assign(n, 0);
+  s.heap.clear();
+
+  // Vane runs: maximal ranges of barbs with the same part and vane (parts are contiguous, vanes too).
+  auto sameVane = [&](size_t i, size_t j) {
+    return c.barbs[i].part == c.barbs[j].part && c.barbs[i].vane == c.barbs[j].vane;
+  };
+  for (size_t begin = 0; begin < n;) {
+    size_t end = begin + 1;
+    while (end < n && sameVane(begin, end)) ++end;
+    // Distance to the nearest key barb (two sweeps).
+    uint32_t d = std::numeric_limits<uint32_t>::max();
+    for (size_t i = begin; i < end; ++i) {
+      d = c.barbs[i].isKey ? 0 : (d == std::numeric_limits<uint32_t>::max() ? d : d + 1);
+      s.keyDist[i] = d;
+    }
+    d = std::numeric_limits<uint32_t>::max();
+    for (size_t i = end; i-- > begin;) {
+      d = c.barbs[i].isKey ? 0 : (d == std::numeric_limits<uint32_t>::max() ? d : d + 1);
+      s.keyDist[i] = std::min(s.keyDist[i], d);
+    }
+    for (size_t i = begin; i < end; ++i) {
+      const BarbCurve& b = c.barbs[i];
+      const bool before = i > begin && c.barbs[i - 1].splitAfter;
+      if (i == begin || i + 1 == end || b.isKey || b.isSplitEdge || b.splitAfter || before) s.pinned[i] = 1;
+    }
+    size_t prev = begin;
+    for (size_t i = begin + 1; i < end; ++i) {
+      if (!s.pinned[i]) continue;
+      if (i - prev >= 2) {
+        Interval iv{static_cast<uint32_t>(i - prev), 0, static_cast<uint32_t>(prev), static_cast<uint32_t>(i)};
+        iv.keyDist = s.keyDist[iv.mid()];
+        s.heap.push_back(iv);
+      }
+      prev = i;
+    }
+    begin = end;
+  }
+
+  uint32_t next = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (s.pinned[i]) out.rank[i] = next++;
+  out.pinned = next;
+
+  std::make_heap(s.heap.begin(), s.heap.end(), HeapLess());
+  while (!s.heap.empty()) {
+    std::pop_heap(s.heap.begin(), s.heap.end(), HeapLess());
+    const Interval iv = s.heap.back();
+    s.heap.pop_back();
+    const uint32_t m = iv.mid();
+    out.rank[m] = next++;
+    for (const auto& [a, b] : {std::pair<uint32_t, uint32_t>{iv.a, m}, std::pair<uint32_t, uint32_t>{m, iv.b}}) {
+      if (b - a < 2) continue;
+      Interval sub{b - a, 0, a, b};
+      sub.keyDist = s.keyDist[sub.mid()];
+      s.heap.push_back(sub);
+      std::push_heap(s.heap.begin(), s.heap.end(), HeapLess());
+    }
+  }
+  PTERYLA_CHECK(next == n, "every barb gets a collapse rank");
+}
+
+LodOrder computeLodOrder(const FeatherCurves& c) {
+  LodOrder o;
+  computeLodOrder(c, o);
+  return o;
+}
+
+uint32_t keptBarbCount(const LodOrder& order, double lod) {
+  const double n = static_cast<double>(order.rank.size());
+  if (!(lod > 0)) lod = 0;  // also maps NaN to the lowest level
+  lod = std::min(lod, 1.0);
+  const double k = std::round(lod * n);
+  return std::max(order.pinned, static_cast<uint32_t>(std::min(k, n)));
+}
+
+int lodSegments(int fullSegments, int minSegments, double segmentLodStart, double lod) {
+  fullSegments = std::max(1, fullSegments);
+  minSegments = std::clamp(minSegments, 1, fullSegments);
+  if (!(lod > 0)) lod = 0;
+  if (!(segmentLodStart > 0) || lod >= segmentLodStart) return fullSegments;
+  const int s = static_cast<int>(std::ceil(fullSegments * lod / segmentLodStart - 1e-9));
+  return std::clamp(s, minSegments, fullSegments);
+}
+
+}  // namespace pteryla::feather
