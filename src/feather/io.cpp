@@ -12,6 +12,7 @@
 #include "pteryla/feather/bezier.hpp"
 #include "pteryla/feather/generator.hpp"
 #include "pteryla/feather/silhouette.hpp"
+#include "keys_internal.hpp"
 
 namespace pteryla::feather {
 
@@ -218,7 +219,7 @@ FeatherParams readImpl(JsonReader& r) {
     g->read(r, p);
   }
   r.finish();
-  validateFeather(p, r.file());
+  validateFeatherAt(p, r.file(), r.path());
   return p;
 }
 

@@ -229,4 +229,8 @@ void validateImpl(const FeatherParams& p, const std::string& file, const std::st
 
 void validateFeather(const FeatherParams& p, const std::string& file) { validateImpl(p, file, ""); }
 
+void validateFeatherAt(const FeatherParams& p, const std::string& file, const std::string& path) {
+  validateImpl(p, file, path.empty() ? "" : path + ".");
+}
+
 }  // namespace pteryla::feather
