@@ -156,7 +156,9 @@ struct Row {
 struct Scratch {
   LodOrder order;
   std::vector<ShaftFrames> frames, refFrames;
-  std::vector<RefBarb> ref;            // per barb of the reference
+  std::vector<RefBarb> ref;            // per barb of the reference (valid where refDone)
+  std::vector<uint8_t> refDone;
+  std::vector<ShaftFrames>* geo = nullptr;  // frames of the curves being meshed (refFrames when same)
   std::vector<UvSpace> space;          // per part of the reference
   std::vector<uint32_t> kept;          // kept barbs of the current vane
   std::vector<int> keptSlot;           // source slot of each kept barb
@@ -168,6 +170,8 @@ struct Scratch {
   std::vector<Row> rows;
   std::vector<glm::vec3> rowPos;
   std::vector<int> shaftSel;
+  std::vector<float> alphaC, alphaE;   // alpha per sample of centre / side rows
+  std::vector<glm::vec2> ring;         // (cos, sin) per shaft side
 };
 Scratch& scratch() {
   static thread_local Scratch s;
@@ -296,10 +300,15 @@ FeatherMeshSize planSize(const Plan& pl, const MeshOptions& opt, Scratch& s) {
 
 // ---------------------------------------------------------------- reference texture space
 
+// Texture space of every part of the reference: extents of along / across over all control vertices
+// (a curve lies in the hull of its control vertices, so normalized coordinates stay in [0, 1]). Frames
+// at barb attachments are walked (barbs ascend in rp per vane) and not renormalized: the extents are
+// normalization constants only. Per-barb data is filled lazily by refBarb().
 void buildReference(const Plan& pl, Scratch& s) {
   const FeatherCurves& r = *pl.ref;
   s.refFrames.resize(r.partCount());
   s.ref.resize(r.barbs.size());
+  s.refDone.assign(r.barbs.size(), 0);
   s.space.assign(r.partCount(), UvSpace{});
   for (size_t part = 0; part < r.partCount(); ++part) {
     const ShaftCurve& sh = r.shafts[part];
@@ -307,35 +316,54 @@ void buildReference(const Plan& pl, Scratch& s) {
     sf.build(sh);
     float alongMin = 0, alongMax = sf.length(), acrossMax = 0, vgMax = sf.length();
     for (const Frame& f : sf.f) acrossMax = std::max(acrossMax, 0.5f * f.width);
+    const size_t nf = sf.f.size();
+    size_t hi = 0;
+    float prevRp = -2;
     for (uint32_t i = r.barbBegin[part]; i < r.barbEnd[part]; ++i) {
       const BarbCurve& b = r.barbs[i];
-      RefBarb& rb = s.ref[i];
-      rb.fr = sf.at(sh, b.rp);
+      if (b.rp < prevRp) hi = 0;  // next vane
+      prevRp = b.rp;
+      while (hi < nf && sh.rp[hi] <= b.rp) ++hi;
+      const size_t h = std::min(std::max<size_t>(hi, 1), nf - 1), lo = h - 1;
+      const float span = sh.rp[h] - sh.rp[lo];
+      const float w = span > 0 ? std::clamp((b.rp - sh.rp[lo]) / span, 0.0f, 1.0f) : 0.0f;
+      const Frame& f0 = sf.f[lo];
+      const Frame& f1 = sf.f[h];
+      const glm::vec3 p = f0.p + w * (f1.p - f0.p), t = f0.t + w * (f1.t - f0.t), l = f0.l + w * (f1.l - f0.l);
+      const float s0 = f0.s + w * (f1.s - f0.s);
       const glm::vec3* cv = r.cvs.data() + b.cvOffset;
       for (uint16_t k = 0; k < b.cvCount; ++k) {
-        const glm::vec3 d = cv[k] - rb.fr.p;
-        const float along = rb.fr.s + glm::dot(d, rb.fr.t);
-        const float across = std::abs(glm::dot(d, rb.fr.l));
+        const glm::vec3 d = cv[k] - p;
+        const float along = s0 + glm::dot(d, t);
+        const float across = std::abs(glm::dot(d, l));
         alongMin = std::min(alongMin, along);
         alongMax = std::max(alongMax, along);
         acrossMax = std::max(acrossMax, across);
       }
-      rb.len = b.cvCount ? glm::length(cv[b.cvCount - 1] - cv[0]) : 0.0f;
-      vgMax = std::max(vgMax, rb.fr.s + rb.len);
-      rb.u0 = std::abs(glm::dot(cv[0] - rb.fr.p, rb.fr.l));       // scaled below
-      rb.uTip = std::abs(glm::dot(cv[b.cvCount - 1] - rb.fr.p, rb.fr.l));
+      if (b.cvCount) vgMax = std::max(vgMax, s0 + glm::length(cv[b.cvCount - 1] - cv[0]));
     }
     UvSpace& sp = s.space[part];
     sp.alongMin = alongMin;
     sp.alongInv = alongMax - alongMin > 1e-30f ? 1.0f / (alongMax - alongMin) : 0.0f;
     sp.acrossInv = acrossMax > 1e-30f ? 0.5f / acrossMax : 0.0f;
     sp.vgInv = vgMax > 1e-30f ? 1.0f / vgMax : 0.0f;
-    for (uint32_t i = r.barbBegin[part]; i < r.barbEnd[part]; ++i) {
-      RefBarb& rb = s.ref[i];
-      rb.u0 = std::min(0.5f, rb.u0 * sp.acrossInv);
-      rb.uTip = std::clamp(rb.uTip * sp.acrossInv, rb.u0, 0.5f);
-    }
   }
+}
+
+const RefBarb& refBarb(const Plan& pl, Scratch& s, uint32_t i) {
+  RefBarb& rb = s.ref[i];
+  if (s.refDone[i]) return rb;
+  s.refDone[i] = 1;
+  const FeatherCurves& r = *pl.ref;
+  const BarbCurve& b = r.barbs[i];
+  const size_t part = b.part < r.partCount() ? b.part : 0;
+  const UvSpace& sp = s.space[part];
+  rb.fr = s.refFrames[part].at(r.shafts[part], b.rp);
+  const glm::vec3* cv = r.cvs.data() + b.cvOffset;
+  rb.len = b.cvCount ? glm::length(cv[b.cvCount - 1] - cv[0]) : 0.0f;
+  rb.u0 = b.cvCount ? std::min(0.5f, std::abs(glm::dot(cv[0] - rb.fr.p, rb.fr.l)) * sp.acrossInv) : 0.0f;
+  rb.uTip = b.cvCount ? std::clamp(std::abs(glm::dot(cv[b.cvCount - 1] - rb.fr.p, rb.fr.l)) * sp.acrossInv, rb.u0, 0.5f) : rb.u0;
+  return rb;
 }
 
 // Reference barbs standing for barb i of the curves: same index when the vane layouts match, else the
@@ -402,8 +430,8 @@ int addSource(const Plan& pl, Scratch& s, uint32_t i, const RefLink& link, float
     return slot;
   }
   const UvSpace& sp = s.space[link.part];
-  const RefBarb& ra = s.ref[link.a];
-  const RefBarb& rb = s.ref[link.b];
+  const RefBarb& ra = refBarb(pl, s, link.a);
+  const RefBarb& rb = refBarb(pl, s, link.b);
   const float w = link.w;
   const bool same = pl.ref == pl.c;
   const BarbCurve& ba = pl.ref->barbs[link.a];
@@ -543,7 +571,7 @@ void writeVane(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& i
       const float dir = row.b == kBelow ? -1.0f : 1.0f;
       const glm::vec3 chord = A[n - 1] - A[0];
       const float off = 0.05f * glm::length(chord) + 1e-7f;
-      const Frame fr = s.frames[part].at(c.shafts[part], c.barbs[s.kept[0]].rp);
+      const Frame fr = (*s.geo)[part].at(c.shafts[part], c.barbs[s.kept[0]].rp);
       for (size_t k = 0; k < n; ++k) s.rowPos[r * n + k] = A[k] + (dir * off) * fr.t;
       continue;
     }
@@ -554,10 +582,16 @@ void writeVane(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& i
   const float startC = std::max(0.0f, 1.0f - 1.0f / pl.fullSegs);
   const float startE = std::max(0.0f, 1.0f - 2.0f / pl.fullSegs);
   const float tipAlpha = static_cast<float>(opt.alphaTip);
+  s.alphaC.resize(n);
+  s.alphaE.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    const float t = static_cast<float>(static_cast<double>(k) / pl.segs);
+    s.alphaC[k] = alphaAt(t, startC, tipAlpha);
+    s.alphaE[k] = alphaAt(t, startE, tipAlpha);
+  }
   const bool sheathed = in.sheathShed < 1.0;
   const float orient = vane == 0 ? -1.0f : 1.0f;  // cross(along, across) points ventral on the left vane
   const uint32_t v0 = cur.v;
-  const double inv = 1.0 / pl.segs;
   for (size_t r = 0; r < R; ++r) {
     const Row& row = s.rows[r];
     const size_t sa = static_cast<size_t>(row.a) * n;
@@ -567,26 +601,33 @@ void writeVane(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& i
     const glm::vec3* P = s.rowPos.data() + r * n;
     const glm::vec3* Pp = s.rowPos.data() + (r > 0 ? r - 1 : r) * n;
     const glm::vec3* Pn = s.rowPos.data() + (r + 1 < R ? r + 1 : r) * n;
-    const Frame fr = s.frames[part].at(c.shafts[part], rp);
+    // Rachis frame: only for degenerate normals / tangents (closed pin barbs, zero-length barbs).
+    Frame fr;
+    bool haveFrame = false;
+    auto frame = [&]() -> const Frame& {
+      if (!haveFrame) fr = (*s.geo)[part].at(c.shafts[part], rp);
+      haveFrame = true;
+      return fr;
+    };
+    const float* alphaRow = (row.centre ? s.alphaC : s.alphaE).data();
     for (size_t k = 0; k < n; ++k) {
       const size_t o = v0 + r * n + k;
       const glm::vec3 along = P[k + 1 < n ? k + 1 : k] - P[k > 0 ? k - 1 : k];
       const glm::vec3 across = Pn[k] - Pp[k];
-      glm::vec3 nrm = orient * glm::cross(along, across);
+      const glm::vec3 nrm = orient * glm::cross(along, across);
       const float l2 = glm::dot(nrm, nrm);
-      const float ref2 = glm::dot(along, along) * glm::dot(across, across);
-      nrm = (l2 > 1e-10f * ref2 && l2 > 1e-36f) ? nrm / std::sqrt(l2) : fr.d;
+      const float along2 = glm::dot(along, along);
+      const bool okN = l2 > 1e-10f * along2 * glm::dot(across, across) && l2 > 1e-36f;
       d.pos[o] = xf.point(P[k]);
-      d.nrm[o] = xf.normal(nrm);
-      d.tan[o] = xf.tangent(safeUnit(along, fr.t));
+      d.nrm[o] = xf.normal(okN ? nrm : frame().d);
+      d.tan[o] = xf.tangent(along2 > 1e-36f ? along : frame().t);
       const glm::vec2 g = clamp01(wa * s.srcUvG[sa + k] + wb * s.srcUvG[sb + k]);
       const glm::vec2 bu = clamp01(glm::vec2(wa * s.srcUvB[sa + k].x + wb * s.srcUvB[sb + k].x, rp));
       const glm::vec2 gr = clamp01(wa * s.srcUvGr[sa + k] + wb * s.srcUvGr[sb + k]);
       d.uvG[o] = g;
       d.uvB[o] = bu;
       d.uvGr[o] = gr;
-      const float t = static_cast<float>(k * inv);
-      d.alpha[o] = alphaAt(t, row.centre ? startC : startE, tipAlpha);
+      d.alpha[o] = alphaRow[k];
       d.sheath[o] = sheathed ? static_cast<float>(sheathWeight(gr.y, in.sheathShed, in.sheathBand)) : 0.0f;
       d.count[o] = row.count;
       d.fid[o] = in.featherId;
@@ -624,7 +665,7 @@ void writeShaft(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& 
   const ShaftCurve& sh = pl.c->shafts[part];
   shaftSelection(sh, pl, opt, s.shaftSel);
   if (s.shaftSel.size() < 2) return;
-  const ShaftFrames& sf = s.frames[part];
+  const ShaftFrames& sf = (*s.geo)[part];
   const bool hasRef = part < pl.ref->partCount();
   const ShaftCurve& rsh = hasRef ? pl.ref->shafts[part] : sh;
   const ShaftFrames& rsf = hasRef ? s.refFrames[part] : sf;
@@ -634,6 +675,13 @@ void writeShaft(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& 
   const bool sheathed = in.sheathShed < 1.0;
   const uint32_t v0 = cur.v;
   uint32_t o = v0;
+  if (s.ring.size() != static_cast<size_t>(sides + 1)) {
+    s.ring.resize(static_cast<size_t>(sides + 1));
+    for (int j = 0; j <= sides; ++j) {
+      const double th = -kPi + 2 * kPi * j / sides;
+      s.ring[static_cast<size_t>(j)] = glm::vec2(static_cast<float>(std::cos(th)), static_cast<float>(std::sin(th)));
+    }
+  }
   // Reference arc length and half width at rachis position rp (calamus: rp in [-1, 0)).
   auto refAt = [&](float rp, float& sRef, float& halfW) {
     const Frame f = rsf.at(rsh, rp);
@@ -652,7 +700,7 @@ void writeShaft(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& 
     const float sheath = sheathed ? static_cast<float>(sheathWeight(vGr, in.sheathShed, in.sheathBand)) : 0.0f;
     for (int j = 0; j <= sides; ++j, ++o) {
       const float th = -0.5f * kTwoPi + kTwoPi * static_cast<float>(j) / static_cast<float>(sides);
-      const float cs = std::cos(th), sn = std::sin(th);
+      const float cs = s.ring[static_cast<size_t>(j)].x, sn = s.ring[static_cast<size_t>(j)].y;
       const glm::vec3 dir = cs * f.d + sn * f.l;
       d.pos[o] = xf.point(f.p + rad * dir);
       d.nrm[o] = xf.normal(dir);
@@ -713,8 +761,13 @@ void writeFeather(const FeatherMeshInput& in, const MeshOptions& opt, Dst& d, Fe
   const Plan pl = makePlan(in, opt, s);
   const Xform xf(in.placement);
   buildReference(pl, s);
-  s.frames.resize(pl.c->partCount());
-  for (size_t part = 0; part < pl.parts; ++part) s.frames[part].build(pl.c->shafts[part]);
+  if (pl.ref == pl.c) {
+    s.geo = &s.refFrames;
+  } else {
+    s.frames.resize(pl.c->partCount());
+    for (size_t part = 0; part < pl.parts; ++part) s.frames[part].build(pl.c->shafts[part]);
+    s.geo = &s.frames;
+  }
   Cursor cur;
   FeatherMeshRanges rg;
   auto mark = [&](uint32_t& first) { first = d.ibase + cur.i; };
