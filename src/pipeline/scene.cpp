@@ -109,6 +109,7 @@ Scene sceneFromJson(const Json& j, const std::string& file) {
   s.skeleton = takeSection(r, "skeleton", Json::object());
   s.controls = takeSection(r, "controls", Json::array());
   s.packing = takeSection(r, "packing", Json::object());
+  s.ordering = takeSection(r, "ordering", Json::object());
   if (r.has("camera")) s.camera = readCamera(r.object("camera")); else r.allow("camera");
   for (auto& l : r.objects("lights")) s.lights.push_back(readLight(l));
   if (r.has("render")) s.render = readRender(r.object("render")); else r.allow("render");
@@ -152,6 +153,7 @@ Json sceneToJson(const Scene& s, const std::string& relativeTo) {
   if (!s.skeleton.empty()) j["skeleton"] = sectionsRelativeTo(s, s.skeleton, "skeleton", relativeTo);
   if (!s.controls.empty()) j["controls"] = s.controls;
   if (!s.packing.empty()) j["packing"] = s.packing;
+  if (!s.ordering.empty()) j["ordering"] = s.ordering;
   Json cam;
   cam["fov"] = s.camera.fovDeg;
   cam["up"] = vec(s.camera.up);

@@ -39,10 +39,11 @@ void validateSections(Scene& s) {
   validateFeathers(s);
   if (!s.tracts.is_array()) throw Error("expected an array of tracts", s.file, "tracts");
   if (!s.controls.is_array()) throw Error("expected an array of controls", s.file, "controls");
-  for (const char* key : {"directions", "moult", "skeleton", "packing"}) {
+  for (const char* key : {"directions", "moult", "skeleton", "packing", "ordering"}) {
     const Json& sec = key == std::string("directions") ? s.directions
                       : key == std::string("moult")    ? s.moult
                       : key == std::string("skeleton") ? s.skeleton
+                      : key == std::string("ordering") ? s.ordering
                                                        : s.packing;
     if (!sec.is_object()) throw Error("expected an object", s.file, key);
   }
@@ -56,7 +57,7 @@ Scene bareMeshScene(const std::string& meshPath) {
   s.fromBareMesh = true;
   s.feathers = Json::object();
   s.feathers["contour"] = (std::filesystem::path(dataDir()) / "feathers" / "contour.json").string();
-  s.tracts = Json::array({Json{{"name", "all"}, {"density", "auto"}}});
+  s.tracts = Json::array({Json{{"name", "all"}, {"parameterization", {{"method", "projection"}}}}});
   s.lights.push_back(LightSpec{});
   s.lights.push_back(LightSpec{{0.7, -0.3, 0.6}, {0.55, 0.6, 0.7}, 0.5});
   return s;

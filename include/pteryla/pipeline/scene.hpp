@@ -53,6 +53,7 @@ struct Scene {
   Json skeleton = Json::object();
   Json controls = Json::array();
   Json packing = Json::object();
+  Json ordering = Json::object();
   CameraSpec camera;
   std::vector<LightSpec> lights;
   RenderSpec render;

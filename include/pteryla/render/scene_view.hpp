@@ -1,0 +1,43 @@
+#pragma once
+// SceneView: draws what a Pipeline evaluated (posed skin + packed coat) with the Renderer, using the
+// scene's camera, lights, materials and render settings. Shared by the CLI (OSMesa), the viewer (GLFW)
+// and the golden tests, so a frame looks the same everywhere. Owns no model state: it re-uploads the
+// meshes when the pipeline's results change.
+#include <memory>
+#include <string>
+
+#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/render/camera.hpp"
+#include "pteryla/render/image.hpp"
+#include "pteryla/render/renderer.hpp"
+
+namespace pteryla::render {
+
+// Camera for the scene: explicit eye/target, or framing the posed skin's bounds (auto_frame).
+Camera sceneCamera(const pipeline::Scene& scene, const TriMesh& skin, const TriMesh& coat, int width, int height);
+std::vector<Light> sceneLights(const pipeline::Scene& scene);
+RenderSettings sceneSettings(const pipeline::Scene& scene, int width, int height);
+// Renderer materials for the coat's feather types: colour texture from the feather file, else the
+// pattern named in it (data/textures/<pattern>.png or a synthesized one), barb alpha mask, BRDF d/h.
+std::vector<FeatherMaterial> sceneMaterials(const pipeline::Scene& scene, const pipeline::CoatMesh& coat);
+std::vector<FeatherDrawRange> drawRanges(const pipeline::CoatMesh& coat);
+
+class SceneView {
+ public:
+  explicit SceneView(RenderContext& context);
+  ~SceneView();
+  // Uploads the pipeline's current skin and coat (when they changed) and renders an image.
+  // style: "" (the scene's), "shaded" or "scratchboard".
+  Image render(pipeline::Pipeline& p, int width, int height, const std::string& style = "");
+  // Draws into the current framebuffer (viewer); `camera` overrides the scene camera.
+  void draw(pipeline::Pipeline& p, const Camera& camera, int width, int height);
+  Renderer& renderer();
+  // Forces a re-upload on the next render (after edits the view cannot detect).
+  void markDirty();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pteryla::render

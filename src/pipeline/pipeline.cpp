@@ -1,0 +1,585 @@
+// The evaluation pipeline: one StageGraph node per stage of the thesis' method (Streit 2003, Ch.6-8),
+// each owning its cached result. See include/pteryla/pipeline/pipeline.hpp for the graph.
+#include "pteryla/pipeline/pipeline.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <glm/common.hpp>
+#include <cmath>
+#include <map>
+
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/directions.hpp"
+#include "pteryla/coat/follicles.hpp"
+#include "pteryla/coat/key_feathers.hpp"
+#include "pteryla/coat/metrics.hpp"
+#include "pteryla/coat/ordering.hpp"
+#include "pteryla/coat/pack.hpp"
+#include "pteryla/coat/parameterize.hpp"
+#include "pteryla/coat/relax.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/coat/style.hpp"
+#include "pteryla/coat/tracts.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/core/paths.hpp"
+#include "pteryla/core/rng.hpp"
+#include "pteryla/feather/barbs.hpp"
+#include "pteryla/feather/growth.hpp"
+#include "pteryla/feather/io.hpp"
+#include "pteryla/feather/lod.hpp"
+#include "pteryla/feather/mesh.hpp"
+#include "pipeline_internal.hpp"
+#include "time_stages.hpp"
+
+namespace pteryla::pipeline {
+
+const char* stageName(Stage s) {
+  switch (s) {
+    case Stage::Skin: return "skin";
+    case Stage::Tracts: return "tracts";
+    case Stage::Distribute: return "distribute";
+    case Stage::Interpolate: return "interpolate";
+    case Stage::Directions: return "directions";
+    case Stage::Pose: return "pose";
+    case Stage::Ages: return "ages";
+    case Stage::Controls: return "controls";
+    case Stage::Pack: return "pack";
+    case Stage::Mesh: return "mesh";
+  }
+  return "?";
+}
+
+namespace {
+
+// Per-tract settings the pipeline reads itself (the rest of a tract object belongs to coat parsers).
+struct TractSettings {
+  coat::Tract tract;
+  double density = 0;       // follicles per unit area (0: use count)
+  size_t count = 0;
+  bool autoScale = false;   // scale feathers so their length is ~featherSpacings x follicle spacing
+  double featherScale = 1;  // explicit scale factor
+  double featherSpacings = 3.5;
+  coat::RelaxOptions relax;
+  std::vector<glm::dvec3> pinned;
+  coat::TractFeatherOptions feathers;
+  std::string element;
+};
+
+constexpr size_t kAutoCount = 1500;
+
+// Axes of the rest skin's bounding box, longest first.
+void boxAxes(const coat::SkinMesh& m, glm::dvec3& lo, glm::dvec3& hi, int axes[3]) {
+  lo = hi = m.positions.empty() ? glm::dvec3(0) : m.positions[0];
+  for (const auto& p : m.positions) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+  const glm::dvec3 ext = hi - lo;
+  axes[0] = 0; axes[1] = 1; axes[2] = 2;
+  std::sort(axes, axes + 3, [&](int a, int b) { return ext[a] > ext[b]; });
+}
+
+
+}  // namespace
+
+struct Pipeline::Impl {
+  Scene scene;
+  ProgressFn progress;
+  double time = 0, lod = 1;
+  StageGraph graph;
+  StageGraph::Id ids[10];
+
+  // Cached stage results.
+  coat::SkinMesh rest, posed;
+  coat::FeatherLibrary library;
+  std::vector<std::string> materialNames;
+  std::vector<TractSettings> tractSettings;
+  std::vector<coat::Tract> tracts;
+  coat::Follicles follicles, posedFollicles;
+  std::vector<coat::RelaxResult> relaxResults;
+  std::vector<coat::TractParameterization> params;
+  coat::CoatFeathers coatRest;    // interpolated + rest frames + order
+  coat::SurfaceDirections directions;
+  coat::DirectionOptions directionOptions;
+  coat::OrderOptions orderOptions;
+  coat::PackOptions packOptions;
+  coat::CoatFeathers coatNow;     // at the current time: posed frames, ages, presence
+  TimeState timeState;
+  std::vector<double> fixedElevation;
+  coat::PackResult packed;
+  bool havePacked = false;
+  CoatMesh mesh;
+  std::vector<feather::FeatherCurves> curves, refCurves;
+  std::vector<feather::LodOrder> lodOrders;
+
+  Stage stageOf(StageGraph::Id id) const {
+    for (int i = 0; i < 10; ++i)
+      if (ids[i] == id) return Stage(i);
+    return Stage::Skin;
+  }
+  StageGraph::Id id(Stage s) const { return ids[int(s)]; }
+
+  void build();
+  void computeSkin();
+  void computeTracts();
+  void computeDistribute();
+  void computeInterpolate();
+  coat::TractParameterization boxParameterization(uint32_t tract) const;
+  void computeDirections();
+  void computePose();
+  void computeAges();
+  void computeControls();
+  void computePack();
+  void computeMesh();
+};
+
+void Pipeline::Impl::build() {
+  auto add = [&](Stage s, std::vector<Stage> in, void (Impl::*fn)()) {
+    std::vector<StageGraph::Id> inputs;
+    for (Stage i : in) inputs.push_back(id(i));
+    ids[int(s)] = graph.add(stageName(s), inputs, [this, fn] { (this->*fn)(); });
+  };
+  add(Stage::Skin, {}, &Impl::computeSkin);
+  add(Stage::Tracts, {Stage::Skin}, &Impl::computeTracts);
+  add(Stage::Distribute, {Stage::Tracts}, &Impl::computeDistribute);
+  add(Stage::Interpolate, {Stage::Distribute}, &Impl::computeInterpolate);
+  add(Stage::Directions, {Stage::Interpolate}, &Impl::computeDirections);
+  add(Stage::Pose, {Stage::Directions}, &Impl::computePose);
+  add(Stage::Ages, {Stage::Pose}, &Impl::computeAges);
+  add(Stage::Controls, {Stage::Ages}, &Impl::computeControls);
+  add(Stage::Pack, {Stage::Controls}, &Impl::computePack);
+  add(Stage::Mesh, {Stage::Pack}, &Impl::computeMesh);
+}
+
+void Pipeline::Impl::computeSkin() {
+  report(progress, "load", 0);
+  coat::MeshLoadOptions o;
+  o.repair = scene.meshRepair;
+  rest = coat::loadSkinMesh(scene.meshPath, o);
+  // Feather library: every named feather of the scene.
+  library.clear();
+  materialNames.clear();
+  for (auto it = scene.feathers.begin(); it != scene.feathers.end(); ++it) {
+    feather::FeatherParams p;
+    if (it->is_string()) {
+      try {
+        p = feather::loadFeather(it->get<std::string>());
+      } catch (const Error& e) {
+        throw Error(e.detail(), e.file().empty() ? scene.file : e.file(),
+                    e.file().empty() ? "feathers." + it.key() : e.element());
+      }
+    } else {
+      JsonReader r(*it, scene.file, "feathers." + it.key());
+      p = feather::readFeather(r);
+      p.sourceFile = scene.file;
+    }
+    p.name = it.key();
+    library[it.key()] = std::move(p);
+    materialNames.push_back(it.key());
+  }
+  if (library.empty()) throw Error("the scene defines no feathers", scene.file, "feathers");
+  report(progress, "load", 1);
+}
+
+void Pipeline::Impl::computeTracts() {
+  tractSettings.clear();
+  tracts.clear();
+  std::vector<coat::Tract> earlier;
+  const double meshArea = rest.totalArea();
+  if (scene.tracts.empty()) scene.tracts = Json::array({Json{{"name", "all"}}});
+  for (size_t i = 0; i < scene.tracts.size(); ++i) {
+    const std::string where = "tracts[" + std::to_string(i) + "]";
+    JsonReader r(scene.tracts[i], scene.file, where);
+    TractSettings t;
+    t.element = where;
+    t.tract = coat::readTract(r, rest, earlier);
+    earlier.push_back(t.tract);
+    const double area = coat::tractArea(rest, t.tract);
+    if (r.has("count")) {
+      t.count = static_cast<size_t>(r.integer("count", 0, 2000000));
+      r.allow("density");
+    } else if (r.has("density") && r.json().at("density").is_number()) {
+      t.density = r.number("density", 0.0, 1e9);
+    } else {
+      r.allow("density");
+      t.count = static_cast<size_t>(std::lround(kAutoCount * area / std::max(meshArea, 1e-300)));
+    }
+    if (r.has("feather_scale") && r.json().at("feather_scale").is_string()) {
+      if (r.string("feather_scale") != "auto") r.fail("feather_scale", "expected a positive number or \"auto\"");
+      t.autoScale = true;
+    } else {
+      t.featherScale = r.number("feather_scale", 1.0, 1e-6, 1e6);
+      t.autoScale = scene.fromBareMesh;
+    }
+    t.featherSpacings = r.number("feather_spacings", t.featherSpacings, 0.1, 100.0);
+    t.relax.iterations = 40;
+    if (r.has("relax")) {
+      JsonReader rr = r.object("relax");
+      t.relax.iterations = static_cast<int>(rr.integer("iterations", t.relax.iterations, 0, 100000));
+      t.relax.overRelaxation = rr.number("over_relaxation", t.relax.overRelaxation, 1.0, 1.99);
+      t.relax.fixBoundary = rr.boolean("fix_boundary", t.relax.fixBoundary);
+      for (auto& b : rr.objects("bias")) {
+        coat::BiasVector v;
+        v.origin = b.vec3("at");
+        v.direction = b.vec3("direction");
+        v.sigma = b.number("sigma", 0.0, 0.0, 1e9);
+        v.stretch = b.number("stretch", v.stretch, 1.0, 10.0);
+        v.densityGain = b.number("density_gain", 0.0, 0.0, 100.0);
+        b.finish();
+        t.relax.bias.push_back(v);
+      }
+      rr.finish();
+    } else {
+      r.allow("relax");
+    }
+    if (r.has("pinned")) {
+      for (auto& p : r.objects("pinned")) {
+        t.pinned.push_back(p.vec3("at"));
+        p.finish();
+      }
+    } else {
+      r.allow("pinned");
+    }
+    t.feathers = coat::parseTractFeatherOptions(r);
+    r.allow("moult");  // read by the time stages
+    r.finish();
+    tracts.push_back(t.tract);
+    tractSettings.push_back(std::move(t));
+  }
+  directionOptions = coat::DirectionOptions{};
+  orderOptions = coat::OrderOptions{};
+  if (scene.fromBareMesh) {
+    // Any mesh with one command: feathers flow along the longest bounding-box axis and are layered
+    // along it (roof tiles from the far end).
+    glm::dvec3 lo, hi;
+    int ax[3];
+    boxAxes(rest, lo, hi, ax);
+    glm::dvec3 a = 0.5 * (lo + hi), b = a;
+    a[ax[0]] = lo[ax[0]];
+    b[ax[0]] = hi[ax[0]];
+    directionOptions.field.axis = {a, b};
+    orderOptions.method = coat::OrderMethod::Axis;
+    orderOptions.axis = {a, b};
+  }
+  if (!scene.directions.empty()) {
+    JsonReader r(scene.directions, scene.file, "directions");
+    directionOptions = coat::parseDirections(r);
+  }
+  packOptions = coat::PackOptions{};
+  if (!scene.packing.empty()) {
+    JsonReader r(scene.packing, scene.file, "packing");
+    packOptions = coat::parsePackOptions(r);
+  }
+  if (!scene.ordering.empty()) {
+    JsonReader r(scene.ordering, scene.file, "ordering");
+    orderOptions = coat::parseOrdering(r);
+  }
+}
+
+void Pipeline::Impl::computeDistribute() {
+  follicles.clear();
+  relaxResults.clear();
+  uint64_t nextId = 0;
+  for (size_t i = 0; i < tractSettings.size(); ++i) {
+    TractSettings& t = tractSettings[i];
+    coat::ScatterOptions so;
+    so.seed = mix64(scene.seed * 0x9E37u + i);
+    so.density.uniform = t.density;
+    so.count = t.count;
+    if (so.count == 0 && t.density <= 0) so.count = 1;
+    so.tractIndex = static_cast<uint32_t>(i);
+    so.firstId = nextId;
+    coat::Follicles f = coat::scatterFollicles(rest, t.tract, so);
+    nextId += f.size() + t.pinned.size() + 1;
+    for (size_t k = 0; k < t.pinned.size(); ++k)
+      coat::addPinnedFollicleNear(f, rest, t.tract, t.pinned[k], static_cast<uint32_t>(i), nextId - 1 - k);
+    coat::RelaxOptions ro = t.relax;
+    ro.progress = [&, i](const std::string&, double fr) {
+      return report(progress, "distribute", (double(i) + fr) / double(tractSettings.size()));
+    };
+    relaxResults.push_back(coat::relaxFollicles(rest, t.tract, f, ro));
+    follicles.append(f);
+  }
+  report(progress, "distribute", 1);
+}
+
+coat::TractParameterization Pipeline::Impl::boxParameterization(uint32_t tract) const {
+  glm::dvec3 lo, hi;
+  int ax[3];
+  boxAxes(rest, lo, hi, ax);
+  const glm::dvec3 ext = glm::max(hi - lo, glm::dvec3(1e-12));
+  coat::TractParameterization p;
+  p.method = coat::ParamMethod::Projection;
+  p.note = "bounding-box projection (at most one key feather)";
+  p.scale = ext[ax[0]];
+  for (size_t f = 0; f < follicles.size(); ++f) {
+    if (follicles.tract[f] != tract) continue;
+    const glm::dvec3 q = (follicles.position[f] - lo) / ext;
+    p.follicles.push_back(static_cast<uint32_t>(f));
+    p.follicleUv.push_back({q[ax[0]], q[ax[1]]});
+  }
+  return p;
+}
+
+void Pipeline::Impl::computeInterpolate() {
+  report(progress, "interpolate", 0);
+  params.clear();
+  std::vector<coat::TractKeys> keys;
+  for (size_t i = 0; i < tractSettings.size(); ++i) {
+    TractSettings& t = tractSettings[i];
+    try {
+      params.push_back(coat::parameterizeTract(rest, t.tract, static_cast<uint32_t>(i), follicles,
+                                               t.feathers.parameterization));
+    } catch (const Error&) {
+      // With at most one key feather nothing is interpolated, so a closed or folded tract needs no
+      // real parameterization: (u,v) from the two longest axes of the mesh's bounding box.
+      if (t.feathers.keys.size() > 1) throw;
+      params.push_back(boxParameterization(static_cast<uint32_t>(i)));
+    }
+  }
+  for (size_t i = 0; i < tractSettings.size(); ++i) {
+    TractSettings& t = tractSettings[i];
+    coat::TractKeys k;
+    k.param = &params[i];
+    k.keys = coat::resolveKeyFeathers(follicles, params[i], t.feathers.keys, library, t.tract.name, t.feathers.feather,
+                                      scene.file);
+    k.scaleJitter = t.feathers.scaleJitter;
+    keys.push_back(std::move(k));
+  }
+  coatRest = coat::CoatFeathers{};
+  coat::InterpolateOptions io;
+  io.seed = scene.seed;
+  coat::interpolateCoatFeathers(follicles, keys, library, io, coatRest);
+  // Tract-level feather scale (explicit, or automatic from the follicle spacing).
+  for (size_t i = 0; i < tractSettings.size(); ++i) {
+    const TractSettings& t = tractSettings[i];
+    double s = t.featherScale;
+    if (t.autoScale && i < relaxResults.size() && relaxResults[i].spacing > 0) {
+      double len = 0;
+      size_t n = 0;
+      for (size_t f = 0; f < coatRest.size(); ++f)
+        if (coatRest.tract[f] == i) { len += coatRest.params[f].totalLength(); ++n; }
+      if (n && len > 0) s = t.featherSpacings * relaxResults[i].spacing / (len / double(n));
+    }
+    if (s != 1.0)
+      for (size_t f = 0; f < coatRest.size(); ++f)
+        if (coatRest.tract[f] == i) coat::scaleFeather(coatRest.params[f], s);
+  }
+  report(progress, "interpolate", 1);
+}
+
+void Pipeline::Impl::computeDirections() {
+  directions = coat::computeSurfaceDirections(rest, tracts, follicles, directionOptions);
+  coat::evaluateFrames(rest, follicles, directions, coatRest);
+  coat::orderLayers(rest, tracts, params, follicles, directions, orderOptions, coatRest);
+}
+
+void Pipeline::Impl::computePose() {
+  posed = rest;
+  poseSkin(scene, time, rest, posed, timeState);
+  posedFollicles = follicles;
+  coat::updateFollicleGeometry(posed, posedFollicles);
+  coatNow = coatRest;
+  coat::evaluateFrames(posed, posedFollicles, directions, coatNow);
+}
+
+void Pipeline::Impl::computeAges() {
+  coatNow.age.assign(coatNow.size(), 1.0);
+  coatNow.present.assign(coatNow.size(), 1);
+  featherAges(scene, time, params, posedFollicles, timeState, coatNow);
+}
+
+void Pipeline::Impl::computeControls() {
+  fixedElevation.assign(coatNow.size(), std::nan(""));
+  if (!packOptions.styling.empty()) fixedElevation = coat::applyStyling(coatNow, packOptions.styling, fixedElevation).fixedElevation;
+  applyControls(scene, time, posed, posedFollicles, timeState, coatNow, fixedElevation);
+}
+
+void Pipeline::Impl::computePack() {
+  report(progress, "pack", 0);
+  coat::PackOptions o = packOptions;
+  o.fixedElevation = fixedElevation;
+  packed = coat::pack(posed, coatNow, o);
+  havePacked = true;
+  report(progress, "pack", 1);
+}
+
+void Pipeline::Impl::computeMesh() {
+  report(progress, "mesh", 0);
+  const size_t n = coatNow.size();
+  curves.resize(n);
+  refCurves.resize(n);
+  lodOrders.resize(n);
+  std::vector<uint8_t> grown(n, 1);
+  std::vector<double> shed(n, 1.0);
+  const feather::GrowthSchedule& schedule = feather::defaultGrowthSchedule();
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    if (!coatNow.present[i]) return;
+    const double age = coatNow.age[i];
+    const feather::FeatherParams& p = packed.packedParams.empty() ? coatNow.params[i] : packed.packedParams[i];
+    if (age >= 1.0) {
+      feather::generateBarbs(p, curves[i]);
+      grown[i] = 1;
+    } else {
+      const feather::GrowthState st = feather::growthStateAt(age, schedule);
+      feather::generateBarbs(feather::featherAtState(p, st, schedule), curves[i]);
+      feather::generateBarbs(p, refCurves[i]);
+      shed[i] = st[feather::GrowthParam::Sheath];
+      grown[i] = 0;
+    }
+    feather::computeLodOrder(curves[i], lodOrders[i]);
+  });
+  std::vector<feather::FeatherMeshInput> inputs;
+  std::vector<uint32_t> which;
+  inputs.reserve(n);
+  for (uint32_t i : coatNow.layerOrder) {
+    if (!coatNow.present[i]) continue;
+    feather::FeatherMeshInput in;
+    in.curves = &curves[i];
+    in.reference = grown[i] ? nullptr : &refCurves[i];
+    in.order = &lodOrders[i];
+    const coat::FeatherFrame& fr = coatNow.frames[i];
+    in.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, packed.elevation[i]);
+    in.featherId = i;
+    in.lod = lod;
+    in.sheathShed = shed[i];
+    inputs.push_back(in);
+    which.push_back(i);
+  }
+  mesh.mesh.clear();
+  std::vector<feather::FeatherMeshRanges> ranges;
+  feather::MeshOptions mo;
+  feather::appendFeatherMeshes(inputs.data(), inputs.size(), mo, mesh.mesh, &ranges);
+  mesh.ranges.clear();
+  mesh.ranges.reserve(ranges.size());
+  std::map<std::string, uint32_t> matIndex;
+  for (size_t k = 0; k < materialNames.size(); ++k) matIndex[materialNames[k]] = static_cast<uint32_t>(k);
+  for (size_t k = 0; k < ranges.size(); ++k) {
+    const uint32_t i = which[k];
+    const auto& r = ranges[k];
+    CoatDrawRange d;
+    const uint32_t first = r.shaftFirst;
+    const uint32_t end = std::max({r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
+                                   r.afterFirst + r.afterCount});
+    d.firstIndex = first;
+    d.indexCount = end - first;
+    d.partCount[0] = r.shaftCount;
+    d.partCount[1] = r.leftCount;
+    d.partCount[2] = r.rightCount;
+    d.partCount[3] = r.afterCount;
+    const auto it = matIndex.find(coatNow.params[i].name);
+    d.material = it == matIndex.end() ? 0 : it->second;
+    const coat::FeatherFrame& fr = coatNow.frames[i];
+    const auto pl = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, packed.elevation[i]);
+    d.origin = glm::vec3(fr.origin);
+    d.axisX = glm::vec3(pl.x);
+    d.axisY = glm::vec3(pl.y);
+    mesh.ranges.push_back(d);
+  }
+  mesh.materials.clear();
+  for (const auto& name : materialNames) {
+    const feather::FeatherParams& p = library.at(name);
+    CoatMaterial m;
+    m.name = name;
+    auto resolve = [&](const std::string& t) { return t.empty() ? t : resolveRelative(p.sourceFile, t); };
+    m.texture = resolve(p.material.texture);
+    m.alphaTexture = resolve(p.material.alphaTexture);
+    m.pattern = p.material.pattern;
+    if (p.material.baseColor) m.baseColor = glm::vec3(*p.material.baseColor);
+    mesh.materials.push_back(m);
+  }
+  report(progress, "mesh", 1);
+}
+
+Pipeline::Pipeline(Scene scene, ProgressFn progress) : impl_(std::make_unique<Impl>()) {
+  impl_->scene = std::move(scene);
+  impl_->progress = std::move(progress);
+  impl_->time = impl_->scene.time;
+  impl_->lod = impl_->scene.render.lod;
+  impl_->build();
+}
+
+Pipeline::~Pipeline() = default;
+
+const Scene& Pipeline::scene() const { return impl_->scene; }
+void Pipeline::editScene(Stage from, const std::function<void(Scene&)>& edit) {
+  edit(impl_->scene);
+  invalidate(from);
+}
+void Pipeline::invalidate(Stage from) { impl_->graph.invalidate(impl_->id(from)); }
+void Pipeline::setProgress(ProgressFn progress) { impl_->progress = std::move(progress); }
+
+void Pipeline::setTime(double t) {
+  if (!std::isfinite(t)) throw Error("time must be a finite number", "", "--time");
+  if (t == impl_->time) return;
+  impl_->time = t;
+  // Only stages that depend on time: the skin pose and everything after it.
+  impl_->graph.invalidate(impl_->id(Stage::Pose));
+}
+double Pipeline::time() const { return impl_->time; }
+
+void Pipeline::setLod(double f) {
+  if (!(f > 0 && f <= 1)) throw Error("level of detail must be in (0, 1]", "", "lod");
+  if (f == impl_->lod) return;
+  impl_->lod = f;
+  impl_->graph.invalidate(impl_->id(Stage::Mesh));
+}
+double Pipeline::lod() const { return impl_->lod; }
+
+const coat::SkinMesh& Pipeline::restSkin() {
+  impl_->graph.pull(impl_->id(Stage::Skin));
+  return impl_->rest;
+}
+const coat::SkinMesh& Pipeline::posedSkin() {
+  impl_->graph.pull(impl_->id(Stage::Pose));
+  return impl_->posed;
+}
+const std::vector<coat::Tract>& Pipeline::tracts() {
+  impl_->graph.pull(impl_->id(Stage::Tracts));
+  return impl_->tracts;
+}
+const coat::Follicles& Pipeline::follicles() {
+  impl_->graph.pull(impl_->id(Stage::Distribute));
+  return impl_->follicles;
+}
+const coat::CoatFeathers& Pipeline::feathers() {
+  impl_->graph.pull(impl_->id(Stage::Pack));
+  return impl_->coatNow;
+}
+const std::vector<double>& Pipeline::elevations() {
+  impl_->graph.pull(impl_->id(Stage::Pack));
+  return impl_->packed.elevation;
+}
+const CoatMesh& Pipeline::coatMesh() {
+  impl_->graph.pull(impl_->id(Stage::Mesh));
+  return impl_->mesh;
+}
+TriMesh Pipeline::skinTriMesh() { return coat::toTriMesh(posedSkin()); }
+
+QualityMetrics Pipeline::check() {
+  QualityMetrics m;
+  const auto& f = follicles();
+  m.follicles = f.size();
+  double hexSum = 0, cvSum = 0;
+  size_t interior = 0;
+  for (size_t i = 0; i < impl_->tracts.size(); ++i) {
+    const auto d = coat::measureDistribution(impl_->rest, impl_->tracts[i], f);
+    hexSum += d.hexFraction * double(d.interior);
+    cvSum += d.nnCv * double(d.interior);
+    interior += d.interior;
+  }
+  if (interior > 0) {
+    m.hexFraction = hexSum / double(interior);
+    m.nnCv = cvSum / double(interior);
+  }
+  const auto& coat = feathers();
+  size_t present = 0;
+  for (auto p : coat.present) present += p ? 1 : 0;
+  m.feathers = present;
+  checkCoat(*this, m);
+  return m;
+}
+
+StageGraph& Pipeline::graph() { return impl_->graph; }
+double Pipeline::stageSeconds(Stage s) const { return impl_->graph.totalSeconds(impl_->id(s)); }
+void Pipeline::resetTimings() { impl_->graph.resetTimings(); }
+
+}  // namespace pteryla::pipeline

@@ -1,0 +1,187 @@
+#include "pteryla/render/scene_view.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+
+#include "pteryla/core/paths.hpp"
+#include "pteryla/render/pattern.hpp"
+#include "pteryla/render/scratchboard.hpp"
+
+namespace pteryla::render {
+namespace {
+
+glm::vec3 v3(const glm::dvec3& v) { return glm::vec3(v); }
+
+std::string textureDir() {
+  if (const char* e = std::getenv("PTERYLA_DATA")) return std::string(e) + "/textures";
+  return std::string(PTERYLA_DATA_DIR) + "/textures";
+}
+
+}  // namespace
+
+Camera sceneCamera(const pipeline::Scene& scene, const TriMesh& skin, const TriMesh& coat, int width, int height) {
+  Camera c;
+  c.fovYDegrees = static_cast<float>(scene.camera.fovDeg);
+  c.up = v3(scene.camera.up);
+  const float aspect = float(width) / float(std::max(height, 1));
+  if (!scene.camera.autoFrame) {
+    c.eye = v3(scene.camera.eye);
+    c.target = v3(scene.camera.target);
+    const float dist = glm::length(c.eye - c.target);
+    c.zNear = std::max(1e-3f, dist * 0.01f);
+    c.zFar = dist * 10.0f;
+    return c;
+  }
+  glm::vec3 lo, hi, lo2, hi2;
+  bool any = skin.bounds(lo, hi);
+  if (coat.bounds(lo2, hi2)) {
+    if (any) { lo = glm::min(lo, lo2); hi = glm::max(hi, hi2); } else { lo = lo2; hi = hi2; any = true; }
+  }
+  if (!any) { lo = glm::vec3(-1); hi = glm::vec3(1); }
+  glm::vec3 dir = glm::normalize(v3(scene.camera.viewDir));
+  const glm::vec3 centre = 0.5f * (lo + hi);
+  c.target = centre;
+  c.eye = centre - dir;
+  c.frameBounds(lo, hi, aspect, 1.02f);
+  return c;
+}
+
+std::vector<Light> sceneLights(const pipeline::Scene& scene) {
+  std::vector<Light> out;
+  for (const auto& l : scene.lights) {
+    Light x;
+    x.direction = -v3(l.direction);  // scene: direction the light travels; renderer: toward the light
+    x.color = v3(l.color) * static_cast<float>(l.intensity);
+    out.push_back(x);
+  }
+  return out;
+}
+
+RenderSettings sceneSettings(const pipeline::Scene& scene, int width, int height) {
+  RenderSettings s;
+  s.width = width;
+  s.height = height;
+  s.background = glm::vec4(v3(scene.render.background), 1.0f);
+  s.ambient = glm::vec3(static_cast<float>(scene.render.ambient));
+  s.skinColor = v3(scene.render.skinColor);
+  return s;
+}
+
+std::vector<FeatherMaterial> sceneMaterials(const pipeline::Scene& scene, const pipeline::CoatMesh& coat) {
+  static const std::map<std::string, PatternKind> kinds = {{"plain", PatternKind::Plain},
+                                                           {"barred", PatternKind::Barred},
+                                                           {"scalloped", PatternKind::Scalloped},
+                                                           {"spotted", PatternKind::Spotted},
+                                                           {"eyespot", PatternKind::Eyespot}};
+  std::vector<FeatherMaterial> out;
+  for (const auto& m : coat.materials) {
+    FeatherMaterial f;
+    f.name = m.name;
+    f.baseColor = m.baseColor;
+    f.barbules.d = scene.render.brdfD;
+    f.barbules.h = scene.render.brdfH;
+    if (!m.texture.empty()) {
+      f.colorTexture = m.texture;
+      f.baseColor = glm::vec3(1.0f);
+    } else if (!m.pattern.empty()) {
+      const std::string file = textureDir() + "/" + m.pattern + ".png";
+      if (fileExists(file)) {
+        f.colorTexture = file;
+      } else {
+        PatternParams pp;
+        auto it = kinds.find(m.pattern);
+        pp.kind = it == kinds.end() ? PatternKind::Barred : it->second;
+        pp.baseColor = m.baseColor;
+        pp.markColor = m.baseColor * 0.35f;
+        f.colorImage = generatePattern(pp);
+        f.baseColor = glm::vec3(1.0f);
+      }
+    }
+    if (!m.alphaTexture.empty()) {
+      f.alphaTexture = m.alphaTexture;
+    } else {
+      BarbAlphaParams ap;
+      if (m.name.find("down") != std::string::npos) ap.fluff = 1.0f;
+      f.alphaImage = generateBarbAlpha(ap);
+    }
+    out.push_back(std::move(f));
+  }
+  return out;
+}
+
+std::vector<FeatherDrawRange> drawRanges(const pipeline::CoatMesh& coat) {
+  std::vector<FeatherDrawRange> out;
+  out.reserve(coat.ranges.size());
+  for (const auto& r : coat.ranges) {
+    FeatherDrawRange d;
+    d.firstIndex = r.firstIndex;
+    d.indexCount = r.indexCount;
+    d.material = r.material;
+    d.origin = r.origin;
+    d.axisX = r.axisX;
+    d.axisY = r.axisY;
+    for (int k = 0; k < 4; ++k) d.partCount[k] = r.partCount[k];
+    out.push_back(d);
+  }
+  return out;
+}
+
+struct SceneView::Impl {
+  explicit Impl(RenderContext& c) : renderer(c) {}
+  Renderer renderer;
+  const void* lastCoat = nullptr;
+  uint64_t lastSkinEval = ~0ull, lastMeshEval = ~0ull;
+  bool materialsSet = false;
+  TriMesh skin;
+
+  void sync(pipeline::Pipeline& p) {
+    const auto& coat = p.coatMesh();
+    auto& g = p.graph();
+    const auto skinId = g.find("pose"), meshId = g.find("mesh");
+    if (g.evaluations(skinId) != lastSkinEval) {
+      skin = p.skinTriMesh();
+      renderer.setSkin(skin);
+      lastSkinEval = g.evaluations(skinId);
+    }
+    if (g.evaluations(meshId) != lastMeshEval) {
+      if (!materialsSet) {
+        renderer.setMaterials(sceneMaterials(p.scene(), coat));
+        materialsSet = true;
+      }
+      renderer.setCoat(coat.mesh, drawRanges(coat));
+      lastMeshEval = g.evaluations(meshId);
+    }
+  }
+};
+
+SceneView::SceneView(RenderContext& context) : impl_(std::make_unique<Impl>(context)) {}
+SceneView::~SceneView() = default;
+Renderer& SceneView::renderer() { return impl_->renderer; }
+void SceneView::markDirty() {
+  impl_->lastSkinEval = impl_->lastMeshEval = ~0ull;
+  impl_->materialsSet = false;
+}
+
+Image SceneView::render(pipeline::Pipeline& p, int width, int height, const std::string& styleIn) {
+  const std::string style = styleIn.empty() ? p.scene().render.style : styleIn;
+  const auto& coat = p.coatMesh();
+  if (style == "scratchboard") {
+    const TriMesh skin = p.skinTriMesh();
+    ScratchboardSettings s;
+    s.width = width;
+    s.height = height;
+    return renderScratchboard(coat.mesh, skin, sceneCamera(p.scene(), skin, coat.mesh, width, height),
+                              sceneLights(p.scene()), s);
+  }
+  impl_->sync(p);
+  const Camera cam = sceneCamera(p.scene(), impl_->skin, coat.mesh, width, height);
+  return impl_->renderer.renderImage(cam, sceneLights(p.scene()), sceneSettings(p.scene(), width, height));
+}
+
+void SceneView::draw(pipeline::Pipeline& p, const Camera& camera, int width, int height) {
+  impl_->sync(p);
+  impl_->renderer.render(camera, sceneLights(p.scene()), sceneSettings(p.scene(), width, height));
+}
+
+}  // namespace pteryla::render
