@@ -65,6 +65,7 @@ struct LocalKey {
   dvec3 root{0}, u{1, 0, 0}, w{0, 1, 0}, d{0, 0, 1}, left{0, 1, 0};
   double len = 0;
   double sExt = 0;  // extent along u (len * max cv.x)
+  double rootDist = 0;  // |root|
   uint32_t cvOff = 0;
   uint16_t cvCount = 0;
 };
@@ -74,6 +75,8 @@ struct LocalFeather {
   bool unopened = false;
   double reach = 0;            // bound on |p| for every point in any packed state
   double yMin = 0, yMax = 0;   // lateral footprint (bound over packed states)
+  double vaneHalf = 0;         // largest lateral reach of a barb from its root (unpacked)
+  double shaftYMin = 0, shaftYMax = 0;
   double totalLength = 0;
   std::vector<dvec3> shaft;    // polyline from the follicle to the tip, feather-local
   std::vector<double> shaftRad;
@@ -92,6 +95,7 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
   L.keys.clear();
   L.cvs.clear();
   L.leftKeys = 0;
+  L.vaneHalf = 0;
   const int segs = std::max(2, o.shaftSamples);
   if (L.unopened) {
     // 8.3: a pin or partly opened feather is straight and stiff.
@@ -152,6 +156,8 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
           xmax = std::max(xmax, c.x);
         }
         k.sExt = k.len * xmax;
+        k.rootDist = glm::length(k.root);
+        L.vaneHalf = std::max(L.vaneHalf, k.len * xmax * sa);
         L.keys.push_back(k);
         if (v == 0) ++L.leftKeys;
       }
@@ -160,7 +166,10 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
   // Bounds over every packed state: elevation is a rotation about the follicle, flattening moves control
   // vertices toward the barb's plane and the lift rotates a barb about its root, so |p| <= |root| + len |cv|.
   double reach = 0, yMin = 0, yMax = 0;
+  L.shaftYMin = L.shaftYMax = 0;
   for (size_t k = 0; k < L.shaft.size(); ++k) {
+    L.shaftYMin = std::min(L.shaftYMin, L.shaft[k].y);
+    L.shaftYMax = std::max(L.shaftYMax, L.shaft[k].y);
     reach = std::max(reach, glm::length(L.shaft[k]) + L.shaftRad[k]);
     yMin = std::min(yMin, L.shaft[k].y - L.shaftRad[k]);
     yMax = std::max(yMax, L.shaft[k].y + L.shaftRad[k]);
@@ -189,10 +198,13 @@ struct Candidate {
 
 struct Scratch {
   std::vector<Candidate> cand;
-  std::vector<double> hf, psiMin, shaftRadBin;
-  std::vector<double> bh, bhRaw;        // barb field bins
-  std::vector<glm::dvec3> curve, flat;  // barb samples
-  std::vector<glm::dvec3> cvs;
+  std::vector<double> psiMin, shaftRadBin, yLo, yHi;
+  std::vector<glm::dvec2> best;           // per shaft bin: direction of the largest angle so far
+  std::vector<double> bh, bhRaw;          // barb fields, keys x bins
+  std::vector<double> plane;              // per key: signed distance of the current candidate
+  std::vector<glm::dvec3> curve, tmp;     // barb samples and transformed control vertices
+  std::vector<double> bern;               // Bernstein weights: samples x cvs
+  size_t bernCvs = 0, bernSamples = 0;
   PackStats stats;
   std::vector<BarbField> fields;
 };
@@ -226,41 +238,48 @@ struct Rot {
   dvec3 operator()(const dvec3& p) const { return {p.x * c - p.z * s, p.y, p.x * s + p.z * c}; }
 };
 
-bool inFootprint(const LocalFeather& L, double t, double b, double n, double margin) {
-  if (t < 0 || t > L.reach + margin) return false;
-  if (b < L.yMin - margin || b > L.yMax + margin) return false;
-  return t * t + b * b + n * n <= (L.reach + margin) * (L.reach + margin);
+// Monotone stand-in for the angle of (x, y) over (-pi/2, 3pi/2) ("diamond angle" of the vector turned by
+// +pi/2): compares angles without atan2.
+inline double pseudoAngle(double x, double y) {
+  const double px = -y, py = x;  // turned by +pi/2: angles in (-pi/2, 3pi/2) -> (0, 2pi)
+  const double s = std::abs(px) + std::abs(py);
+  if (s == 0) return 0;
+  if (py >= 0) return px >= 0 ? py / s : 1 + (-px) / s;
+  return px < 0 ? 2 + (-py) / s : 3 + px / s;
 }
 
-// Minimum of the shaft's polar angle psi(r) per radius bin, over the shaft polyline (and its extension
-// along the tip tangent to `rMax`), and the largest shaft radius per bin. Exact for the polyline: the polar
-// angle is monotone along a straight segment, so a bin's minimum sits at a segment end or a bin edge.
-void shaftProfile(const LocalFeather& L, double rMax, int bins, bool extend, std::vector<double>& psiMin,
-                  std::vector<double>& radBin) {
-  psiMin.assign(bins, kInf);
-  radBin.assign(bins, 0.0);
+// Minimum of the shaft's polar angle psi(r) per radius bin over the shaft polyline (and its extension along
+// the tip tangent to `rMax`), the largest shaft radius and the lateral range of the shaft per bin. Exact for
+// the polyline: the polar angle is monotone along a straight segment, so a bin's minimum sits at a segment
+// end or where the segment crosses a bin edge.
+void shaftProfile(const LocalFeather& L, double rMax, int bins, bool extend, Scratch& S) {
+  S.psiMin.assign(bins, kInf);
+  S.shaftRadBin.assign(bins, 0.0);
+  S.yLo.assign(bins, kInf);
+  S.yHi.assign(bins, -kInf);
   const double cell = rMax / bins;
   auto binOf = [&](double r) { return std::min(bins - 1, std::max(0, static_cast<int>(std::floor(r / cell)))); };
-  auto note = [&](int b, double psi, double rad) {
-    psiMin[b] = std::min(psiMin[b], psi);
-    radBin[b] = std::max(radBin[b], rad);
+  auto note = [&](int b, double psi, double rad, double y) {
+    S.psiMin[b] = std::min(S.psiMin[b], psi);
+    S.shaftRadBin[b] = std::max(S.shaftRadBin[b], rad);
+    S.yLo[b] = std::min(S.yLo[b], y);
+    S.yHi[b] = std::max(S.yHi[b], y);
   };
-  auto segment = [&](glm::dvec2 a, glm::dvec2 c, double ra, double rc) {
+  auto segment = [&](const dvec3& a3, const dvec3& c3, double ra, double rc) {
+    const glm::dvec2 a(a3.x, a3.z), c(c3.x, c3.z);
     const glm::dvec2 dd = c - a;
     const double la = glm::length(a), lc = glm::length(c);
     const double psiA = la > 0 ? std::atan2(a.y, a.x) : std::atan2(dd.y, dd.x);
     const double psiC = lc > 0 ? std::atan2(c.y, c.x) : psiA;
     const double rad = std::max(ra, rc);
-    if (la <= rMax) note(binOf(la), psiA, rad);
-    if (lc <= rMax) note(binOf(lc), psiC, rad);
-    // Bin edges crossed by the segment: solve |a + s dd| = edge.
+    if (la <= rMax) note(binOf(la), psiA, rad, a3.y);
+    if (lc <= rMax) note(binOf(lc), psiC, rad, c3.y);
     const double A = glm::dot(dd, dd);
     if (A <= 0) return;
-    const double lo = std::min(la, lc), hi = std::max(la, lc);
-    // The segment's closest approach to the origin may lie inside it.
+    const double hi = std::max(la, lc);
     const double sMin = std::clamp(-glm::dot(a, dd) / A, 0.0, 1.0);
     const double rLow = glm::length(a + sMin * dd);
-    const int b0 = binOf(std::min(lo, rLow)), b1 = binOf(std::min(hi, rMax));
+    const int b0 = binOf(rLow), b1 = binOf(std::min(hi, rMax));
     for (int b = b0 + 1; b <= b1; ++b) {
       const double e = b * cell;
       const double B = 2 * glm::dot(a, dd), C = glm::dot(a, a) - e * e;
@@ -271,58 +290,75 @@ void shaftProfile(const LocalFeather& L, double rMax, int bins, bool extend, std
         if (s < 0 || s > 1) continue;
         const glm::dvec2 q = a + s * dd;
         const double psi = std::atan2(q.y, q.x);
-        note(b - 1, psi, rad);
-        note(b, psi, rad);
+        const double y = a3.y + s * (c3.y - a3.y);
+        note(b - 1, psi, rad, y);
+        note(b, psi, rad, y);
       }
     }
   };
-  for (size_t k = 0; k + 1 < L.shaft.size(); ++k) {
-    segment({L.shaft[k].x, L.shaft[k].z}, {L.shaft[k + 1].x, L.shaft[k + 1].z}, L.shaftRad[k], L.shaftRad[k + 1]);
-  }
+  for (size_t k = 0; k + 1 < L.shaft.size(); ++k) segment(L.shaft[k], L.shaft[k + 1], L.shaftRad[k], L.shaftRad[k + 1]);
   if (extend && L.shaft.size() >= 2) {
-    const glm::dvec2 tip(L.shaft.back().x, L.shaft.back().z);
-    const glm::dvec2 prev(L.shaft[L.shaft.size() - 2].x, L.shaft[L.shaft.size() - 2].z);
-    glm::dvec2 dir = tip - prev;
+    const dvec3 tip = L.shaft.back(), prev = L.shaft[L.shaft.size() - 2];
+    glm::dvec2 dir(tip.x - prev.x, tip.z - prev.z);
     const double ld = glm::length(dir);
     if (ld > 0) {
       dir /= ld;
-      // Extend until the radius exceeds rMax.
-      const double bq = glm::dot(tip, dir), cq = glm::dot(tip, tip) - rMax * rMax;
+      const glm::dvec2 t2(tip.x, tip.z);
+      const double bq = glm::dot(t2, dir), cq = glm::dot(t2, t2) - rMax * rMax;
       const double disc = bq * bq - cq;
       const double s = disc > 0 ? -bq + std::sqrt(disc) : 0.0;
-      if (s > 0) segment(tip, tip + s * dir, 0.0, 0.0);
+      if (s > 0) segment(tip, dvec3(tip.x + s * dir.x, tip.y, tip.z + s * dir.y), 0.0, 0.0);
     }
   }
 }
 
-// Fits one key barb to its height field (6.3.3). Curve samples are in the barb slicing plane: x = along
-// (scene units from the root), z = up. Returns the flattening fraction mu and the lift angle alpha.
+// ---- barb fitting (6.3.3)
+
 struct BarbFit {
   double mu = 0, alpha = 0;
   bool resolved = true;
 };
 
-// Samples (s, z) of the barb: cvs in barb-local unit frame (x along, y toward tip, z dorsal), scaled by len,
-// after flattening mu and lift alpha.
-void barbSamples(const std::vector<glm::dvec3>& cvs, double len, double mu, double alpha, int count,
-                 std::vector<glm::dvec3>& out, std::vector<glm::dvec3>& tmp) {
-  tmp.resize(cvs.size());
-  const double ca = std::cos(alpha), sa = std::sin(alpha);
-  for (size_t j = 0; j < cvs.size(); ++j) {
-    const double z = cvs[j].z + mu * std::max(0.0, -cvs[j].z);
-    tmp[j] = {cvs[j].x * ca - z * sa, cvs[j].y, cvs[j].x * sa + z * ca};
-  }
-  out.resize(count);
-  for (int k = 0; k < count; ++k) {
-    const double u = static_cast<double>(k) / (count - 1);
-    out[k] = len * feather::bezierPoint(tmp.data(), tmp.size(), u);
+void bernsteinTable(size_t cvs, size_t samples, Scratch& S) {
+  if (S.bernCvs == cvs && S.bernSamples == samples) return;
+  S.bernCvs = cvs;
+  S.bernSamples = samples;
+  S.bern.assign(cvs * samples, 0.0);
+  const size_t n = cvs - 1;
+  for (size_t k = 0; k < samples; ++k) {
+    const double u = static_cast<double>(k) / (samples - 1);
+    double binom = 1;
+    for (size_t j = 0; j <= n; ++j) {
+      S.bern[k * cvs + j] = binom * std::pow(u, static_cast<double>(j)) * std::pow(1 - u, static_cast<double>(n - j));
+      binom = binom * static_cast<double>(n - j) / static_cast<double>(j + 1);
+    }
   }
 }
 
-// Largest field value over the bins overlapping [s0, s1].
-double fieldMax(const std::vector<double>& bh, double cell, double s0, double s1) {
+// Samples (s, z) of the key barb in its slicing plane (x = along from the root, z = up, scene units) after
+// flattening mu and lift alpha: control vertices cv in the barb-local unit frame scaled by len.
+void barbSamples(const dvec3* cvs, size_t n, double len, double mu, double alpha, Scratch& S) {
+  S.tmp.resize(n);
+  const double ca = std::cos(alpha), sa = std::sin(alpha);
+  for (size_t j = 0; j < n; ++j) {
+    const double z = cvs[j].z + mu * std::max(0.0, -cvs[j].z);
+    S.tmp[j] = {cvs[j].x * ca - z * sa, cvs[j].y, cvs[j].x * sa + z * ca};
+  }
+  const size_t m = S.bernSamples;
+  S.curve.resize(m);
+  for (size_t k = 0; k < m; ++k) {
+    const double* w = &S.bern[k * n];
+    double x = 0, z = 0;
+    for (size_t j = 0; j < n; ++j) {
+      x += w[j] * S.tmp[j].x;
+      z += w[j] * S.tmp[j].z;
+    }
+    S.curve[k] = {len * x, 0.0, len * z};
+  }
+}
+
+double fieldMax(const double* bh, int nb, double cell, double s0, double s1) {
   if (s1 < 0) return -kInf;
-  const int nb = static_cast<int>(bh.size());
   const int b0 = std::max(0, static_cast<int>(std::floor(s0 / cell)));
   const int b1 = std::min(nb - 1, static_cast<int>(std::floor(s1 / cell)));
   double m = -kInf;
@@ -330,42 +366,51 @@ double fieldMax(const std::vector<double>& bh, double cell, double s0, double s1
   return m;
 }
 
-// Does the sampled curve clear the field everywhere beyond the root zone?
-bool clears(const std::vector<glm::dvec3>& c, const std::vector<double>& bh, double cell, double sRoot) {
+// Does the sampled curve clear the field beyond the root zone? Each curve segment must be above the
+// largest bin it overlaps, at both ends.
+bool clears(const Scratch& S, const double* bh, int nb, double cell, double sRoot) {
+  const auto& c = S.curve;
   for (size_t k = 0; k + 1 < c.size(); ++k) {
     const double s0 = std::min(c[k].x, c[k + 1].x), s1 = std::max(c[k].x, c[k + 1].x);
     if (s1 < sRoot) continue;
-    const double H = fieldMax(bh, cell, std::max(s0, 0.0), s1);
+    const double H = fieldMax(bh, nb, cell, std::max(s0, 0.0), s1);
     if (H == -kInf) continue;
     if (c[k].z < H || c[k + 1].z < H) return false;
   }
   return true;
 }
 
-BarbFit fitBarb(const std::vector<glm::dvec3>& cvs, double len, double sExt, const std::vector<double>& bh,
-                const PackOptions& o, Scratch& S) {
+// One flattening fraction mu in [0, maxFlatten] (the smallest that clears every bin: the barb flattens
+// uniformly and never takes inverse curvature for mu <= 1), then, only if needed, the smallest rotation
+// alpha about the root (bisection) that clears.
+BarbFit fitBarb(const dvec3* cvs, size_t n, double len, double sExt, const double* bh, int nb, const PackOptions& o,
+                Scratch& S) {
   BarbFit fit;
-  const int nb = static_cast<int>(bh.size());
   const double cell = sExt / nb;
-  const int samples = 4 * nb + 1;
-  const double sRoot = 0.05 * sExt;  // the root zone belongs to the shaft (it sits on the rachis)
-  barbSamples(cvs, len, 0, 0, samples, S.curve, S.cvs);
-  if (clears(S.curve, bh, cell, sRoot)) return fit;
-  // Flattening lift profile f(u) = len * sum B_j(u) max(0, -z_j).
-  S.flat.resize(cvs.size());
-  for (size_t j = 0; j < cvs.size(); ++j) S.flat[j] = {0, 0, std::max(0.0, -cvs[j].z)};
+  const double sRoot = 0.05 * sExt;  // the root zone belongs to the shaft (the barb sits on the rachis)
+  // Quick accept: the curve lies above its lowest control vertex (convex hull).
+  double zLow = 0, hMax = -kInf;
+  for (size_t j = 0; j < n; ++j) zLow = std::min(zLow, len * cvs[j].z);
+  for (int b = 0; b < nb; ++b)
+    if ((b + 1) * cell >= sRoot) hMax = std::max(hMax, bh[b]);
+  if (hMax <= zLow) return fit;
+  bernsteinTable(n, static_cast<size_t>(4 * nb + 1), S);
+  barbSamples(cvs, n, len, 0, 0, S);
+  if (clears(S, bh, nb, cell, sRoot)) return fit;
   double mu = 0;
   bool feasible = true;
-  for (size_t k = 0; k + 1 < S.curve.size(); ++k) {
+  const size_t m = S.bernSamples;
+  for (size_t k = 0; k + 1 < m; ++k) {
     const double s0 = std::min(S.curve[k].x, S.curve[k + 1].x), s1 = std::max(S.curve[k].x, S.curve[k + 1].x);
     if (s1 < sRoot) continue;
-    const double H = fieldMax(bh, cell, std::max(s0, 0.0), s1);
+    const double H = fieldMax(bh, nb, cell, std::max(s0, 0.0), s1);
     if (H == -kInf) continue;
     for (size_t e : {k, k + 1}) {
       const double z = S.curve[e].z;
       if (z >= H) continue;
-      const double u = static_cast<double>(e) / (samples - 1);
-      const double f = len * feather::bezierPoint(S.flat.data(), S.flat.size(), u).z;
+      double f = 0;  // flattening lift at this sample: len * sum B_j max(0, -z_j)
+      for (size_t j = 0; j < n; ++j) f += S.bern[e * n + j] * std::max(0.0, -cvs[j].z);
+      f *= len;
       if (f <= 1e-12 * len) {
         feasible = false;
         continue;
@@ -379,23 +424,20 @@ BarbFit fitBarb(const std::vector<glm::dvec3>& cvs, double len, double sExt, con
   }
   fit.mu = mu;
   if (feasible) {
-    // Guard against sampling slop: confirm, else fall through to the lift.
-    barbSamples(cvs, len, mu, 0, samples, S.curve, S.cvs);
-    if (clears(S.curve, bh, cell, sRoot)) return fit;
+    barbSamples(cvs, n, len, mu, 0, S);
+    if (clears(S, bh, nb, cell, sRoot)) return fit;
   }
-  // Lift: rotate the flattened barb about its root (monotone in alpha for a barb pointing away from the
-  // rachis); bisection for the smallest angle that clears.
   double lo = 0, hi = o.maxBarbLift;
-  barbSamples(cvs, len, mu, hi, samples, S.curve, S.cvs);
-  if (!clears(S.curve, bh, cell, sRoot)) {
+  barbSamples(cvs, n, len, mu, hi, S);
+  if (!clears(S, bh, nb, cell, sRoot)) {
     fit.alpha = hi;
     fit.resolved = false;
     return fit;
   }
-  for (int it = 0; it < 30; ++it) {
+  for (int it = 0; it < 24; ++it) {
     const double mid = 0.5 * (lo + hi);
-    barbSamples(cvs, len, mu, mid, samples, S.curve, S.cvs);
-    if (clears(S.curve, bh, cell, sRoot)) hi = mid;
+    barbSamples(cvs, n, len, mu, mid, S);
+    if (clears(S, bh, nb, cell, sRoot)) hi = mid;
     else lo = mid;
   }
   fit.alpha = hi;
@@ -409,6 +451,13 @@ struct Output {
   std::vector<uint32_t>& pointOffset;
   std::vector<glm::vec4>& points;
   std::vector<glm::dvec4>& bounds;
+  const std::vector<uint32_t>& groupOffset;
+  const std::vector<uint32_t>& groupPoint;
+  std::vector<glm::vec4>& groupBounds;
+};
+
+struct PlacedKey {
+  dvec3 root, u, w, d, left;
 };
 
 // Packs feather i against its dependencies' packed points (already in `out`) and the skin.
@@ -420,39 +469,64 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
   ++st.recomputed;
   // Candidate points in the follicle frame (6.3.2: "the data points of the surrounding feathers").
   S.cand.clear();
-  const double margin = 0;
+  const dvec3 T = F.tangent, B = F.binormal, N = F.normal, O = F.origin;
+  const double R2 = L.reach * L.reach;
+  // Sphere (centre c in the follicle frame, radius r) can touch the footprint?
+  auto sphereIn = [&](const dvec3& c, double r) {
+    return c.x + r >= 0 && c.x - r <= L.reach && c.y + r >= L.yMin && c.y - r <= L.yMax &&
+           glm::dot(c, c) <= (L.reach + r) * (L.reach + r);
+  };
+  auto frame = [&](const dvec3& w) {
+    const dvec3 r = w - O;
+    return dvec3(glm::dot(r, T), glm::dot(r, B), glm::dot(r, N));
+  };
   for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k) {
     const uint32_t j = ctx.deps[k];
     const glm::dvec4& bj = out.bounds[j];
-    const dvec3 c = toFrame(F, dvec3(bj));
-    if (c.x + bj.w < 0) continue;
-    if (c.x - bj.w > L.reach || c.y + bj.w < L.yMin || c.y - bj.w > L.yMax) continue;
-    if (glm::length(c) > L.reach + bj.w) continue;
-    for (uint32_t q = out.pointOffset[j]; q < out.pointOffset[j + 1]; ++q) {
-      const glm::vec4& pq = out.points[q];
-      const dvec3 l = toFrame(F, dvec3(pq.x, pq.y, pq.z));
-      if (!inFootprint(L, l.x, l.y, l.z, pq.w + margin)) continue;
-      S.cand.push_back({l.x, l.y, l.z, pq.w, false});
+    if (!sphereIn(frame(dvec3(bj)), bj.w)) continue;
+    for (uint32_t g = out.groupOffset[j]; g < out.groupOffset[j + 1]; ++g) {
+      const glm::vec4& gb = out.groupBounds[g];
+      if (!sphereIn(frame(dvec3(gb.x, gb.y, gb.z)), gb.w)) continue;
+      for (uint32_t q = out.groupPoint[g]; q < out.groupPoint[g + 1]; ++q) {
+        const glm::vec4& pq = out.points[q];
+        const dvec3 r(pq.x - O.x, pq.y - O.y, pq.z - O.z);
+        const double t = glm::dot(r, T);
+        const double m = L.reach + pq.w;
+        if (t < 0 || t > m) continue;
+        const double b = glm::dot(r, B);
+        if (b < L.yMin - pq.w || b > L.yMax + pq.w) continue;
+        const double n = glm::dot(r, N);
+        if (t * t + b * b + n * n > m * m) continue;
+        S.cand.push_back({t, b, n, pq.w, false});
+      }
     }
   }
   if (o.skin && !ctx.skinPts.empty()) {
-    // World bounds of the footprint box (t in [0, R], b in [yMin, yMax], n in [-R, R]) clipped to the ball.
+    // World bounds of the footprint box (t in [0, R], b in [yMin, yMax], n in [-R, R]) clipped to the ball;
+    // grid cells are culled against the footprint before their points are read.
     detail::Box box;
     for (int k = 0; k < 8; ++k) {
       const dvec3 lp((k & 1) ? L.reach : 0.0, (k & 2) ? L.yMax : L.yMin, (k & 4) ? L.reach : -L.reach);
-      box.add(F.origin + lp.x * F.tangent + lp.y * F.binormal + lp.z * F.normal);
+      box.add(O + lp.x * T + lp.y * B + lp.z * N);
     }
-    box.lo = glm::max(box.lo, F.origin - dvec3(L.reach));
-    box.hi = glm::min(box.hi, F.origin + dvec3(L.reach));
-    ctx.skinGrid.query(box.lo, box.hi, [&](uint32_t k) {
-      const dvec3 l = toFrame(F, ctx.skinPts[k]);
-      if (!inFootprint(L, l.x, l.y, l.z, 0)) return;
-      S.cand.push_back({l.x, l.y, l.z, 0.0, true});
-    });
+    box.lo = glm::max(box.lo, O - dvec3(L.reach));
+    box.hi = glm::min(box.hi, O + dvec3(L.reach));
+    ctx.skinGrid.query(
+        box.lo, box.hi, [&](const dvec3& centre, double half) { return sphereIn(frame(centre), half); },
+        [&](uint32_t k) {
+          const dvec3 r = ctx.skinPts[k] - O;
+          const double t = glm::dot(r, T);
+          if (t < 0 || t > L.reach) return;
+          const double b = glm::dot(r, B);
+          if (b < L.yMin || b > L.yMax) return;
+          const double n = glm::dot(r, N);
+          if (t * t + b * b + n * n > R2) return;
+          S.cand.push_back({t, b, n, 0.0, true});
+        });
   }
   st.candidatePoints += S.cand.size();
 
-  // ---- 6.3.2 shaft rotation
+  // ---- 6.3.2 shaft rotation: polar height field in the shaft slicing plane.
   const double rMax = L.reach;
   const int bins = std::max(4, o.heightFieldBins);
   const double cell = rMax / bins;
@@ -463,22 +537,33 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     e = fixedE;
     ++st.fixed;
   } else {
-    shaftProfile(L, rMax, bins, o.extendShaft, S.psiMin, S.shaftRadBin);
-    S.hf.assign(bins, -kInf);
+    shaftProfile(L, rMax, bins, o.extendShaft, S);
+    S.best.assign(bins, glm::dvec2(0));
+    std::vector<double>& bestKey = S.plane;  // pseudo-angle of S.best per bin
+    bestKey.assign(bins, -1.0);
+    const double band = o.shaftBand * L.vaneHalf;
+    const double r2Min = 1e-24 * rMax * rMax, r2Max = rMax * rMax;
     for (const Candidate& c : S.cand) {
-      const double r = std::hypot(c.t, c.n);
-      if (!(r > 1e-12 * rMax) || r > rMax) continue;
+      const double r2 = c.t * c.t + c.n * c.n;
+      if (!(r2 > r2Min) || r2 > r2Max) continue;
+      const double r = std::sqrt(r2);
       const int b = std::min(bins - 1, static_cast<int>(r / cell));
       if (S.psiMin[b] == kInf) continue;  // beyond the shaft's reach
-      const double phi = std::atan2(c.n, c.t);
+      if (c.b < S.yLo[b] - band - c.rad || c.b > S.yHi[b] + band + c.rad) continue;
       const double gap = c.skin ? (S.shaftRadBin[b] + ctx.skinClearance) * std::min(1.0, r / ramp)
                                 : c.rad + S.shaftRadBin[b] + ctx.clearance;
-      const double delta = std::asin(std::min(1.0, gap / r));
-      S.hf[b] = std::max(S.hf[b], phi + delta);
+      const double sd = std::min(1.0, gap / r), cd = std::sqrt(1 - sd * sd);
+      // (t, n) turned up by the clearance angle delta = asin(gap / r).
+      const double vx = c.t * cd - c.n * sd, vy = c.t * sd + c.n * cd;
+      const double pa = pseudoAngle(vx, vy);
+      if (pa > bestKey[b]) {
+        bestKey[b] = pa;
+        S.best[b] = {vx, vy};
+      }
     }
     double req = -kInf;
     for (int b = 0; b < bins; ++b)
-      if (S.hf[b] > -kInf && S.psiMin[b] < kInf) req = std::max(req, S.hf[b] - S.psiMin[b]);
+      if (bestKey[b] >= 0 && S.psiMin[b] < kInf) req = std::max(req, std::atan2(S.best[b].y, S.best[b].x) - S.psiMin[b]);
     if (req == -kInf || req <= o.minElevation) ++st.free;
     e = std::max(o.minElevation, req);
     if (e > o.maxElevation) {
@@ -490,50 +575,72 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
   out.elevation[i] = e;
   const Rot R{std::cos(e), std::sin(e)};
 
-  // ---- 6.3.3 barb elevation
-  const size_t nKeys = L.keys.size();
-  // Final control vertices per key (flattened/lifted), written into the packed params.
+  // ---- 6.3.3 barb elevation: per key barb, a height field in its barb slicing plane from the candidates
+  // on its side of the shaft between the neighbouring key barbs' slicing planes.
   feather::FeatherParams& P = out.params[i];
   P = ctx.coat.params[i];
-  bool anyChanged = false;
+  const size_t nKeys = L.keys.size();
   const int fb = std::max(2, o.barbFieldBins);
+  bool anyChanged = false;
   std::vector<feather::KeyBarb> vaneKeys[2];
-  for (size_t kk = 0; kk < nKeys; ++kk) {
-    const LocalKey& k = L.keys[kk];
-    std::vector<glm::dvec3> cvs(L.cvs.begin() + k.cvOff, L.cvs.begin() + k.cvOff + k.cvCount);
-    BarbFit fit;
-    if (o.elevateBarbs && !L.unopened && k.sExt > 0) {
-      const dvec3 root = R(k.root), u = R(k.u), d = R(k.d), left = R(k.left);
-      const double side = k.vane == 0 ? 1.0 : -1.0;
-      const size_t first = k.vane == 0 ? 0 : L.leftKeys;
-      const size_t last = k.vane == 0 ? L.leftKeys : nKeys;
-      const bool hasPrev = kk > first, hasNext = kk + 1 < last;
-      dvec3 rootPrev{0}, wPrev{0}, rootNext{0}, wNext{0};
-      if (hasPrev) { rootPrev = R(L.keys[kk - 1].root); wPrev = R(L.keys[kk - 1].w); }
-      if (hasNext) { rootNext = R(L.keys[kk + 1].root); wNext = R(L.keys[kk + 1].w); }
-      const double bcell = k.sExt / fb;
-      S.bh.assign(fb, -kInf);
-      if (o.captureFields) S.bhRaw.assign(fb, -kInf);
-      const double sideTol = 0.5 * ctx.coat.params[i].rachisWidth;
-      const double rootDist = glm::length(k.root);
-      for (const Candidate& c : S.cand) {
-        const dvec3 q(c.t, c.b, c.n);
-        const dvec3 rq = q - root;
-        if (side * glm::dot(rq, left) < -sideTol) continue;
-        if (hasPrev && glm::dot(q - rootPrev, wPrev) < 0) continue;
-        if (hasNext && glm::dot(q - rootNext, wNext) > 0) continue;
-        const double s = glm::dot(rq, u);
-        if (s < 0 || s > k.sExt) continue;
-        const double h = glm::dot(rq, d);
-        const double gap = c.skin ? ctx.skinClearance * std::min(1.0, (rootDist + s) / ramp) : c.rad + ctx.clearance;
-        const int b = std::min(fb - 1, static_cast<int>(s / bcell));
-        S.bh[b] = std::max(S.bh[b], h + gap);
-        if (o.captureFields) S.bhRaw[b] = std::max(S.bhRaw[b], h);
+  if (!L.unopened) {
+    vaneKeys[0].reserve(L.leftKeys);
+    vaneKeys[1].reserve(nKeys - L.leftKeys);
+    for (size_t kk = 0; kk < nKeys; ++kk) {
+      const LocalKey& k = L.keys[kk];
+      vaneKeys[k.vane].push_back({k.rp, std::vector<glm::dvec3>(L.cvs.begin() + k.cvOff, L.cvs.begin() + k.cvOff + k.cvCount)});
+    }
+  }
+  if (o.elevateBarbs && !L.unopened && nKeys > 0) {
+    PlacedKey pk[256];
+    const size_t nk = std::min<size_t>(nKeys, 256);
+    for (size_t kk = 0; kk < nk; ++kk) {
+      const LocalKey& k = L.keys[kk];
+      pk[kk] = {R(k.root), R(k.u), R(k.w), R(k.d), R(k.left)};
+    }
+    S.bh.assign(nk * fb, -kInf);
+    if (o.captureFields) S.bhRaw.assign(nk * fb, -kInf);
+    S.plane.resize(nk);
+    const double sideTol = 0.5 * ctx.coat.params[i].rachisWidth;
+    for (const Candidate& c : S.cand) {
+      const dvec3 q(c.t, c.b, c.n);
+      for (int v = 0; v < 2; ++v) {
+        const size_t first = v == 0 ? 0 : L.leftKeys, last = v == 0 ? std::min<size_t>(L.leftKeys, nk) : nk;
+        if (first >= last) continue;
+        // Far on the other side of the shaft: not this vane's.
+        if (v == 0 ? c.b < L.shaftYMin - sideTol : c.b > L.shaftYMax + sideTol) continue;
+        for (size_t kk = first; kk < last; ++kk) S.plane[kk] = glm::dot(q - pk[kk].root, pk[kk].w);
+        const double side = v == 0 ? 1.0 : -1.0;
+        for (size_t kk = first; kk < last; ++kk) {
+          if (kk > first && S.plane[kk - 1] < 0) continue;
+          if (kk + 1 < last && S.plane[kk + 1] > 0) continue;
+          const LocalKey& k = L.keys[kk];
+          const dvec3 rq = q - pk[kk].root;
+          if (side * glm::dot(rq, pk[kk].left) < -sideTol) continue;
+          const double s = glm::dot(rq, pk[kk].u);
+          if (s < 0 || s > k.sExt) continue;
+          const double h = glm::dot(rq, pk[kk].d);
+          const double gap = c.skin ? ctx.skinClearance * std::min(1.0, (k.rootDist + s) / ramp) : c.rad + ctx.clearance;
+          const int b = std::min(fb - 1, static_cast<int>(s * fb / k.sExt));
+          double& slot = S.bh[kk * fb + b];
+          slot = std::max(slot, h + gap);
+          if (o.captureFields) S.bhRaw[kk * fb + b] = std::max(S.bhRaw[kk * fb + b], h);
+        }
       }
-      fit = fitBarb(cvs, k.len, k.sExt, S.bh, o, S);
+    }
+    for (size_t kk = 0; kk < nk; ++kk) {
+      const LocalKey& k = L.keys[kk];
+      if (k.sExt <= 0) continue;
+      std::vector<glm::dvec3>& cvs = vaneKeys[k.vane][k.vane == 0 ? kk : kk - L.leftKeys].cvs;
+      const BarbFit fit = fitBarb(cvs.data(), cvs.size(), k.len, k.sExt, &S.bh[kk * fb], fb, o, S);
       if (fit.mu > 0 || fit.alpha > 0) {
         ++st.barbsElevated;
         anyChanged = true;
+        const double ca = std::cos(fit.alpha), sa = std::sin(fit.alpha);
+        for (auto& cv : cvs) {
+          const double z = cv.z + fit.mu * std::max(0.0, -cv.z);
+          cv = {cv.x * ca - z * sa, cv.y, cv.x * sa + z * ca};
+        }
       }
       if (fit.alpha > 0) ++st.barbsLifted;
       if (!fit.resolved) ++st.barbsUnresolved;
@@ -541,26 +648,19 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
         BarbField bf;
         bf.feather = i;
         bf.vane = k.vane;
-        bf.key = static_cast<uint16_t>(kk - first);
-        bf.root = F.origin + root.x * F.tangent + root.y * F.binormal + root.z * F.normal;
-        bf.along = u.x * F.tangent + u.y * F.binormal + u.z * F.normal;
-        bf.up = d.x * F.tangent + d.y * F.binormal + d.z * F.normal;
+        bf.key = static_cast<uint16_t>(k.vane == 0 ? kk : kk - L.leftKeys);
+        const PlacedKey& p = pk[kk];
+        bf.root = F.origin + p.root.x * F.tangent + p.root.y * F.binormal + p.root.z * F.normal;
+        bf.along = p.u.x * F.tangent + p.u.y * F.binormal + p.u.z * F.normal;
+        bf.up = p.d.x * F.tangent + p.d.y * F.binormal + p.d.z * F.normal;
         bf.length = k.sExt;
         bf.field.origin = 0;
-        bf.field.cell = bcell;
+        bf.field.cell = k.sExt / fb;
         bf.field.h.resize(fb);
-        for (int b = 0; b < fb; ++b) bf.field.h[b] = static_cast<float>(S.bhRaw[b]);
+        for (int b = 0; b < fb; ++b) bf.field.h[b] = static_cast<float>(S.bhRaw[kk * fb + b]);
         S.fields.push_back(std::move(bf));
       }
-      if (fit.mu > 0 || fit.alpha > 0) {
-        const double ca = std::cos(fit.alpha), sa = std::sin(fit.alpha);
-        for (auto& c : cvs) {
-          const double z = c.z + fit.mu * std::max(0.0, -c.z);
-          c = {c.x * ca - z * sa, c.y, c.x * sa + z * ca};
-        }
-      }
     }
-    if (!L.unopened) vaneKeys[k.vane].push_back({k.rp, cvs});
   }
   if (!L.unopened) {
     P.left.keyBarbs = std::move(vaneKeys[0]);
@@ -568,7 +668,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
   }
   out.barbsChanged[i] = anyChanged ? 1 : 0;
 
-  // ---- packed points for later feathers
+  // ---- packed points handed to later feathers: shaft polyline and samples along every key barb.
   uint32_t q = out.pointOffset[i];
   double rad = 0;
   auto emit = [&](const dvec3& local, double r) {
@@ -578,20 +678,39 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
                                 static_cast<float>(r));
     rad = std::max(rad, glm::length(f) + r);
   };
+  uint32_t g = out.groupOffset[i];
+  auto closeGroup = [&] {
+    // Sphere around the group's stored (float) points: box centre, largest distance plus thickness.
+    const uint32_t a = out.groupPoint[g], b = out.groupPoint[g + 1];
+    PTERYLA_CHECK(b == q, "packed point group mismatch");
+    dvec3 lo(kInf), hi(-kInf);
+    for (uint32_t k = a; k < b; ++k) {
+      const dvec3 p(out.points[k]);
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+    const dvec3 c = 0.5 * (lo + hi);
+    double r = 0;
+    for (uint32_t k = a; k < b; ++k) r = std::max(r, glm::length(dvec3(out.points[k]) - c) + out.points[k].w);
+    out.groupBounds[g] = glm::vec4(static_cast<float>(c.x), static_cast<float>(c.y), static_cast<float>(c.z),
+                                   static_cast<float>(r * (1 + 1e-5) + 1e-6 * (glm::length(c) + r)));
+    ++g;
+  };
   for (size_t k = 0; k < L.shaft.size(); ++k) emit(L.shaft[k], L.shaftRad[k]);
+  closeGroup();
   const int bs = std::max(1, o.barbSamples);
   for (size_t kk = 0; kk < nKeys; ++kk) {
     const LocalKey& k = L.keys[kk];
     const std::vector<feather::KeyBarb>& vk = k.vane == 0 ? P.left.keyBarbs : P.right.keyBarbs;
-    const size_t idx = k.vane == 0 ? kk : kk - L.leftKeys;
-    const std::vector<glm::dvec3>& cv = vk[idx].cvs;
+    const std::vector<glm::dvec3>& cv = vk[k.vane == 0 ? kk : kk - L.leftKeys].cvs;
     for (int s = 1; s <= bs; ++s) {
       const glm::dvec3 c = feather::bezierPoint(cv.data(), cv.size(), static_cast<double>(s) / bs);
       emit(k.root + k.len * (c.x * k.u + c.y * k.w + c.z * k.d), 0.0);
     }
+    closeGroup();
   }
-  PTERYLA_CHECK(q == out.pointOffset[i + 1], "packed point count mismatch");
-  // float rounding of the stored points: pad the sphere slightly
+  PTERYLA_CHECK(q == out.pointOffset[i + 1] && g == out.groupOffset[i + 1], "packed point count mismatch");
+  // Pad the sphere for the float rounding of the stored points.
   out.bounds[i] = glm::dvec4(F.origin, rad * (1 + 1e-6) + 1e-9);
 }
 
@@ -745,7 +864,7 @@ void setup(Context& ctx) {
           }
       }
     });
-    ctx.skinGrid.build(ctx.skinPts, std::max(0.5 * medReach, 2 * h));
+    ctx.skinGrid.build(ctx.skinPts, std::max(0.2 * medReach, 2 * h));
   }
 }
 
@@ -792,6 +911,24 @@ void initResult(const Context& ctx, PackResult& res) {
   res.pointOffset = pointOffsets(ctx);
   res.points.assign(res.pointOffset.back(), glm::vec4(0));
   res.bounds.assign(n, glm::dvec4(0));
+  res.groupOffset.assign(n + 1, 0);
+  res.groupPoint.clear();
+  for (size_t i = 0; i < n; ++i) {
+    const LocalFeather& L = ctx.local[i];
+    uint32_t p = res.pointOffset[i];
+    if (L.packable) {
+      res.groupPoint.push_back(p);
+      p += static_cast<uint32_t>(L.shaft.size());
+      for (size_t k = 0; k < L.keys.size(); ++k) {
+        res.groupPoint.push_back(p);
+        p += static_cast<uint32_t>(std::max(1, ctx.opt.barbSamples));
+      }
+    }
+    PTERYLA_CHECK(p == res.pointOffset[i + 1], "point groups do not cover the points");
+    res.groupOffset[i + 1] = static_cast<uint32_t>(res.groupPoint.size());
+  }
+  res.groupPoint.push_back(res.pointOffset[n]);
+  res.groupBounds.assign(res.groupOffset[n], glm::vec4(0));
   res.barbFields.clear();
   res.stats = {};
 }
@@ -833,7 +970,7 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
     setup(ctx);
     initResult(ctx, res);
     tbb::enumerable_thread_specific<Scratch> scratch;
-    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds};
+    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds};
     schedule(ctx, options.threads, [&](uint32_t i) {
       packFeather(ctx, i, scratch.local(), out);
       res.recomputed[i] = 1;
@@ -893,7 +1030,7 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
     }
     std::vector<uint8_t> outChanged(n, 0);
     tbb::enumerable_thread_specific<Scratch> scratch;
-    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds};
+    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds};
     schedule(ctx, options.threads, [&](uint32_t i) {
       bool dirty = isChanged[i] || touched[i];
       for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !dirty; ++k) dirty = outChanged[ctx.deps[k]] != 0;
@@ -906,6 +1043,10 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
         std::copy(prev.points.begin() + prev.pointOffset[i], prev.points.begin() + prev.pointOffset[i + 1],
                   res.points.begin() + res.pointOffset[i]);
         res.bounds[i] = prev.bounds[i];
+        PTERYLA_CHECK(prev.groupOffset[i + 1] - prev.groupOffset[i] == res.groupOffset[i + 1] - res.groupOffset[i],
+                      "unchanged feather with a different point structure");
+        std::copy(prev.groupBounds.begin() + prev.groupOffset[i], prev.groupBounds.begin() + prev.groupOffset[i + 1],
+                  res.groupBounds.begin() + res.groupOffset[i]);
         return;
       }
       packFeather(ctx, i, scratch.local(), out);

@@ -22,6 +22,7 @@ PackOptions parsePackOptions(JsonReader& r) {
   if (o.maxElevation < o.minElevation) r.fail("max_elevation_deg", "must not be below min_elevation_deg");
   o.openingAge = r.number("opening_age", o.openingAge, 0.0, 1.0);
   o.baseAllowance = r.number("base_allowance", o.baseAllowance, 0.0, 1.0);
+  o.shaftBand = r.number("shaft_band", o.shaftBand, 0.0, 1.0);
   o.keyBarbsPerVane = static_cast<int>(r.integer("key_barbs_per_vane", o.keyBarbsPerVane, 2, 64));
   o.barbSamples = static_cast<int>(r.integer("barb_samples", o.barbSamples, 1, 64));
   o.shaftSamples = static_cast<int>(r.integer("shaft_samples", o.shaftSamples, 2, 256));
@@ -48,6 +49,7 @@ Json packOptionsToJson(const PackOptions& o) {
   if (o.maxElevation != d.maxElevation) j["max_elevation_deg"] = o.maxElevation / kDeg;
   if (o.openingAge != d.openingAge) j["opening_age"] = o.openingAge;
   if (o.baseAllowance != d.baseAllowance) j["base_allowance"] = o.baseAllowance;
+  if (o.shaftBand != d.shaftBand) j["shaft_band"] = o.shaftBand;
   if (o.keyBarbsPerVane != d.keyBarbsPerVane) j["key_barbs_per_vane"] = o.keyBarbsPerVane;
   if (o.barbSamples != d.barbSamples) j["barb_samples"] = o.barbSamples;
   if (o.shaftSamples != d.shaftSamples) j["shaft_samples"] = o.shaftSamples;

@@ -53,6 +53,22 @@ class PointGrid {
           for (uint32_t k = offsets_[c]; k < offsets_[c + 1]; ++k) f(items_[k]);
         }
   }
+  // Same, but a cell is visited only when cellTest(centre, halfDiagonal) holds.
+  template <class C, class F>
+  void query(const glm::dvec3& lo, const glm::dvec3& hi, C&& cellTest, F&& f) const {
+    if (count_ == 0) return;
+    const glm::ivec3 a = cellOf(lo), b = cellOf(hi);
+    const double half = 0.5 * cell_ * std::sqrt(3.0);
+    for (int z = a.z; z <= b.z; ++z)
+      for (int y = a.y; y <= b.y; ++y)
+        for (int x = a.x; x <= b.x; ++x) {
+          const size_t c = (static_cast<size_t>(z) * dims_.y + y) * dims_.x + x;
+          if (offsets_[c] == offsets_[c + 1]) continue;
+          const glm::dvec3 centre = origin_ + cell_ * (glm::dvec3(x, y, z) + 0.5);
+          if (!cellTest(centre, half)) continue;
+          for (uint32_t k = offsets_[c]; k < offsets_[c + 1]; ++k) f(items_[k]);
+        }
+  }
   double cell() const { return cell_; }
 
  private:

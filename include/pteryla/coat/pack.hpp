@@ -48,6 +48,8 @@ struct PackOptions {
   double openingAge = 0.8;     // feathers with age < openingAge are unopened: straight shaft only, no barb elevation (8.3)
   double baseAllowance = 0.08; // fraction of the feather's total length around the follicle where the shaft may sink
                                // into the skin (the calamus sits in the follicle); clearance ramps up over it
+  double shaftBand = 1.0;      // the shaft packs against candidates within this fraction of the vane half-width
+                               // of the shaft (1 = the whole vane, as in the thesis); the barbs handle the rest
   int keyBarbsPerVane = 5;     // key barbs inserted per vane at uniform rp (>= 2)
   int barbSamples = 6;         // points per key barb handed to later feathers
   int shaftSamples = 12;       // rachis segments of the shaft polyline
@@ -114,6 +116,10 @@ struct PackResult {
   std::vector<uint32_t> pointOffset;
   std::vector<glm::vec4> points;
   std::vector<glm::dvec4> bounds;                // per feather: sphere (centre, radius) around its points
+  // Point groups (the shaft, then each key barb's samples) with bounding spheres, for culling: the groups
+  // of feather i are groupOffset[i] .. [i+1]; group g holds points groupPoint[g] .. groupPoint[g+1].
+  std::vector<uint32_t> groupOffset, groupPoint;
+  std::vector<glm::vec4> groupBounds;
   std::vector<BarbField> barbFields;             // captureFields only
   PackStats stats;
 };

@@ -1,0 +1,74 @@
+#pragma once
+// An independent check of a packed coat at full geometry (it does not trust the packer, Streit 2003,
+// 6.3.4 / 9.1.2 claims "no feather-model or feather-feather interpenetrations"):
+//  - intersecting_pairs: pairs of triangles of different feathers that intersect (BVH + Moeller's
+//    triangle-triangle test in double precision, parallel);
+//  - skin_penetrations: coat vertices (barb and shaft samples) below the skin: the sign of the offset to
+//    the nearest skin point against the angle-weighted pseudo-normal of the nearest feature, which is
+//    "inside" for closed meshes and "below the local surface" for open ones (points whose nearest skin
+//    point lies on a boundary are outside by definition);
+//  - coverage: the fraction of tract area whose outward normal ray hits a feather triangle (area-uniform
+//    samples on the tract faces).
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/core/trimesh.hpp"
+
+namespace pteryla::coat {
+
+struct CheckOptions {
+  bool intersections = true;
+  bool penetrations = true;
+  bool coverage = true;
+  size_t coverageSamples = 20000;
+  uint64_t seed = 1;               // coverage sample positions
+  double skinTolerance = 0;        // scene units below the surface still counted as on it; 0 = auto (1e-6 x skin diagonal)
+  double rayOffset = 0;            // scene units the coverage rays start above the skin; 0 = auto (1e-6 x skin diagonal)
+  double maxRayDistance = 0;       // scene units; 0 = unlimited
+  // Coat vertices of feather f within featherBaseRadius[f] of featherOrigins[f] are exempt from the skin
+  // test (the calamus sits in its follicle). Empty = no exemption; see setFeatherBases().
+  std::vector<glm::dvec3> featherOrigins;
+  std::vector<double> featherBaseRadius;
+  int threads = 0;                 // 0 = all available
+};
+
+struct CheckResult {
+  size_t intersectingPairs = 0;
+  size_t coatTriangles = 0;
+  size_t skinPenetrations = 0;
+  size_t samplePoints = 0;                 // coat vertices tested against the skin
+  std::vector<uint32_t> penetratingFeathers;  // featherIds with a penetrating vertex, ascending
+  double coverage = 0;                     // [0,1]
+  size_t coverageSamples = 0, coveredSamples = 0;
+  double seconds = 0;
+};
+
+// `tractFaces`: skin triangle indices the coverage is measured on (empty = every face). The coat's
+// featherId attribute tells which triangles belong to the same feather (required for intersections).
+CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces, const TriMesh& coat,
+                  const CheckOptions& options = {});
+
+// Only the intersecting pair count.
+size_t countIntersectingPairs(const TriMesh& coat, int threads = 0);
+
+// Fills featherOrigins / featherBaseRadius from the coat: radius = baseAllowance x total feather length
+// (use the same value as PackOptions::baseAllowance), at least the calamus radius.
+void setFeatherBases(CheckOptions& options, const CoatFeathers& coat, double baseAllowance);
+
+// A simple full-geometry stand-in for the feather mesher: each vane as triangle strips between
+// consecutive barbs (barb polylines from feather::generateBarbs), the shaft as a ribbon in the vane plane;
+// unopened feathers (age < openingAge) as a straight ribbon. featherId = feather index.
+struct ProxyMeshOptions {
+  int barbStride = 1;      // use every n-th barb
+  int barbSegments = 4;    // polyline segments per barb
+  int shaftSegments = 12;
+  double openingAge = 0.8;
+};
+TriMesh proxyCoatMesh(const CoatFeathers& coat, const std::vector<double>& elevation,
+                      const std::vector<feather::FeatherParams>& params, const ProxyMeshOptions& options = {});
+
+}  // namespace pteryla::coat
