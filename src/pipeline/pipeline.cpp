@@ -284,10 +284,10 @@ void Pipeline::Impl::computeDistribute() {
     so.seed = mix64(scene.seed * 0x9E37u + i);
     so.density.uniform = t.density;
     so.count = t.count;
-    if (so.count == 0 && t.density <= 0) so.count = 1;
     so.tractIndex = static_cast<uint32_t>(i);
     so.firstId = nextId;
-    coat::Follicles f = coat::scatterFollicles(rest, t.tract, so);
+    // count 0 with no density: a tract of hand-placed (pinned) follicles only, e.g. flight feathers.
+    coat::Follicles f = (so.count == 0 && t.density <= 0) ? coat::Follicles{} : coat::scatterFollicles(rest, t.tract, so);
     nextId += f.size() + t.pinned.size() + 1;
     for (size_t k = 0; k < t.pinned.size(); ++k)
       coat::addPinnedFollicleNear(f, rest, t.tract, t.pinned[k], static_cast<uint32_t>(i), nextId - 1 - k);
@@ -295,7 +295,7 @@ void Pipeline::Impl::computeDistribute() {
     ro.progress = [&, i](const std::string&, double fr) {
       return report(progress, "distribute", (double(i) + fr) / double(tractSettings.size()));
     };
-    relaxResults.push_back(coat::relaxFollicles(rest, t.tract, f, ro));
+    relaxResults.push_back(f.size() > t.pinned.size() ? coat::relaxFollicles(rest, t.tract, f, ro) : coat::RelaxResult{});
     follicles.append(f);
   }
   report(progress, "distribute", 1);

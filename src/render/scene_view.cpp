@@ -43,7 +43,7 @@ Camera sceneCamera(const pipeline::Scene& scene, const TriMesh& skin, const TriM
   const glm::vec3 centre = 0.5f * (lo + hi);
   c.target = centre;
   c.eye = centre - dir;
-  c.frameBounds(lo, hi, aspect, 1.02f);
+  c.frameBounds(lo, hi, aspect, 0.8f);  // the box's bounding sphere is loose: frame a little tighter
   return c;
 }
 

@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""Writes data/scenes/bird.json and the bird's feather variants (data/feathers/bird/) from the bundled
+bird mesh, its axes and the feather library. Re-run after changing the mesh; the outputs are committed."""
+import json, math, os
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..')
+DATA = os.path.join(ROOT, 'data')
+
+def load_obj_groups(path):
+    verts, groups, cur = [], {}, None
+    for line in open(path):
+        t = line.split()
+        if not t: continue
+        if t[0] == 'v': verts.append(tuple(map(float, t[1:4])))
+        elif t[0] == 'g': cur = t[1]
+        elif t[0] == 'f':
+            idx = [int(x.split('/')[0]) - 1 for x in t[1:]]
+            c = tuple(sum(verts[i][k] for i in idx) / len(idx) for k in range(3))
+            groups.setdefault(cur, []).append(c)
+    return groups
+
+def farthest_points(points, k):
+    if not points: return []
+    cx = [sum(p[i] for p in points) / len(points) for i in range(3)]
+    first = min(points, key=lambda p: sum((p[i] - cx[i]) ** 2 for i in range(3)))
+    chosen = [first]
+    d = [sum((p[i] - first[i]) ** 2 for i in range(3)) for p in points]
+    while len(chosen) < k:
+        j = max(range(len(points)), key=lambda i: d[i])
+        chosen.append(points[j])
+        d = [min(d[i], sum((points[i][m] - points[j][m]) ** 2 for m in range(3))) for i in range(len(points))]
+    return chosen
+
+def resample(poly, n):
+    seg = [math.dist(poly[i], poly[i + 1]) for i in range(len(poly) - 1)]
+    total = sum(seg); out = []
+    for k in range(n):
+        s = total * (k + 0.5) / n; i = 0
+        while i < len(seg) - 1 and s > seg[i]: s -= seg[i]; i += 1
+        t = s / seg[i] if seg[i] > 0 else 0
+        out.append([round(poly[i][m] + t * (poly[i + 1][m] - poly[i][m]), 5) for m in range(3)])
+    return out
+
+def variant(base, name, pattern=None, color=None, **over):
+    f = json.load(open(os.path.join(DATA, 'feathers', base + '.json')))
+    f['name'] = name
+    mat = {}
+    if pattern: mat['pattern'] = pattern
+    if color: mat['base_color'] = color
+    f['material'] = mat
+    for k, v in over.items(): f[k] = v
+    os.makedirs(os.path.join(DATA, 'feathers', 'bird'), exist_ok=True)
+    json.dump(f, open(os.path.join(DATA, 'feathers', 'bird', name + '.json'), 'w'), indent=2)
+    return '../feathers/bird/' + name + '.json'
+
+feathers = {
+    'back': variant('contour', 'back', 'scalloped_grey'),
+    'breast': variant('contour', 'breast', 'spotted'),
+    'head': variant('contour', 'head', 'barred_brown'),
+    'covert': variant('covert', 'covert', 'barred_brown'),
+    'flank': variant('semiplume', 'flank', 'down_grey'),
+    'primary': variant('primary', 'primary', 'flight_dark'),
+    'secondary': variant('secondary', 'secondary', 'flight_dark'),
+    'rectrix': variant('rectrix', 'rectrix', 'barred_brown'),
+}
+
+groups = load_obj_groups(os.path.join(DATA, 'meshes', 'bird.obj'))
+axes = json.load(open(os.path.join(DATA, 'meshes', 'bird.axes.json')))
+DENSITY = 1050.0  # follicles per unit area on body tracts (~3,000 body feathers)
+
+body = [  # tract, feather types for its key feathers (cycled), key count
+    ('capital', ['head'], 4), ('capital_left', ['head'], 3), ('capital_right', ['head'], 3),
+    ('capital_throat', ['head', 'breast'], 4), ('cervical_dorsal', ['head', 'back'], 4),
+    ('spinal', ['back'], 6), ('ventral', ['breast', 'flank'], 8), ('caudal', ['back', 'covert'], 4),
+    ('humeral_left', ['back', 'covert'], 4), ('humeral_right', ['back', 'covert'], 4),
+    ('alar_left', ['covert'], 6), ('alar_right', ['covert'], 6),
+    ('femoral_left', ['flank', 'breast'], 3), ('femoral_right', ['flank', 'breast'], 3),
+    ('crural_left', ['flank'], 3), ('crural_right', ['flank'], 3),
+]
+tracts = []
+for name, kinds, n in body:
+    pts = farthest_points(groups[name], n)
+    keys = [{'feather': kinds[i % len(kinds)], 'at': [round(c, 5) for c in p]} for i, p in enumerate(pts)]
+    t = {'name': name, 'groups': [name], 'density': DENSITY, 'feather_scale': 'auto', 'feather_spacings': 3.6,
+         'scale_jitter': 0.08, 'key_feathers': keys, 'relax': {'iterations': 30}}
+    if name.startswith(('alar', 'humeral', 'spinal', 'caudal', 'capital', 'cervical')):
+        t['parameterization'] = {'method': 'projection', 'view_direction': [0, -1, 0]}
+    else:
+        t['parameterization'] = {'method': 'projection', 'view_direction': [0, 1, 0]}
+    tracts.append(t)
+
+for side, sgn in (('left', 1), ('right', -1)):
+    prim = resample(axes['primaries_' + side], 10)
+    sec = resample(axes['secondaries_' + side], 10)
+    tracts.append({'name': 'remiges_' + side, 'groups': ['remiges_' + side], 'count': 0, 'feather_scale': 0.05,
+                   'pinned': [{'at': p} for p in sec + prim],
+                   'key_feathers': [{'feather': 'secondary', 'at': sec[0]}, {'feather': 'secondary', 'at': sec[-1]},
+                                    {'feather': 'primary', 'at': prim[0]}, {'feather': 'primary', 'at': prim[-1]}],
+                   'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
+rect = resample(axes['tail_edge'], 12)
+tracts.append({'name': 'rectrices', 'groups': ['caudal'], 'count': 0, 'feather_scale': 0.055,
+               'pinned': [{'at': p} for p in rect], 'feather': 'rectrix',
+               'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
+
+body_axis = [[round(c, 5) for c in p] for p in axes['body_axis']]
+wing_dir = lambda sgn: [-1.0, 0.0, 0.45 * sgn]
+scene = {
+    'pteryla': 1,
+    'name': 'bird',
+    'seed': 2003,
+    'mesh': '../meshes/bird.obj',
+    'feathers': feathers,
+    'tracts': tracts,
+    'directions': {
+        'axis': body_axis,
+        'tracts': {
+            'alar_left': {'vectors': [{'at': [0.1, 0.2, 0.5], 'direction': wing_dir(1)}]},
+            'alar_right': {'vectors': [{'at': [0.1, 0.2, -0.5], 'direction': wing_dir(-1)}]},
+            'remiges_left': {'vectors': [{'at': [0.0, 0.2, 0.5], 'direction': [-1.0, 0.0, 0.25]},
+                                         {'at': [0.0, 0.2, 1.0], 'direction': [-0.6, 0.0, 1.0]}]},
+            'remiges_right': {'vectors': [{'at': [0.0, 0.2, -0.5], 'direction': [-1.0, 0.0, -0.25]},
+                                          {'at': [0.0, 0.2, -1.0], 'direction': [-0.6, 0.0, -1.0]}]},
+        },
+    },
+    'ordering': {'method': 'axis', 'axis': body_axis},
+    'camera': {'view_direction': [-0.45, -0.6, -0.66], 'fov': 30},
+    'lights': [{'direction': [-0.4, -1.0, -0.5], 'intensity': 1.0},
+               {'direction': [0.6, -0.2, 0.7], 'color': [0.6, 0.65, 0.75], 'intensity': 0.5}],
+    'render': {'size': [1280, 720], 'lod': 0.6, 'background': [0.84, 0.87, 0.9]},
+}
+json.dump(scene, open(os.path.join(DATA, 'scenes', 'bird.json'), 'w'), indent=1)
+print('keys', sum(len(t.get('key_feathers', [])) for t in tracts), 'tracts', len(tracts))
