@@ -70,10 +70,8 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
       const auto it = std::lower_bound(p.follicles.begin(), p.follicles.end(), f);
       PTERYLA_CHECK(it != p.follicles.end() && *it == f, "feather's follicle missing from its tract's parameterization");
       uv[i] = p.follicleUv[static_cast<size_t>(it - p.follicles.begin())];
-      const auto& tri = rest.faces[follicles.face[f]];
-      const glm::dvec2 uv0 = p.uvOfVertex(tri[0]);
-      const glm::dvec2 d = directions.faceCoords[f].x * (p.uvOfVertex(tri[1]) - uv0) +
-                           directions.faceCoords[f].y * (p.uvOfVertex(tri[2]) - uv0);
+      const auto& c = p.faceUv(follicles.face[f]);
+      const glm::dvec2 d = directions.faceCoords[f].x * (c[1] - c[0]) + directions.faceCoords[f].y * (c[2] - c[0]);
       const double len = glm::length(d);
       duv[i] = len > 0 ? d / len : glm::dvec2(0.0);
       res.tractFlow[t] += duv[i];

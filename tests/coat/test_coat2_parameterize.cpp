@@ -12,13 +12,14 @@ namespace {
 
 void expectUnitSquare(const TractParameterization& p) {
   double maxCoord = 0;
-  for (const auto& uv : p.vertexUv) {
-    EXPECT_GE(uv.x, -1e-12);
-    EXPECT_GE(uv.y, -1e-12);
-    EXPECT_LE(uv.x, 1 + 1e-12);
-    EXPECT_LE(uv.y, 1 + 1e-12);
-    maxCoord = std::max({maxCoord, uv.x, uv.y});
-  }
+  for (const auto& corners : p.cornerUv)
+    for (const auto& uv : corners) {
+      EXPECT_GE(uv.x, -1e-12);
+      EXPECT_GE(uv.y, -1e-12);
+      EXPECT_LE(uv.x, 1 + 1e-12);
+      EXPECT_LE(uv.y, 1 + 1e-12);
+      maxCoord = std::max({maxCoord, uv.x, uv.y});
+    }
   EXPECT_NEAR(maxCoord, 1.0, 1e-12);
 }
 
@@ -47,7 +48,7 @@ TEST(Coat2Parameterize, LscmOnSphericalCapHasNoFlippedTriangles) {
     const TractParameterization p = parameterizeTract(sphere, tracts[0], 0, fol, o);
     EXPECT_EQ(p.method, m == ParamMethod::Arap ? ParamMethod::Arap : ParamMethod::Lscm);
     EXPECT_EQ(p.flippedFaces, 0u) << paramMethodName(m);
-    for (double a : uvFaceAreas(sphere, tracts[0], p)) EXPECT_GT(a, 0.0);
+    for (double a : uvFaceAreas(p)) EXPECT_GT(a, 0.0);
     expectUnitSquare(p);
     EXPECT_EQ(p.follicles.size(), 300u);
     EXPECT_GT(p.scale, 0.5);  // the cap is ~1.7 units across
@@ -92,14 +93,14 @@ TEST(Coat2Parameterize, LscmOfFlatPatchIsASimilarity) {
   EXPECT_NEAR(p.scale, 1.0 / ratio0, 1e-6);
 }
 
-TEST(Coat2Parameterize, ClosedSphereIsRejected) {
+TEST(Coat2Parameterize, ClosedSphereIsRejectedByLscmAndCutByAuto) {
   const SkinMesh sphere = makeIcosphere(2);
   const std::vector<Tract> tracts{wholeMeshTract(sphere)};
   const Follicles fol = scatterTracts(sphere, tracts, 20);
   const TractTopology topo = tractTopology(sphere, tracts[0]);
   EXPECT_EQ(topo.boundaryLoops, 0u);
   EXPECT_EQ(topo.eulerCharacteristic(), 2);
-  for (ParamMethod m : {ParamMethod::Lscm, ParamMethod::Arap, ParamMethod::Auto}) {
+  for (ParamMethod m : {ParamMethod::Lscm, ParamMethod::Arap}) {
     ParameterizeOptions o;
     o.method = m;
     const std::string msg = errorText([&] { parameterizeTract(sphere, tracts[0], 0, fol, o); });
@@ -107,13 +108,24 @@ TEST(Coat2Parameterize, ClosedSphereIsRejected) {
     EXPECT_NE(msg.find("split"), std::string::npos) << msg;
     EXPECT_NE(msg.find("projection"), std::string::npos) << msg;
   }
+  // Auto without seams has nothing else to try on a closed sphere.
+  ParameterizeOptions noSeams;
+  noSeams.autoSeams = false;
+  EXPECT_NE(errorText([&] { parameterizeTract(sphere, tracts[0], 0, fol, noSeams); }).find("not a topological disk"),
+            std::string::npos);
+  // Auto cuts it open along one seam path and flattens it.
+  const TractParameterization p = parameterizeTract(sphere, tracts[0], 0, fol);
+  EXPECT_EQ(p.method, ParamMethod::Lscm);
+  EXPECT_GT(p.seamEdges, 2u);
+  EXPECT_EQ(p.flippedFaces, 0u);
+  expectUnitSquare(p);
   // Projection without a view direction has nothing to look along on a closed sphere.
   ParameterizeOptions o;
   o.method = ParamMethod::Projection;
   EXPECT_THROW(parameterizeTract(sphere, tracts[0], 0, fol, o), Error);
 }
 
-TEST(Coat2Parameterize, AnnulusAndCylinderAreRejected) {
+TEST(Coat2Parameterize, AnnulusAndCylinderAreRejectedByLscmAndCutByAuto) {
   const SkinMesh grid = makeGridPatch(10, 10, 1.0, 1.0);
   const std::vector<Tract> ring{tractWhere(grid, "ring", [](const glm::dvec3& c) {
     return std::abs(c.x - 0.5) > 0.2 || std::abs(c.y - 0.5) > 0.2;
@@ -127,17 +139,45 @@ TEST(Coat2Parameterize, AnnulusAndCylinderAreRejected) {
   lscm.method = ParamMethod::Lscm;
   const std::string msg = errorText([&] { parameterizeTract(grid, ring[0], 0, fol, lscm); });
   EXPECT_NE(msg.find("2 boundary loop"), std::string::npos) << msg;
-  // Auto: the flat annulus is seen entirely from the front, so it falls back to projection.
+  // Auto: cut open along a seam joining the two boundary loops, then LSCM.
   const TractParameterization p = parameterizeTract(grid, ring[0], 0, fol, ParameterizeOptions{});
-  EXPECT_EQ(p.method, ParamMethod::Projection);
+  EXPECT_EQ(p.method, ParamMethod::Lscm);
+  EXPECT_GE(p.seamEdges, 3u);  // the hole is 3 edges away from the outer border
   EXPECT_FALSE(p.note.empty());
   EXPECT_EQ(p.flippedFaces, 0u);
+  expectUnitSquare(p);
+  // A flat annulus is conformally itself: the cut map is a similarity (the seam closes up again).
+  const double ratio0 = glm::length(p.follicleUv[1] - p.follicleUv[0]) /
+                        glm::length(fol.position[p.follicles[1]] - fol.position[p.follicles[0]]);
+  for (size_t k = 2; k < p.follicles.size(); ++k)
+    EXPECT_NEAR(glm::length(p.follicleUv[k] - p.follicleUv[0]) /
+                    glm::length(fol.position[p.follicles[k]] - fol.position[p.follicles[0]]),
+                ratio0, 1e-6);
 
   const SkinMesh tube = makeCylinder(12, 6);
   const std::vector<Tract> all{wholeMeshTract(tube)};
   const Follicles tf = scatterTracts(tube, all, 10);
   EXPECT_THROW(parameterizeTract(tube, all[0], 0, tf, lscm), Error);
-  EXPECT_THROW(parameterizeTract(tube, all[0], 0, tf, ParameterizeOptions{}), Error);
+  const TractParameterization tp = parameterizeTract(tube, all[0], 0, tf, ParameterizeOptions{});
+  EXPECT_EQ(tp.flippedFaces, 0u);
+  EXPECT_GT(tp.seamEdges, 0u);
+}
+
+TEST(Coat2Parameterize, AutoProjectsFlatPiecesAndRejectsHandles) {
+  // Two separate strips of a flat patch: not one surface, but seen from the front: projected.
+  const SkinMesh grid = makeGridPatch(10, 4, 1.0, 0.4);
+  const std::vector<Tract> pieces{tractWhere(grid, "pieces", [](const glm::dvec3& c) { return c.x < 0.3 || c.x > 0.7; })};
+  EXPECT_EQ(tractTopology(grid, pieces[0]).components, 2u);
+  const Follicles fol = scatterTracts(grid, pieces, 20);
+  const TractParameterization p = parameterizeTract(grid, pieces[0], 0, fol);
+  EXPECT_EQ(p.method, ParamMethod::Projection);
+  EXPECT_EQ(p.flippedFaces, 0u);
+  // A torus has a handle: no seams are tried, and it cannot be projected.
+  const SkinMesh torus = makeTorus(16, 8);
+  const std::vector<Tract> all{wholeMeshTract(torus)};
+  const Follicles tf = scatterTracts(torus, all, 10);
+  const std::string msg = errorText([&] { parameterizeTract(torus, all[0], 0, tf); });
+  EXPECT_NE(msg.find("Euler characteristic 0"), std::string::npos) << msg;
 }
 
 TEST(Coat2Parameterize, BowTieTractIsNotADisk) {
@@ -167,4 +207,21 @@ TEST(Coat2Parameterize, ParseRejectsUnknownKeysAndMethods) {
   const Json badMethod = Json::parse(R"({"method": "conformal"})");
   JsonReader r3(badMethod, "scene.json", "p");
   EXPECT_THROW(parseParameterization(r3), Error);
+}
+
+TEST(Coat2Parameterize, BundledBirdTractsFlattenWithoutFolds) {
+  const SkinMesh bird = loadSkinMesh(std::string(PTERYLA_DATA_DIR) + "/meshes/bird.obj");
+  const Follicles none;
+  size_t tracts = 0, cut = 0;
+  for (const auto& g : bird.groupNames) {
+    if (g.rfind("apteria", 0) == 0) continue;
+    ++tracts;
+    const Tract t = tractFromGroups(bird, g, {g});
+    const TractParameterization p = parameterizeTract(bird, t, 0, none);
+    EXPECT_EQ(p.method, ParamMethod::Lscm) << g;
+    EXPECT_EQ(p.flippedFaces, 0u) << g;
+    cut += p.seamEdges > 0;
+  }
+  EXPECT_EQ(tracts, 18u);  // the thesis' 18 tracts (9.2.1)
+  EXPECT_EQ(cut, 3u);      // ventral and both crural tracts are bands around a hole
 }

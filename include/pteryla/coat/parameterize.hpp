@@ -10,16 +10,22 @@
 //  - Lscm / Arap: automatic low-distortion parameterizations (least-squares conformal maps; as-rigid-
 //    as-possible) of a disk-like tract: one connected component, one boundary loop, Euler
 //    characteristic 1. Anything else is a pteryla::Error suggesting a split or the projection method.
-//  - Auto: Lscm for disk-like tracts; otherwise Projection along the tract's mean normal when that view
-//    sees (almost) the whole tract from the front, else the same Error as Lscm.
+//  - Auto: Lscm for disk-like tracts. A connected genus-0 tract that is not a disk (an annulus, a
+//    cylinder around a leg, a band with holes, a closed sphere) is first cut open along seams: shortest
+//    edge paths joining its boundary loops one after another (a closed tract: a shortest path between
+//    two far-apart vertices), which makes it a disk; feathers on the two sides of a seam are far apart in
+//    (u,v) and interpolate independently. Any other tract (several pieces, handles, non-manifold
+//    vertices) is projected along its mean normal when that view sees (almost) all of it from the
+//    front, else rejected with an Error suggesting a split or the projection method.
 //
-// Per-vertex (u,v) is computed for the tract's vertices, follicles interpolate it with their face's
-// barycentric coordinates. The result is normalised to the unit square keeping the aspect ratio (min
-// corner at 0, the longer side spans [0,1]) and oriented so that faces are counter-clockwise in (u,v)
+// (u,v) is computed per face corner (corners of one vertex agree except across seams); follicles
+// interpolate their face's corners with their barycentric coordinates. The result is normalised to the
+// unit square keeping the aspect ratio (min corner at 0, the longer side spans [0,1]) and oriented so that faces are counter-clockwise in (u,v)
 // when seen from the normal side (a mirrored solution is flipped in u).
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -46,24 +52,28 @@ struct ParameterizeOptions {
   // Auto only: largest fraction of the tract's area allowed to face away from the mean-normal view
   // before a non-disk tract is rejected instead of projected.
   double autoMaxBackfacing = 0.01;
+  bool autoSeams = true;        // Auto: cut non-disk genus-0 tracts open along seams (else project/reject)
 };
 
 struct TractParameterization {
   ParamMethod method = ParamMethod::Projection;  // the method actually used (never Auto)
-  // Tract vertices (global skin vertex indices, ascending) and their (u,v).
-  std::vector<uint32_t> vertices;
-  std::vector<glm::dvec2> vertexUv;
+  // Tract faces (= Tract::faces, ascending) and the (u,v) of each of their corners. Corners of one skin
+  // vertex agree except across seams (see seamEdges).
+  std::vector<uint32_t> faces;
+  std::vector<std::array<glm::dvec2, 3>> cornerUv;
   // Follicles of the tract (indices into Follicles, ascending) and their (u,v).
   std::vector<uint32_t> follicles;
   std::vector<glm::dvec2> follicleUv;
   // Diagnostics.
   size_t flippedFaces = 0;       // tract faces with non-positive signed (u,v) area
-  double scale = 1.0;            // scene units per unit of normalised (u,v) (the longer bbox side)
+  size_t seamEdges = 0;          // Auto on a non-disk genus-0 tract: interior edges cut open
+  double scale = 1.0;            // scene units per unit of normalised (u,v) (sqrt of the area ratio)
   glm::dvec3 viewDirection{0.0}; // Projection: the view direction used
   std::string note;              // why Auto chose what it chose
 
-  // (u,v) of tract vertex `globalVertex`; PTERYLA_CHECKs that it belongs to the tract.
-  glm::dvec2 uvOfVertex(uint32_t globalVertex) const;
+  // (u,v) at a point of a tract face; PTERYLA_CHECKs that the face belongs to the tract.
+  glm::dvec2 uvAt(uint32_t face, const glm::dvec3& bary) const;
+  const std::array<glm::dvec2, 3>& faceUv(uint32_t face) const;
 };
 
 // Topology of a tract's faces as a surface: for the disk check and error messages.
@@ -80,15 +90,17 @@ TractTopology tractTopology(const SkinMesh& skin, const Tract& tract);
 
 // Parameterizes tract `tractIndex` (= tracts[tractIndex]); follicles are those with
 // follicles.tract[i] == tractIndex. Throws pteryla::Error (element "tracts.<name>") for an empty tract,
-// a non-disk tract with Lscm/Arap/Auto, a degenerate projection, or a follicle on a face outside the tract.
+// a non-disk tract with Lscm/Arap (or with Auto, see above), a degenerate projection, or a follicle on a
+// face outside the tract.
 TractParameterization parameterizeTract(const SkinMesh& skin, const Tract& tract, uint32_t tractIndex,
                                         const Follicles& follicles, const ParameterizeOptions& options = {});
 
-// Signed area of each tract face in (u,v) (positive = counter-clockwise = not flipped); tract.faces order.
-std::vector<double> uvFaceAreas(const SkinMesh& skin, const Tract& tract, const TractParameterization& param);
+// Signed area of each tract face in (u,v) (positive = counter-clockwise = not flipped); param.faces order.
+std::vector<double> uvFaceAreas(const TractParameterization& param);
 
 // Reads a "parameterization" object: {"method": "auto"|"projection"|"lscm"|"arap",
-// "view_direction": [x,y,z], "up": [x,y,z], "arap_iterations": n, "auto_max_backfacing": f}.
+// "view_direction": [x,y,z], "up": [x,y,z], "arap_iterations": n, "auto_max_backfacing": f,
+// "auto_seams": bool}.
 // Calls r.finish() (unknown keys rejected).
 ParameterizeOptions parseParameterization(JsonReader& r);
 
