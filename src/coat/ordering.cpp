@@ -70,8 +70,11 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
       const auto it = std::lower_bound(p.follicles.begin(), p.follicles.end(), f);
       PTERYLA_CHECK(it != p.follicles.end() && *it == f, "feather's follicle missing from its tract's parameterization");
       uv[i] = p.follicleUv[static_cast<size_t>(it - p.follicles.begin())];
-      const auto& c = p.faceUv(follicles.face[f]);
-      const glm::dvec2 d = directions.faceCoords[f].x * (c[1] - c[0]) + directions.faceCoords[f].y * (c[2] - c[0]);
+      glm::dvec2 d(0.0);  // a hand-made parameterization without corner (u,v) contributes no direction
+      if (!p.faces.empty()) {
+        const auto& c = p.faceUv(follicles.face[f]);
+        d = directions.faceCoords[f].x * (c[1] - c[0]) + directions.faceCoords[f].y * (c[2] - c[0]);
+      }
       const double len = glm::length(d);
       duv[i] = len > 0 ? d / len : glm::dvec2(0.0);
       res.tractFlow[t] += duv[i];

@@ -7,7 +7,8 @@
 // feathers furthest downstream (toward where the feathers point) are the bottom layer and packed first.
 //  - Tracts: tract by tract (OrderOptions::tractOrder, bottom first; unlisted tracts follow in index
 //    order); within a tract by s = dot(uv, flow) descending, where flow is the tract's mean feather
-//    direction in (u,v) (each follicle's direction mapped through its face's parameterization).
+//    direction in (u,v) (each follicle's direction mapped through its face's parameterization; a
+//    hand-made parameterization without corner (u,v) gives flow (1,0)).
 //  - Axis: one global order by the arc length of the follicle's closest point on a body-axis polyline
 //    (head to tail), tail-most first; tracts are ignored.
 // Ties are broken by follicle id (Follicles::id), then by feather index, so the order is total and
