@@ -9,6 +9,7 @@
 #include <cmath>
 #include <map>
 
+#include "pteryla/coat/check.hpp"
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/directions.hpp"
 #include "pteryla/coat/follicles.hpp"
@@ -29,7 +30,6 @@
 #include "pteryla/feather/io.hpp"
 #include "pteryla/feather/lod.hpp"
 #include "pteryla/feather/mesh.hpp"
-#include "pipeline_internal.hpp"
 #include "time_stages.hpp"
 
 namespace pteryla::pipeline {
@@ -574,7 +574,38 @@ QualityMetrics Pipeline::check() {
   size_t present = 0;
   for (auto p : coat.present) present += p ? 1 : 0;
   m.feathers = present;
-  checkCoat(*this, m);
+  // The independent checker (coat/check.hpp) on the coat at full geometry, and on the same coat before
+  // packing: every feather at the packed coat's median elevation with its unpacked key barbs.
+  const double savedLod = impl_->lod;
+  setLod(1.0);
+  const TriMesh& full = coatMesh().mesh;
+  std::vector<uint32_t> tractFaces;
+  for (const auto& t : impl_->tracts) tractFaces.insert(tractFaces.end(), t.faces.begin(), t.faces.end());
+  std::sort(tractFaces.begin(), tractFaces.end());
+  tractFaces.erase(std::unique(tractFaces.begin(), tractFaces.end()), tractFaces.end());
+  coat::CheckOptions co;
+  co.seed = impl_->scene.seed;
+  coat::setFeatherBases(co, impl_->coatNow, impl_->packOptions.baseAllowance);
+  report(impl_->progress, "check", 0);
+  const coat::CheckResult r = coat::check(impl_->posed, tractFaces, full, co);
+  m.intersectingPairs = r.intersectingPairs;
+  m.skinPenetrations = r.skinPenetrations;
+  m.coverage = r.coverage;
+  std::vector<double> el;
+  for (size_t i = 0; i < impl_->coatNow.size(); ++i)
+    if (impl_->coatNow.present[i]) el.push_back(impl_->packed.elevation[i]);
+  double median = 0;
+  if (!el.empty()) {
+    std::nth_element(el.begin(), el.begin() + el.size() / 2, el.end());
+    median = el[el.size() / 2];
+  }
+  const std::vector<double> flat(impl_->coatNow.size(), median);
+  const TriMesh unpacked = coat::proxyCoatMesh(impl_->coatNow, flat, impl_->coatNow.params);
+  const TriMesh packedProxy = coat::proxyCoatMesh(impl_->coatNow, impl_->packed.elevation, impl_->packed.packedParams);
+  m.intersectingPairsUnpacked = coat::countIntersectingPairs(unpacked);
+  m.intersectingPairsProxy = coat::countIntersectingPairs(packedProxy);
+  report(impl_->progress, "check", 1);
+  setLod(savedLod);
   return m;
 }
 

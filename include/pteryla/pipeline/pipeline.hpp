@@ -58,6 +58,8 @@ struct QualityMetrics {
   std::optional<size_t> follicles, feathers;
   std::optional<double> hexFraction, nnCv;
   std::optional<size_t> intersectingPairs, intersectingPairsUnpacked, skinPenetrations;
+  // Same-geometry comparison for the unpacked count: the packed coat meshed like the unpacked one.
+  std::optional<size_t> intersectingPairsProxy;
   std::optional<double> coverage;
 };
 
