@@ -72,3 +72,37 @@ TEST(Cli, BadSizeOptionExits2) {
   EXPECT_EQ(r.code, 2);
   EXPECT_TRUE(contains(r.err, "--size")) << r.err;
 }
+
+TEST(Cli, EmptyAndNanMeshesExit2NamingTheProblem) {
+  const auto empty = writeTemp("empty_mesh.obj", "# nothing here\n");
+  auto r = runPteryla("check " + empty);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(contains(r.err, "empty_mesh.obj")) << r.err;
+  const auto nan = writeTemp("nan_mesh.obj", "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n");
+  r = runPteryla("render " + nan + " --out " + std::string(PTERYLA_BUILD_DIR) + "/nan.png");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_TRUE(contains(r.err, "nan_mesh.obj")) << r.err;
+  EXPECT_EQ(lineCount(r.err), 1) << r.err;
+}
+
+TEST(Cli, MissingFeatherFileInSceneNamesTheKey) {
+  writeTemp("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const auto p = writeTemp("missing_feather.json",
+                           "{\"pteryla\": 1, \"mesh\": \"tri.obj\", \"feathers\": {\"c\": \"nope.json\"}}");
+  auto r = runPteryla("check " + p);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "feathers.c")) << r.err;
+}
+
+TEST(Cli, FeatherCommandWritesMeshAndRejectsBadFiles) {
+  const std::string out = std::string(PTERYLA_BUILD_DIR) + "/cli_contour.obj";
+  auto r = runPteryla("feather " + std::string(PTERYLA_DATA_DIR) + "/feathers/contour.json --out " + out + " --lod 0.5 -q");
+  EXPECT_EQ(r.code, 0) << r.err;
+  FILE* f = fopen(out.c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  fclose(f);
+  const auto bad = writeTemp("bad_feather.json", "{\"pteryla_feather\": 1, \"rachis\": {\"length\": -1}}");
+  r = runPteryla("feather " + bad + " --out x.obj");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "bad_feather.json")) << r.err;
+}

@@ -1,0 +1,86 @@
+#include <gtest/gtest.h>
+
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/follicles.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+
+using namespace pteryla;
+using namespace pteryla::pipeline;
+
+namespace {
+Scene smallScene() {
+  Json j = Json::parse(R"({"pteryla": 1, "seed": 5, "mesh": "meshes/sphere_250.obj",
+    "feathers": {"contour": "feathers/contour.json"},
+    "tracts": [{"name": "all", "count": 120, "feather_scale": "auto", "relax": {"iterations": 10},
+                "parameterization": {"method": "projection", "view_direction": [0, -1, 0]}}],
+    "directions": {"axis": [[0, 1.5, 0], [0, -1.5, 0]]},
+    "ordering": {"method": "axis", "axis": [[0, 1.5, 0], [0, -1.5, 0]]},
+    "render": {"lod": 0.3}})");
+  return sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
+}
+}  // namespace
+
+TEST(PipelineEval, SameSceneAndSeedGiveTheSameCoatBitForBit) {
+  Pipeline a(smallScene()), b(smallScene());
+  const TriMesh& ma = a.coatMesh().mesh;
+  const TriMesh& mb = b.coatMesh().mesh;
+  ASSERT_FALSE(ma.empty());
+  EXPECT_EQ(ma.positions, mb.positions);
+  EXPECT_EQ(ma.indices, mb.indices);
+  EXPECT_EQ(a.elevations(), b.elevations());
+  Scene other = smallScene();
+  other.seed = 6;
+  Pipeline c(std::move(other));
+  EXPECT_NE(c.coatMesh().mesh.positions, ma.positions);
+}
+
+TEST(PipelineEval, TimeAndLodEditsDirtyOnlyDownstreamStages) {
+  Pipeline p(smallScene());
+  p.coatMesh();
+  auto& g = p.graph();
+  const auto skin = g.find("skin"), dist = g.find("distribute"), pack = g.find("pack"), mesh = g.find("mesh");
+  EXPECT_EQ(g.evaluations(skin), 1u);
+  p.setTime(3.0);
+  p.coatMesh();
+  EXPECT_EQ(g.evaluations(skin), 1u);  // a timeline scrub does not reload the mesh
+  EXPECT_EQ(g.evaluations(dist), 1u);  // nor re-relax follicles
+  EXPECT_EQ(g.evaluations(pack), 2u);
+  p.setLod(0.9);
+  p.coatMesh();
+  EXPECT_EQ(g.evaluations(pack), 2u);  // a LOD change re-meshes without repacking
+  EXPECT_EQ(g.evaluations(mesh), 3u);
+  p.invalidate(Stage::Pack);
+  p.coatMesh();
+  EXPECT_EQ(g.evaluations(dist), 1u);  // repacking does not re-relax
+  EXPECT_EQ(g.evaluations(pack), 3u);
+}
+
+TEST(PipelineEval, LodReducesTrianglesAndEveryFeatherHasARange) {
+  Pipeline p(smallScene());
+  p.setLod(1.0);
+  const size_t full = p.coatMesh().mesh.triangleCount();
+  const size_t feathers = p.coatMesh().ranges.size();
+  EXPECT_EQ(feathers, p.follicles().size());
+  p.setLod(0.2);
+  EXPECT_LT(p.coatMesh().mesh.triangleCount(), full / 2);
+}
+
+TEST(PipelineEval, SceneJsonRoundTrips) {
+  const Scene s = smallScene();
+  const Json j = sceneToJson(s, s.file);
+  const Scene back = sceneFromJson(j, s.file);
+  EXPECT_EQ(sceneToJson(back, s.file), j);
+}
+
+TEST(PipelineEval, BadTractKeyNamesItsPath) {
+  Scene s = smallScene();
+  s.tracts[0]["densty"] = 3;
+  Pipeline p(std::move(s));
+  try {
+    p.follicles();
+    FAIL() << "unknown tract key accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.element(), "tracts[0].densty") << e.what();
+  }
+}
