@@ -28,6 +28,8 @@ using Vb = CGAL::Triangulation_vertex_base_with_info_2<uint32_t, K>;
 using Tds = CGAL::Triangulation_data_structure_2<Vb>;
 using Delaunay = CGAL::Delaunay_triangulation_2<K, Tds>;
 
+constexpr uint64_t kJitterStream = 0x5CA1E;  // decorrelates the jitter from other per-follicle draws
+
 double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
 
 // Closest point on segment ab: parameter t in [0,1] and squared distance.
@@ -315,6 +317,10 @@ InterpolateStats interpolateCoatFeathers(const Follicles& follicles, const std::
       FeatherFrame& fr = coat.frames[i];
       fr.origin = follicles.position[f];
       fr.normal = follicles.normal[f];
+      // A valid right-handed frame until evaluateFrames() sets the surface direction.
+      const glm::dvec3 other = std::abs(fr.normal.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+      fr.tangent = glm::normalize(glm::cross(other, fr.normal));
+      fr.binormal = glm::cross(fr.normal, fr.tangent);
       if (w.count == 1) {
         coat.params[i] = *kp[w.key[0]];
         kind[i] = 1;
@@ -330,7 +336,7 @@ InterpolateStats interpolateCoatFeathers(const Follicles& follicles, const std::
         kind[i] = 2;
       }
       const double jitter = tracts[s.tract].scaleJitter;
-      if (jitter > 0) scaleFeather(coat.params[i], 1.0 + jitter * (2.0 * hashUniform(options.seed, follicles.id[f]) - 1.0));
+      if (jitter > 0) scaleFeather(coat.params[i], 1.0 + jitter * (2.0 * hashUniform(options.seed, follicles.id[f], kJitterStream) - 1.0));
     }
   });
   InterpolateStats st;

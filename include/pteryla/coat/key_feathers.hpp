@@ -8,7 +8,7 @@
 //
 // A follicle that carries a key feather gets exactly that feather (no blending, no jitter), and so does a
 // follicle whose weight for one key is 1 (within 1e-12). Every other feather may be scaled by a per-
-// follicle factor in [1 - scaleJitter, 1 + scaleJitter] drawn from hashUniform(seed, follicle id); the
+// follicle factor in [1 - scaleJitter, 1 + scaleJitter] drawn from hashUniform(seed, follicle id, ...); the
 // factor multiplies every length of the feather (calamus, rachis length and width, barb length,
 // silhouette lengths, barb spacing, and the afterfeather's), so a jittered feather is a similar copy.
 #include <glm/vec2.hpp>
@@ -100,8 +100,9 @@ struct TractKeys {
 };
 
 // One feather per follicle that appears in a tract's parameterization, in ascending follicle order.
-// Fills coat.follicle, .tract, .params, .age (1), .present (1), resizes .frames (origin/normal from the
-// follicle caches, tangent unset: see directions.hpp) and clears .layerOrder (see ordering.hpp).
+// Fills coat.follicle, .tract, .params, .age (1), .present (1), .frames (origin and normal from the
+// follicle caches, an arbitrary tangent until evaluateFrames() in directions.hpp) and clears .layerOrder
+// (see ordering.hpp).
 // Blends run in parallel; the result does not depend on the thread count.
 InterpolateStats interpolateCoatFeathers(const Follicles& follicles, const std::vector<TractKeys>& tracts,
                                          const FeatherLibrary& library, const InterpolateOptions& options,
