@@ -54,6 +54,7 @@
   X(PFNGLGETUNIFORMLOCATIONPROC, GetUniformLocation)                   \
   X(PFNGLUNIFORM1IPROC, Uniform1i)                                     \
   X(PFNGLUNIFORM1FPROC, Uniform1f)                                     \
+  X(PFNGLUNIFORM2FPROC, Uniform2f)                                     \
   X(PFNGLUNIFORM3FPROC, Uniform3f)                                     \
   X(PFNGLUNIFORM3FVPROC, Uniform3fv)                                   \
   X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                       \
@@ -75,7 +76,8 @@
   X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage)                 \
   X(PFNGLRENDERBUFFERSTORAGEMULTISAMPLEPROC, RenderbufferStorageMultisample) \
   X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer)                         \
-  X(PFNGLDRAWELEMENTSPROC, DrawElements)
+  X(PFNGLDRAWELEMENTSPROC, DrawElements)                               \
+  X(PFNGLMULTIDRAWELEMENTSPROC, MultiDrawElements)
 
 namespace pteryla::render {
 

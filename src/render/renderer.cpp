@@ -7,10 +7,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <tuple>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
 #include "gl_api.hpp"
@@ -53,9 +56,12 @@ struct Target {
 struct Renderer::Impl {
   RenderContext& ctx;
   GlApi gl;
-  Program skinProg, coatProg;
+  Program skinProg, coatVertexProg, coatFragmentProg;
   GpuMesh skin, coat;
   std::vector<FeatherDrawRange> ranges;
+  std::vector<glm::vec4> rangeSpheres;  // per range: bounding sphere (centre, radius) for culling
+  std::vector<GLsizei> batchCounts;     // pending multi-draw, reused between frames
+  std::vector<const void*> batchOffsets;
   std::vector<GpuMaterial> materials;
   std::map<std::string, GLuint> fileTextures;            // path -> texture, per setMaterials
   std::map<std::tuple<double, double, double>, GLuint> brdfCache;
@@ -64,9 +70,10 @@ struct Renderer::Impl {
 
   explicit Impl(RenderContext& c) : ctx(c) {}
 
-  GLuint compile(GLenum type, const char* src) {
+  GLuint compile(GLenum type, std::initializer_list<const char*> parts) {
     GLuint s = gl.CreateShader(type);
-    gl.ShaderSource(s, 1, &src, nullptr);
+    const std::vector<const char*> src(parts);
+    gl.ShaderSource(s, static_cast<GLsizei>(src.size()), src.data(), nullptr);
     gl.CompileShader(s);
     GLint ok = 0;
     gl.GetShaderiv(s, GL_COMPILE_STATUS, &ok);
@@ -79,9 +86,8 @@ struct Renderer::Impl {
     return s;
   }
 
-  Program link(const char* vs, const char* fs, std::initializer_list<const char*> uniforms) {
+  Program link(GLuint v, GLuint f, std::initializer_list<const char*> uniforms) {
     Program p;
-    GLuint v = compile(GL_VERTEX_SHADER, vs), f = compile(GL_FRAGMENT_SHADER, fs);
     p.id = gl.CreateProgram();
     gl.AttachShader(p.id, v);
     gl.AttachShader(p.id, f);
@@ -115,7 +121,7 @@ struct Renderer::Impl {
     gl.BindTexture(GL_TEXTURE_2D, t);
     gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
     gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, flipped.data());
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, mipmap ? GL_LINEAR_MIPMAP_LINEAR : GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, mipmap ? GL_LINEAR_MIPMAP_NEAREST : GL_LINEAR);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrapT);
@@ -247,6 +253,33 @@ struct Renderer::Impl {
     gl.BindVertexArray(0);
   }
 
+  // Queues a range for one glMultiDrawElements per material run; ranges that continue the previous
+  // one in the buffer are merged (a feather drawn forward right after its predecessor, or the parts
+  // of a feather drawn backward in reverse part order).
+  void queue(const GpuMesh& m, uint32_t first, uint32_t count, bool backward) {
+    if (count == 0) return;
+    const size_t start = backward ? m.indexCount + (m.indexCount - first - count) : first;
+    if (!batchCounts.empty()) {
+      const size_t lastStart = reinterpret_cast<size_t>(batchOffsets.back()) / sizeof(uint32_t);
+      if (lastStart + static_cast<size_t>(batchCounts.back()) == start) {
+        batchCounts.back() += static_cast<GLsizei>(count);
+        return;
+      }
+    }
+    batchCounts.push_back(static_cast<GLsizei>(count));
+    batchOffsets.push_back(reinterpret_cast<const void*>(start * sizeof(uint32_t)));
+  }
+
+  size_t flush() {
+    const size_t n = batchCounts.size();
+    if (n == 1) gl.DrawElements(GL_TRIANGLES, batchCounts[0], GL_UNSIGNED_INT, batchOffsets[0]);
+    else if (n > 1)
+      gl.MultiDrawElements(GL_TRIANGLES, batchCounts.data(), GL_UNSIGNED_INT, batchOffsets.data(), static_cast<GLsizei>(n));
+    batchCounts.clear();
+    batchOffsets.clear();
+    return n;  // index ranges submitted
+  }
+
   void drawIndices(const GpuMesh& m, uint32_t first, uint32_t count, bool backward) {
     if (count == 0) return;
     const size_t start = backward ? m.indexCount + (m.indexCount - first - count) : first;
@@ -292,13 +325,22 @@ Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(contex
   r.gl.GetIntegerv(GL_MINOR_VERSION, &minor);
   if (major * 10 + minor < 33)
     throw Error("OpenGL 3.3 is required, the context offers " + std::to_string(major) + "." + std::to_string(minor));
-  r.skinProg = r.link(shaders::kMeshVertex, shaders::kSkinFragment,
-                      {"uViewProj", "uColorUv", "uEye", "uSkinColor", "uAmbient", "uLightCount", "uLightDir",
-                       "uLightColor"});
-  r.coatProg = r.link(shaders::kMeshVertex, shaders::kCoatFragment,
-                      {"uViewProj", "uColorUv", "uColorTex", "uAlphaTex", "uBrdfTex", "uEye", "uAmbient",
-                       "uLightCount", "uLightDir", "uLightColor", "uUseAlphaTex", "uUseBrdf", "uBaseColor",
-                       "uSheathColor", "uBarbuleAngle", "uSpecular", "uConeSigma", "uTranslucency"});
+  const char* perVertex = "#version 330 core\n#define PER_FRAGMENT 0\n";
+  const char* perFragment = "#version 330 core\n#define PER_FRAGMENT 1\n";
+  using namespace shaders;
+  const std::initializer_list<const char*> common = {"uViewProj", "uColorUv", "uIsCoat", "uEye", "uAmbient",
+                                                      "uLightCount", "uLightDir", "uLightColor"};
+  const std::initializer_list<const char*> coat = {
+      "uViewProj", "uColorUv", "uIsCoat", "uEye", "uAmbient", "uLightCount", "uLightDir", "uLightColor",
+      "uColorTex", "uAlphaTex", "uBrdfTex", "uUseAlphaTex", "uUseBrdf", "uBaseColor", "uSheathColor",
+      "uBarbuleCosSin", "uSpecular", "uConeInv2s2", "uTranslucency"};
+  r.skinProg = r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshVertex}),
+                      r.compile(GL_FRAGMENT_SHADER, {perFragment, kSkinFragment}), common);
+  r.skinProg.loc["uSkinColor"] = r.gl.GetUniformLocation(r.skinProg.id, "uSkinColor");
+  r.coatVertexProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kCoatShading, kMeshVertex}),
+                            r.compile(GL_FRAGMENT_SHADER, {perVertex, kCoatFragment}), coat);
+  r.coatFragmentProg = r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshVertex}),
+                              r.compile(GL_FRAGMENT_SHADER, {perFragment, kCoatShading, kCoatFragment}), coat);
   r.white = r.makeTexture(Image(1, 1, 255, 255, 255, 255), false, GL_REPEAT, GL_REPEAT);
   setMaterials({});
 }
@@ -317,7 +359,8 @@ Renderer::~Renderer() {
   r.releaseMesh(r.coat);
   r.releaseTarget();
   r.gl.DeleteProgram(r.skinProg.id);
-  r.gl.DeleteProgram(r.coatProg.id);
+  r.gl.DeleteProgram(r.coatVertexProg.id);
+  r.gl.DeleteProgram(r.coatFragmentProg.id);
 }
 
 void Renderer::setSkin(const TriMesh& skin) {
@@ -375,6 +418,20 @@ void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>&
     all.indexCount = static_cast<uint32_t>(n);
     all.origin = glm::vec3(0.0f);
     r.ranges.push_back(all);
+  }
+  // Bounding sphere per feather (box centre, farthest vertex) for frustum culling.
+  r.rangeSpheres.resize(r.ranges.size());
+  for (size_t i = 0; i < r.ranges.size(); ++i) {
+    const FeatherDrawRange& f = r.ranges[i];
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    for (uint32_t k = f.firstIndex; k < f.firstIndex + f.indexCount; ++k) {
+      const glm::vec3& q = coat.positions[coat.indices[k]];
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    }
+    if (f.indexCount == 0) lo = hi = glm::vec3(0.0f);
+    const glm::vec3 c = 0.5f * (lo + hi);
+    r.rangeSpheres[i] = glm::vec4(c, glm::length(hi - c) * 1.001f + 1e-6f);
   }
 }
 
@@ -437,7 +494,8 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   const int lightCount = static_cast<int>(std::min<size_t>(lights.size(), 4));
   glm::vec3 dirs[4], colors[4];
   for (int i = 0; i < lightCount; ++i) {
-    dirs[i] = lights[i].direction;
+    const float len = glm::length(lights[i].direction);
+    dirs[i] = len > 0.0f ? lights[i].direction / len : glm::vec3(0.0f, 0.0f, 1.0f);
     colors[i] = lights[i].color;
   }
   auto setCommon = [&](const Program& p) {
@@ -451,6 +509,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       gl.Uniform3fv(r.U(p, "uLightColor"), lightCount, glm::value_ptr(colors[0]));
     }
     gl.Uniform1i(r.U(p, "uColorUv"), 0);
+    gl.Uniform1i(r.U(p, "uIsCoat"), &p == &r.skinProg ? 0 : 1);
   };
 
   gl.Viewport(0, 0, s.width, s.height);
@@ -478,7 +537,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
 
   // Feathers: depth test on, depth writes off, blended in layer order (7.2).
   if (s.drawCoat && r.coat.indexCount > 0 && !r.ranges.empty()) {
-    const Program& p = r.coatProg;
+    const Program& p = s.brdfPerFragment ? r.coatFragmentProg : r.coatVertexProg;
     setCommon(p);
     gl.Uniform1i(r.U(p, "uColorTex"), 0);
     gl.Uniform1i(r.U(p, "uAlphaTex"), 1);
@@ -490,6 +549,20 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     gl.BindVertexArray(r.coat.vao);
     r.applyDefaults(r.coat);
 
+    // Frustum planes (Gribb-Hartmann) for per-feather culling with the bounding spheres.
+    glm::vec4 planes[6];
+    const glm::mat4 m = glm::transpose(viewProj);
+    for (int k = 0; k < 3; ++k) {
+      planes[2 * k] = m[3] + m[k];
+      planes[2 * k + 1] = m[3] - m[k];
+    }
+    for (auto& pl : planes) pl /= glm::length(glm::vec3(pl));
+    auto visible = [&](const glm::vec4& sphere) {
+      for (const auto& pl : planes)
+        if (glm::dot(glm::vec3(pl), glm::vec3(sphere)) + pl.w < -sphere.w) return false;
+      return true;
+    };
+
     uint32_t bound = UINT32_MAX;
     for (size_t i = 0; i < r.ranges.size(); ++i) {
       const FeatherDrawRange& f = r.ranges[i];
@@ -498,23 +571,31 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
         throw Error("feather draw range uses material " + std::to_string(f.material) + " but " +
                         std::to_string(r.materials.size()) + " materials are set",
                     {}, "ranges[" + std::to_string(i) + "].material");
+      if (!visible(r.rangeSpheres[i])) {
+        ++stats_.culledFeathers;
+        continue;
+      }
       if (f.material != bound) {
+        const size_t n = r.flush();
+        stats_.drawCalls += n > 0 ? 1 : 0;
+        stats_.drawRanges += n;
         bound = f.material;
-        const GpuMaterial& m = r.materials[bound];
-        const FeatherMaterial& d = m.desc;
+        const GpuMaterial& mat = r.materials[bound];
+        const FeatherMaterial& d = mat.desc;
         gl.ActiveTexture(GL_TEXTURE0);
-        gl.BindTexture(GL_TEXTURE_2D, m.colorTex);
+        gl.BindTexture(GL_TEXTURE_2D, mat.colorTex);
         gl.ActiveTexture(GL_TEXTURE1);
-        gl.BindTexture(GL_TEXTURE_2D, m.alphaTex);
+        gl.BindTexture(GL_TEXTURE_2D, mat.alphaTex);
         gl.ActiveTexture(GL_TEXTURE2);
-        gl.BindTexture(GL_TEXTURE_2D, m.brdfTex);
+        gl.BindTexture(GL_TEXTURE_2D, mat.brdfTex);
         gl.Uniform1i(r.U(p, "uColorUv"), static_cast<int>(d.colorUv));
         gl.Uniform1i(r.U(p, "uUseBrdf"), (s.useBrdf && d.useBrdf) ? 1 : 0);
         gl.Uniform3f(r.U(p, "uBaseColor"), d.baseColor.r, d.baseColor.g, d.baseColor.b);
         gl.Uniform3f(r.U(p, "uSheathColor"), d.sheathColor.r, d.sheathColor.g, d.sheathColor.b);
-        gl.Uniform1f(r.U(p, "uBarbuleAngle"), d.barbuleAngle);
+        gl.Uniform2f(r.U(p, "uBarbuleCosSin"), std::cos(d.barbuleAngle), std::sin(d.barbuleAngle));
         gl.Uniform1f(r.U(p, "uSpecular"), d.specular);
-        gl.Uniform1f(r.U(p, "uConeSigma"), std::max(d.coneSigma, 1e-3f));
+        const float cone = std::max(d.coneSigma, 1e-3f);
+        gl.Uniform1f(r.U(p, "uConeInv2s2"), 1.0f / (2.0f * cone * cone));
         gl.Uniform1f(r.U(p, "uTranslucency"), d.translucency);
       }
       // Octant rule (7.1.2): farther substructures first, from this feather's own view direction.
@@ -523,11 +604,10 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       const bool ordered = s.viewDependentOrder;
       const bool backward = ordered && glm::dot(toEye, f.axisX) <= 0.0f;
       const bool hasParts = f.partCount[0] + f.partCount[1] + f.partCount[2] + f.partCount[3] > 0;
+      stats_.triangles += f.indexCount / 3;
       if (!hasParts) {
-        r.drawIndices(r.coat, f.firstIndex, f.indexCount, backward);
-        ++stats_.drawCalls;
+        r.queue(r.coat, f.firstIndex, f.indexCount, backward);
         stats_.backwardParts += backward ? 1 : 0;
-        stats_.triangles += f.indexCount / 3;
         continue;
       }
       uint32_t start[4];
@@ -547,12 +627,13 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       }
       for (int k : order) {
         if (f.partCount[k] == 0) continue;
-        r.drawIndices(r.coat, start[k], f.partCount[k], backward);
-        ++stats_.drawCalls;
+        r.queue(r.coat, start[k], f.partCount[k], backward);
         stats_.backwardParts += backward ? 1 : 0;
-        stats_.triangles += f.partCount[k] / 3;
       }
     }
+    const size_t n = r.flush();
+    stats_.drawCalls += n > 0 ? 1 : 0;
+    stats_.drawRanges += n;
     gl.DepthMask(GL_TRUE);
     gl.Disable(GL_BLEND);
   }

@@ -1,9 +1,83 @@
 #pragma once
-// GLSL 3.30 core sources of the renderer (private to src/render).
+// GLSL 3.30 core sources of the renderer (private to src/render). Programs are assembled as
+// "#version 330 core" + "#define PER_FRAGMENT 0|1" + the stage source. The coat's lighting
+// (kCoatShading) runs per vertex (PER_FRAGMENT 0: the thesis' per-vertex evaluation of the projected
+// angles, 7.1.3, and the fast default) or per fragment (PER_FRAGMENT 1).
 namespace pteryla::render::shaders {
 
+// Streit 2003, 7.1.3: the Poulin-Fournier table stores D and S over (alpha_L, alpha_V), the angles
+// of the projected light / view from the barbule binormal B = T x N, and the radiance is
+// albedo * E * |L'| * D (brdf_table.hpp). Two look-ups per light, one for the barbules on each side
+// of the barb. Light directions arrive normalised; uBarbuleCosSin = (cos, sin) of the barbule angle.
+inline constexpr const char* kCoatShading = R"GLSL(
+uniform sampler2D uBrdfTex;
+uniform vec3 uEye;
+uniform vec3 uAmbient;
+uniform int uLightCount;
+uniform vec3 uLightDir[4];
+uniform vec3 uLightColor[4];
+uniform int uUseBrdf;
+uniform vec2 uBarbuleCosSin;
+uniform float uSpecular;
+uniform float uConeInv2s2;
+uniform float uTranslucency;
+const float kPi = 3.14159265358979;
+
+// acos with |error| < 7e-5 rad (Abramowitz-Stegun 4.4.45 form), well below the table's pi/128 cells.
+float fastAcos(float x) {
+  float ax = min(abs(x), 1.0);
+  float r = sqrt(1.0 - ax) * (1.5707288 + ax * (-0.2121144 + ax * (0.0742610 - 0.0187293 * ax)));
+  return x >= 0.0 ? r : kPi - r;
+}
+
+float projectedAngle(vec3 dir, vec3 T, vec3 B, out float len) {
+  vec3 p = dir - dot(dir, T) * T;
+  len = length(p);
+  return len > 1e-5 ? fastAcos(dot(B, p) / len) : 0.5 * kPi;
+}
+
+// Returns the irradiance factor for the albedo (rgb of `diffuse`) and the specular radiance.
+void shadeCoat(vec3 pos, vec3 normal, vec3 tangent, out vec3 diffuse, out vec3 spec) {
+  vec3 V = normalize(uEye - pos);
+  vec3 N = normalize(normal);
+  if (dot(N, V) < 0.0) N = -N;
+  diffuse = uAmbient;
+  spec = vec3(0.0);
+  vec3 T = tangent - dot(tangent, N) * N;
+  float lenT = length(T);
+  bool aniso = uUseBrdf != 0 && lenT > 1e-4;
+  vec3 Tb0 = vec3(1.0, 0.0, 0.0), Tb1 = Tb0;
+  if (aniso) {
+    T /= lenT;
+    vec3 side = cross(N, T);
+    Tb0 = uBarbuleCosSin.x * T + uBarbuleCosSin.y * side;
+    Tb1 = uBarbuleCosSin.x * T - uBarbuleCosSin.y * side;
+  }
+  for (int i = 0; i < uLightCount; ++i) {
+    vec3 L = uLightDir[i];
+    float nl = dot(N, L);
+    if (nl <= 0.0) {
+      diffuse += uLightColor[i] * (uTranslucency * -nl);
+    } else if (!aniso) {
+      diffuse += uLightColor[i] * nl;
+    } else {
+      float lenL0, lenL1, lenV;
+      vec3 B0 = cross(Tb0, N), B1 = cross(Tb1, N);
+      vec2 c0 = vec2(projectedAngle(L, Tb0, B0, lenL0), projectedAngle(V, Tb0, B0, lenV)) / kPi;
+      vec2 c1 = vec2(projectedAngle(L, Tb1, B1, lenL1), projectedAngle(V, Tb1, B1, lenV)) / kPi;
+      vec2 ds0 = textureLod(uBrdfTex, c0, 0.0).rg;
+      vec2 ds1 = textureLod(uBrdfTex, c1, 0.0).rg;
+      float a0 = dot(L, Tb0) + dot(V, Tb0), a1 = dot(L, Tb1) + dot(V, Tb1);
+      diffuse += uLightColor[i] * (0.5 * (lenL0 * ds0.r + lenL1 * ds1.r));
+      spec += uLightColor[i] * (0.5 * uSpecular *
+              (lenL0 * ds0.g * exp(-a0 * a0 * uConeInv2s2) + lenL1 * ds1.g * exp(-a1 * a1 * uConeInv2s2)));
+    }
+  }
+}
+)GLSL";
+
 // Shared by skin and coat. Attribute locations match renderer.cpp's Attr enum.
-inline constexpr const char* kMeshVertex = R"GLSL(#version 330 core
+inline constexpr const char* kMeshVertex = R"GLSL(
 layout(location = 0) in vec3 aPos;
 layout(location = 1) in vec3 aNormal;
 layout(location = 2) in vec3 aTangent;
@@ -15,26 +89,41 @@ layout(location = 7) in float aSheath;
 layout(location = 8) in float aBarbCount;
 uniform mat4 uViewProj;
 uniform int uColorUv;
+uniform int uIsCoat;
 out vec3 vPos;
 out vec3 vNormal;
-out vec3 vTangent;
 out vec2 vUvColor;
 out vec2 vUvAlpha;
 out float vAlpha;
 out float vSheath;
+#if PER_FRAGMENT
+out vec3 vTangent;
+#else
+out vec3 vDiffuse;
+out vec3 vSpec;
+#endif
 void main() {
   vPos = aPos;
   vNormal = aNormal;
-  vTangent = aTangent;
   vUvColor = uColorUv == 1 ? aUvBarb : (uColorUv == 2 ? aUvGrowth : aUvGlobal);
   vUvAlpha = vec2(aUvBarb.x * max(aBarbCount, 1.0), aUvBarb.y);
   vAlpha = aAlpha;
   vSheath = clamp(aSheath, 0.0, 1.0);
+#if PER_FRAGMENT
+  vTangent = aTangent;
+#else
+  if (uIsCoat != 0) {
+    shadeCoat(aPos, aNormal, aTangent, vDiffuse, vSpec);
+  } else {
+    vDiffuse = vec3(0.0);
+    vSpec = vec3(0.0);
+  }
+#endif
   gl_Position = uViewProj * vec4(aPos, 1.0);
 }
 )GLSL";
 
-inline constexpr const char* kSkinFragment = R"GLSL(#version 330 core
+inline constexpr const char* kSkinFragment = R"GLSL(
 in vec3 vPos;
 in vec3 vNormal;
 uniform vec3 uEye;
@@ -49,96 +138,44 @@ void main() {
   vec3 N = normalize(vNormal);
   if (dot(N, V) < 0.0) N = -N;
   vec3 light = uAmbient;
-  for (int i = 0; i < uLightCount; ++i) light += uLightColor[i] * max(dot(N, normalize(uLightDir[i])), 0.0);
+  for (int i = 0; i < uLightCount; ++i) light += uLightColor[i] * max(dot(N, uLightDir[i]), 0.0);
   oColor = vec4(uSkinColor * light, 1.0);
 }
 )GLSL";
 
-// Streit 2003, 7.1.3: colour pattern x base colour, barb alpha mask, and two look-ups in the
-// Poulin-Fournier table, one for the barbules on each side of the barb. The table stores D and S
-// over (alpha_L, alpha_V) = angles of the projected light / view from the barbule binormal
-// B = T x N; radiance = albedo * E * |L'| * D (see brdf_table.hpp).
-inline constexpr const char* kCoatFragment = R"GLSL(#version 330 core
+// Colour pattern x base colour, barb alpha mask repeated barbCount times, sheath blend (8.1).
+inline constexpr const char* kCoatFragment = R"GLSL(
 in vec3 vPos;
 in vec3 vNormal;
-in vec3 vTangent;
 in vec2 vUvColor;
 in vec2 vUvAlpha;
 in float vAlpha;
 in float vSheath;
+#if PER_FRAGMENT
+in vec3 vTangent;
+#else
+in vec3 vDiffuse;
+in vec3 vSpec;
+#endif
 uniform sampler2D uColorTex;
 uniform sampler2D uAlphaTex;
-uniform sampler2D uBrdfTex;
-uniform vec3 uEye;
-uniform vec3 uAmbient;
-uniform int uLightCount;
-uniform vec3 uLightDir[4];
-uniform vec3 uLightColor[4];
 uniform int uUseAlphaTex;
-uniform int uUseBrdf;
 uniform vec3 uBaseColor;
 uniform vec3 uSheathColor;
-uniform float uBarbuleAngle;
-uniform float uSpecular;
-uniform float uConeSigma;
-uniform float uTranslucency;
 out vec4 oColor;
-const float kPi = 3.14159265358979;
-
-float projectedAngle(vec3 dir, vec3 T, vec3 B, out float len) {
-  vec3 p = dir - dot(dir, T) * T;
-  len = length(p);
-  return len > 1e-5 ? acos(clamp(dot(B, p) / len, -1.0, 1.0)) : 0.5 * kPi;
-}
-
 void main() {
   vec4 tex = texture(uColorTex, vUvColor);
   float a = vAlpha * tex.a;
   if (uUseAlphaTex != 0) a *= texture(uAlphaTex, vUvAlpha).r;
-  vec3 albedo = mix(uBaseColor * tex.rgb, uSheathColor, vSheath);
   a = mix(a, 1.0, vSheath);
   if (a < 0.5 / 255.0) discard;
-
-  vec3 V = normalize(uEye - vPos);
-  vec3 N = normalize(vNormal);
-  if (dot(N, V) < 0.0) N = -N;
-  vec3 T = vTangent - dot(vTangent, N) * N;
-  float lenT = length(T);
-  bool aniso = uUseBrdf != 0 && lenT > 1e-4;
-  T = aniso ? T / lenT : vec3(1.0, 0.0, 0.0);
-  vec3 side = cross(N, T);
-  vec3 Tb0 = cos(uBarbuleAngle) * T + sin(uBarbuleAngle) * side;
-  vec3 Tb1 = cos(uBarbuleAngle) * T - sin(uBarbuleAngle) * side;
-  float inv2s2 = 1.0 / (2.0 * uConeSigma * uConeSigma);
-
-  vec3 diffuse = uAmbient;
-  vec3 spec = vec3(0.0);
-  for (int i = 0; i < uLightCount; ++i) {
-    vec3 L = normalize(uLightDir[i]);
-    float nl = dot(N, L);
-    if (nl <= 0.0) {
-      diffuse += uLightColor[i] * (uTranslucency * -nl);
-      continue;
-    }
-    if (!aniso) {
-      diffuse += uLightColor[i] * nl;
-      continue;
-    }
-    float dsum = 0.0, ssum = 0.0;
-    for (int k = 0; k < 2; ++k) {
-      vec3 Tb = k == 0 ? Tb0 : Tb1;
-      vec3 B = cross(Tb, N);
-      float lenL, lenV;
-      float aL = projectedAngle(L, Tb, B, lenL);
-      float aV = projectedAngle(V, Tb, B, lenV);
-      vec2 ds = textureLod(uBrdfTex, vec2(aL, aV) / kPi, 0.0).rg;
-      float along = dot(L, Tb) + dot(V, Tb);
-      dsum += lenL * ds.r;
-      ssum += lenL * ds.g * exp(-along * along * inv2s2);
-    }
-    diffuse += uLightColor[i] * (0.5 * dsum);
-    spec += uLightColor[i] * (0.5 * ssum * uSpecular);
-  }
+  vec3 albedo = mix(uBaseColor * tex.rgb, uSheathColor, vSheath);
+#if PER_FRAGMENT
+  vec3 diffuse, spec;
+  shadeCoat(vPos, vNormal, vTangent, diffuse, spec);
+#else
+  vec3 diffuse = vDiffuse, spec = vSpec;
+#endif
   oColor = vec4(albedo * diffuse + spec * (1.0 - vSheath), a);
 }
 )GLSL";

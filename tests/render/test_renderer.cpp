@@ -232,7 +232,7 @@ TEST(Renderer, OctantRuleOrdersVanesAndBarbsByViewDirection) {
   EXPECT_EQ(r.lastStats().backwardParts, 0u);
   look({-2, 0.5f, 5}, true);
   EXPECT_EQ(r.lastStats().backwardParts, 2u);
-  EXPECT_EQ(r.lastStats().drawCalls, 2u);
+  EXPECT_EQ(r.lastStats().drawCalls, 1u);  // both vanes backward are contiguous: one submission
 }
 
 TEST(Renderer, ColourTextureOrientationAndUvSets) {
@@ -292,7 +292,9 @@ TEST(Renderer, AlphaMaskRepeatsBarbCountTimesAcrossPolygon) {
   EXPECT_GT(centre(solid)[0], 250);
 }
 
-TEST(Renderer, BrdfReducesToLambertForThinBarbulesAndIsAnisotropic) {
+class RendererBrdf : public ::testing::TestWithParam<bool> {};
+
+TEST_P(RendererBrdf, ReducesToLambertForThinBarbulesAndIsAnisotropic) {
   Renderer r(context());
   const TriMesh q = quad({0, 0, 0}, {2, 0, 0}, {0, 2, 0});
   r.setCoat(q, {whole(q)});
@@ -300,6 +302,7 @@ TEST(Renderer, BrdfReducesToLambertForThinBarbulesAndIsAnisotropic) {
   Camera cam = frontCamera();
   cam.eye = {-1, 0.5f, 5};
   RenderSettings s = flatSettings(32);
+  s.brdfPerFragment = GetParam();
   FeatherMaterial m = lambert({0.8f, 0.8f, 0.8f});
   r.setMaterials({m});
   const Image lam = r.renderImage(cam, light, s);
@@ -324,6 +327,44 @@ TEST(Renderer, BrdfReducesToLambertForThinBarbulesAndIsAnisotropic) {
   s.useBrdf = false;
   const Image lamY = r.renderImage(cam, light, s);
   EXPECT_EQ(meanAbsoluteError(lam, lamY), 0.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(PerVertexAndPerFragment, RendererBrdf, ::testing::Values(false, true));
+
+TEST(Renderer, PerVertexAndPerFragmentShadingAgreeOnFineGeometry) {
+  Renderer r(context());
+  FeatherMaterial m;
+  m.barbules = {1.5, 0.1, 0.2};
+  m.specular = 0.4f;
+  r.setMaterials({m});
+  const SyntheticFeather f = makeSyntheticFeather(SyntheticFeatherParams());
+  FeatherDrawRange range;
+  range.indexCount = static_cast<uint32_t>(f.mesh.indices.size());
+  r.setCoat(f.mesh, {range});
+  Camera cam;
+  cam.eye = {0.3f, -0.5f, 1.5f};
+  cam.target = {0.5f, 0.0f, 0.0f};
+  RenderSettings s;
+  s.width = s.height = 96;
+  const Image v = r.renderImage(cam, {Light{}}, s);
+  s.brdfPerFragment = true;
+  const Image p = r.renderImage(cam, {Light{}}, s);
+  EXPECT_LT(meanAbsoluteError(v, p), 0.01);
+}
+
+TEST(Renderer, CullsFeathersOutsideTheView) {
+  Renderer r(context());
+  TriMesh coat = quad({0, 0, 0}, {0.5f, 0, 0}, {0, 0.5f, 0});
+  coat.append(quad({50, 0, 0}, {0.5f, 0, 0}, {0, 0.5f, 0}));
+  FeatherDrawRange a = whole(coat), b = whole(coat);
+  a.indexCount = b.indexCount = 6;
+  b.firstIndex = 6;
+  r.setCoat(coat, {a, b});
+  const Image img = r.renderImage(frontCamera(), kFrontLight, flatSettings(32));
+  EXPECT_EQ(r.lastStats().culledFeathers, 1u);
+  EXPECT_EQ(r.lastStats().triangles, 2u);
+  const uint8_t black[3] = {0, 0, 0};
+  EXPECT_GT(coveredFraction(img, black), 0.0);
 }
 
 TEST(Renderer, MissingOrUnreadableTextureNamesTheFile) {

@@ -2,8 +2,8 @@
 // Renderer: draws a skin mesh and a feather coat with OpenGL 3.3 core (Streit 2003, chapter 7).
 //  - 7.1.1-7.1.3 per-feather material: colour pattern texture x base colour, barb alpha texture
 //    repeated barbCount times across a polygon, per-vertex alpha, and the Poulin-Fournier barbule
-//    reflection looked up twice per fragment (barbules on each side of the barb) in a tabulated
-//    BRDF texture (brdf_table.hpp);
+//    reflection looked up twice per light (barbules on each side of the barb) in a tabulated BRDF
+//    texture (brdf_table.hpp), per vertex by default or per fragment (RenderSettings::brdfPerFragment);
 //  - 7.1.2 / 7.2 draw order for alpha blending: the skin first writing depth, then the feathers in
 //    the order of their draw ranges (layer order) with depth test on and depth writes off, each
 //    feather's parts in view-dependent (octant) order.
@@ -96,12 +96,18 @@ struct RenderSettings {
   bool useBrdf = true;                      // global switch over FeatherMaterial::useBrdf
   bool viewDependentOrder = true;           // false: every range drawn forward (for comparisons)
   int msaaSamples = 0;                      // renderImage only; 0 for golden images
+  // Where the coat's lighting (BRDF look-ups included) is evaluated. false: per vertex, as the
+  // thesis computes the projected angles per vertex (7.1.3); about twice as fast on llvmpipe and
+  // indistinguishable at full geometry. true: per fragment, for close-ups of coarse LOD polygons.
+  bool brdfPerFragment = false;
 };
 
 struct RenderStats {
-  size_t drawCalls = 0;
-  size_t triangles = 0;
-  size_t backwardParts = 0;  // parts drawn in reverse order (view-dependent ordering at work)
+  size_t drawCalls = 0;       // GL draw submissions (a multi-draw counts once)
+  size_t drawRanges = 0;      // index ranges in those submissions, after merging contiguous ones
+  size_t triangles = 0;       // triangles submitted (skin + feathers not culled)
+  size_t backwardParts = 0;   // feather parts drawn in reverse order (view-dependent ordering at work)
+  size_t culledFeathers = 0;  // feathers outside the view frustum, skipped
 };
 
 class Renderer {
