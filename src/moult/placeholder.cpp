@@ -1,0 +1,1 @@
+// placeholder: keeps the moult target buildable until its sources land
