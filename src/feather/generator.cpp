@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "pteryla/core/error.hpp"
+#include "pteryla/feather/helical.hpp"
 
 namespace pteryla::feather {
 
@@ -35,7 +36,7 @@ void addGenerator(Registry& reg, const std::string& name, FeatherGenerator gen) 
 
 // Generators that ship with pteryla register here (static libraries drop self-registering objects).
 // Example: addGenerator(reg, "helical", helicalFeatherGenerator());
-void registerBuiltinFeatherGenerators(Registry& reg) { (void)reg; }
+void registerBuiltinFeatherGenerators(Registry& reg) { addGenerator(reg, "helical", helicalFeatherGenerator()); }
 
 }  // namespace
 

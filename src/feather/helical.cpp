@@ -160,12 +160,16 @@ Collar::Collar(const CollarShape& shape, const std::string& file) : shape_(shape
   const size_t m = segs * kPerSeg;
   tableU_.resize(m + 1);
   tableS_.resize(m + 1);
+  tableD_.resize(m + 1);
   double acc = 0, area2 = 0;
   glm::dvec2 prev = evalU(0.0, nullptr);
   for (size_t k = 0; k <= m; ++k) {
     const double u0 = static_cast<double>(k) / kPerSeg;
     tableU_[k] = u0;
     tableS_[k] = acc;
+    glm::dvec2 d0;
+    evalU(u0, &d0);
+    tableD_[k] = std::sqrt(d0.x * d0.x + d0.y * d0.y);  // ds/du, normalized below
     if (k == m) break;
     const double du = 1.0 / kPerSeg;
     double seg = 0;
@@ -185,6 +189,7 @@ Collar::Collar(const CollarShape& shape, const std::string& file) : shape_(shape
     throw Error("collar must be a counter-clockwise closed curve (signed area " + num(0.5 * area2) + ")", file,
                 "helical.collar.points");
   for (auto& s : tableS_) s /= length_;
+  for (auto& d : tableD_) d /= length_;
 }
 
 glm::dvec2 Collar::evalU(double u, glm::dvec2* d) const {
@@ -204,7 +209,11 @@ double Collar::uOfS(double s) const {
   if (i + 1 >= tableS_.size()) i = tableS_.size() - 2;
   const double ds = tableS_[i + 1] - tableS_[i];
   const double f = ds > 0 ? (s - tableS_[i]) / ds : 0.0;
-  return tableU_[i] + f * (tableU_[i + 1] - tableU_[i]);
+  if (!(tableD_[i] > 1e-12 && tableD_[i + 1] > 1e-12))  // cusp: linear
+    return tableU_[i] + f * (tableU_[i + 1] - tableU_[i]);
+  // Cubic Hermite of the inverse map with the exact slopes du/ds = 1 / (ds/du).
+  const double u = hermite(tableU_[i], tableU_[i + 1], ds / tableD_[i], ds / tableD_[i + 1], f);
+  return std::clamp(u, tableU_[i], tableU_[i + 1]);
 }
 
 glm::dvec2 Collar::point(double s) const {

@@ -14,6 +14,8 @@ namespace pteryla::feather {
 
 namespace {
 
+constexpr double kTipFraction = 0.05;
+
 double wrapAngle(double a) {
   while (a > kPi) a -= 2 * kPi;
   while (a < -kPi) a += 2 * kPi;
@@ -71,9 +73,10 @@ void unfurlTrail(std::vector<glm::dvec2>& xy, glm::dvec2 anchorDir, double w) {
   // by w times its alignment angle leaves (1 - w) of each turning angle.
   const double ref = std::atan2(anchorDir.y, anchorDir.x);
   double prev = ref, theta = 0;
-  glm::dvec2 pos = xy[n - 1];
+  glm::dvec2 pos = xy[n - 1], proximal = xy[n - 1];  // proximal: original position of xy[k + 1]
   for (size_t k = n - 1; k-- > 0;) {
-    const glm::dvec2 e = xy[k] - xy[k + 1];
+    const glm::dvec2 e = xy[k] - proximal;
+    proximal = xy[k];
     const double len = std::sqrt(e.x * e.x + e.y * e.y);
     if (len > 0) {
       const double phi = std::atan2(e.y, e.x);
@@ -165,13 +168,15 @@ HelicalSpacingStats helicalSpacingStats(const HelicalGrowth& g) {
       const HelicalFeatherBarb& b = *order[k];
       const glm::dvec3* pts = &f.points[b.first];
       for (uint32_t q = 0; q < b.count; ++q) st.width = std::max(st.width, std::abs(pts[q].y));
-      if (gb[b.growthIndex].tipRegion) ++st.tipBarbs;
+      // The tip: barbs whose distal end lies in the distal 5% of the feather (at least two barbs).
+      const bool atTip = k < 2 || pts[b.count - 1].x >= (1.0 - kTipFraction) * f.length;
+      if (atTip) ++st.tipBarbs;
       if (k + 1 == order.size()) break;
       const HelicalFeatherBarb& c = *order[k + 1];
       const glm::dvec3* qts = &f.points[c.first];
       const double d = glm::length(qts[c.count - 1] - pts[b.count - 1]);
       all.push_back(d);
-      if (gb[b.growthIndex].tipRegion) tip.push_back(d);
+      if (atTip) tip.push_back(d);
       if (!gb[b.growthIndex].tipRegion && !gb[c.growthIndex].tipRegion && b.count > 2 && c.count > 2) {
         edge.push_back(distanceToPolyline2(pointAtFraction(pts, b.count, 0.9), qts, c.count));
         rachis.push_back(distanceToPolyline2(pointAtFraction(pts, b.count, 0.1), qts, c.count));
@@ -184,6 +189,7 @@ HelicalSpacingStats helicalSpacingStats(const HelicalGrowth& g) {
       st.tipSpacing = sum / static_cast<double>(tip.size());
     }
     st.tipRatio = st.medianSpacing > 0 ? st.tipSpacing / st.medianSpacing : 0.0;
+    st.tipMaxRatio = st.medianSpacing > 0 && !tip.empty() ? *std::max_element(tip.begin(), tip.end()) / st.medianSpacing : 0.0;
     st.nearEdge = median(edge);
     st.nearRachis = median(rachis);
   }

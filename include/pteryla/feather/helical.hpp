@@ -99,7 +99,7 @@ class Collar {
   double uOfS(double s) const;
   CollarShape shape_;
   double length_ = 0;
-  std::vector<double> tableU_, tableS_;  // arc-length table for Bezier collars
+  std::vector<double> tableU_, tableS_, tableD_;  // arc-length table (u, s, ds/du) for Bezier collars
 };
 
 // ---------------------------------------------------------------------------------------------------
@@ -126,7 +126,8 @@ struct HelicalParams {
   double unfurlLeft = 1.0;   // w per vane, [0,1]
   double unfurlRight = 1.0;
   // Conversion to FeatherParams.
-  double length = 0;         // scale so the rachis is this long (scene units); 0 keeps v_grow t_end
+  double length = 0;         // scale so the rachis is this long (scene units); 0: the feather file's
+                             // rachis.length (applyHelical) or the grown length v_grow t_end
   int fitCvs = 4;            // control vertices per fitted barb Bezier, [2, 8]
   double keyBarbTolerance = 0.01;  // key barbs are added until interpolation error < this (unit chord)
   int maxKeyBarbs = 40;      // per vane, >= 2
@@ -279,10 +280,14 @@ void unfurlTrail(std::vector<glm::dvec2>& xy, glm::dvec2 anchorDir, double w);
 // ---------------------------------------------------------------------------------------------------
 // Barb spacing diagnostics on the flattened (w = 1) vane, per vane.
 //  - edge spacings: distances between consecutive barbs' distal ends (the vane edge), spawn order.
-//  - tipSpacing: mean of the edge spacings among tip-region barbs (spawned while the emitter moved);
-//    medianSpacing: median of all edge spacings; tipRatio = tipSpacing / medianSpacing. Zhang & Kanai
-//    report abnormal tip density in time mode; ArcLength mode keeps the ratio near 1.
-//  - nearEdge / nearRachis: median perpendicular distance between consecutive body barbs measured 10%
+//  - tipSpacing: mean edge spacing from each tip barb (distal end in the distal 5% of the feather
+//    length; at least the first two barbs) to the next; medianSpacing: median of all edge spacings;
+//    tipRatio = tipSpacing / medianSpacing, tipMaxRatio = largest tip spacing / medianSpacing.
+//    Zhang & Kanai report abnormal barb density at the tip in Time mode (the spacing there follows the
+//    emitter speed, then drops to v_grow / f once the emitter is clamped); ArcLength mode keeps both
+//    ratios near 1.
+//  - nearEdge / nearRachis: median perpendicular distance between consecutive body barbs (spawned after
+//    the emitter clamped, so neighbours are translated copies) measured 10%
 //    of the barb length from its distal / proximal end (the paper observes nearEdge < nearRachis).
 struct VaneSpacingStats {
   int barbs = 0;
@@ -290,6 +295,7 @@ struct VaneSpacingStats {
   double tipSpacing = 0;
   double medianSpacing = 0;
   double tipRatio = 0;
+  double tipMaxRatio = 0;
   double nearEdge = 0;
   double nearRachis = 0;
   double width = 0;  // max distance of a distal end from the rachis axis (flat vane)
@@ -301,29 +307,31 @@ HelicalSpacingStats helicalSpacingStats(const HelicalGrowth& g);
 
 // ---------------------------------------------------------------------------------------------------
 // Conversion to an ordinary feather (generator "streit" fields): straight rachis of the grown length
-// (scaled to `length` when set), barb angle pi/2 with key barbs = least-squares Bezier fits of selected
-// unfurled barbs (chosen until linear interpolation between key barbs reproduces every barb within
-// keyBarbTolerance of its chord), per-vane silhouette = chord length of every barb (tapering to 0 at the
-// rachis tip), spacing fitted linearly to the attachment gaps, rachis width = arc length of I_A.
-// Calamus: 10% of the rachis length here; applyHelical() keeps the file's calamus.
+// scaled to a target length (HelicalParams::length, else the rachisLength argument, else unscaled),
+// barb angle pi/2 with key barbs = least-squares Bezier fits of selected unfurled barbs (chosen until
+// linear interpolation between key barbs reproduces every barb within keyBarbTolerance of its chord),
+// per-vane silhouette = chord length of every barb (tapering to 0 at the rachis tip), spacing fitted
+// linearly to the attachment gaps, rachis width = arc length of I_A, calamus = 10% of the rachis.
 struct HelicalConversion {
   FeatherParams feather;
   double scale = 1;         // output units per growth unit
-  double maxFitError = 0;   // max polyline-to-Bezier distance over all barbs / rachis length
+  double maxFitError = 0;   // max polyline-to-Bezier distance over all barbs / grown length
   int keyBarbs[2] = {0, 0};
   int barbs[2] = {0, 0};    // converted barbs per vane (degenerate zero-chord barbs skipped)
 };
-HelicalConversion convertHelical(const HelicalGrowth& g, const HelicalFeather& f);
+HelicalConversion convertHelical(const HelicalGrowth& g, const HelicalFeather& f, double rachisLength = 0);
 FeatherParams helicalToFeatherParams(const HelicalParams& p, const std::string& file = {});
-// Fills the derived fields of p (calamus is kept; rachis length, barb lengths/silhouette, vanes, spacing
-// are derived; rachis width, curvatures, calamus, splits, material, seed, afterfeather are kept) from
-// the helical parameters stored in p.generatorParams (helicalToJson form). Throws Error naming
-// p.sourceFile for invalid helical parameters.
+// Derives the barb fields of p from helical parameters: rachis length stays p.rachisLength unless
+// hp.length is set; barbs (silhouette, key barbs, angles, spacing) are replaced; calamus, rachis width
+// and curvature, splits, material, seed and afterfeather are kept. The one-argument form reads hp from
+// p.generatorParams (helicalToJson form). Throws Error naming p.sourceFile for invalid parameters.
 void applyHelical(FeatherParams& p);
 void applyHelical(FeatherParams& p, const HelicalParams& hp);
 
 // Least-squares Bezier fit with fixed end points and chord-length parameters refined by projection.
-// Returns `cvCount` control vertices; maxError (optional) receives the max point-to-curve distance.
+// Returns `cvCount` (2..16) control vertices. Polylines of more than 64 points are first thinned to 64
+// evenly spaced ones (end points kept); maxError (optional) receives the max distance from those
+// points to the curve.
 std::vector<glm::dvec3> fitBezier(const glm::dvec3* pts, size_t n, int cvCount, double* maxError = nullptr);
 
 // The "helical" feather generator hooks (FeatherParams::generator == "helical", settings in a
