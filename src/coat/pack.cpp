@@ -84,7 +84,66 @@ struct LocalFeather {
   uint32_t leftKeys = 0;
   std::vector<dvec3> cvs;      // key barb control vertices, barb-local unit frame
   uint32_t pointCount = 0;
+  // Vane outline, invariant under elevation (a rotation about B keeps y and the xz radius): per lateral bin
+  // of [yMin, yMax], the smallest and largest xz radius of feather points with that lateral offset.
+  static constexpr int kOutlineBins = 32;
+  float rLo[kOutlineBins], rHi[kOutlineBins];
+  bool inOutline(double b, double r) const {
+    const int k = static_cast<int>((b - yMin) * kOutlineBins / (yMax - yMin));
+    if (k < 0 || k >= kOutlineBins) return false;
+    return r >= rLo[k] && r <= rHi[k];
+  }
 };
+
+// Fills the vane outline from the shaft polyline and the key barbs, with barbs interpolated between
+// consecutive key barbs, dilated by one lateral bin and by `margin` in radius.
+void buildOutline(LocalFeather& L, const PackOptions& o) {
+  constexpr int nb = LocalFeather::kOutlineBins;
+  float lo[nb], hi[nb];
+  for (int k = 0; k < nb; ++k) {
+    lo[k] = std::numeric_limits<float>::infinity();
+    hi[k] = -std::numeric_limits<float>::infinity();
+  }
+  const double w = (L.yMax - L.yMin) / nb;
+  auto add = [&](const dvec3& p, double rad) {
+    const double r = std::hypot(p.x, p.z);
+    const int k0 = static_cast<int>(std::floor((p.y - rad - L.yMin) / w)), k1 = static_cast<int>(std::floor((p.y + rad - L.yMin) / w));
+    for (int k = std::max(0, k0); k <= std::min(nb - 1, k1); ++k) {
+      lo[k] = std::min(lo[k], static_cast<float>(r - rad));
+      hi[k] = std::max(hi[k], static_cast<float>(r + rad));
+    }
+  };
+  for (size_t k = 0; k < L.shaft.size(); ++k) {
+    add(L.shaft[k], L.shaftRad[k]);
+    if (k + 1 < L.shaft.size()) add(0.5 * (L.shaft[k] + L.shaft[k + 1]), L.shaftRad[k]);
+  }
+  constexpr int kAlong = 12, kBetween = 4;
+  for (size_t kk = 0; kk < L.keys.size(); ++kk) {
+    const LocalKey& a = L.keys[kk];
+    const bool hasNext = kk + 1 < L.keys.size() && L.keys[kk + 1].vane == a.vane;
+    for (int m = 0; m < (hasNext ? kBetween : 1); ++m) {
+      const double f = static_cast<double>(m) / kBetween;
+      const LocalKey& b = hasNext ? L.keys[kk + 1] : a;
+      for (int s = 0; s <= kAlong; ++s) {
+        const double u = static_cast<double>(s) / kAlong;
+        const dvec3 ca = feather::bezierPoint(&L.cvs[a.cvOff], a.cvCount, u);
+        const dvec3 cb = feather::bezierPoint(&L.cvs[b.cvOff], b.cvCount, u);
+        const dvec3 pa = a.root + a.len * (ca.x * a.u + ca.y * a.w + ca.z * a.d);
+        const dvec3 pb = b.root + b.len * (cb.x * b.u + cb.y * b.w + cb.z * b.d);
+        add((1 - f) * pa + f * pb, 0.0);
+      }
+    }
+  }
+  // Dilate: one bin sideways, and in radius by the sampling gap plus the largest clearance anyone needs.
+  const double dr = 0.05 * L.reach + 4 * o.clearance + 2 * (L.shaftRad.empty() ? 0.0 : L.shaftRad.front());
+  for (int k = 0; k < nb; ++k) {
+    float a = lo[k], b = hi[k];
+    if (k > 0) { a = std::min(a, lo[k - 1]); b = std::max(b, hi[k - 1]); }
+    if (k + 1 < nb) { a = std::min(a, lo[k + 1]); b = std::max(b, hi[k + 1]); }
+    L.rLo[k] = std::max(0.0f, static_cast<float>(a - dr));
+    L.rHi[k] = static_cast<float>(b + dr);
+  }
+}
 
 void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, LocalFeather& L) {
   const feather::FeatherParams& p = coat.params[i];
@@ -182,8 +241,9 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
     yMax = std::max(yMax, k.root.y + k.len * cm);
   }
   L.reach = reach;
-  L.yMin = yMin;
-  L.yMax = yMax;
+  L.yMin = yMin - 1e-9 * (1 + reach);
+  L.yMax = yMax + 1e-9 * (1 + reach);
+  buildOutline(L, o);
   const uint32_t barbPts = static_cast<uint32_t>(std::max(1, o.barbSamples));
   L.pointCount = static_cast<uint32_t>(L.shaft.size()) + static_cast<uint32_t>(L.keys.size()) * barbPts;
 }
@@ -194,6 +254,7 @@ struct Candidate {
   double t, b, n;   // follicle frame: along T, B, N
   double rad;       // thickness radius of the point
   bool skin;
+  uint32_t src;     // feather the point belongs to (UINT32_MAX: skin)
 };
 
 struct Scratch {
@@ -497,10 +558,12 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
         if (b < L.yMin - pq.w || b > L.yMax + pq.w) continue;
         const double n = glm::dot(r, N);
         if (t * t + b * b + n * n > m * m) continue;
-        S.cand.push_back({t, b, n, pq.w, false});
+        if (!L.inOutline(b, std::sqrt(t * t + n * n))) continue;
+        S.cand.push_back({t, b, n, pq.w, false, j});
       }
     }
   }
+  const double base2 = std::pow(o.baseAllowance * L.totalLength, 2);
   if (o.skin && !ctx.skinPts.empty()) {
     // World bounds of the footprint box (t in [0, R], b in [yMin, yMax], n in [-R, R]) clipped to the ball;
     // grid cells are culled against the footprint before their points are read.
@@ -520,8 +583,12 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
           const double b = glm::dot(r, B);
           if (b < L.yMin || b > L.yMax) return;
           const double n = glm::dot(r, N);
-          if (t * t + b * b + n * n > R2) return;
-          S.cand.push_back({t, b, n, 0.0, true});
+          const double d2 = t * t + b * b + n * n;
+          // The calamus sits in its follicle: skin within the base allowance is not an obstacle (the
+          // checker exempts the same zone).
+          if (d2 > R2 || d2 < base2) return;
+          if (!L.inOutline(b, std::sqrt(t * t + n * n))) return;
+          S.cand.push_back({t, b, n, 0.0, true, UINT32_MAX});
         });
   }
   st.candidatePoints += S.cand.size();

@@ -26,7 +26,7 @@ inline feather::FeatherParams contourFeather(double scale) {
   p.calamusLength = 0.02 * scale;
   p.rachisLength = 0.4 * scale;
   p.rachisWidth = 0.008 * scale;
-  p.barbLength = 0.1 * scale;
+  p.barbLength = 0.15 * scale;
   p.spacingBase = 0.01 * scale;
   p.spacingTip = 0.01 * scale;
   p.rachisVentralDorsalCurvature = 0.35;
