@@ -71,6 +71,7 @@ void unfurlTrail(std::vector<glm::dvec2>& xy, glm::dvec2 anchorDir, double w) {
   if (n < 2 || w == 0.0) return;
   // Turning angles accumulated from the anchor (proximal) toward the distal end; rotating every joint
   // by w times its alignment angle leaves (1 - w) of each turning angle.
+  anchorDir /= std::sqrt(anchorDir.x * anchorDir.x + anchorDir.y * anchorDir.y);
   const double ref = std::atan2(anchorDir.y, anchorDir.x);
   double prev = ref, theta = 0;
   glm::dvec2 pos = xy[n - 1], proximal = xy[n - 1];  // proximal: original position of xy[k + 1]
@@ -83,8 +84,12 @@ void unfurlTrail(std::vector<glm::dvec2>& xy, glm::dvec2 anchorDir, double w) {
       theta += wrapAngle(phi - prev);
       prev = phi;
     }
-    const double phiNew = ref + (1.0 - w) * theta;
-    pos += len * glm::dvec2(std::cos(phiNew), std::sin(phiNew));
+    if (w == 1.0) {
+      pos += len * anchorDir;  // fully unfurled: every segment along the anchor direction
+    } else {
+      const double phiNew = ref + (1.0 - w) * theta;
+      pos += len * glm::dvec2(std::cos(phiNew), std::sin(phiNew));
+    }
     xy[k] = pos;
   }
 }
@@ -110,6 +115,10 @@ HelicalFeather helicalFeather(const HelicalGrowth& g, double unfurlLeft, double 
   std::vector<glm::dvec2> xy;
   std::vector<double> height;
   const auto& barbs = g.barbs();
+  size_t total = 0;
+  for (const HelicalBarb& b : barbs)
+    if (g.completed(b)) total += g.maxStampCount(b);
+  f.points.reserve(total);
   for (int vane = 0; vane < 2; ++vane) {
     const double w = vane == 0 ? unfurlLeft : unfurlRight;
     const glm::dvec2 anchorDir = vane == 0 ? -T0 : T0;
