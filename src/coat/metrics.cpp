@@ -184,14 +184,13 @@ DistributionMetrics measureDistribution(const SkinMesh& mesh, const Tract& tract
     for (size_t i = r.begin(); i != r.end(); ++i)
       if (interior[i]) cells[i] = cb.build(i);
   });
-  double sum = 0, sum2 = 0, mn = std::numeric_limits<double>::infinity(), deg = 0, psi = 0;
+  double sum = 0, mn = std::numeric_limits<double>::infinity(), deg = 0, psi = 0;
   size_t six = 0, cnt = 0;
   for (size_t i = 0; i < f.size(); ++i) {
     if (!interior[i] || !cells[i].complete) continue;
     ++cnt;
     six += cells[i].degree == 6;
     sum += cells[i].nn;
-    sum2 += cells[i].nn * cells[i].nn;
     mn = std::min(mn, cells[i].nn);
     deg += cells[i].degree;
     psi += cells[i].psi6;
@@ -199,7 +198,10 @@ DistributionMetrics measureDistribution(const SkinMesh& mesh, const Tract& tract
   m.interior = cnt;
   if (cnt == 0) return m;
   const double mean = sum / cnt;
-  const double var = std::max(0.0, sum2 / cnt - mean * mean);
+  double var = 0;
+  for (size_t i = 0; i < f.size(); ++i)
+    if (interior[i] && cells[i].complete) var += (cells[i].nn - mean) * (cells[i].nn - mean);
+  var /= cnt;
   m.hexFraction = static_cast<double>(six) / cnt;
   m.nnCv = mean > 0 ? std::sqrt(var) / mean : 0;
   m.nnMean = mean / m.spacing;
@@ -241,7 +243,7 @@ DirectionalSpacing directionalSpacing(const SkinMesh& mesh, const Tract& tract, 
       if (c >= cos30) {
         along += glm::length(e);
         ++out.alongEdges;
-      } else if (c <= 0.5) {
+      } else if (c <= 0.5 + 1e-9) {
         across += glm::length(e);
         ++out.acrossEdges;
       }

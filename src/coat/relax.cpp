@@ -408,9 +408,10 @@ class Relaxer {
       sc.knn.emplace_back(glm::dot(d, d), sc.cand[q]);
     }
     if (sc.knn.size() < kFirstK + 1) return false;
-    std::partial_sort(sc.knn.begin(), sc.knn.begin() + kFirstK + 1, sc.knn.end());
+    std::nth_element(sc.knn.begin(), sc.knn.begin() + kFirstK, sc.knn.end());
     const double h = grid_.cellSize();
     if (!(sc.knn[kFirstK].first <= h * h)) return false;
+    std::sort(sc.knn.begin(), sc.knn.begin() + kFirstK);
     next2 = sc.knn[kFirstK].first;
     sc.knn.resize(kFirstK);
     return true;
