@@ -6,6 +6,7 @@
 #include <benchmark/benchmark.h>
 
 #include <sys/resource.h>
+#include <ctime>
 
 #include <map>
 #include <memory>
@@ -24,6 +25,19 @@ double peakRssMb() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return static_cast<double>(u.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+// CPU seconds of the whole process (all llvmpipe threads) and of the calling thread: on a shared
+// machine these say more than wall time (an idle 2-core frame takes about max(main, process / 2)).
+double processCpu() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+double threadCpu() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 const SyntheticCoat& bird(int lodPercent) {
@@ -79,16 +93,27 @@ void BM_Frame(benchmark::State& state) {
   rs.height = 720;
   const Camera cam = birdCamera(c, 1280.0f / 720.0f);
   const std::vector<Light> lights{Light{}};
+  rs.brdfPerFragment = state.range(1) != 0;
+  rs.occlusionCulling = state.range(2) != 0;
   s.renderer.renderImage(cam, lights, rs);  // warm-up: shader variants, buffers
+  const double p0 = processCpu(), t0 = threadCpu();
   for (auto _ : state) {
     Image img = s.renderer.renderImage(cam, lights, rs);
     benchmark::DoNotOptimize(img.rgba.data());
   }
+  const double frames = static_cast<double>(state.iterations());
+  state.counters["cpu_s"] = (processCpu() - p0) / frames;
+  state.counters["main_thread_s"] = (threadCpu() - t0) / frames;
+  const RenderStats& st = s.renderer.lastStats();
   state.counters["triangles"] = static_cast<double>(c.coat.triangleCount() + c.skin.triangleCount());
-  state.counters["draw_calls"] = static_cast<double>(s.renderer.lastStats().drawCalls);
+  state.counters["drawn_tris"] = static_cast<double>(st.triangles);
+  state.counters["occluded"] = static_cast<double>(st.occludedFeathers);
+  state.counters["draw_calls"] = static_cast<double>(st.drawCalls);
   state.counters["peak_rss_MB"] = peakRssMb();
 }
-BENCHMARK(BM_Frame)->Arg(100)->Arg(60)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+// Args: geometry percent, BRDF per fragment (0: per vertex, the default), occlusion culling (1: on,
+// the default).
+BENCHMARK(BM_Frame)->Args({100, 0, 1})->Args({60, 0, 1})->Args({100, 1, 1})->Args({100, 0, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
 
 void BM_SetCoat(benchmark::State& state) {
   const SyntheticCoat& c = bird(100);

@@ -60,8 +60,13 @@ struct Renderer::Impl {
   GpuMesh skin, coat;
   std::vector<FeatherDrawRange> ranges;
   std::vector<glm::vec4> rangeSpheres;  // per range: bounding sphere (centre, radius) for culling
+  std::vector<glm::vec3> rangeBoxes;    // per range: lo, hi (2 entries) for occlusion culling
   std::vector<GLsizei> batchCounts;     // pending multi-draw, reused between frames
   std::vector<const void*> batchOffsets;
+  std::vector<float> depth;              // skin depth read back for occlusion culling
+  std::vector<float> tileMax;            // per kTile x kTile block: farthest depth
+  int tilesX = 0, tilesY = 0;
+  static constexpr int kTile = 8;
   std::vector<GpuMaterial> materials;
   std::map<std::string, GLuint> fileTextures;            // path -> texture, per setMaterials
   std::map<std::tuple<double, double, double>, GLuint> brdfCache;
@@ -287,6 +292,46 @@ struct Renderer::Impl {
                     reinterpret_cast<const void*>(start * sizeof(uint32_t)));
   }
 
+  void buildDepthTiles(int w, int h) {
+    tilesX = (w + kTile - 1) / kTile;
+    tilesY = (h + kTile - 1) / kTile;
+    tileMax.assign(static_cast<size_t>(tilesX) * tilesY, 0.0f);
+    for (int y = 0; y < h; ++y) {
+      const float* row = depth.data() + static_cast<size_t>(y) * w;
+      float* tiles = tileMax.data() + static_cast<size_t>(y / kTile) * tilesX;
+      for (int x = 0; x < w; ++x) tiles[x / kTile] = std::max(tiles[x / kTile], row[x]);
+    }
+  }
+
+  // True when the box [lo, hi] is certainly hidden behind the skin depth: its nearest point lies
+  // behind the farthest skin depth over every tile its projection touches.
+  bool occluded(const glm::vec3& lo, const glm::vec3& hi, const glm::mat4& viewProj, const glm::mat4& view,
+                const glm::mat4& proj, int w, int h) const {
+    const float zNear = proj[3][2] / (proj[2][2] - 1.0f);
+    float nearest = std::numeric_limits<float>::max();
+    float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
+    for (int k = 0; k < 8; ++k) {
+      const glm::vec4 corner(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z, 1.0f);
+      nearest = std::min(nearest, -(view * corner).z);
+      const glm::vec4 q = viewProj * corner;
+      if (q.w <= 0.0f) return false;
+      const float sx = (q.x / q.w * 0.5f + 0.5f) * w, sy = (q.y / q.w * 0.5f + 0.5f) * h;
+      x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
+    }
+    if (nearest <= zNear * 1.01f) return false;
+    const int tx0 = std::clamp(static_cast<int>(std::floor(x0)) / kTile, 0, tilesX - 1);
+    const int tx1 = std::clamp(static_cast<int>(std::ceil(x1)) / kTile, 0, tilesX - 1);
+    const int ty0 = std::clamp(static_cast<int>(std::floor(y0)) / kTile, 0, tilesY - 1);
+    const int ty1 = std::clamp(static_cast<int>(std::ceil(y1)) / kTile, 0, tilesY - 1);
+    // Window depth of the nearest point (glm perspective: z_clip = P22 z + P32, w = -z).
+    const float ndc = (proj[2][2] * -nearest + proj[3][2]) / nearest;
+    const float windowDepth = ndc * 0.5f + 0.5f;
+    for (int ty = ty0; ty <= ty1; ++ty)
+      for (int tx = tx0; tx <= tx1; ++tx)
+        if (tileMax[static_cast<size_t>(ty) * tilesX + tx] >= windowDepth - 1e-6f) return false;
+    return true;
+  }
+
   void ensureTarget(int w, int h, int samples) {
     Target& t = target;
     if (t.fbo && t.width == w && t.height == h && t.samples == samples) return;
@@ -421,6 +466,7 @@ void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>&
   }
   // Bounding sphere per feather (box centre, farthest vertex) for frustum culling.
   r.rangeSpheres.resize(r.ranges.size());
+  r.rangeBoxes.resize(2 * r.ranges.size());
   for (size_t i = 0; i < r.ranges.size(); ++i) {
     const FeatherDrawRange& f = r.ranges[i];
     glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
@@ -432,6 +478,8 @@ void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>&
     if (f.indexCount == 0) lo = hi = glm::vec3(0.0f);
     const glm::vec3 c = 0.5f * (lo + hi);
     r.rangeSpheres[i] = glm::vec4(c, glm::length(hi - c) * 1.001f + 1e-6f);
+    r.rangeBoxes[2 * i] = lo;
+    r.rangeBoxes[2 * i + 1] = hi;
   }
 }
 
@@ -490,7 +538,8 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   r.ctx.makeCurrent();
   stats_ = RenderStats();
 
-  const glm::mat4 viewProj = camera.projection(float(s.width) / float(s.height)) * camera.view();
+  const glm::mat4 view = camera.view(), proj = camera.projection(float(s.width) / float(s.height));
+  const glm::mat4 viewProj = proj * view;
   const int lightCount = static_cast<int>(std::min<size_t>(lights.size(), 4));
   glm::vec3 dirs[4], colors[4];
   for (int i = 0; i < lightCount; ++i) {
@@ -534,6 +583,21 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     ++stats_.drawCalls;
     stats_.triangles += r.skin.indexCount / 3;
   }
+  // The skin's depth, reduced to a grid of per-tile maxima, lets whole feathers hidden behind the
+  // body skip rasterisation (conservative: a feather is dropped only if its bounding sphere's nearest
+  // point lies behind the farthest skin depth over its screen rectangle).
+  bool occlusion = false;
+  if (s.occlusionCulling && s.drawSkin && r.skin.indexCount > 0 && s.drawCoat) {
+    GLint sampleBuffers = 0;
+    gl.GetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
+    if (sampleBuffers == 0) {
+      r.depth.resize(static_cast<size_t>(s.width) * s.height);
+      gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
+      gl.ReadPixels(0, 0, s.width, s.height, GL_DEPTH_COMPONENT, GL_FLOAT, r.depth.data());
+      r.buildDepthTiles(s.width, s.height);
+      occlusion = true;
+    }
+  }
 
   // Feathers: depth test on, depth writes off, blended in layer order (7.2).
   if (s.drawCoat && r.coat.indexCount > 0 && !r.ranges.empty()) {
@@ -573,6 +637,10 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
                     {}, "ranges[" + std::to_string(i) + "].material");
       if (!visible(r.rangeSpheres[i])) {
         ++stats_.culledFeathers;
+        continue;
+      }
+      if (occlusion && r.occluded(r.rangeBoxes[2 * i], r.rangeBoxes[2 * i + 1], viewProj, view, proj, s.width, s.height)) {
+        ++stats_.occludedFeathers;
         continue;
       }
       if (f.material != bound) {

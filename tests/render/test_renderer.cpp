@@ -352,6 +352,33 @@ TEST(Renderer, PerVertexAndPerFragmentShadingAgreeOnFineGeometry) {
   EXPECT_LT(meanAbsoluteError(v, p), 0.01);
 }
 
+TEST(Renderer, OcclusionCullingSkipsHiddenFeathersWithoutChangingTheImage) {
+  Renderer r(context());
+  SyntheticCoatParams cp;
+  cp.featherCount = 200;
+  cp.featherLength = 0.5f;
+  cp.featherWidth = 0.15f;
+  cp.feather.barbsPerVane = 6;
+  const SyntheticCoat coat = makeSyntheticCoat(cp);
+  r.setSkin(coat.skin);
+  r.setCoat(coat.coat, coat.ranges);
+  Camera cam;
+  cam.eye = {0.5f, 1.0f, 3.0f};
+  glm::vec3 lo, hi;
+  coat.coat.bounds(lo, hi);
+  cam.frameBounds(lo, hi, 1.0f, 0.8f);
+  RenderSettings s;
+  s.width = s.height = 128;
+  const Image culled = r.renderImage(cam, {Light{}}, s);
+  const size_t hidden = r.lastStats().occludedFeathers;
+  s.occlusionCulling = false;
+  const Image all = r.renderImage(cam, {Light{}}, s);
+  EXPECT_EQ(r.lastStats().occludedFeathers, 0u);
+  EXPECT_GT(hidden, 10u);  // feathers on the far side of the body
+  EXPECT_LT(hidden, 160u);
+  EXPECT_EQ(meanAbsoluteError(culled, all), 0.0);
+}
+
 TEST(Renderer, CullsFeathersOutsideTheView) {
   Renderer r(context());
   TriMesh coat = quad({0, 0, 0}, {0.5f, 0, 0}, {0, 0.5f, 0});

@@ -100,6 +100,9 @@ struct RenderSettings {
   // thesis computes the projected angles per vertex (7.1.3); about twice as fast on llvmpipe and
   // indistinguishable at full geometry. true: per fragment, for close-ups of coarse LOD polygons.
   bool brdfPerFragment = false;
+  // Skip feathers whose bounding sphere lies entirely behind the skin (the skin's depth is read back
+  // once per frame). Exact for opaque skin; turn off to measure raw throughput.
+  bool occlusionCulling = true;
 };
 
 struct RenderStats {
@@ -108,6 +111,7 @@ struct RenderStats {
   size_t triangles = 0;       // triangles submitted (skin + feathers not culled)
   size_t backwardParts = 0;   // feather parts drawn in reverse order (view-dependent ordering at work)
   size_t culledFeathers = 0;  // feathers outside the view frustum, skipped
+  size_t occludedFeathers = 0;  // feathers hidden behind the skin, skipped
 };
 
 class Renderer {
