@@ -106,7 +106,7 @@ void buildOutline(LocalFeather& L, const PackOptions& o) {
   }
   const double w = (L.yMax - L.yMin) / nb;
   auto add = [&](const dvec3& p, double rad) {
-    const double r = std::hypot(p.x, p.z);
+    const double r = std::sqrt(p.x * p.x + p.z * p.z);
     const int k0 = static_cast<int>(std::floor((p.y - rad - L.yMin) / w)), k1 = static_cast<int>(std::floor((p.y + rad - L.yMin) / w));
     for (int k = std::max(0, k0); k <= std::min(nb - 1, k1); ++k) {
       lo[k] = std::min(lo[k], static_cast<float>(r - rad));
@@ -117,21 +117,23 @@ void buildOutline(LocalFeather& L, const PackOptions& o) {
     add(L.shaft[k], L.shaftRad[k]);
     if (k + 1 < L.shaft.size()) add(0.5 * (L.shaft[k] + L.shaft[k + 1]), L.shaftRad[k]);
   }
-  constexpr int kAlong = 12, kBetween = 4;
+  constexpr int kAlong = 8, kBetween = 3;
+  // Samples along every key barb once; barbs between two key barbs are approximated by blending them.
+  std::vector<dvec3> samples(L.keys.size() * (kAlong + 1));
   for (size_t kk = 0; kk < L.keys.size(); ++kk) {
     const LocalKey& a = L.keys[kk];
-    const bool hasNext = kk + 1 < L.keys.size() && L.keys[kk + 1].vane == a.vane;
+    for (int s = 0; s <= kAlong; ++s) {
+      const dvec3 c = feather::bezierPoint(&L.cvs[a.cvOff], a.cvCount, static_cast<double>(s) / kAlong);
+      samples[kk * (kAlong + 1) + s] = a.root + a.len * (c.x * a.u + c.y * a.w + c.z * a.d);
+    }
+  }
+  for (size_t kk = 0; kk < L.keys.size(); ++kk) {
+    const bool hasNext = kk + 1 < L.keys.size() && L.keys[kk + 1].vane == L.keys[kk].vane;
+    const dvec3* pa = &samples[kk * (kAlong + 1)];
+    const dvec3* pb = hasNext ? &samples[(kk + 1) * (kAlong + 1)] : pa;
     for (int m = 0; m < (hasNext ? kBetween : 1); ++m) {
       const double f = static_cast<double>(m) / kBetween;
-      const LocalKey& b = hasNext ? L.keys[kk + 1] : a;
-      for (int s = 0; s <= kAlong; ++s) {
-        const double u = static_cast<double>(s) / kAlong;
-        const dvec3 ca = feather::bezierPoint(&L.cvs[a.cvOff], a.cvCount, u);
-        const dvec3 cb = feather::bezierPoint(&L.cvs[b.cvOff], b.cvCount, u);
-        const dvec3 pa = a.root + a.len * (ca.x * a.u + ca.y * a.w + ca.z * a.d);
-        const dvec3 pb = b.root + b.len * (cb.x * b.u + cb.y * b.w + cb.z * b.d);
-        add((1 - f) * pa + f * pb, 0.0);
-      }
+      for (int s = 0; s <= kAlong; ++s) add((1 - f) * pa[s] + f * pb[s], 0.0);
     }
   }
   // Dilate: one bin sideways, and in radius by the sampling gap plus the largest clearance anyone needs.
