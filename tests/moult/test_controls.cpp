@@ -181,9 +181,13 @@ TEST(Controls, FolliclesBindToTheirNearestControlWithinRadius) {
     const double mine = b.control[f] == 0 ? d0 : d1, other = b.control[f] == 0 ? d1 : d0;
     EXPECT_LE(mine, 0.25);
     EXPECT_LE(mine, other);
-    if (b.control[f] == 0) EXPECT_EQ(b.weight[f], 1.0);
-    if (b.control[f] == 1 && d1 < 0.125) EXPECT_EQ(b.weight[f], 1.0);
-    if (b.control[f] == 1 && d1 > 0.13) EXPECT_LT(b.weight[f], 1.0);
+    if (b.control[f] == 0) {
+      EXPECT_EQ(b.weight[f], 1.0);
+    } else if (d1 < 0.125) {
+      EXPECT_EQ(b.weight[f], 1.0);  // inside the unfaded core
+    } else if (d1 > 0.13) {
+      EXPECT_LT(b.weight[f], 1.0);  // in the falloff band
+    }
   }
   EXPECT_GT(none, s.follicles.size() / 2);
   EXPECT_GT(b.bound[0], 5u);
