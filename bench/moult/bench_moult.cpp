@@ -1,0 +1,147 @@
+// bench_moult: one frame of a moulting coat through the Pipeline (skin pose, ages, controls, pack and
+// mesh at 20% LOD), as a timeline scrub re-evaluates it. Target: < 0.15 s per frame for ~3,000 feathers.
+//   bird:       data/scenes/bird.json with a moult added (skipped if the scene is missing)
+//   synthetic:  bird.obj, one tract of 3,000 contour feathers, moult + bent wings
+// Also the moult schedule, skinning and controls on their own.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/core/paths.hpp"
+#include "pteryla/core/rng.hpp"
+#include "pteryla/moult/schedule.hpp"
+#include "pteryla/moult/skinning.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/pipeline/scene.hpp"
+
+using namespace pteryla;
+
+namespace {
+
+const std::string kData = PTERYLA_DATA_DIR;
+
+Json moultSection() {
+  return Json::parse(R"({"start": 0, "duration": 10, "window": 0.2, "sequence": "centre_out", "gap": 0.05,
+                        "random": 0.15, "seed": 3, "size_exponent": 0.5})");
+}
+
+Json birdWings() {
+  return Json::parse(R"({"file": "../meshes/bird.skeleton.json", "interpolation": "smooth", "keys": [
+      {"joint": "elbow_left", "t": 0, "rotation": [1, 0, 0, 0]},
+      {"joint": "elbow_left", "t": 10, "rotation": [1, 0, 0, 30]},
+      {"joint": "elbow_right", "t": 0, "rotation": [1, 0, 0, 0]},
+      {"joint": "elbow_right", "t": 10, "rotation": [1, 0, 0, -30]}]})");
+}
+
+// Builds and fully evaluates a pipeline once (rest stages cached), then times frames at new times.
+void runFrames(benchmark::State& state, pipeline::Scene scene) {
+  std::unique_ptr<pipeline::Pipeline> p;
+  try {
+    p = std::make_unique<pipeline::Pipeline>(std::move(scene));
+    p->setLod(0.2);
+    p->setTime(4.0);
+    p->coatMesh();
+  } catch (const Error& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  const double times[] = {3.0, 5.5, 4.25, 6.0, 2.5, 7.75, 5.0, 3.5};
+  size_t k = 0;
+  p->resetTimings();
+  for (auto _ : state) {
+    p->setTime(times[k++ % 8]);
+    benchmark::DoNotOptimize(p->coatMesh().mesh.vertexCount());
+  }
+  const auto& c = p->feathers();
+  size_t absent = 0, growing = 0;
+  for (size_t i = 0; i < c.size(); ++i) {
+    absent += c.present[i] ? 0 : 1;
+    growing += c.present[i] && c.age[i] < 1 ? 1 : 0;
+  }
+  const double n = double(state.iterations());
+  state.counters["feathers"] = double(c.size());
+  state.counters["growing"] = double(growing);
+  state.counters["absent"] = double(absent);
+  state.counters["triangles"] = double(p->coatMesh().mesh.triangleCount());
+  using pipeline::Stage;
+  state.counters["pose_ms"] = 1e3 * p->stageSeconds(Stage::Pose) / n;
+  state.counters["ages_ms"] = 1e3 * p->stageSeconds(Stage::Ages) / n;
+  state.counters["controls_ms"] = 1e3 * p->stageSeconds(Stage::Controls) / n;
+  state.counters["pack_ms"] = 1e3 * p->stageSeconds(Stage::Pack) / n;
+  state.counters["mesh_ms"] = 1e3 * p->stageSeconds(Stage::Mesh) / n;
+}
+
+void BM_FrameBirdScene(benchmark::State& state) {
+  const std::string path = kData + "/scenes/bird.json";
+  if (!fileExists(path)) {
+    state.SkipWithError("data/scenes/bird.json not found");
+    return;
+  }
+  pipeline::Scene s = pipeline::loadScene(path);
+  if (s.moult.empty()) s.moult = moultSection();
+  if (state.range(0) && s.skeleton.empty()) s.skeleton = birdWings();
+  runFrames(state, std::move(s));
+}
+BENCHMARK(BM_FrameBirdScene)->Arg(0)->Arg(1)->ArgName("skeleton")->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+
+void BM_FrameSynthetic(benchmark::State& state) {
+  Json j = Json::parse(R"({"pteryla": 1, "seed": 4, "mesh": "../meshes/bird.obj",
+      "feathers": {"contour": "../feathers/contour.json"},
+      "tracts": [{"name": "body", "groups": ["spinal", "ventral", "caudal", "femoral_left", "femoral_right",
+                                               "alar_left", "alar_right", "humeral_left", "humeral_right"],
+                  "count": 3000, "feather_scale": "auto", "feather_spacings": 2.5,
+                  "relax": {"iterations": 10}, "parameterization": {"method": "projection"}}],
+      "directions": {"axis": [[0.97, 0.327, 0], [-0.95, 0.1, 0]]}})");
+  j["moult"] = moultSection();
+  if (state.range(0)) j["skeleton"] = birdWings();
+  runFrames(state, pipeline::sceneFromJson(j, kData + "/scenes/bench_synthetic.json"));
+}
+BENCHMARK(BM_FrameSynthetic)->Arg(0)->Arg(1)->ArgName("skeleton")->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+
+// The schedule alone: plan + ages for 3,000 feathers.
+void BM_MoultSchedule(benchmark::State& state) {
+  std::vector<glm::dvec2> uv;
+  std::vector<double> size;
+  std::vector<uint64_t> id;
+  for (uint64_t i = 0; i < 3000; ++i) {
+    uv.push_back({hashUniform(1, i), hashUniform(2, i)});
+    size.push_back(0.5 + hashUniform(3, i));
+    id.push_back(i);
+  }
+  moult::MoultOptions o;
+  o.random = 0.2;
+  o.sizeExponent = 1;
+  double t = 0;
+  for (auto _ : state) {
+    const moult::MoultPlan p = moult::planMoult(uv, size, id, o);
+    double sum = 0;
+    for (size_t i = 0; i < p.size(); ++i) sum += moult::moultStateAt(p, i, t).age;
+    t += 0.01;
+    benchmark::DoNotOptimize(sum);
+  }
+}
+BENCHMARK(BM_MoultSchedule)->Unit(benchmark::kMicrosecond);
+
+// Linear blend skinning of the bird (4,000 vertices) plus normals.
+void BM_SkinBird(benchmark::State& state) {
+  const coat::SkinMesh rest = coat::loadSkinMesh(kData + "/meshes/bird.obj");
+  const moult::Skeleton s = moult::loadSkeleton(kData + "/meshes/bird.skeleton.json", rest.vertexCount());
+  moult::SkeletonPose pose = moult::restPose(s);
+  coat::SkinMesh posed = rest;
+  double a = 1;
+  for (auto _ : state) {
+    pose.rotation[2] = moult::rotationFromAxisAngle({1, 0, 0}, a);
+    pose.rotation[6] = moult::rotationFromAxisAngle({1, 0, 0}, -a);
+    a += 0.1;
+    benchmark::DoNotOptimize(moult::poseSkinMesh(s, pose, rest, posed));
+  }
+  state.counters["vertices"] = double(rest.vertexCount());
+}
+BENCHMARK(BM_SkinBird)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
