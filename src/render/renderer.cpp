@@ -71,6 +71,21 @@ struct Renderer::Impl {
   std::map<std::string, GLuint> fileTextures;            // path -> texture, per setMaterials
   std::map<std::tuple<double, double, double>, GLuint> brdfCache;
   GLuint white = 0;
+  bool fastFilter = true;  // minification filter of colour / alpha textures (RenderSettings)
+
+  GLint minFilter() const { return fastFilter ? GL_NEAREST_MIPMAP_NEAREST : GL_LINEAR_MIPMAP_NEAREST; }
+
+  void setFastFilter(bool fast) {
+    if (fast == fastFilter) return;
+    fastFilter = fast;
+    for (const GpuMaterial& m : materials) {
+      for (GLuint t : {m.colorTex, m.alphaTex}) {
+        if (t == white) continue;
+        gl.BindTexture(GL_TEXTURE_2D, t);
+        gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, minFilter());
+      }
+    }
+  }
   Target target;
 
   explicit Impl(RenderContext& c) : ctx(c) {}
@@ -126,7 +141,7 @@ struct Renderer::Impl {
     gl.BindTexture(GL_TEXTURE_2D, t);
     gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
     gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, flipped.data());
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, mipmap ? GL_LINEAR_MIPMAP_NEAREST : GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, mipmap ? minFilter() : GL_LINEAR);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrapT);
@@ -602,6 +617,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   // Feathers: depth test on, depth writes off, blended in layer order (7.2).
   if (s.drawCoat && r.coat.indexCount > 0 && !r.ranges.empty()) {
     const Program& p = s.brdfPerFragment ? r.coatFragmentProg : r.coatVertexProg;
+    r.setFastFilter(s.fastTextureFiltering);
     setCommon(p);
     gl.Uniform1i(r.U(p, "uColorTex"), 0);
     gl.Uniform1i(r.U(p, "uAlphaTex"), 1);

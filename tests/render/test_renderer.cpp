@@ -379,6 +379,31 @@ TEST(Renderer, OcclusionCullingSkipsHiddenFeathersWithoutChangingTheImage) {
   EXPECT_EQ(meanAbsoluteError(culled, all), 0.0);
 }
 
+TEST(Renderer, FastTextureFilteringStaysCloseToBilinear) {
+  Renderer r(context());
+  FeatherMaterial m;
+  const std::vector<NamedImage> textures = standardTextures(1);
+  m.colorImage = textures[2].image;  // spotted: high contrast
+  m.alphaImage = textures[7].image;
+  r.setMaterials({m});
+  SyntheticFeatherParams fp;
+  fp.lodFraction = 0.5f;
+  const SyntheticFeather f = makeSyntheticFeather(fp);
+  FeatherDrawRange range;
+  range.indexCount = static_cast<uint32_t>(f.mesh.indices.size());
+  r.setCoat(f.mesh, {range});
+  Camera cam;
+  cam.eye = {0.5f, 0.0f, 2.5f};
+  cam.target = {0.5f, 0.0f, 0.0f};
+  RenderSettings s;
+  s.width = s.height = 64;  // the 128x256 texture is minified
+  const Image fast = r.renderImage(cam, {Light{}}, s);
+  s.fastTextureFiltering = false;
+  const Image smooth = r.renderImage(cam, {Light{}}, s);
+  EXPECT_GT(meanAbsoluteError(fast, smooth), 0.0);
+  EXPECT_LT(meanAbsoluteError(fast, smooth), 0.01);
+}
+
 TEST(Renderer, CullsFeathersOutsideTheView) {
   Renderer r(context());
   TriMesh coat = quad({0, 0, 0}, {0.5f, 0, 0}, {0, 0.5f, 0});

@@ -103,6 +103,9 @@ struct RenderSettings {
   // Skip feathers whose bounding sphere lies entirely behind the skin (the skin's depth is read back
   // once per frame). Exact for opaque skin; turn off to measure raw throughput.
   bool occlusionCulling = true;
+  // Minified colour and alpha textures: true samples the nearest texel of the nearest mip level
+  // (about 20% faster on llvmpipe); false filters bilinearly within it. Magnification is bilinear.
+  bool fastTextureFiltering = true;
 };
 
 struct RenderStats {
