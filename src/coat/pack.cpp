@@ -908,29 +908,54 @@ void setup(Context& ctx) {
   // Skin samples (9.1.2: the surface under the feather, including neighbouring polygons).
   ctx.skinPts.clear();
   if (o.skin && !ctx.skin.faces.empty()) {
-    const double h = o.skinSampleSpacing > 0 ? o.skinSampleSpacing : 0.05 * medReach;
-    std::vector<uint32_t> faceOff(ctx.skin.faces.size() + 1, 0);
-    std::vector<int> faceN(ctx.skin.faces.size());
-    for (size_t f = 0; f < ctx.skin.faces.size(); ++f) {
-      const auto& t = ctx.skin.faces[f];
-      const dvec3 a = ctx.skin.positions[t[0]], b = ctx.skin.positions[t[1]], c = ctx.skin.positions[t[2]];
-      const double le = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
-      const int m = std::clamp(static_cast<int>(std::ceil(le / h)), 1, 32);
+    const double h = o.skinSampleSpacing > 0 ? o.skinSampleSpacing : 0.1 * medReach;
+    // Every used vertex once, points along each edge once (the face with the lower index, or the only
+    // face, owns it), and interior points of each face; counts from the edge/face size and spacing h.
+    const SkinMesh& sk = ctx.skin;
+    const size_t nf = sk.faces.size();
+    auto segs = [&](double len) { return std::clamp(static_cast<int>(std::ceil(len / h)), 1, 32); };
+    std::vector<uint8_t> used(sk.positions.size(), 0);
+    for (const auto& t : sk.faces) used[t[0]] = used[t[1]] = used[t[2]] = 1;
+    for (size_t v = 0; v < sk.positions.size(); ++v)
+      if (used[v]) ctx.skinPts.push_back(sk.positions[v]);
+    std::vector<uint32_t> faceOff(nf + 1, 0);
+    std::vector<int> faceN(nf);
+    for (size_t f = 0; f < nf; ++f) {
+      const auto& t = sk.faces[f];
+      uint32_t cnt = 0;
+      double le = 0;
+      for (int c = 0; c < 3; ++c) {
+        const double l = glm::length(sk.positions[t[(c + 1) % 3]] - sk.positions[t[c]]);
+        le = std::max(le, l);
+        const int32_t nb = sk.faceNeighbors.empty() ? -1 : sk.faceNeighbors[f][c];
+        if (nb < 0 || static_cast<size_t>(nb) > f) cnt += static_cast<uint32_t>(segs(l) - 1);
+      }
+      const int m = segs(le);
       faceN[f] = m;
-      faceOff[f + 1] = faceOff[f] + static_cast<uint32_t>((m + 1) * (m + 2) / 2);
+      cnt += static_cast<uint32_t>(m >= 3 ? (m - 1) * (m - 2) / 2 : 0);
+      faceOff[f + 1] = faceOff[f] + cnt;
     }
-    ctx.skinPts.resize(faceOff.back());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, ctx.skin.faces.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+    const size_t base = ctx.skinPts.size();
+    ctx.skinPts.resize(base + faceOff.back());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nf, 64), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t f = r.begin(); f < r.end(); ++f) {
-        const auto& t = ctx.skin.faces[f];
-        const dvec3 a = ctx.skin.positions[t[0]], b = ctx.skin.positions[t[1]], c = ctx.skin.positions[t[2]];
+        const auto& t = sk.faces[f];
+        const dvec3 P[3] = {sk.positions[t[0]], sk.positions[t[1]], sk.positions[t[2]]};
+        size_t q = base + faceOff[f];
+        for (int c = 0; c < 3; ++c) {
+          const int32_t nb = sk.faceNeighbors.empty() ? -1 : sk.faceNeighbors[f][c];
+          if (!(nb < 0 || static_cast<size_t>(nb) > f)) continue;
+          const dvec3 a = P[c], b = P[(c + 1) % 3];
+          const int m = segs(glm::length(b - a));
+          for (int k = 1; k < m; ++k) ctx.skinPts[q++] = a + (static_cast<double>(k) / m) * (b - a);
+        }
         const int m = faceN[f];
-        uint32_t q = faceOff[f];
-        for (int x = 0; x <= m; ++x)
-          for (int y = 0; y <= m - x; ++y) {
+        for (int x = 1; x < m; ++x)
+          for (int y = 1; x + y < m; ++y) {
             const double u = static_cast<double>(x) / m, v = static_cast<double>(y) / m;
-            ctx.skinPts[q++] = a + u * (b - a) + v * (c - a);
+            ctx.skinPts[q++] = P[0] + u * (P[1] - P[0]) + v * (P[2] - P[0]);
           }
+        PTERYLA_CHECK(q == base + faceOff[f + 1], "skin sample count mismatch");
       }
     });
     ctx.skinGrid.build(ctx.skinPts, std::max(0.2 * medReach, 2 * h));
