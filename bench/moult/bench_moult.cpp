@@ -1,6 +1,7 @@
 // bench_moult: one frame of a moulting coat through the Pipeline (skin pose, ages, controls, pack and
 // mesh at 20% LOD), as a timeline scrub re-evaluates it. Target: < 0.15 s per frame for ~3,000 feathers.
-//   bird:       data/scenes/bird.json with a moult added (skipped if the scene is missing)
+//   bird:       data/scenes/bird.json with a moult added (skipped if the scene is missing), optionally
+//               bent wings and lift controls (a crest and a chest)
 //   synthetic:  bird.obj, one tract of 3,000 contour feathers, moult + bent wings
 // Also the moult schedule, skinning and controls on their own.
 #include <benchmark/benchmark.h>
@@ -85,9 +86,17 @@ void BM_FrameBirdScene(benchmark::State& state) {
   pipeline::Scene s = pipeline::loadScene(path);
   if (s.moult.empty()) s.moult = moultSection();
   if (state.range(0) && s.skeleton.empty()) s.skeleton = birdWings();
+  if (state.range(1) && s.controls.empty()) {
+    // A raised crest and a puffed chest, rising over the scrubbed range.
+    s.controls = Json::parse(R"([
+      {"name": "crest", "at": [0.78, 0.47, 0.0], "radius": 0.15, "falloff": 0.3,
+       "keys": [{"t": 2, "lift": 0.2}, {"t": 8, "lift": 1}]},
+      {"name": "chest", "at": [0.62, -0.05, 0.0], "radius": 0.3, "seed": 7, "random": 0.5,
+       "keys": [{"t": 2, "lift": 0.1}, {"t": 8, "lift": 0.5}]}])");
+  }
   runFrames(state, std::move(s));
 }
-BENCHMARK(BM_FrameBirdScene)->Arg(0)->Arg(1)->ArgName("skeleton")->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_FrameBirdScene)->ArgsProduct({{0, 1}, {0, 1}})->ArgNames({"skeleton", "controls"})->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_FrameSynthetic(benchmark::State& state) {
   Json j = Json::parse(R"({"pteryla": 1, "seed": 4, "mesh": "../meshes/bird.obj",

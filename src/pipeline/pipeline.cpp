@@ -397,7 +397,7 @@ void Pipeline::Impl::computePack() {
   report(progress, "pack", 0);
   coat::PackOptions o = packOptions;
   o.fixedElevation = fixedElevation;
-  packed = coat::pack(posed, coatNow, o);
+  packed = packFrame(posed, coatNow, o, timeState);  // repacks from the controls' natural pack when there is one
   havePacked = true;
   report(progress, "pack", 1);
 }

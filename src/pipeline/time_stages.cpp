@@ -133,7 +133,20 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
   const moult::ControlBinding binding = moult::bindControls(rest, follicles, state.controls, state.controlTracts);
   state.controlResult = moult::evaluateControls(state.controls, binding, posed, follicles, t, state.packOptions, coat,
                                                 fixedElevation);
-  state.controlResult.natural = coat::PackResult{};
+}
+
+coat::PackResult packFrame(const coat::SkinMesh& posed, const coat::CoatFeathers& coat, const coat::PackOptions& options,
+                           TimeState& state) {
+  moult::ControlResult& cr = state.controlResult;
+  if (!cr.naturalPacked) return coat::pack(posed, coat, options);
+  cr.naturalPacked = false;
+  coat::PackResult natural = std::move(cr.natural);
+  cr.natural = coat::PackResult{};
+  // The natural pack must have used the same options (it did unless the packing section was edited
+  // without re-running the tracts stage, where the pipeline parses its own copy).
+  if (coat::packOptionsToJson(options) != coat::packOptionsToJson(state.packOptions))
+    return coat::pack(posed, coat, options);
+  return coat::repack(posed, coat, natural, cr.changed, options);
 }
 
 }  // namespace pteryla::pipeline

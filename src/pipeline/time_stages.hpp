@@ -42,7 +42,7 @@ struct TimeState {
   std::vector<moult::ControlSpec> controls;
   std::vector<std::vector<uint32_t>> controlTracts;  // per control: tract indices (empty = any)
   coat::PackOptions packOptions;
-  moult::ControlResult controlResult;     // of the last evaluation (natural pack dropped after use)
+  moult::ControlResult controlResult;     // of the last evaluation; its natural pack is consumed by packFrame
 };
 
 // posed = rest deformed by the scene's skeleton at time t (identity without a skeleton). `posed` comes
@@ -54,5 +54,12 @@ void featherAges(const Scene& scene, double t, const std::vector<coat::TractPara
 // Expressive controls at time t: lifted feathers get fixed elevations (NaN = free) and directions.
 void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, const coat::Follicles& follicles,
                    TimeState& state, coat::CoatFeathers& coat, std::vector<double>& fixedElevation);
+
+// The frame's pack: when applyControls had to pack the frame without its raises (to find natural
+// elevations), an incremental repack from that pack over the raised feathers (bit-identical to a full
+// pack, coat/pack.hpp); else a full pack. The natural pack is used once, so a later re-pack of the same
+// frame (e.g. after editing packing options) packs fully.
+coat::PackResult packFrame(const coat::SkinMesh& posed, const coat::CoatFeathers& coat, const coat::PackOptions& options,
+                           TimeState& state);
 
 }  // namespace pteryla::pipeline
