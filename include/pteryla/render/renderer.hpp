@@ -19,6 +19,9 @@
 //  uvBarb.y in [0,1] along the barb from the rachis to the barb tip; the mask is sampled at
 //  (uvBarb.x * barbCount, uvBarb.y) with repeat across. alpha multiplies opacity; sheath in [0,1]
 //  blends toward the opaque sheath colour (pin feathers, 8.1). featherId is not used for drawing.
+// Texture images are top row first: row 0 of a colour pattern is v = 1 (the feather tip).
+// Feathers whose bounds fall outside the view, or (RenderSettings::occlusionCulling) entirely behind
+// the skin's depth, are skipped; RenderStats reports how many.
 #include <cstdint>
 #include <memory>
 #include <string>
