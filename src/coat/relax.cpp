@@ -50,6 +50,7 @@ struct ThreadScratch {
   std::vector<uint32_t> queue, shell;
   std::vector<std::pair<double, uint32_t>> knn;
   std::vector<glm::dvec3> polyA, polyB, q, candPos;
+  std::vector<double> qq;
   std::vector<uint32_t> cand;
   std::vector<double> f;
 
@@ -330,18 +331,19 @@ class Relaxer {
 
   // Keeps the part of polygon `a` with n.y <= d (Sutherland-Hodgman), result in `a` (using `b` and `f` as
   // scratch); returns false when nothing is left.
-  static bool clip(std::vector<glm::dvec3>& a, std::vector<glm::dvec3>& b, std::vector<double>& f,
-                   const glm::dvec3& n, double d) {
+  enum ClipResult { kEmpty, kUnchanged, kClipped };
+  static ClipResult clip(std::vector<glm::dvec3>& a, std::vector<glm::dvec3>& b, std::vector<double>& f,
+                         const glm::dvec3& n, double d) {
     const size_t m = a.size();
-    f.resize(m);
+    if (f.size() < m) f.resize(m);
     bool anyOut = false, anyIn = false;
     for (size_t j = 0; j < m; ++j) {
       f[j] = glm::dot(n, a[j]) - d;
       if (f[j] > 0) anyOut = true;
       else anyIn = true;
     }
-    if (!anyOut) return true;
-    if (!anyIn) return false;
+    if (!anyOut) return kUnchanged;
+    if (!anyIn) return kEmpty;
     b.clear();
     size_t prev = m - 1;
     for (size_t j = 0; j < m; ++j) {
@@ -351,7 +353,13 @@ class Relaxer {
       prev = j;
     }
     a.swap(b);
-    return a.size() >= 3;
+    return a.size() >= 3 ? kClipped : kEmpty;
+  }
+
+  static double maxNorm2(const std::vector<glm::dvec3>& a) {
+    double r2 = 0;
+    for (const auto& v : a) r2 = std::max(r2, glm::dot(v, v));
+    return r2;
   }
 
   void integrate(const std::vector<glm::dvec3>& poly, uint32_t fi, size_t lf, const glm::dvec3& site, Cell& cell) const {
@@ -424,14 +432,19 @@ class Relaxer {
     if (startLocal < 0) return cell;
     const glm::dvec3 p = pos_[i];
     const double secure = metric_ ? (1.0 + std::sqrt(1.0 + lambdaBound_)) : 2.0;
+    const double lambda = 1.0 + lambdaBound_;  // bound on the metric's largest eigenvalue
     for (size_t k = kFirstK;; k *= 2) {
       double next2 = 0;
       if (k != kFirstK || !nearestFromBlock(i, sc, next2))
         grid_.kNearest(sites_.data(), p, static_cast<uint32_t>(i), k, sc.knn, &next2, sc.shell);
       sc.q.clear();
+      sc.qq.clear();
       for (const auto& [d2, j] : sc.knn) {
         if (d2 == 0 && j < i) return cell;  // coincident sites: the lower index owns the cell
-        if (d2 > 0) sc.q.push_back(sites_[j] - p);
+        if (d2 > 0) {
+          sc.q.push_back(sites_[j] - p);
+          sc.qq.push_back(d2);
+        }
       }
       cell = Cell();
       double r2max = 0;
@@ -445,17 +458,27 @@ class Relaxer {
         const auto& t = mesh_.faces[fi];
         sc.polyA.assign({mesh_.positions[t[0]] - p, mesh_.positions[t[1]] - p, mesh_.positions[t[2]] - p});
         bool alive = true;
-        for (const glm::dvec3& q : sc.q) {
+        double r2 = maxNorm2(sc.polyA);
+        for (size_t j = 0; j < sc.q.size(); ++j) {
+          // A bisector at distance |q|/2 cannot reach a polygon within r of the site when
+          // sqrt(lambda) r <= |q|/2; neighbours are sorted by distance, so neither can the later ones.
+          if (4.0 * lambda * r2 <= sc.qq[j]) break;
+          const glm::dvec3& q = sc.q[j];
+          ClipResult res;
           if (metric_) {
             const glm::dvec3 n = metric_faces_[lf] * q;
-            alive = clip(sc.polyA, sc.polyB, sc.f, n, 0.5 * glm::dot(q, n));
+            res = clip(sc.polyA, sc.polyB, sc.f, n, 0.5 * glm::dot(q, n));
           } else {
-            alive = clip(sc.polyA, sc.polyB, sc.f, q, 0.5 * glm::dot(q, q));
+            res = clip(sc.polyA, sc.polyB, sc.f, q, 0.5 * sc.qq[j]);
           }
-          if (!alive) break;
+          if (res == kEmpty) {
+            alive = false;
+            break;
+          }
+          if (res == kClipped) r2 = maxNorm2(sc.polyA);
         }
         if (!alive) continue;
-        for (const auto& v : sc.polyA) r2max = std::max(r2max, glm::dot(v, v));
+        r2max = std::max(r2max, r2);
         integrate(sc.polyA, fi, lf, p, cell);
         for (int c = 0; c < 3; ++c) {
           const int32_t g = mesh_.faceNeighbors[fi][c];

@@ -34,8 +34,8 @@ struct BiasVector {
 };
 
 struct RelaxOptions {
-  int iterations = 50;               // the default reaches hex fraction ~0.75 from random starts
-  double overRelaxation = 1.6;       // w in [1, 2): step x += w (c - x); 1 = textbook Lloyd
+  int iterations = 50;               // from random starts: hex fraction ~0.77, nn CV ~0.054
+  double overRelaxation = 1.8;       // w in [1, 2): step x += w (c - x); 1 = textbook Lloyd
   bool fixBoundary = true;           // 6.1.3: follicles within boundaryBand of the tract edge do not move
   double boundaryBand = 0.5;         // in units of the mean follicle spacing
   double edgeMargin = 0.05;          // free follicles keep this distance from tract edges (spacing units)
