@@ -30,7 +30,6 @@ void TriMesh::append(const TriMesh& o) {
   appendAttr(featherId, n, o.featherId, m, 0u);
   positions.insert(positions.end(), o.positions.begin(), o.positions.end());
   const uint32_t off = static_cast<uint32_t>(n);
-  indices.reserve(indices.size() + o.indices.size());
   for (uint32_t i : o.indices) indices.push_back(i + off);
 }
 
