@@ -47,6 +47,9 @@ void validateSections(Scene& s) {
                                                        : s.packing;
     if (!sec.is_object()) throw Error("expected an object", s.file, key);
   }
+  // The skeleton side file, absolute like every Scene path (read by the time stages, docs/moult.md).
+  if (s.skeleton.contains("file") && s.skeleton["file"].is_string())
+    s.skeleton["file"] = resolveRelative(s.file, s.skeleton["file"].get<std::string>());
 }
 
 Scene bareMeshScene(const std::string& meshPath) {
@@ -69,6 +72,8 @@ Json sectionsRelativeTo(const Scene& s, const Json& section, const std::string& 
     for (auto it = out.begin(); it != out.end(); ++it)
       if (it->is_string()) *it = relPath(it->get<std::string>(), relativeTo);
   }
+  if (which == "skeleton" && out.contains("file") && out["file"].is_string())
+    out["file"] = relPath(out["file"].get<std::string>(), relativeTo);
   return out;
 }
 

@@ -6,6 +6,7 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 #include "pteryla/coat/coat_feathers.hpp"
@@ -290,4 +291,24 @@ TEST(TimePipeline, BadSectionsAreErrorsWithKeyPaths) {
   j = wingScene();
   j["controls"] = Json::array({Json::parse(R"({"at": [0, 0, 0], "radius": 0.2, "tracts": ["tail"]})")});
   expectError(j, "controls[0].tracts[0]");
+}
+
+TEST(TimePipeline, SavedSceneKeepsItsSkeletonAndTimeSections) {
+  Json j = wingScene();
+  j["moult"] = moultSection();
+  j["skeleton"] = skeletonSection();
+  j["controls"] = Json::array({liftControl(-1)});
+  const pipeline::Scene scene = pipeline::sceneFromJson(j, kSceneFile);
+  // Saved into another directory: the skeleton file is written relative to the new scene file.
+  const std::string dir = std::string(PTERYLA_BUILD_DIR) + "/moult_test_saved";
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/wing_saved.json";
+  pipeline::saveScene(path, scene);
+  const pipeline::Scene back = pipeline::loadScene(path);
+  Pipeline a(scene), b(back);
+  a.setTime(7);
+  b.setTime(7);
+  EXPECT_EQ(a.posedSkin().positions, b.posedSkin().positions);
+  EXPECT_EQ(a.feathers().age, b.feathers().age);
+  EXPECT_EQ(a.elevations(), b.elevations());
 }
