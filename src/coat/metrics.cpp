@@ -62,8 +62,9 @@ class CellBuilder {
     const glm::dvec3 p = f_.position[i];
     glm::dvec3 n = f_.normal[i];
     if (!(glm::length(n) > 0)) n = glm::dvec3(0, 0, 1);
+    n = glm::normalize(n);
     glm::dvec3 t1, t2;
-    tangentBasis(glm::normalize(n), t1, t2);
+    tangentBasis(n, t1, t2);
     std::vector<std::pair<double, uint32_t>> knn;
     std::vector<V2> poly, next;
     std::vector<int64_t> lab, nextLab;
@@ -76,6 +77,8 @@ class CellBuilder {
       poly = {{-R0, -R0}, {R0, -R0}, {R0, R0}, {-R0, R0}};
       lab = {-1, -1, -1, -1};
       for (const auto& [d2, q] : knn) {
+        // A follicle facing away lies on another sheet of the surface (other side of a thin wing).
+        if (glm::dot(f_.normal[q], n) < 0) continue;
         const glm::dvec3 d = f_.position[q] - p;
         const V2 v{glm::dot(d, t1), glm::dot(d, t2)};
         const double c = 0.5 * (v.x * v.x + v.y * v.y);

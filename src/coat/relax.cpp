@@ -68,6 +68,7 @@ struct ThreadScratch {
 
 // Moments of one restricted Voronoi cell about its site (relative coordinates).
 struct Cell {
+  double area = 0;            // plain area
   double mass = 0;            // integral of the weight
   glm::dvec3 m1{0};           // integral of weight * y
   glm::dmat3 H{0.0};          // integral of weight * M (metric only)
@@ -129,6 +130,9 @@ class Relaxer {
     }
     step(nullptr, nullptr, nullptr, cellEnergy, move);
     res.energy.push_back(totalEnergy(cellEnergy));
+    double covered = 0;
+    for (double a : cellArea_) covered += a;
+    res.coverage = area_ > 0 ? covered / area_ : 0.0;
 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n_, 1024), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -369,6 +373,7 @@ class Relaxer {
       const glm::dvec3& c = poly[j + 1];
       const double A = 0.5 * glm::length(glm::cross(b - a, c - a));
       if (!(A > 0)) continue;
+      cell.area += A;
       if (!weighted_) {
         const glm::dvec3 s = a + b + c;
         const glm::dvec3 m1 = (A / 3.0) * s;
@@ -549,6 +554,7 @@ class Relaxer {
   void step(std::vector<glm::dvec3>* newPos, std::vector<uint32_t>* newFace, std::vector<glm::dvec3>* newBary,
             std::vector<double>& cellEnergy, std::vector<double>& move) {
     sites_ = pos_;
+    cellArea_.resize(n_);
     grid_.build(sites_.data(), n_);
     const double omega = opt_.overRelaxation;
     const auto& runKeys = grid_.runKeys();
@@ -581,6 +587,7 @@ class Relaxer {
         }
         const Cell cell = computeCell(i, sc);
         cellEnergy[i] = cell.energy;
+        cellArea_[i] = cell.area;
         if (!newPos || kind_[i] != kFree || !(cell.mass > 0)) continue;
         const glm::dvec3 cRel = metric_ ? glm::inverse(cell.H) * cell.hm1 : cell.m1 / cell.mass;
         const glm::dvec3 c = x + cRel;
@@ -627,6 +634,7 @@ class Relaxer {
   std::vector<uint8_t> kind_;
   std::vector<uint32_t> face_;
   std::vector<glm::dvec3> bary_, pos_, sites_;
+  std::vector<double> cellArea_;
   size_t n_ = 0;
   double area_ = 0, spacing_ = 0, weightNorm_ = 1.0;
   CellGrid grid_;

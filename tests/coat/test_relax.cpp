@@ -74,6 +74,7 @@ void checkRegularity(const Scene& s, const char* what) {
   o.iterations = 20;
   const RelaxResult r20 = relaxFollicles(s.mesh, s.tract, f, o);
   expectMonotone(r20);
+  EXPECT_NEAR(r20.coverage, 1.0, 1e-9) << what << ": cells must tile the tract";
   const DistributionMetrics m20 = measureDistribution(s.mesh, s.tract, f);
   EXPECT_GT(m20.interior, 1200u) << what;
   EXPECT_GT(m20.hexFraction, 0.55) << what;

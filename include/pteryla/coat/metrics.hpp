@@ -7,6 +7,8 @@
 // Delaunay neighbours on the surface: each follicle's nearest neighbours are projected onto its tangent
 // plane and its Voronoi cell is clipped from their bisectors; neighbours are added until the cell is
 // provably complete (security radius), so the result equals the local 2-D Delaunay triangulation.
+// Follicles whose normal faces away (n_i . n_j < 0) are on another sheet of the surface (the far side
+// of a thin wing) and are not neighbours.
 // Follicles closer than interiorBand spacings to the tract boundary are not measured (they are still
 // neighbours of the others). Spacing = sqrt(2 A / (sqrt(3) n)) for tract area A and n follicles.
 #include <glm/vec3.hpp>

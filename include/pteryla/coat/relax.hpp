@@ -13,6 +13,12 @@
 // The CVT energy never rises from one iteration to the next: an over-relaxed step x + w (c - x) with
 // 1 <= w < 2 lowers each cell's energy, and a projected step that would not is retried with w = 1 or
 // skipped. Results are bit-identical for the same inputs and any thread count.
+//
+// Cells are grown over the tract's faces from the follicle's own face, so a cell is the part of the
+// Voronoi cell connected to its follicle. When the spacing is small against the surface's feature size
+// (the thesis' assumption, 6.1.3 and Fig. 6.4) that is the whole restricted cell. Where it is not (a
+// band wrapping a thin wing edge), the far pieces are left out rather than claimed across the gap,
+// RelaxResult::coverage drops below 1 and the energy may wobble by a few 1e-4 near convergence.
 #include <glm/vec3.hpp>
 
 #include <cstdint>
@@ -58,6 +64,7 @@ struct RelaxResult {
   size_t fixedBoundary = 0;          // held because they lie along the tract boundary
   size_t pinned = 0;
   double spacing = 0.0;              // mean hexagonal spacing sqrt(2 A / (sqrt(3) n)), scene units
+  double coverage = 0.0;             // share of the tract's area inside some cell after the last step
   bool converged = false;            // stopped by tolerance
   bool cancelled = false;            // stopped by the progress callback
   double seconds = 0.0;
