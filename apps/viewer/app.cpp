@@ -1,0 +1,396 @@
+// The viewer's main loop: events, background evaluation, GL view sync, UI, screenshots and the orbit
+// benchmark. The Renderer (src/render) does the scene's GL into its off-screen target; the viewer keeps
+// the last frame in a texture drawn behind the panels, re-rendering only when the camera, the uploaded
+// results or the look change. Its own GL is that texture upload and the wireframe polygon mode.
+#include "app.hpp"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <GL/gl.h>
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl3.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+#include "glfw_context.hpp"
+#include "overlays.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/render/image.hpp"
+#include "pteryla/render/renderer.hpp"
+#include "pteryla/render/scene_view.hpp"
+#include "pteryla/render/scratchboard.hpp"
+
+namespace pteryla::viewer {
+
+namespace {
+
+void closeCallback(GLFWwindow* w) {
+  if (auto* app = static_cast<App*>(glfwGetWindowUserPointer(w))) app->onCloseRequested();
+}
+
+void glfwErrorCallback(int code, const char* what) { std::fprintf(stderr, "pteryla-viewer: GLFW error %d: %s\n", code, what); }
+
+}  // namespace
+
+int runViewer(const ViewerOptions& options) {
+  App app(options);
+  return app.run();
+}
+
+App::App(const ViewerOptions& o) : options_(o) {
+  requests_.frameAll = [this] { frameAll(); };
+  requests_.screenshot = [this](const std::string& p) {
+    shotPath_ = p;
+    shotWanted_ = true;
+    shotWithUi_ = false;
+  };
+  requests_.open = [this](const std::string& p) { requestOpen(p); };
+  requests_.save = [this] { requestSave(); };
+  requests_.saveAs = [this] { requestSaveAs(); };
+  requests_.error = [this](const std::string& m) { showError(m); };
+  panels_ = std::make_unique<PanelContext>(PanelContext{doc_, view_, camera_, requests_});
+}
+
+App::~App() {
+  if (window_) glfwMakeContextCurrent(window_);
+  if (window_ && scratchTexture_) glDeleteTextures(1, &scratchTexture_);
+  if (window_ && viewTexture_) glDeleteTextures(1, &viewTexture_);
+  renderer_.reset();
+  if (imguiReady_) {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+  }
+  if (window_) glfwDestroyWindow(window_);
+  glfwTerminate();
+}
+
+bool App::scripted() const { return !options_.script.empty() || !options_.screenshot.empty() || options_.benchmarkOrbit > 0; }
+
+bool App::initWindow() {
+  glfwSetErrorCallback(glfwErrorCallback);
+  if (!glfwInit()) {
+    std::fprintf(stderr, "pteryla-viewer: cannot initialise GLFW (no display? run under xvfb-run -a)\n");
+    return false;
+  }
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  window_ = glfwCreateWindow(options_.width, options_.height, "pteryla viewer", nullptr, nullptr);
+  if (!window_) {
+    std::fprintf(stderr, "pteryla-viewer: cannot create an OpenGL 3.3 core window\n");
+    return false;
+  }
+  glfwSetWindowUserPointer(window_, this);
+  glfwSetWindowCloseCallback(window_, closeCallback);
+  glfwMakeContextCurrent(window_);
+  glfwSwapInterval(options_.vsync && !scripted() ? 1 : 0);
+  context_ = std::make_unique<GlfwContext>(window_);
+  renderer_ = std::make_unique<render::Renderer>(*context_);
+
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the user's files
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(window_, true);
+  ImGui_ImplOpenGL3_Init("#version 330 core");
+  imguiReady_ = true;
+  return true;
+}
+
+void App::fail(const std::string& message, int code) {
+  std::fprintf(stderr, "pteryla-viewer: %s\n", message.c_str());
+  if (exitCode_ == 0) exitCode_ = code;
+  quit_ = true;
+}
+
+int App::run() {
+  try {
+    if (!initWindow()) return 1;
+    if (!options_.script.empty()) script_ = loadScript(options_.script);
+    if (!options_.scene.empty()) doc_.open(options_.scene);
+    if (options_.lod) doc_.setLod(*options_.lod);
+    if (!options_.screenshot.empty()) {
+      shotPath_ = options_.screenshot;
+      shotWanted_ = true;
+    }
+  } catch (const Error& e) {
+    std::fprintf(stderr, "pteryla-viewer: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pteryla-viewer: %s\n", e.what());
+    return 1;
+  }
+  fpsStart_ = std::chrono::steady_clock::now();
+  while (!quit_) {
+    try {
+      frame();
+    } catch (const Error& e) {
+      // Anything that escapes a panel or the view sync: report and keep running (scripts stop).
+      if (scripted()) fail(e.what(), 2); else showError(e.what());
+    } catch (const std::exception& e) {
+      if (scripted()) fail(e.what(), 1); else showError(e.what());
+    }
+    if (glfwWindowShouldClose(window_)) quit_ = true;
+  }
+  return exitCode_;
+}
+
+void App::onCloseRequested() {
+  if (doc_.modified() && !scripted()) {
+    glfwSetWindowShouldClose(window_, GLFW_FALSE);
+    pending_ = Pending::Quit;
+    popupToOpen_ = "Unsaved changes";
+  }
+}
+
+void App::frame() {
+  const bool active = doc_.busy() || view_.playing || scripted() || shotWanted_ || dragging_;
+  if (active) glfwPollEvents(); else glfwWaitEventsTimeout(0.1);
+
+  doc_.update();
+  if (auto e = doc_.takeError()) {
+    if (scripted()) fail("evaluation failed: " + *e, 2); else showError(*e);
+  }
+  advancePlayback(*panels_);
+  if (!script_.empty()) scriptStep();
+  if (quit_) return;
+
+  int w = 0, h = 0, fw = 0, fh = 0;
+  glfwGetWindowSize(window_, &w, &h);
+  glfwGetFramebufferSize(window_, &fw, &fh);
+  windowSize_ = {w, h};
+  fbSize_ = {fw, fh};
+  syncView();
+  if (options_.benchmarkOrbit > 0) benchmarkStep();
+  if (fw > 0 && fh > 0) renderView();
+
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  if (viewTexture_ && doc_.hasScene())
+    ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(static_cast<intptr_t>(viewTexture_)),
+                                             ImVec2(0, 0), ImVec2(float(w), float(h)));
+  handleInput();
+  buildUi();
+  if (doc_.hasScene() && options_.benchmarkOrbit <= 0) drawOverlays(ImGui::GetBackgroundDrawList(), *panels_, windowSize_);
+  ImGui::Render();
+
+  if (fw > 0 && fh > 0) {
+    glViewport(0, 0, fw, fh);
+    const glm::dvec3 bg = doc_.hasScene() ? doc_.scene().render.background : glm::dvec3(0.2, 0.22, 0.25);
+    glClearColor(float(bg.x), float(bg.y), float(bg.z), 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    captureScreenshot(fw, fh, true);
+    captureScreenshot(fw, fh, false);
+  }
+  glfwSwapBuffers(window_);
+  ++framesDrawn_;
+  updateFps();
+  // --screenshot: the capture above happened once the evaluation was complete; then quit.
+  if (!options_.screenshot.empty() && !shotWanted_ && script_.empty()) quit_ = true;
+}
+
+void App::updateFps() {
+  ++fpsFrames_;
+  const auto now = std::chrono::steady_clock::now();
+  const double s = std::chrono::duration<double>(now - fpsStart_).count();
+  if (s >= 0.5) {
+    view_.fps = static_cast<float>(fpsFrames_ / s);
+    fpsFrames_ = 0;
+    fpsStart_ = now;
+  }
+}
+
+void App::initCamera() {
+  const Snapshot& s = doc_.snapshot();
+  const float aspect = float(std::max(windowSize_.x, 1)) / float(std::max(windowSize_.y, 1));
+  camera_.set(render::sceneCamera(doc_.scene(), s.skin, TriMesh{}, std::max(windowSize_.x, 1), std::max(windowSize_.y, 1)));
+  if (doc_.scene().camera.autoFrame) camera_.frame(s.skinLo, s.skinHi, aspect);
+  const float diag = glm::length(s.skinHi - s.skinLo);
+  if (diag > 0) {
+    view_.brushRadius = diag * 0.05f;
+    view_.controlRadius = diag * 0.1f;
+    view_.biasSigma = diag * 0.1f;
+  }
+  cameraReady_ = true;
+  cameraMoved_ = false;
+}
+
+void App::frameAll() {
+  const Snapshot& s = doc_.snapshot();
+  glm::vec3 lo = s.skinLo, hi = s.skinHi;
+  if (s.haveCoat) {
+    lo = glm::min(lo, s.coatLo);
+    hi = glm::max(hi, s.coatHi);
+  }
+  camera_.frame(lo, hi, float(std::max(windowSize_.x, 1)) / float(std::max(windowSize_.y, 1)));
+}
+
+// Results to the renderer: the skin as soon as a job publishes it (progressive display), the coat and
+// its materials once the evaluation is complete.
+void App::syncView() {
+  if (!doc_.hasScene()) return;
+  const Snapshot& s = doc_.snapshot();
+  if (s.skinVersion != uploadedSkin_ && !s.skin.empty()) {
+    context_->makeCurrent();
+    renderer_->setSkin(s.skin);
+    uploadedSkin_ = s.skinVersion;
+    ++uploadVersion_;
+  }
+  if (!cameraReady_ && !s.skin.empty()) initCamera();
+  uploadResults();
+  if (cameraReady_ && !cameraFramedCoat_ && s.haveCoat) {
+    if (!cameraMoved_ && doc_.scene().camera.autoFrame) frameAll();
+    cameraFramedCoat_ = true;
+  }
+}
+
+void App::uploadResults() {
+  const pipeline::Scene& scene = doc_.scene();
+  const Snapshot& snap = doc_.snapshot();
+  pipeline::Pipeline* p = doc_.idlePipeline();
+  if (p && doc_.upToDate() && doc_.resultVersion() != syncedResult_) {
+    // The pipeline is idle and clean: reading its coat does not evaluate anything.
+    const uint64_t meshEvals = p->graph().evaluations(p->graph().find("mesh"));
+    if (meshEvals != meshEvals_) {
+      const pipeline::CoatMesh& coat = p->coatMesh();
+      context_->makeCurrent();
+      renderer_->setCoat(coat.mesh, render::drawRanges(coat));
+      meshEvals_ = meshEvals;
+      materialsStale_ = true;
+      ++uploadVersion_;
+    }
+    syncedResult_ = doc_.resultVersion();
+  }
+  if (snap.haveCoat && (materialsStale_ || lastBrdfD_ != scene.render.brdfD || lastBrdfH_ != scene.render.brdfH ||
+                        lastMaterialCount_ != snap.materials.size())) {
+    pipeline::CoatMesh materialsOnly;
+    materialsOnly.materials = snap.materials;
+    renderer_->setMaterials(render::sceneMaterials(scene, materialsOnly));
+    lastBrdfD_ = scene.render.brdfD;
+    lastBrdfH_ = scene.render.brdfH;
+    lastMaterialCount_ = snap.materials.size();
+    materialsStale_ = false;
+    ++uploadVersion_;
+  }
+}
+
+// Everything the 3D image depends on; the view is re-rendered when it changes.
+std::vector<float> App::viewKey() const {
+  const render::Camera& c = camera_.camera();
+  const pipeline::Scene& s = doc_.scene();
+  std::vector<float> k = {float(fbSize_.x), float(fbSize_.y), c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z,
+                          c.up.x, c.up.y, c.up.z, c.fovYDegrees, c.zNear, c.zFar, float(uploadVersion_),
+                          float(view_.showSkin), float(view_.showCoat), float(view_.wireframe), float(s.render.ambient),
+                          float(s.render.background.x), float(s.render.background.y), float(s.render.background.z),
+                          float(s.render.skinColor.x), float(s.render.skinColor.y), float(s.render.skinColor.z)};
+  for (const auto& l : s.lights)
+    for (float v : {float(l.direction.x), float(l.direction.y), float(l.direction.z), float(l.color.x), float(l.color.y),
+                    float(l.color.z), float(l.intensity)})
+      k.push_back(v);
+  return k;
+}
+
+void App::renderView() {
+  if (!doc_.hasScene() || !cameraReady_) return;
+  std::vector<float> key = viewKey();
+  if (key == lastViewKey_ && viewTexture_) return;
+  const pipeline::Scene& scene = doc_.scene();
+  render::RenderSettings settings = render::sceneSettings(scene, fbSize_.x, fbSize_.y);
+  settings.drawSkin = view_.showSkin;
+  settings.drawCoat = view_.showCoat;
+  const auto t0 = std::chrono::steady_clock::now();
+  context_->makeCurrent();
+  if (view_.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+  viewImage_ = renderer_->renderImage(camera_.camera(), render::sceneLights(scene), settings);
+  if (view_.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  if (!viewTexture_) glGenTextures(1, &viewTexture_);
+  glBindTexture(GL_TEXTURE_2D, viewTexture_);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  if (viewTexW_ != viewImage_.width || viewTexH_ != viewImage_.height) {
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, viewImage_.width, viewImage_.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                 viewImage_.rgba.data());
+    viewTexW_ = viewImage_.width;
+    viewTexH_ = viewImage_.height;
+  } else {
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, viewImage_.width, viewImage_.height, GL_RGBA, GL_UNSIGNED_BYTE,
+                    viewImage_.rgba.data());
+  }
+  lastRenderSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  lastViewKey_ = std::move(key);
+}
+
+void App::captureScreenshot(int fbw, int fbh, bool afterUi) {
+  if (!shotWanted_ || afterUi != shotWithUi_) return;
+  // Scripted and --screenshot captures wait for the evaluation (and its upload) to finish.
+  if (doc_.hasScene() && (!doc_.upToDate() || doc_.resultVersion() != syncedResult_ || viewImage_.empty())) {
+    if (doc_.failed() || doc_.halted()) {
+      shotWanted_ = false;
+      if (scripted()) fail("screenshot: the scene did not evaluate", 2);
+      else showError("screenshot skipped: the scene did not evaluate");
+    }
+    return;
+  }
+  if (framesDrawn_ + 1 < options_.frames && !options_.screenshot.empty() && script_.empty()) return;
+  shotWanted_ = false;
+  try {
+    render::Image img;
+    if (afterUi) {
+      img = renderer_->readPixels(fbw, fbh);
+    } else if (doc_.scene().render.style == "scratchboard" && doc_.idlePipeline()) {
+      pipeline::Pipeline& p = *doc_.idlePipeline();
+      render::ScratchboardSettings ss;
+      ss.width = fbw;
+      ss.height = fbh;
+      img = render::renderScratchboard(p.coatMesh().mesh, p.skinTriMesh(), camera_.camera(), render::sceneLights(p.scene()), ss);
+    } else {
+      img = viewImage_;  // exactly the 3D view on screen, without the panels
+    }
+    render::saveImage(shotPath_, img);
+    std::fprintf(stderr, "pteryla-viewer: wrote %s (%dx%d)\n", shotPath_.c_str(), img.width, img.height);
+  } catch (const Error& e) {
+    if (scripted()) fail(e.what(), 2); else showError(e.what());
+  }
+}
+
+// --benchmark-orbit N: once the scene is evaluated, uploaded and framed, one full turn in N frames;
+// every frame re-renders the 3D view (the camera moves) and draws the panels.
+void App::benchmarkStep() {
+  const int n = options_.benchmarkOrbit;
+  if (benchFrame_ < 0) {
+    if (!doc_.hasScene() || !doc_.upToDate() || doc_.resultVersion() != syncedResult_ || !cameraReady_ || viewImage_.empty()) {
+      if (doc_.failed() || doc_.halted()) fail("benchmark: the scene did not evaluate", 2);
+      return;
+    }
+    benchFrame_ = 0;
+    benchStart_ = std::chrono::steady_clock::now();
+    benchRenderSeconds_ = 0;
+  } else {
+    benchRenderSeconds_ += lastRenderSeconds_;
+  }
+  if (benchFrame_ == n) {
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - benchStart_).count();
+    const Snapshot& s = doc_.snapshot();
+    const auto& st = renderer_->lastStats();
+    std::printf("{\"orbit_frames\": %d, \"seconds\": %.4f, \"fps\": %.2f, \"render_ms\": %.1f, \"width\": %d, \"height\": %d, "
+                "\"lod\": %.3f, \"feathers\": %zu, \"coat_triangles\": %zu, \"drawn_triangles\": %zu, \"gl\": \"%s\"}\n",
+                n, secs, double(n) / secs, 1000.0 * benchRenderSeconds_ / n, fbSize_.x, fbSize_.y, doc_.lod(), s.coatFeathers,
+                s.coatTriangles, st.triangles, renderer_->glVersion().c_str());
+    std::fflush(stdout);
+    quit_ = true;
+    return;
+  }
+  camera_.orbit(2.0f * 3.14159265f / float(n), 0.0f);
+  ++benchFrame_;
+}
+
+}  // namespace pteryla::viewer

@@ -1,0 +1,154 @@
+#pragma once
+// The viewer application: a GLFW window with an OpenGL 3.3 context, Dear ImGui panels, the 3D view
+// drawn by render::SceneView, and the Document evaluating the scene in the background.
+//   app.cpp         main loop, GL view sync, screenshots, the orbit benchmark
+//   app_ui.cpp      menu bar, the panel column, dialogs (open, save as, overwrite, unsaved changes, errors)
+//   app_input.cpp   camera navigation and the viewport tools (picking on the skin)
+//   app_script.cpp  --script sessions
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "camera_controller.hpp"
+#include "document.hpp"
+#include "panels.hpp"
+#include "script.hpp"
+
+struct GLFWwindow;
+
+#include "pteryla/render/image.hpp"
+
+namespace pteryla::render {
+class Renderer;
+}  // namespace pteryla::render
+
+namespace pteryla::viewer {
+
+class GlfwContext;
+
+struct ViewerOptions {
+  std::string scene;              // scene file or bare mesh to open ("" = none)
+  std::string script;             // --script
+  std::string screenshot;         // --screenshot: capture after `frames` frames and the evaluation, then quit
+  int frames = 1;                 // --frames
+  int benchmarkOrbit = 0;         // --benchmark-orbit N: N frames of a full orbit, prints fps, quits
+  int width = 1280, height = 800;
+  std::optional<double> lod;
+  bool vsync = true;
+};
+
+// Runs the viewer; returns the process exit code (0 ok, 1 internal/window error, 2 bad input or a
+// failed script).
+int runViewer(const ViewerOptions& options);
+
+class App {
+ public:
+  explicit App(const ViewerOptions& o);
+  ~App();
+  int run();
+
+  // Called by GLFW callbacks.
+  void onCloseRequested();
+
+ private:
+  enum class Pending { None, Quit, Open };
+
+  // app.cpp
+  bool initWindow();
+  bool scripted() const;  // script, --screenshot or --benchmark-orbit: errors end the run
+  void frame();
+  void syncView();
+  void uploadResults();
+  void renderView();
+  std::vector<float> viewKey() const;
+  void initCamera();
+  void frameAll();
+  void captureScreenshot(int fbw, int fbh, bool afterUi);
+  void updateFps();
+  void benchmarkStep();
+  void fail(const std::string& message, int code);
+  // app_ui.cpp
+  void buildUi();
+  void menuBar();
+  void panelColumn();
+  void dialogs();
+  void showError(const std::string& message);
+  void requestOpen(const std::string& path);
+  void openNow(const std::string& path);
+  void requestSave();
+  void requestSaveAs();
+  void afterSave();
+  void sceneJsonWindow();
+  void helpWindow();
+  void scratchboardWindow();
+  // app_input.cpp
+  void handleInput();
+  void handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse);
+  // app_script.cpp
+  void scriptStep();
+
+  ViewerOptions options_;
+  GLFWwindow* window_ = nullptr;
+  std::unique_ptr<GlfwContext> context_;
+  std::unique_ptr<render::Renderer> renderer_;
+  Document doc_;
+  ViewState view_;
+  CameraController camera_;
+  AppRequests requests_;
+  std::unique_ptr<PanelContext> panels_;
+  FeatherDesigner designer_;
+  bool imguiReady_ = false;
+
+  // View sync: results uploaded to the renderer, and the 3D view cached in a texture (re-rendered only
+  // when the camera, the uploads or the look change, so panels stay fast over a heavy coat).
+  uint64_t syncedResult_ = ~0ull, uploadedSkin_ = 0, meshEvals_ = ~0ull, uploadVersion_ = 0;
+  std::vector<float> lastViewKey_;
+  render::Image viewImage_;
+  unsigned int viewTexture_ = 0;
+  int viewTexW_ = 0, viewTexH_ = 0;
+  double lastRenderSeconds_ = 0;
+  bool cameraReady_ = false, cameraFramedCoat_ = false, cameraMoved_ = false;
+  bool materialsStale_ = true;
+  double lastBrdfD_ = -1, lastBrdfH_ = -1;
+  size_t lastMaterialCount_ = 0;
+  glm::ivec2 windowSize_{0}, fbSize_{0};
+
+  // Dialogs.
+  std::vector<std::string> errors_;
+  std::string popupToOpen_;
+  Pending pending_ = Pending::None;
+  std::string pendingPath_;
+  std::string openPath_, saveAsPath_;
+  bool quit_ = false;
+
+  // Screenshots and scripted runs.
+  std::string shotPath_;
+  bool shotWanted_ = false, shotWithUi_ = false;
+  int framesDrawn_ = 0;
+  std::vector<ScriptCommand> script_;
+  size_t scriptNext_ = 0;
+  int scriptWaitFrames_ = 0;
+  bool awaitingMetrics_ = false;
+  int exitCode_ = 0;
+
+  // Measurement.
+  std::chrono::steady_clock::time_point fpsStart_;
+  int fpsFrames_ = 0;
+  int benchFrame_ = -1;
+  std::chrono::steady_clock::time_point benchStart_;
+  double benchRenderSeconds_ = 0;
+
+  // Drag state of the viewport.
+  bool dragging_ = false, toolDrag_ = false;
+  glm::vec3 dragNormal_{0, 0, 1};
+
+  // Scratchboard preview (CPU renderer) as a GL texture.
+  unsigned int scratchTexture_ = 0;
+  int scratchW_ = 0, scratchH_ = 0;
+  bool showScratch_ = false;
+  std::string scratchError_;
+};
+
+}  // namespace pteryla::viewer

@@ -1,0 +1,165 @@
+// Viewport input: turntable camera (left drag orbits, right/middle or shift+left drag pans, wheel zooms)
+// and the panel tools, which pick on the posed skin (raycast) or on follicles (nearest projection).
+#include <imgui.h>
+
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "actions.hpp"
+#include "app.hpp"
+#include "overlays.hpp"
+#include "picking.hpp"
+
+namespace pteryla::viewer {
+
+namespace {
+
+// Intersection of a ray with the plane through `p` with normal `n`; false when parallel or behind.
+bool rayPlane(const Ray& r, const glm::vec3& p, const glm::vec3& n, glm::vec3& out) {
+  const float den = glm::dot(r.direction, n);
+  if (std::abs(den) < 1e-9f) return false;
+  const float t = glm::dot(p - r.origin, n) / den;
+  if (t <= 0) return false;
+  out = r.origin + t * r.direction;
+  return true;
+}
+
+}  // namespace
+
+void App::handleInput() {
+  ImGuiIO& io = ImGui::GetIO();
+  if (!doc_.hasScene() || !cameraReady_) return;
+  const glm::vec2 mouse(io.MousePos.x, io.MousePos.y);
+  const float h = float(std::max(windowSize_.y, 1));
+  const bool overUi = io.WantCaptureMouse && !dragging_;
+  if (!overUi && io.MouseWheel != 0.0f) {
+    camera_.zoom(std::pow(0.88f, io.MouseWheel));
+    cameraMoved_ = true;
+  }
+  const bool leftPressed = ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !overUi;
+  const bool toolActive = view_.tool != Tool::Orbit && !io.KeyShift;
+  if (toolActive && (leftPressed || toolDrag_)) {
+    handleTool(leftPressed, ImGui::IsMouseDown(ImGuiMouseButton_Left), ImGui::IsMouseReleased(ImGuiMouseButton_Left), mouse);
+    if (toolDrag_ || leftPressed) return;
+  }
+  const bool anyDown = ImGui::IsMouseDown(ImGuiMouseButton_Left) || ImGui::IsMouseDown(ImGuiMouseButton_Right) ||
+                       ImGui::IsMouseDown(ImGuiMouseButton_Middle);
+  if (!anyDown) dragging_ = false;
+  if (!overUi && (ImGui::IsMouseClicked(ImGuiMouseButton_Left) || ImGui::IsMouseClicked(ImGuiMouseButton_Right) ||
+                  ImGui::IsMouseClicked(ImGuiMouseButton_Middle)))
+    dragging_ = true;
+  if (!dragging_) return;
+  const glm::vec2 delta(io.MouseDelta.x, io.MouseDelta.y);
+  if (delta.x == 0 && delta.y == 0) return;
+  if (ImGui::IsMouseDown(ImGuiMouseButton_Right) || ImGui::IsMouseDown(ImGuiMouseButton_Middle) ||
+      (ImGui::IsMouseDown(ImGuiMouseButton_Left) && io.KeyShift)) {
+    camera_.panPixels(delta, h);
+    cameraMoved_ = true;
+  } else if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
+    camera_.orbitPixels(delta, h);
+    cameraMoved_ = true;
+  }
+}
+
+void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse) {
+  const Snapshot& snap = doc_.snapshot();
+  const render::Camera& cam = camera_.camera();
+  const Ray ray = pixelRay(cam, mouse, windowSize_);
+  PanelContext& ctx = *panels_;
+  auto tractIndex = [&] { return size_t(std::max(view_.selectedTract, 0)); };
+
+  if (pressed) {
+    if (view_.tool == Tool::PlaceKey) {
+      const int f = pickPoint(snap.follicle, snap.follicleNormal, cam, windowSize_, mouse, 12.0f);
+      if (f >= 0) {
+        view_.selectedFollicle = f;
+        const size_t tract = f < int(snap.follicleTract.size()) ? snap.follicleTract[size_t(f)] : 0;
+        guarded(ctx, [&] { actions::addKeyFeather(doc_, tract, view_.toolFeather, snap.follicleId[size_t(f)]); });
+      }
+      return;
+    }
+    if (view_.tool == Tool::EditVectors) {
+      // Grab the styling vector whose tip is nearest the mouse.
+      const Json& d = doc_.scene().directions;
+      if (!d.contains("vectors") || !d["vectors"].is_array()) return;
+      const float len = overlayArrowLength(snap);
+      std::vector<glm::vec3> tips;
+      for (const auto& v : d["vectors"]) {
+        glm::vec3 dir = glm::vec3(actions::jsonVec3(v.value("direction", Json()), glm::dvec3(1, 0, 0)));
+        if (glm::length(dir) > 0) dir = glm::normalize(dir);
+        tips.push_back(glm::vec3(actions::jsonVec3(v.value("at", Json()))) + dir * len);
+      }
+      const int k = pickPoint(tips, {}, cam, windowSize_, mouse, 12.0f);
+      if (k < 0) return;
+      const Json& v = d["vectors"][size_t(k)];
+      view_.dragVector = k;
+      view_.selectedVector = k;
+      view_.dragAt = glm::vec3(actions::jsonVec3(v.value("at", Json())));
+      view_.dragDirection = tips[size_t(k)] - view_.dragAt;
+      // Drag in the plane through the anchor facing the camera's direction of the surface there.
+      const auto hit = raycast(snap.skin, Ray{view_.dragAt - cam.forward() * 1e-3f, cam.forward()});
+      dragNormal_ = hit ? hit->normal : -cam.forward();
+      view_.dragActive = true;
+      toolDrag_ = true;
+      return;
+    }
+    const auto hit = raycast(snap.skin, ray);
+    if (!hit) return;
+    const glm::dvec3 at(hit->point);
+    switch (view_.tool) {
+      case Tool::AddVector:
+      case Tool::AddBias:
+        view_.dragVector = -1;
+        view_.dragAt = hit->point;
+        view_.dragDirection = glm::vec3(0);
+        dragNormal_ = hit->normal;
+        view_.dragActive = true;
+        toolDrag_ = true;
+        break;
+      case Tool::Brush:
+        guarded(ctx, [&] { actions::addBrush(doc_, at, view_.brushRadius, view_.brushElevationDeg); });
+        break;
+      case Tool::AddControl:
+        guarded(ctx, [&] { view_.selectedControl = int(actions::addControl(doc_, at, view_.controlRadius)); });
+        break;
+      case Tool::Pin:
+        guarded(ctx, [&] {
+          actions::ensureTracts(doc_);
+          actions::addPinned(doc_, tractIndex(), at);
+        });
+        break;
+      default:
+        break;
+    }
+    return;
+  }
+  if (!toolDrag_) return;
+  glm::vec3 q;
+  if (rayPlane(ray, view_.dragAt, dragNormal_, q)) view_.dragDirection = q - view_.dragAt;
+  if (down && !released) return;
+  // Release: commit the dragged vector (a click without a drag uses the camera's right, in the plane).
+  toolDrag_ = false;
+  view_.dragActive = false;
+  glm::vec3 dir = view_.dragDirection;
+  if (glm::length(dir) < 1e-6f * std::max(1.0f, glm::length(snap.skinHi - snap.skinLo))) {
+    dir = glm::cross(cam.forward(), cam.up);
+    dir -= dragNormal_ * glm::dot(dir, dragNormal_);
+  }
+  if (glm::length(dir) == 0) return;
+  const glm::dvec3 at(view_.dragAt), d(glm::normalize(dir));
+  guarded(ctx, [&] {
+    if (view_.tool == Tool::AddVector) {
+      actions::addStylingVector(doc_, at, d);
+      view_.selectedVector = int(doc_.scene().directions["vectors"].size()) - 1;
+    } else if (view_.tool == Tool::AddBias) {
+      actions::ensureTracts(doc_);
+      actions::addBias(doc_, tractIndex(), at, d, view_.biasSigma, view_.biasStretch);
+    } else if (view_.tool == Tool::EditVectors && view_.dragVector >= 0) {
+      actions::setStylingVector(doc_, size_t(view_.dragVector), at, d);
+    }
+  });
+  view_.dragVector = -1;
+}
+
+}  // namespace pteryla::viewer

@@ -1,0 +1,77 @@
+// --script sessions: one command per frame, each once the previous evaluation is complete, so the
+// window keeps drawing (and the result is the same however long a stage takes). Any error ends the
+// session with exit code 2.
+#include <cstdio>
+#include <iostream>
+
+#include "app.hpp"
+#include "pteryla/core/error.hpp"
+
+namespace pteryla::viewer {
+
+void App::scriptStep() {
+  if (quit_) return;
+  if (doc_.failed()) return;  // frame() reports the error and fails the script
+  if (shotWanted_) return;    // a screenshot is waiting for its frame
+  if (scriptWaitFrames_ > 0) {
+    --scriptWaitFrames_;
+    return;
+  }
+  if (doc_.hasScene() && !doc_.upToDate()) {
+    if (doc_.halted()) fail("script: the evaluation was stopped", 2);
+    return;
+  }
+  if (awaitingMetrics_) {
+    awaitingMetrics_ = false;
+    if (!doc_.metrics()) {
+      fail(options_.script + ": the checker produced no metrics", 2);
+      return;
+    }
+    std::cout << metricsJson(*doc_.metrics()) << std::endl;
+  }
+  if (scriptNext_ >= script_.size()) return;  // done: stay open (interactive) unless the script quit
+  const ScriptCommand& c = script_[scriptNext_++];
+  const std::string& file = options_.script;
+  try {
+    if (c.verb == "quit") {
+      needArgs(c, 0, 0, "quit", file);
+      quit_ = true;
+    } else if (c.verb == "screenshot" || c.verb == "screenshot-window") {
+      needArgs(c, 1, 1, c.verb + " PATH", file);
+      shotPath_ = c.args[0];
+      shotWanted_ = true;
+      shotWithUi_ = c.verb == "screenshot-window";
+    } else if (c.verb == "orbit") {
+      needArgs(c, 2, 2, "orbit YAW_DEG PITCH_DEG", file);
+      camera_.orbit(float(scriptNumber(c, 0, file)) * 0.01745329252f, float(scriptNumber(c, 1, file)) * 0.01745329252f);
+      cameraMoved_ = true;
+    } else if (c.verb == "zoom") {
+      needArgs(c, 1, 1, "zoom FACTOR", file);
+      const double f = scriptNumber(c, 0, file);
+      if (!(f > 0)) throw Error("zoom factor must be positive", file, "line " + std::to_string(c.line));
+      camera_.zoom(float(f));
+      cameraMoved_ = true;
+    } else if (c.verb == "frame") {
+      needArgs(c, 0, 0, "frame", file);
+      frameAll();
+    } else if (c.verb == "frames") {
+      needArgs(c, 1, 1, "frames N", file);
+      scriptWaitFrames_ = int(scriptNumber(c, 0, file));
+    } else if (c.verb == "check") {
+      needArgs(c, 0, 0, "check", file);
+      if (!doc_.hasScene()) throw Error("no scene is open", file, "line " + std::to_string(c.line));
+      doc_.requestCheck();
+      awaitingMetrics_ = true;
+    } else if (c.verb == "load") {
+      needArgs(c, 1, 1, "load PATH", file);
+      openNow(c.args[0]);
+      if (!errors_.empty()) throw Error(errors_.back(), file, "line " + std::to_string(c.line));
+    } else {
+      runDocumentCommand(doc_, c, file, std::cout);
+    }
+  } catch (const std::exception& e) {
+    fail(e.what(), 2);
+  }
+}
+
+}  // namespace pteryla::viewer

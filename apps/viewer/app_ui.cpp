@@ -1,0 +1,385 @@
+// Menu bar, the panel column and the dialogs: open, save as (asks before replacing a file), unsaved
+// changes on quit or open (Save / Discard / Cancel), errors from any stage (the viewer keeps running).
+#include <GL/gl.h>
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include <filesystem>
+
+#include "app.hpp"
+#include "json_widgets.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/core/paths.hpp"
+#include "pteryla/render/renderer.hpp"
+#include "pteryla/render/scene_view.hpp"
+#include "pteryla/render/scratchboard.hpp"
+#include "scene_edit.hpp"
+
+namespace pteryla::viewer {
+
+namespace {
+constexpr float kStatusHeight = 30.0f;
+constexpr float kPanelWidth = 420.0f;
+}  // namespace
+
+void App::showError(const std::string& message) {
+  errors_.push_back(message);
+  if (popupToOpen_.empty()) popupToOpen_ = "Error";
+}
+
+void App::requestOpen(const std::string& path) {
+  if (doc_.modified()) {
+    pending_ = Pending::Open;
+    pendingPath_ = path;
+    popupToOpen_ = "Unsaved changes";
+    return;
+  }
+  openNow(path);
+}
+
+void App::openNow(const std::string& path) {
+  try {
+    doc_.open(path);
+  } catch (const std::exception& e) {
+    showError(e.what());
+    return;
+  }
+  // Forget the previous scene's view.
+  renderer_->setSkin(TriMesh{});
+  renderer_->setCoat(TriMesh{}, {});
+  syncedResult_ = ~0ull;
+  uploadedSkin_ = 0;
+  meshEvals_ = ~0ull;
+  ++uploadVersion_;
+  cameraReady_ = cameraFramedCoat_ = false;
+  materialsStale_ = true;
+  view_.selectedTract = 0;
+  view_.selectedControl = view_.selectedVector = view_.selectedFollicle = -1;
+  view_.tool = Tool::Orbit;
+  view_.playing = false;
+}
+
+void App::requestSave() {
+  if (!doc_.hasScene()) return;
+  if (doc_.path().empty()) {
+    requestSaveAs();
+    return;
+  }
+  try {
+    doc_.save();
+    afterSave();
+  } catch (const std::exception& e) {
+    showError(e.what());
+  }
+}
+
+void App::requestSaveAs() {
+  if (!doc_.hasScene()) return;
+  if (saveAsPath_.empty())
+    saveAsPath_ = doc_.path().empty() ? (std::filesystem::current_path() / (doc_.scene().name + ".json")).string() : doc_.path();
+  popupToOpen_ = "Save scene as";
+}
+
+// After a successful save: carry on with what the unsaved-changes dialog was asked to do.
+void App::afterSave() {
+  if (pending_ == Pending::Quit) {
+    quit_ = true;
+  } else if (pending_ == Pending::Open) {
+    openNow(pendingPath_);
+  }
+  pending_ = Pending::None;
+}
+
+void App::buildUi() {
+  menuBar();
+  panelColumn();
+  drawStatusBar(*panels_, kStatusHeight);
+  if (view_.showDesigner && doc_.hasScene()) designer_.draw(*panels_, &view_.showDesigner);
+  if (view_.showJsonInspector && doc_.hasScene()) sceneJsonWindow();
+  if (view_.showHelp) helpWindow();
+  if (doc_.hasScene() && doc_.scene().render.style == "scratchboard") scratchboardWindow();
+  dialogs();
+  // Keyboard shortcuts (when no text field has the keyboard).
+  ImGuiIO& io = ImGui::GetIO();
+  if (!io.WantCaptureKeyboard) {
+    const bool ctrl = io.KeyCtrl;
+    if (ctrl && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Z))) {
+      if (io.KeyShift) doc_.redo(); else doc_.undo();
+    }
+    if (ctrl && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Y))) doc_.redo();
+    if (ctrl && ImGui::IsKeyPressed('S')) requestSave();
+    if (!ctrl && ImGui::IsKeyPressed('F')) frameAll();
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space))) view_.playing = !view_.playing;
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) view_.tool = Tool::Orbit;
+  }
+  // Releasing the mouse ends a gesture: the next slider drag is a new undo step.
+  if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) doc_.endGesture();
+}
+
+void App::menuBar() {
+  if (!ImGui::BeginMainMenuBar()) return;
+  if (ImGui::BeginMenu("File")) {
+    if (ImGui::MenuItem("Open...")) popupToOpen_ = "Open scene";
+    if (ImGui::MenuItem("Save", "Ctrl+S", false, doc_.hasScene())) requestSave();
+    if (ImGui::MenuItem("Save As...", nullptr, false, doc_.hasScene())) requestSaveAs();
+    ImGui::Separator();
+    if (ImGui::MenuItem("Quit")) {
+      if (doc_.modified()) {
+        pending_ = Pending::Quit;
+        popupToOpen_ = "Unsaved changes";
+      } else {
+        quit_ = true;
+      }
+    }
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Edit")) {
+    const std::string u = "Undo " + doc_.undoLabel(), r = "Redo " + doc_.redoLabel();
+    if (ImGui::MenuItem(u.c_str(), "Ctrl+Z", false, doc_.canUndo())) doc_.undo();
+    if (ImGui::MenuItem(r.c_str(), "Ctrl+Y", false, doc_.canRedo())) doc_.redo();
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Windows")) {
+    ImGui::MenuItem("Feather designer", nullptr, &view_.showDesigner);
+    ImGui::MenuItem("Scene JSON", nullptr, &view_.showJsonInspector);
+    ImGui::MenuItem("Help", nullptr, &view_.showHelp);
+    ImGui::EndMenu();
+  }
+  if (doc_.hasScene()) {
+    const std::string title = doc_.scene().name + (doc_.modified() ? " *" : "") +
+                              (doc_.path().empty() ? "  (not saved yet)" : "  " + doc_.path());
+    ImGui::TextDisabled("%s", title.c_str());
+  }
+  ImGui::EndMainMenuBar();
+}
+
+void App::panelColumn() {
+  const ImGuiViewport* vp = ImGui::GetMainViewport();
+  ImGui::SetNextWindowPos(vp->WorkPos, ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(kPanelWidth, vp->WorkSize.y - kStatusHeight), ImGuiCond_Always);
+  ImGui::Begin("Panels", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
+                                      ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoBringToFrontOnFocus);
+  if (!doc_.hasScene()) {
+    ImGui::TextWrapped("No scene. Open a scene file (.json) or a bare mesh (.obj, .ply, .off, .stl).");
+    static std::string path;
+    ImGui::InputText("path", &path);
+    if (ImGui::Button("Open")) requestOpen(path);
+    ImGui::End();
+    return;
+  }
+  PanelContext& ctx = *panels_;
+  if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) drawViewPanel(ctx);
+  if (ImGui::CollapsingHeader("Feather designer")) {
+    ImGui::Checkbox("Show the designer window", &view_.showDesigner);
+  }
+  if (ImGui::CollapsingHeader("Tracts")) drawTractsPanel(ctx);
+  if (ImGui::CollapsingHeader("Follicles")) drawFolliclesPanel(ctx);
+  if (ImGui::CollapsingHeader("Key feathers")) drawKeyFeathersPanel(ctx);
+  if (ImGui::CollapsingHeader("Directions")) drawDirectionsPanel(ctx);
+  if (ImGui::CollapsingHeader("Packing")) drawPackingPanel(ctx);
+  if (ImGui::CollapsingHeader("Timeline", ImGuiTreeNodeFlags_DefaultOpen)) drawTimelinePanel(ctx);
+  if (ImGui::CollapsingHeader("Expressive controls")) drawControlsPanel(ctx);
+  if (ImGui::CollapsingHeader("Render")) drawRenderPanel(ctx);
+  if (ImGui::CollapsingHeader("Stage timings")) {
+    const Snapshot& s = doc_.snapshot();
+    for (int i = 0; i < 10; ++i)
+      ImGui::Text("%-12s %8.3f s", pipeline::stageName(pipeline::Stage(i)), s.stageSeconds[i]);
+  }
+  ImGui::End();
+}
+
+void App::dialogs() {
+  if (!popupToOpen_.empty()) {
+    ImGui::OpenPopup(popupToOpen_.c_str());
+    popupToOpen_.clear();
+  }
+  const ImVec2 centre = ImGui::GetMainViewport()->GetCenter();
+
+  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+  if (ImGui::BeginPopupModal("Error", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    for (const auto& e : errors_) {
+      ImGui::PushTextWrapPos(640.0f);
+      ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", e.c_str());
+      ImGui::PopTextWrapPos();
+    }
+    ImGui::TextDisabled("The viewer keeps the scene as it is; undo the last edit or fix the value.");
+    if (ImGui::Button("OK")) {
+      errors_.clear();
+      ImGui::CloseCurrentPopup();
+    }
+    if (doc_.canUndo()) {
+      ImGui::SameLine();
+      if (ImGui::Button(("Undo " + doc_.undoLabel()).c_str())) {
+        doc_.undo();
+        errors_.clear();
+        ImGui::CloseCurrentPopup();
+      }
+    }
+    ImGui::EndPopup();
+  }
+
+  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+  if (ImGui::BeginPopupModal("Open scene", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::SetNextItemWidth(520);
+    ImGui::InputText("scene or mesh", &openPath_);
+    if (ImGui::Button("Open")) {
+      ImGui::CloseCurrentPopup();
+      requestOpen(openPath_);
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
+    ImGui::EndPopup();
+  }
+
+  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+  if (ImGui::BeginPopupModal("Save scene as", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::SetNextItemWidth(520);
+    ImGui::InputText("file (.json)", &saveAsPath_);
+    if (ImGui::Button("Save")) {
+      ImGui::CloseCurrentPopup();
+      try {
+        if (doc_.saveAs(saveAsPath_, false)) afterSave();
+        else popupToOpen_ = "Replace file?";
+      } catch (const std::exception& e) {
+        pending_ = Pending::None;
+        showError(e.what());
+      }
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) {
+      pending_ = Pending::None;
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+  }
+
+  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+  if (ImGui::BeginPopupModal("Replace file?", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::Text("%s exists.", saveAsPath_.c_str());
+    ImGui::Text("Replace it with this scene?");
+    if (ImGui::Button("Replace")) {
+      ImGui::CloseCurrentPopup();
+      try {
+        doc_.saveAs(saveAsPath_, true);
+        afterSave();
+      } catch (const std::exception& e) {
+        pending_ = Pending::None;
+        showError(e.what());
+      }
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) {
+      pending_ = Pending::None;
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+  }
+
+  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+  if (ImGui::BeginPopupModal("Unsaved changes", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::Text("The scene has unsaved changes.");
+    if (ImGui::Button("Save")) {
+      ImGui::CloseCurrentPopup();
+      if (doc_.path().empty()) {
+        requestSaveAs();  // continues with the pending action after saving
+      } else {
+        try {
+          doc_.save();
+          afterSave();
+        } catch (const std::exception& e) {
+          pending_ = Pending::None;
+          showError(e.what());
+        }
+      }
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Discard")) {
+      ImGui::CloseCurrentPopup();
+      if (pending_ == Pending::Quit) quit_ = true;
+      else if (pending_ == Pending::Open) openNow(pendingPath_);
+      pending_ = Pending::None;
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) {
+      pending_ = Pending::None;
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+  }
+}
+
+void App::sceneJsonWindow() {
+  ImGui::SetNextWindowSize(ImVec2(560, 620), ImGuiCond_FirstUseEver);
+  if (!ImGui::Begin("Scene JSON", &view_.showJsonInspector)) {
+    ImGui::End();
+    return;
+  }
+  static JsonTextState state;
+  Json j = sceneJson(doc_.scene());
+  ImGui::TextDisabled("the whole scene (absolute paths); Apply re-reads it strictly");
+  if (jsonTextEditor("scene", j, state, ImGui::GetContentRegionAvail().y - 60)) {
+    try {
+      pipeline::Scene next = pipeline::sceneFromJson(j, doc_.scene().file);
+      doc_.edit("scene JSON", [&](pipeline::Scene& s) { s = next; });
+    } catch (const std::exception& e) {
+      showError(e.what());
+    }
+  }
+  ImGui::End();
+}
+
+void App::helpWindow() {
+  ImGui::SetNextWindowSize(ImVec2(620, 560), ImGuiCond_FirstUseEver);
+  if (!ImGui::Begin("Help", &view_.showHelp)) {
+    ImGui::End();
+    return;
+  }
+  ImGui::TextWrapped(
+      "Mouse: left drag orbits, right or middle drag (or shift + left) pans, the wheel zooms. F frames all, "
+      "Ctrl+Z / Ctrl+Y undo and redo, Ctrl+S saves, Space plays the timeline, Esc ends a tool.\n"
+      "Edits re-run only the stages after them, in the background; the status bar shows progress and "
+      "Cancel. docs/viewer.md has the details.");
+  ImGui::Separator();
+  ImGui::TextUnformatted(scriptHelp());
+  ImGui::End();
+}
+
+void App::scratchboardWindow() {
+  ImGui::SetNextWindowSize(ImVec2(520, 460), ImGuiCond_FirstUseEver);
+  ImGui::Begin("Scratchboard preview");
+  const bool ready = doc_.upToDate() && doc_.idlePipeline();
+  if (ImGui::Button("Render from this view") && ready) {
+    try {
+      pipeline::Pipeline& p = *doc_.idlePipeline();
+      render::ScratchboardSettings ss;
+      ss.width = std::max(64, fbSize_.x / 2);
+      ss.height = std::max(64, fbSize_.y / 2);
+      const render::Image img =
+          render::renderScratchboard(p.coatMesh().mesh, p.skinTriMesh(), camera_.camera(), render::sceneLights(doc_.scene()), ss);
+      if (!scratchTexture_) glGenTextures(1, &scratchTexture_);
+      glBindTexture(GL_TEXTURE_2D, scratchTexture_);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, img.rgba.data());
+      scratchW_ = img.width;
+      scratchH_ = img.height;
+      scratchError_.clear();
+    } catch (const std::exception& e) {
+      scratchError_ = e.what();
+    }
+  }
+  if (!ready) {
+    ImGui::SameLine();
+    ImGui::TextDisabled("(waiting for the evaluation)");
+  }
+  if (!scratchError_.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", scratchError_.c_str());
+  if (scratchTexture_) {
+    const float w = ImGui::GetContentRegionAvail().x;
+    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<intptr_t>(scratchTexture_)),
+                 ImVec2(w, w * float(scratchH_) / float(std::max(scratchW_, 1))));
+  }
+  ImGui::End();
+}
+
+}  // namespace pteryla::viewer

@@ -1,0 +1,108 @@
+#pragma once
+// The viewer's panels: thin ImGui views over the Document. Panels never touch the Pipeline while a job
+// runs; they read the Snapshot and edit the scene through actions.hpp (one undo step per edit).
+// Viewport tools (placing key feathers, styling vectors, brushes, controls, bias vectors) are modes
+// set here and carried out by the app on mouse input (tool.hpp-like state in ViewState).
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+#include "camera_controller.hpp"
+#include "document.hpp"
+
+namespace pteryla::viewer {
+
+enum class Tool {
+  Orbit,          // left drag orbits (default)
+  PlaceKey,       // click a follicle: key feather `toolFeather` there
+  AddVector,      // press on the skin and drag: styling vector
+  EditVectors,    // drag the tip of a styling vector
+  AddBias,        // press on the skin and drag: relaxation bias vector of the selected tract
+  Brush,          // click on the skin: fixed-angle packing brush
+  AddControl,     // click on the skin: expressive control
+  Pin,            // click on the skin: pinned follicle in the selected tract
+};
+
+// View settings and selections shared by panels, overlays and the app.
+struct ViewState {
+  bool showCoat = true, showSkin = true, wireframe = false;
+  bool showFollicles = false, showDirections = false, showTract = true, showKeys = true;
+  bool showVectors = true, showBrushes = true, showControls = true;
+  int selectedTract = 0;
+  int selectedFollicle = -1;
+  int selectedControl = -1;
+  int selectedVector = -1;
+  Tool tool = Tool::Orbit;
+  std::string toolFeather;         // PlaceKey
+  float brushRadius = 0.1f;        // scene units (set from the skin size on load)
+  float brushElevationDeg = 45.0f;
+  float controlRadius = 0.2f;
+  float biasSigma = 0.2f, biasStretch = 1.5f;
+  // Timeline.
+  bool playing = false;
+  float timeStart = 0.0f, timeEnd = 10.0f, timeStep = 1.0f / 24.0f;
+  bool loop = true;
+  // Measured frame rate (frames per second over the last half second).
+  float fps = 0.0f;
+  // Windows.
+  bool showDesigner = false, showJsonInspector = false, showHelp = false;
+  // A styling vector being dragged (preview until release).
+  int dragVector = -1;
+  glm::vec3 dragAt{0}, dragDirection{0};
+  bool dragActive = false;
+};
+
+// What panels can ask of the app.
+struct AppRequests {
+  std::function<void()> frameAll;
+  std::function<void(const std::string&)> screenshot;   // path
+  std::function<void(const std::string&)> open;          // path (asks about unsaved changes)
+  std::function<void()> save;                            // Save (Save As when the scene has no file)
+  std::function<void()> saveAs;
+  std::function<void(const std::string&)> error;         // shows the error modal
+};
+
+struct PanelContext {
+  Document& doc;
+  ViewState& view;
+  CameraController& camera;
+  AppRequests& app;
+};
+
+// A separator with a title (ImGui 1.86 has no SeparatorText).
+void sectionTitle(const char* title);
+
+// Runs `fn` and routes a pteryla::Error (or any std::exception) to the error modal.
+void guarded(PanelContext& ctx, const std::function<void()>& fn);
+
+// panels_view.cpp
+void drawViewPanel(PanelContext& ctx);
+void drawRenderPanel(PanelContext& ctx);
+void drawStatusBar(PanelContext& ctx, float height);
+// panels_coat.cpp
+void drawTractsPanel(PanelContext& ctx);
+void drawFolliclesPanel(PanelContext& ctx);
+void drawKeyFeathersPanel(PanelContext& ctx);
+void drawDirectionsPanel(PanelContext& ctx);
+void drawPackingPanel(PanelContext& ctx);
+// panels_time.cpp
+void drawTimelinePanel(PanelContext& ctx);
+void drawControlsPanel(PanelContext& ctx);
+void advancePlayback(PanelContext& ctx);  // once per frame: steps time while playing
+
+// panel_feather.cpp: the feather designer window.
+class FeatherDesigner {
+ public:
+  FeatherDesigner();
+  ~FeatherDesigner();
+  void draw(PanelContext& ctx, bool* open);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pteryla::viewer

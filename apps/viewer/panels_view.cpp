@@ -1,0 +1,198 @@
+// View, render and status panels: level of detail, overlays, camera, lights, render style, textures and
+// the Poulin-Fournier BRDF parameters (Streit 2003, 7.1).
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include <cmath>
+
+#include "actions.hpp"
+#include "json_widgets.hpp"
+#include "panels.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/core/paths.hpp"
+#include "pteryla/feather/io.hpp"
+
+namespace pteryla::viewer {
+
+using pipeline::Scene;
+
+void sectionTitle(const char* title) {
+  ImGui::Spacing();
+  ImGui::Separator();
+  ImGui::TextColored(ImVec4(0.65f, 0.8f, 1.0f, 1.0f), "%s", title);
+}
+
+void guarded(PanelContext& ctx, const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const std::exception& e) {
+    ctx.app.error(e.what());
+  }
+}
+
+void drawViewPanel(PanelContext& ctx) {
+  ViewState& v = ctx.view;
+  Document& doc = ctx.doc;
+  ImGui::Text("%.1f fps", v.fps);
+  float lod = static_cast<float>(doc.lod());
+  if (ImGui::SliderFloat("LOD", &lod, 0.02f, 1.0f, "%.2f")) guarded(ctx, [&] { doc.setLod(lod); });
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("fraction of feather geometry (thesis 7.1.3)");
+  ImGui::Checkbox("Coat", &v.showCoat);
+  ImGui::SameLine();
+  ImGui::Checkbox("Skin", &v.showSkin);
+  ImGui::SameLine();
+  ImGui::Checkbox("Wireframe", &v.wireframe);
+  ImGui::Checkbox("Follicles", &v.showFollicles);
+  ImGui::SameLine();
+  ImGui::Checkbox("Directions", &v.showDirections);
+  ImGui::SameLine();
+  ImGui::Checkbox("Tract", &v.showTract);
+  ImGui::Checkbox("Keys", &v.showKeys);
+  ImGui::SameLine();
+  ImGui::Checkbox("Vectors", &v.showVectors);
+  ImGui::SameLine();
+  ImGui::Checkbox("Brushes", &v.showBrushes);
+  ImGui::SameLine();
+  ImGui::Checkbox("Controls", &v.showControls);
+  if (ImGui::Button("Frame all (F)")) ctx.app.frameAll();
+  ImGui::SameLine();
+  static std::string shot = "screenshot.png";
+  if (ImGui::Button("Screenshot")) ctx.app.screenshot(shot);
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(-FLT_MIN);
+  ImGui::InputText("##shot", &shot);
+  const auto& cam = ctx.camera.camera();
+  ImGui::TextDisabled("eye %.3g %.3g %.3g  target %.3g %.3g %.3g", cam.eye.x, cam.eye.y, cam.eye.z, cam.target.x,
+                      cam.target.y, cam.target.z);
+}
+
+void drawRenderPanel(PanelContext& ctx) {
+  Document& doc = ctx.doc;
+  const Scene& s = doc.scene();
+  int style = s.render.style == "scratchboard" ? 1 : 0;
+  const char* styles[] = {"shaded", "scratchboard"};
+  if (ImGui::Combo("Style", &style, styles, 2)) guarded(ctx, [&] { actions::setStyle(doc, styles[style]); });
+  if (style == 1) ImGui::TextDisabled("scratchboard is drawn on the CPU: see the preview window");
+  float d = static_cast<float>(s.render.brdfD), h = static_cast<float>(s.render.brdfH);
+  bool brdf = ImGui::SliderFloat("BRDF d", &d, 0.05f, 20.0f, "%.3f", ImGuiSliderFlags_Logarithmic);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Poulin-Fournier: barbule spacing relative to their radius");
+  brdf |= ImGui::SliderFloat("BRDF h", &h, 0.0f, 0.99f, "%.3f");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Poulin-Fournier: height of the floor between barbules");
+  if (brdf) guarded(ctx, [&] { actions::setBrdf(doc, d, h); });
+
+  auto colour = [&](const char* label, const glm::dvec3& c, const std::function<void(Scene&, const glm::dvec3&)>& set) {
+    float f[3] = {float(c.x), float(c.y), float(c.z)};
+    if (ImGui::ColorEdit3(label, f)) {
+      const glm::dvec3 n(f[0], f[1], f[2]);
+      guarded(ctx, [&] { doc.edit(label, [&](Scene& sc) { set(sc, n); }); });
+    }
+  };
+  colour("Background", s.render.background, [](Scene& sc, const glm::dvec3& c) { sc.render.background = c; });
+  colour("Skin colour", s.render.skinColor, [](Scene& sc, const glm::dvec3& c) { sc.render.skinColor = c; });
+  float amb = static_cast<float>(s.render.ambient);
+  if (ImGui::SliderFloat("Ambient", &amb, 0.0f, 1.0f))
+    guarded(ctx, [&] { doc.edit("ambient", [&](Scene& sc) { sc.render.ambient = amb; }); });
+
+  if (ImGui::TreeNode("Lights")) {
+    for (size_t i = 0; i < s.lights.size(); ++i) {
+      ImGui::PushID(static_cast<int>(i));
+      const auto& l = s.lights[i];
+      float dir[3] = {float(l.direction.x), float(l.direction.y), float(l.direction.z)};
+      float col[3] = {float(l.color.x), float(l.color.y), float(l.color.z)};
+      float inten = float(l.intensity);
+      bool ch = ImGui::DragFloat3("direction", dir, 0.01f);
+      ch |= ImGui::ColorEdit3("colour", col);
+      ch |= ImGui::SliderFloat("intensity", &inten, 0.0f, 4.0f);
+      if (ch && (dir[0] != 0 || dir[1] != 0 || dir[2] != 0))
+        guarded(ctx, [&] {
+          doc.edit("light " + std::to_string(i), [&](Scene& sc) {
+            sc.lights[i].direction = {dir[0], dir[1], dir[2]};
+            sc.lights[i].color = {col[0], col[1], col[2]};
+            sc.lights[i].intensity = inten;
+          });
+        });
+      if (ImGui::SmallButton("remove light") && s.lights.size() > 1)
+        guarded(ctx, [&] { doc.edit("remove light", [&](Scene& sc) { sc.lights.erase(sc.lights.begin() + long(i)); }); });
+      ImGui::Separator();
+      ImGui::PopID();
+    }
+    if (ImGui::Button("Add light") && s.lights.size() < 4)
+      guarded(ctx, [&] { doc.edit("add light", [&](Scene& sc) { sc.lights.push_back({}); }); });
+    ImGui::TreePop();
+  }
+
+  // Textures live in the feather definitions (material): editing makes the definition inline.
+  if (ImGui::TreeNode("Feather textures")) {
+    ImGui::TextDisabled("colour texture, alpha texture or a pattern name per feather type");
+    for (auto it = s.feathers.begin(); it != s.feathers.end(); ++it) {
+      ImGui::PushID(it.key().c_str());
+      if (ImGui::TreeNode(it.key().c_str())) {
+        feather::FeatherParams p;
+        bool ok = true;
+        try {
+          if (it->is_string()) {
+            p = feather::loadFeather(it->get<std::string>());
+          } else {
+            JsonReader r(*it, s.file, "feathers." + it.key());
+            p = feather::readFeather(r);
+          }
+        } catch (const std::exception& e) {
+          ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", e.what());
+          ok = false;
+        }
+        if (ok) {
+          std::string tex = p.material.texture, alpha = p.material.alphaTexture, pattern = p.material.pattern;
+          bool ch = ImGui::InputText("texture", &tex, ImGuiInputTextFlags_EnterReturnsTrue);
+          ch |= ImGui::InputText("alpha texture", &alpha, ImGuiInputTextFlags_EnterReturnsTrue);
+          ch |= ImGui::InputText("pattern", &pattern, ImGuiInputTextFlags_EnterReturnsTrue);
+          if (ch) {
+            // Relative texture paths were relative to the feather file: make them absolute.
+            auto abs = [&](const std::string& t) {
+              return t.empty() || p.sourceFile.empty() ? t : resolveRelative(p.sourceFile, t);
+            };
+            p.material.texture = abs(tex);
+            p.material.alphaTexture = abs(alpha);
+            p.material.pattern = pattern;
+            const std::string name = it.key();
+            guarded(ctx, [&] { actions::setFeatherInline(doc, name, p); });
+          }
+        }
+        ImGui::TreePop();
+      }
+      ImGui::PopID();
+    }
+    ImGui::TreePop();
+  }
+}
+
+void drawStatusBar(PanelContext& ctx, float height) {
+  Document& doc = ctx.doc;
+  const ImGuiViewport* vp = ImGui::GetMainViewport();
+  ImGui::SetNextWindowPos(ImVec2(vp->WorkPos.x, vp->WorkPos.y + vp->WorkSize.y - height));
+  ImGui::SetNextWindowSize(ImVec2(vp->WorkSize.x, height));
+  ImGui::Begin("##status", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
+                   ImGuiWindowFlags_NoBringToFrontOnFocus);
+  const Snapshot& s = doc.snapshot();
+  ImGui::Text("%5.1f fps | %zu feathers | %.2fM triangles | t = %.3f | LOD %.2f%s", ctx.view.fps, s.coatFeathers,
+              double(s.coatTriangles) / 1e6, doc.time(), doc.lod(), doc.modified() ? " | modified" : "");
+  if (doc.busy()) {
+    const JobProgress p = doc.progress();
+    ImGui::SameLine();
+    ImGui::SetNextItemWidth(220);
+    ImGui::ProgressBar(static_cast<float>(p.fraction), ImVec2(220, 0), p.stage.c_str());
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Cancel")) doc.cancel();
+  } else if (doc.halted()) {
+    ImGui::SameLine();
+    ImGui::TextColored(ImVec4(1, 0.8f, 0.3f, 1), "evaluation stopped");
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Evaluate")) doc.resume();
+  } else if (doc.failed()) {
+    ImGui::SameLine();
+    ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "evaluation failed (undo or fix the last edit)");
+  }
+  ImGui::End();
+}
+
+}  // namespace pteryla::viewer

@@ -1,0 +1,130 @@
+#include "scene_edit.hpp"
+
+#include <algorithm>
+
+#include <glm/common.hpp>
+
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/core/error.hpp"
+
+namespace pteryla::viewer {
+
+using pipeline::Scene;
+using pipeline::Stage;
+
+std::optional<Stage> earliestChangedStage(const Scene& a, const Scene& b) {
+  if (a.meshPath != b.meshPath || a.meshRepair != b.meshRepair || a.feathers != b.feathers ||
+      a.fromBareMesh != b.fromBareMesh)
+    return Stage::Skin;
+  // Tracts, directions, packing and ordering are all parsed by the tracts stage.
+  if (a.tracts != b.tracts || a.directions != b.directions || a.packing != b.packing || a.ordering != b.ordering)
+    return Stage::Tracts;
+  if (a.seed != b.seed) return Stage::Distribute;  // scatter and jitter seeds
+  if (a.skeleton != b.skeleton) return Stage::Pose;
+  if (a.moult != b.moult) return Stage::Ages;
+  if (a.controls != b.controls) return Stage::Controls;
+  return std::nullopt;
+}
+
+Json sceneJson(const Scene& s) { return pipeline::sceneToJson(s, ""); }
+
+Json parseLooseValue(const std::string& text) {
+  Json v = Json::parse(text, nullptr, false);
+  if (v.is_discarded()) return Json(text);
+  return v;
+}
+
+void setScenePointer(Scene& s, const std::string& pointer, const Json& value) {
+  Json j = sceneJson(s);
+  try {
+    const Json::json_pointer p(pointer);
+    if (p.empty()) throw Error("cannot replace the whole scene", s.file, pointer);
+    // Parents must exist (no silent creation of misspelt sections); the leaf may be new.
+    const Json::json_pointer parent = p.parent_pointer();
+    if (!j.contains(parent)) throw Error("no such element in the scene", s.file, parent.to_string());
+    Json& container = j.at(parent);
+    const std::string leaf = p.back();
+    if (container.is_array()) {
+      if (leaf == "-") {
+        container.push_back(value);
+      } else {
+        size_t idx = 0;
+        try {
+          idx = std::stoul(leaf);
+        } catch (const std::exception&) {
+          throw Error("expected an array index", s.file, pointer);
+        }
+        if (idx >= container.size()) throw Error("array index out of range (size " + std::to_string(container.size()) + ")", s.file, pointer);
+        container[idx] = value;
+      }
+    } else if (container.is_object()) {
+      container[leaf] = value;
+    } else {
+      throw Error("parent is neither an object nor an array", s.file, parent.to_string());
+    }
+  } catch (const Json::exception& e) {
+    throw Error(std::string("bad JSON pointer: ") + e.what(), s.file, pointer);
+  }
+  Scene next = pipeline::sceneFromJson(j, s.file);
+  next.fromBareMesh = s.fromBareMesh;
+  s = std::move(next);
+}
+
+void makeBareMeshExplicit(Scene& s, const glm::dvec3& lo, const glm::dvec3& hi) {
+  if (!s.fromBareMesh) return;
+  // Same construction as the pipeline's bare-mesh defaults: the longest bounding-box axis through the
+  // box centre, head at its low end.
+  const glm::dvec3 ext = hi - lo;
+  int axes[3] = {0, 1, 2};
+  std::sort(axes, axes + 3, [&](int x, int y) { return ext[x] > ext[y]; });
+  glm::dvec3 a = 0.5 * (lo + hi), b = a;
+  a[axes[0]] = lo[axes[0]];
+  b[axes[0]] = hi[axes[0]];
+  const Json axis = Json::array({Json::array({a.x, a.y, a.z}), Json::array({b.x, b.y, b.z})});
+  if (s.tracts.empty()) s.tracts = Json::array({Json{{"name", "all"}}});
+  for (auto& t : s.tracts)
+    if (t.is_object() && !t.contains("feather_scale")) t["feather_scale"] = "auto";
+  if (s.directions.empty()) s.directions = Json{{"axis", axis}};
+  if (s.ordering.empty()) s.ordering = Json{{"method", "axis"}, {"axis", axis}};
+  s.fromBareMesh = false;
+}
+
+void makeBareMeshExplicit(Scene& s) {
+  if (!s.fromBareMesh) return;
+  coat::MeshLoadOptions o;
+  o.repair = s.meshRepair;
+  const coat::SkinMesh m = coat::loadSkinMesh(s.meshPath, o);
+  glm::dvec3 lo(0), hi(0);
+  if (!m.positions.empty()) lo = hi = m.positions[0];
+  for (const auto& p : m.positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  makeBareMeshExplicit(s, lo, hi);
+}
+
+std::string tractName(const Scene& s, size_t i) {
+  if (i < s.tracts.size() && s.tracts[i].is_object() && s.tracts[i].contains("name") && s.tracts[i]["name"].is_string())
+    return s.tracts[i]["name"].get<std::string>();
+  return "tract " + std::to_string(i);
+}
+
+std::vector<size_t> resolveTracts(const Scene& s, const std::string& ref, const std::string& where) {
+  std::vector<size_t> out;
+  if (ref == "*") {
+    for (size_t i = 0; i < s.tracts.size(); ++i) out.push_back(i);
+    if (out.empty()) throw Error("the scene has no tracts", s.file, where);
+    return out;
+  }
+  if (!ref.empty() && std::all_of(ref.begin(), ref.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    const size_t i = std::stoul(ref);
+    if (i >= s.tracts.size())
+      throw Error("tract index " + ref + " out of range (" + std::to_string(s.tracts.size()) + " tracts)", s.file, where);
+    return {i};
+  }
+  for (size_t i = 0; i < s.tracts.size(); ++i)
+    if (tractName(s, i) == ref) return {i};
+  throw Error("no tract named '" + ref + "'", s.file, where);
+}
+
+}  // namespace pteryla::viewer

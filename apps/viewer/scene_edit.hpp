@@ -1,0 +1,45 @@
+#pragma once
+// Scene edits as the viewer sees them: which pipeline stage an edit of the Scene has to re-run, generic
+// JSON-pointer edits (the `set` script command and the JSON inspectors), and turning a bare-mesh scene
+// into an explicit one so that what the viewer saves reloads to the same coat.
+// Pure data: no GL, no ImGui (unit-tested in tests/viewer).
+#include <optional>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/pipeline/scene.hpp"
+
+namespace pteryla::viewer {
+
+// Earliest stage whose inputs differ between `before` and `after`; nullopt when only view settings
+// (name, camera, lights, render) differ, which need no re-evaluation.
+// The pipeline reads the directions, packing and ordering sections in its tracts stage, so an edit of
+// them re-runs from Stage::Tracts (see pipeline.cpp computeTracts).
+std::optional<pipeline::Stage> earliestChangedStage(const pipeline::Scene& before, const pipeline::Scene& after);
+
+// The scene as JSON with absolute paths (in-memory form; saveScene writes relative ones).
+Json sceneJson(const pipeline::Scene& s);
+// Replaces the value at JSON pointer `pointer` (RFC 6901, e.g. "/packing/clearance",
+// "/tracts/0/relax/iterations"; "-" appends to an array) of the scene's JSON form by `value` and
+// re-reads the scene through the strict scene reader. Throws pteryla::Error naming the pointer for a
+// bad pointer or a value the scene reader rejects; `s` is unchanged then.
+void setScenePointer(pipeline::Scene& s, const std::string& pointer, const Json& value);
+// Parses a script or text-field value: JSON when it parses, else a plain string.
+Json parseLooseValue(const std::string& text);
+
+// A bare-mesh scene (loadScene of an .obj/.ply/...) depends on Scene::fromBareMesh, which scene files
+// cannot express. This writes its implicit defaults explicitly (feather_scale "auto" per tract, the
+// bounding-box body axis as directions and layer ordering) and clears fromBareMesh, so that the scene
+// evaluates to the same coat and survives saveScene/loadScene. `lo`/`hi`: bounds of the rest skin.
+void makeBareMeshExplicit(pipeline::Scene& s, const glm::dvec3& lo, const glm::dvec3& hi);
+// Same, loading the scene's mesh to find its bounds.
+void makeBareMeshExplicit(pipeline::Scene& s);
+
+// Tract reference used by panels and scripts: an index ("0"), a name ("spinal") or "*" (all tracts).
+// Returns the indices it selects; throws Error(element = `where`) for an unknown tract.
+std::vector<size_t> resolveTracts(const pipeline::Scene& s, const std::string& ref, const std::string& where);
+std::string tractName(const pipeline::Scene& s, size_t i);
+
+}  // namespace pteryla::viewer

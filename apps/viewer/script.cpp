@@ -1,0 +1,269 @@
+#include "script.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <ostream>
+#include <sstream>
+
+#include "actions.hpp"
+#include "pteryla/core/error.hpp"
+#include "scene_edit.hpp"
+
+namespace pteryla::viewer {
+
+namespace {
+
+std::string where(const ScriptCommand& c) { return "line " + std::to_string(c.line); }
+
+std::string jsonOrNull(const std::optional<double>& v) {
+  if (!v || !std::isfinite(*v)) return "null";
+  std::ostringstream os;
+  os.precision(6);
+  os << *v;
+  return os.str();
+}
+std::string countOrNull(const std::optional<size_t>& v) { return v ? std::to_string(*v) : "null"; }
+
+}  // namespace
+
+std::string metricsJson(const pipeline::QualityMetrics& m) {
+  std::ostringstream out;
+  out << "{\"follicles\": " << countOrNull(m.follicles) << ", \"hex_fraction\": " << jsonOrNull(m.hexFraction)
+      << ", \"nn_cv\": " << jsonOrNull(m.nnCv) << ", \"feathers\": " << countOrNull(m.feathers)
+      << ", \"intersecting_pairs\": " << countOrNull(m.intersectingPairs)
+      << ", \"intersecting_pairs_unpacked\": " << countOrNull(m.intersectingPairsUnpacked)
+      << ", \"intersecting_pairs_proxy\": " << countOrNull(m.intersectingPairsProxy)
+      << ", \"skin_penetrations\": " << countOrNull(m.skinPenetrations) << ", \"coverage\": " << jsonOrNull(m.coverage)
+      << "}";
+  return out.str();
+}
+
+std::vector<ScriptCommand> parseScript(const std::string& text, const std::string& file) {
+  std::vector<ScriptCommand> out;
+  std::istringstream in(text);
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    std::vector<std::string> tok;
+    std::string cur;
+    bool inQuote = false, have = false;
+    for (size_t i = 0; i < line.size(); ++i) {
+      const char ch = line[i];
+      if (inQuote) {
+        if (ch == '"') inQuote = false; else cur += ch;
+      } else if (ch == '"') {
+        inQuote = true;
+        have = true;
+      } else if (ch == '#') {
+        break;
+      } else if (ch == ' ' || ch == '\t' || ch == '\r') {
+        if (have) tok.push_back(cur);
+        cur.clear();
+        have = false;
+      } else {
+        cur += ch;
+        have = true;
+      }
+    }
+    if (inQuote) throw Error("unterminated quote", file, "line " + std::to_string(n));
+    if (have) tok.push_back(cur);
+    if (tok.empty()) continue;
+    ScriptCommand c;
+    c.line = n;
+    c.verb = tok[0];
+    c.args.assign(tok.begin() + 1, tok.end());
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::vector<ScriptCommand> loadScript(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw Error("cannot open script", path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return parseScript(ss.str(), path);
+}
+
+bool isViewCommand(const std::string& v) {
+  return v == "screenshot" || v == "screenshot-window" || v == "orbit" || v == "zoom" || v == "frame" || v == "frames" || v == "quit";
+}
+
+double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file) {
+  const std::string& s = c.args.at(arg);
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(s, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != s.size() || s.empty() || !std::isfinite(v))
+    throw Error("argument " + std::to_string(arg + 1) + " of '" + c.verb + "': expected a number, got '" + s + "'", file,
+                where(c));
+  return v;
+}
+
+void needArgs(const ScriptCommand& c, size_t min, size_t max, const std::string& usage, const std::string& file) {
+  if (c.args.size() < min || c.args.size() > max) throw Error("usage: " + usage, file, where(c));
+}
+
+namespace {
+
+size_t count(const ScriptCommand& c, size_t arg, const std::string& file) {
+  const double v = scriptNumber(c, arg, file);
+  if (v < 0 || v != std::floor(v) || v > 1e15)
+    throw Error("argument " + std::to_string(arg + 1) + " of '" + c.verb + "': expected a non-negative integer", file, where(c));
+  return static_cast<size_t>(v);
+}
+
+glm::dvec3 vec(const ScriptCommand& c, size_t arg, const std::string& file) {
+  return {scriptNumber(c, arg, file), scriptNumber(c, arg + 1, file), scriptNumber(c, arg + 2, file)};
+}
+
+void run(Document& doc, const ScriptCommand& c, const std::string& file, std::ostream& out) {
+  const std::string& v = c.verb;
+  auto tracts = [&](size_t arg) {
+    actions::ensureTracts(doc);
+    return resolveTracts(doc.scene(), arg < c.args.size() ? c.args[arg] : "*", where(c));
+  };
+  if (v == "load") {
+    needArgs(c, 1, 1, "load PATH", file);
+    doc.open(c.args[0]);
+  } else if (v == "save") {
+    needArgs(c, 1, 2, "save PATH [overwrite]", file);
+    if (c.args.size() == 2 && c.args[1] != "overwrite") throw Error("usage: save PATH [overwrite]", file, where(c));
+    if (!doc.saveAs(c.args[0], c.args.size() == 2))
+      throw Error("file exists (add 'overwrite' to replace it): " + c.args[0], file, where(c));
+  } else if (v == "undo" || v == "redo") {
+    needArgs(c, 0, 0, v, file);
+    if (!(v == "undo" ? doc.undo() : doc.redo())) throw Error("nothing to " + v, file, where(c));
+  } else if (v == "time") {
+    needArgs(c, 1, 1, "time T", file);
+    doc.setTime(scriptNumber(c, 0, file));
+  } else if (v == "lod") {
+    needArgs(c, 1, 1, "lod FRACTION", file);
+    const double f = scriptNumber(c, 0, file);
+    if (!(f > 0 && f <= 1)) throw Error("lod must be in (0, 1]", file, where(c));
+    doc.setLod(f);
+  } else if (v == "seed") {
+    needArgs(c, 1, 1, "seed N", file);
+    const size_t s = count(c, 0, file);
+    doc.edit("seed", [&](pipeline::Scene& sc) { sc.seed = s; });
+  } else if (v == "count") {
+    needArgs(c, 2, 2, "count TRACT N", file);
+    for (size_t t : tracts(0)) actions::setTractCount(doc, t, count(c, 1, file));
+  } else if (v == "density") {
+    needArgs(c, 2, 2, "density TRACT D", file);
+    for (size_t t : tracts(0)) actions::setTractDensity(doc, t, scriptNumber(c, 1, file));
+  } else if (v == "relax") {
+    needArgs(c, 1, 2, "relax ITERATIONS [TRACT]", file);
+    const size_t n = count(c, 0, file);
+    for (size_t t : tracts(1)) actions::setRelaxIterations(doc, t, static_cast<int>(n));
+  } else if (v == "bias") {
+    needArgs(c, 7, 9, "bias TRACT X Y Z DX DY DZ [SIGMA [STRETCH]]", file);
+    const double sigma = c.args.size() > 7 ? scriptNumber(c, 7, file) : 0.0;
+    const double stretch = c.args.size() > 8 ? scriptNumber(c, 8, file) : 1.5;
+    for (size_t t : tracts(0)) actions::addBias(doc, t, vec(c, 1, file), vec(c, 4, file), sigma, stretch);
+  } else if (v == "pin") {
+    needArgs(c, 4, 4, "pin TRACT X Y Z", file);
+    for (size_t t : tracts(0)) actions::addPinned(doc, t, vec(c, 1, file));
+  } else if (v == "feather") {
+    needArgs(c, 2, 2, "feather NAME PATH", file);
+    actions::setFeatherFile(doc, c.args[0], c.args[1]);
+  } else if (v == "key") {
+    needArgs(c, 3, 3, "key TRACT FEATHER FOLLICLE_ID", file);
+    for (size_t t : tracts(0)) actions::addKeyFeather(doc, t, c.args[1], count(c, 2, file));
+  } else if (v == "key-at") {
+    needArgs(c, 5, 5, "key-at TRACT FEATHER X Y Z", file);
+    for (size_t t : tracts(0)) actions::addKeyFeatherAt(doc, t, c.args[1], vec(c, 2, file));
+  } else if (v == "vector") {
+    needArgs(c, 6, 6, "vector X Y Z DX DY DZ", file);
+    actions::addStylingVector(doc, vec(c, 0, file), vec(c, 3, file));
+  } else if (v == "axis") {
+    if (c.args.size() < 6 || c.args.size() % 3 != 0) throw Error("usage: axis X1 Y1 Z1 X2 Y2 Z2 [...]", file, where(c));
+    std::vector<glm::dvec3> pts;
+    for (size_t i = 0; i < c.args.size(); i += 3) pts.push_back(vec(c, i, file));
+    actions::setBodyAxis(doc, pts);
+  } else if (v == "brush") {
+    needArgs(c, 5, 5, "brush X Y Z RADIUS ELEVATION_DEG", file);
+    actions::addBrush(doc, vec(c, 0, file), scriptNumber(c, 3, file), scriptNumber(c, 4, file));
+  } else if (v == "pack" || v == "wait") {
+    needArgs(c, 0, 0, v, file);  // the runner waits for the evaluation before the next command
+  } else if (v == "check") {
+    needArgs(c, 0, 0, "check", file);
+    doc.requestCheck();
+    if (!doc.waitIdle()) throw Error("evaluation failed: " + doc.takeError().value_or("?"), file, where(c));
+    if (!doc.metrics()) throw Error("the checker produced no metrics", file, where(c));
+    out << metricsJson(*doc.metrics()) << std::endl;
+  } else if (v == "control") {
+    needArgs(c, 4, 4, "control X Y Z RADIUS", file);
+    actions::addControl(doc, vec(c, 0, file), scriptNumber(c, 3, file));
+  } else if (v == "lift" || v == "aim" || v == "direction" || v == "random" || v == "dynamic" || v == "blend") {
+    needArgs(c, 2, 2, v + " CONTROL VALUE", file);
+    actions::setControlValue(doc, count(c, 0, file), v == "blend" ? "dynamic" : v, scriptNumber(c, 1, file), doc.time());
+  } else if (v == "keyframe") {
+    needArgs(c, 2, 2, "keyframe CONTROL T", file);
+    actions::addControlKeyframe(doc, count(c, 0, file), scriptNumber(c, 1, file));
+  } else if (v == "set") {
+    needArgs(c, 2, 2, "set /JSON/POINTER VALUE", file);
+    const Json value = parseLooseValue(c.args[1]);
+    doc.edit("set " + c.args[0], [&](pipeline::Scene& s) { setScenePointer(s, c.args[0], value); });
+  } else if (v == "style") {
+    needArgs(c, 1, 1, "style shaded|scratchboard", file);
+    actions::setStyle(doc, c.args[0]);
+  } else if (v == "brdf") {
+    needArgs(c, 2, 2, "brdf D H", file);
+    actions::setBrdf(doc, scriptNumber(c, 0, file), scriptNumber(c, 1, file));
+  } else if (v == "echo") {
+    for (size_t i = 0; i < c.args.size(); ++i) out << (i ? " " : "") << c.args[i];
+    out << std::endl;
+  } else {
+    throw Error("unknown command '" + v + "'", file, where(c));
+  }
+}
+
+}  // namespace
+
+bool runDocumentCommand(Document& doc, const ScriptCommand& c, const std::string& file, std::ostream& out) {
+  if (isViewCommand(c.verb)) return false;
+  if (c.verb != "load" && c.verb != "echo" && !doc.hasScene())
+    throw Error("no scene is open (start with 'load PATH')", file, where(c));
+  try {
+    run(doc, c, file, out);
+  } catch (const Error& e) {
+    if (e.element().rfind("line ", 0) == 0) throw;
+    throw Error(e.what(), file, where(c));
+  }
+  return true;
+}
+
+const char* scriptHelp() {
+  return R"(Script commands (one per line, '#' comments; each waits for the previous evaluation):
+  load PATH                      open a scene (.json) or a bare mesh (.obj/.ply/.off/.stl)
+  save PATH [overwrite]          write the scene; an existing file is only replaced with 'overwrite'
+  undo | redo
+  time T | lod F | seed N        timeline time, level of detail (0,1], master seed
+  count TRACT N | density TRACT D    follicles of a tract (TRACT: index, name or *)
+  relax N [TRACT]                Lloyd iterations (0 = scattered only)
+  bias TRACT X Y Z DX DY DZ [SIGMA [STRETCH]]   relaxation bias vector
+  pin TRACT X Y Z                pinned follicle
+  feather NAME PATH              add or replace a feather file in the library
+  key TRACT FEATHER FOLLICLE_ID | key-at TRACT FEATHER X Y Z     key feathers
+  vector X Y Z DX DY DZ | axis X1 Y1 Z1 X2 Y2 Z2 ...             directions
+  brush X Y Z RADIUS ELEVATION_DEG   fixed-angle packing brush
+  pack | wait                    wait for the evaluation (packing included)
+  check                          print the checker's metrics as JSON
+  control X Y Z RADIUS           add an expressive control
+  lift|aim|direction|random|dynamic CONTROL VALUE   behaviour weight in [0,1] (keyed: at the current time)
+  keyframe CONTROL T             key the control's weights at time T
+  set /JSON/POINTER VALUE        set any scene value (JSON or a plain string)
+  style shaded|scratchboard | brdf D H
+  echo TEXT
+  screenshot PATH | screenshot-window PATH (with the panels)
+  orbit YAW_DEG PITCH_DEG | zoom FACTOR | frame | frames N | quit
+)";
+}
+
+}  // namespace pteryla::viewer
