@@ -80,8 +80,11 @@ struct LocalFeather {
   double totalLength = 0;
   std::vector<dvec3> shaft;    // polyline from the follicle to the tip, feather-local
   std::vector<double> shaftRad;
-  std::vector<LocalKey> keys;  // left vane first, ascending rp within a vane
+  std::vector<LocalKey> keys;  // left vane first, ascending rp within a vane; afterfeather keys last
   uint32_t leftKeys = 0;
+  uint32_t mainKeys = 0;       // keys of the main feather (the packed ones); the rest are the afterfeather's
+  std::vector<dvec3> after;    // afterfeather shaft polyline (not packed, but handed to later feathers)
+  std::vector<double> afterRad;
   std::vector<dvec3> cvs;      // key barb control vertices, barb-local unit frame
   uint32_t pointCount = 0;
   // Vane outline, invariant under elevation (a rotation about B keeps y and the xz radius): per lateral bin
@@ -113,6 +116,7 @@ void buildOutline(LocalFeather& L, const PackOptions& o) {
       hi[k] = std::max(hi[k], static_cast<float>(r + rad));
     }
   };
+  for (size_t k = 0; k < L.after.size(); ++k) add(L.after[k], L.afterRad[k]);
   for (size_t k = 0; k < L.shaft.size(); ++k) {
     add(L.shaft[k], L.shaftRad[k]);
     if (k + 1 < L.shaft.size()) add(0.5 * (L.shaft[k] + L.shaft[k + 1]), L.shaftRad[k]);
@@ -156,6 +160,9 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
   L.keys.clear();
   L.cvs.clear();
   L.leftKeys = 0;
+  L.mainKeys = 0;
+  L.after.clear();
+  L.afterRad.clear();
   L.vaneHalf = 0;
   const int segs = std::max(2, o.shaftSamples);
   if (L.unopened) {
@@ -179,48 +186,71 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
       L.shaftRad.push_back(0.5 * f.width);
     }
     // Refined key barbs (6.3.3: the default tip barb becomes a real key barb; more key barbs pack the
-    // vane at a finer resolution without changing its shape).
+    // vane at a finer resolution without changing its shape). Breakpoints of a silhouette (barb length
+    // profile) become key barbs too, so barb lengths between key barbs are linear as the generator's are.
     std::vector<glm::dvec3> shape;
-    for (int v = 0; v < 2; ++v) {
-      const std::vector<feather::KeyBarb> eff = feather::effectiveKeyBarbs(p, v);
-      std::vector<feather::KeyBarb> keys = eff;
-      const int nk = std::max(2, o.keyBarbsPerVane);
-      for (int k = 0; k < nk; ++k) {
-        const double rp = static_cast<double>(k) / (nk - 1);
-        bool present = false;
-        for (const auto& e : eff) present = present || std::abs(e.rp - rp) < 1e-9;
-        if (present) continue;
-        feather::barbShapeAt(eff, rp, shape);
-        keys.push_back({rp, shape});
-      }
-      std::stable_sort(keys.begin(), keys.end(), [](const feather::KeyBarb& a, const feather::KeyBarb& b) { return a.rp < b.rp; });
-      const feather::VaneParams& vp = p.vane(v);
-      const double side = v == 0 ? 1.0 : -1.0;
-      for (const auto& kb : keys) {
-        LocalKey k;
-        k.rp = kb.rp;
-        k.vane = static_cast<uint8_t>(v);
-        const feather::RachisFrame f = feather::rachisFrame(p, kb.rp);
-        const double angle = std::clamp(vp.baseAngle * (1 - kb.rp) + vp.tipAngle * kb.rp, 0.01, kPi - 0.01);
-        const double ca = std::cos(angle), sa = std::sin(angle);
-        k.u = ca * f.tangent + (side * sa) * f.left;
-        k.w = sa * f.tangent - (side * ca) * f.left;
-        k.d = f.dorsal;
-        k.left = f.left;
-        k.root = f.point + (side * 0.5 * f.width) * f.left;
-        k.len = p.barbLengthAt(v, kb.rp);
-        k.cvOff = static_cast<uint32_t>(L.cvs.size());
-        k.cvCount = static_cast<uint16_t>(kb.cvs.size());
-        double xmax = 0;
-        for (const auto& c : kb.cvs) {
-          L.cvs.push_back(c);
-          xmax = std::max(xmax, c.x);
+    auto addKeys = [&](const feather::FeatherParams& fp, const dvec3& offset, int refine, bool silhouette) {
+      for (int v = 0; v < 2; ++v) {
+        const std::vector<feather::KeyBarb> eff = feather::effectiveKeyBarbs(fp, v);
+        std::vector<feather::KeyBarb> keys = eff;
+        std::vector<double> rps;
+        for (int k = 0; k < refine; ++k) rps.push_back(static_cast<double>(k) / (refine - 1));
+        const feather::LengthProfile& prof = v == 0 ? fp.silhouette.left : fp.silhouette.right;
+        if (silhouette && prof.points.size() <= 16)
+          for (const auto& pt : prof.points)
+            if (pt.x > 0 && pt.x < 1) rps.push_back(pt.x);
+        for (double rp : rps) {
+          bool present = false;
+          for (const auto& e : keys) present = present || std::abs(e.rp - rp) < 1e-6;
+          if (present) continue;
+          feather::barbShapeAt(eff, rp, shape);
+          keys.push_back({rp, shape});
         }
-        k.sExt = k.len * xmax;
-        k.rootDist = glm::length(k.root);
-        L.vaneHalf = std::max(L.vaneHalf, k.len * xmax * sa);
-        L.keys.push_back(k);
-        if (v == 0) ++L.leftKeys;
+        std::stable_sort(keys.begin(), keys.end(), [](const feather::KeyBarb& a, const feather::KeyBarb& b) { return a.rp < b.rp; });
+        const feather::VaneParams& vp = fp.vane(v);
+        const double side = v == 0 ? 1.0 : -1.0;
+        for (const auto& kb : keys) {
+          LocalKey k;
+          k.rp = kb.rp;
+          k.vane = static_cast<uint8_t>(v);
+          const feather::RachisFrame f = feather::rachisFrame(fp, kb.rp);
+          const double angle = std::clamp(vp.baseAngle * (1 - kb.rp) + vp.tipAngle * kb.rp, 0.01, kPi - 0.01);
+          const double ca = std::cos(angle), sa = std::sin(angle);
+          k.u = ca * f.tangent + (side * sa) * f.left;
+          k.w = sa * f.tangent - (side * ca) * f.left;
+          k.d = f.dorsal;
+          k.left = f.left;
+          k.root = offset + f.point + (side * 0.5 * f.width) * f.left;
+          k.len = fp.barbLengthAt(v, kb.rp);
+          k.cvOff = static_cast<uint32_t>(L.cvs.size());
+          k.cvCount = static_cast<uint16_t>(kb.cvs.size());
+          double xmax = 0;
+          for (const auto& c : kb.cvs) {
+            L.cvs.push_back(c);
+            xmax = std::max(xmax, c.x);
+          }
+          k.sExt = k.len * xmax;
+          k.rootDist = glm::length(k.root);
+          L.vaneHalf = std::max(L.vaneHalf, k.len * xmax * sa);
+          L.keys.push_back(k);
+        }
+      }
+    };
+    addKeys(p, dvec3(0), std::max(2, o.keyBarbsPerVane), true);
+    L.mainKeys = static_cast<uint32_t>(L.keys.size());
+    for (const LocalKey& k : L.keys) L.leftKeys += k.vane == 0 ? 1 : 0;
+    if (p.afterfeather) {
+      // The afterfeather (5.2, at the superior umbilicus, as feather::generateBarbs places it) rides along
+      // unpacked; its points still keep later feathers off it.
+      const feather::FeatherParams& af = *p.afterfeather;
+      const dvec3 umbilicus(p.calamusLength, 0, -0.5 * p.rachisWidth);
+      const double vh = L.vaneHalf;
+      addKeys(af, umbilicus, 3, false);
+      L.vaneHalf = vh;
+      for (int k = 0; k <= 4; ++k) {
+        const feather::RachisFrame f = feather::rachisFrame(af, k / 4.0);
+        L.after.push_back(umbilicus + f.point);
+        L.afterRad.push_back(0.5 * f.width);
       }
     }
   }
@@ -235,6 +265,11 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
     yMin = std::min(yMin, L.shaft[k].y - L.shaftRad[k]);
     yMax = std::max(yMax, L.shaft[k].y + L.shaftRad[k]);
   }
+  for (size_t k = 0; k < L.after.size(); ++k) {
+    reach = std::max(reach, glm::length(L.after[k]) + L.afterRad[k]);
+    yMin = std::min(yMin, L.after[k].y - L.afterRad[k]);
+    yMax = std::max(yMax, L.after[k].y + L.afterRad[k]);
+  }
   for (const LocalKey& k : L.keys) {
     double cm = 0;
     for (uint32_t c = 0; c < k.cvCount; ++c) cm = std::max(cm, glm::length(L.cvs[k.cvOff + c]));
@@ -247,7 +282,7 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
   L.yMax = yMax + 1e-9 * (1 + reach);
   buildOutline(L, o);
   const uint32_t barbPts = static_cast<uint32_t>(std::max(1, o.barbSamples));
-  L.pointCount = static_cast<uint32_t>(L.shaft.size()) + static_cast<uint32_t>(L.keys.size()) * barbPts;
+  L.pointCount = static_cast<uint32_t>(L.shaft.size() + L.after.size()) + static_cast<uint32_t>(L.keys.size()) * barbPts;
 }
 
 // ------------------------------------------------------------------ context
@@ -648,7 +683,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
   // on its side of the shaft between the neighbouring key barbs' slicing planes.
   feather::FeatherParams& P = out.params[i];
   P = ctx.coat.params[i];
-  const size_t nKeys = L.keys.size();
+  const size_t nKeys = L.mainKeys;
   const int fb = std::max(2, o.barbFieldBins);
   bool anyChanged = false;
   std::vector<feather::KeyBarb> vaneKeys[2];
@@ -767,13 +802,23 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
   };
   for (size_t k = 0; k < L.shaft.size(); ++k) emit(L.shaft[k], L.shaftRad[k]);
   closeGroup();
+  if (!L.after.empty()) {
+    for (size_t k = 0; k < L.after.size(); ++k) emit(L.after[k], L.afterRad[k]);
+    closeGroup();
+  }
   const int bs = std::max(1, o.barbSamples);
-  for (size_t kk = 0; kk < nKeys; ++kk) {
+  for (size_t kk = 0; kk < L.keys.size(); ++kk) {
     const LocalKey& k = L.keys[kk];
-    const std::vector<feather::KeyBarb>& vk = k.vane == 0 ? P.left.keyBarbs : P.right.keyBarbs;
-    const std::vector<glm::dvec3>& cv = vk[k.vane == 0 ? kk : kk - L.leftKeys].cvs;
+    const glm::dvec3* cv = &L.cvs[k.cvOff];
+    size_t cn = k.cvCount;
+    if (kk < nKeys && !L.unopened) {
+      const std::vector<feather::KeyBarb>& vk = k.vane == 0 ? P.left.keyBarbs : P.right.keyBarbs;
+      const std::vector<glm::dvec3>& c = vk[k.vane == 0 ? kk : kk - L.leftKeys].cvs;
+      cv = c.data();
+      cn = c.size();
+    }
     for (int s = 1; s <= bs; ++s) {
-      const glm::dvec3 c = feather::bezierPoint(cv.data(), cv.size(), static_cast<double>(s) / bs);
+      const glm::dvec3 c = feather::bezierPoint(cv, cn, static_cast<double>(s) / bs);
       emit(k.root + k.len * (c.x * k.u + c.y * k.w + c.z * k.d), 0.0);
     }
     closeGroup();
@@ -1013,6 +1058,10 @@ void initResult(const Context& ctx, PackResult& res) {
     if (L.packable) {
       res.groupPoint.push_back(p);
       p += static_cast<uint32_t>(L.shaft.size());
+      if (!L.after.empty()) {
+        res.groupPoint.push_back(p);
+        p += static_cast<uint32_t>(L.after.size());
+      }
       for (size_t k = 0; k < L.keys.size(); ++k) {
         res.groupPoint.push_back(p);
         p += static_cast<uint32_t>(std::max(1, ctx.opt.barbSamples));

@@ -131,8 +131,9 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
 // Incremental repack after a small change: `changed` lists the feathers whose input differs from the
 // one `previous` was computed from (frame, params, age, presence or fixed elevation). Only feathers whose
 // dependency chain reaches a changed feather are recomputed; the result equals pack() bit for bit. Falls
-// back to a full pack when the layer order or feather count changed. The skin must be unchanged (after a
-// skin deformation every frame changes: call pack()).
+// back to a full pack when the layer order or feather count changed. The skin and the options (other than
+// fixedElevation, whose changes belong in `changed`) must be those `previous` was packed with; after a skin
+// deformation every frame changes: call pack().
 PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& previous,
                   const std::vector<uint32_t>& changed, const PackOptions& options = {});
 
