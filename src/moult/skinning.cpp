@@ -3,7 +3,7 @@
 #include "pteryla/moult/skinning.hpp"
 
 #include <glm/geometric.hpp>
-#include <glm/gtc/matrix_access.hpp>
+#include <glm/trigonometric.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -172,7 +172,7 @@ glm::dquat rotationFromAxisAngle(const glm::dvec3& axis, double degrees) {
   if (degrees == 0) return glm::dquat(1, 0, 0, 0);
   const double len = glm::length(axis);
   PTERYLA_CHECK(len > 0, "rotation axis must be non-zero");
-  return glm::angleAxis(degrees * (M_PI / 180.0), axis / len);
+  return glm::angleAxis(glm::radians(degrees), axis / len);
 }
 
 SkinRig readSkinRig(JsonReader& r, size_t vertexCount) {
