@@ -39,28 +39,43 @@ void setScenePointer(Scene& s, const std::string& pointer, const Json& value) {
   try {
     const Json::json_pointer p(pointer);
     if (p.empty()) throw Error("cannot replace the whole scene", s.file, pointer);
-    // Parents must exist (no silent creation of misspelt sections); the leaf may be new.
-    const Json::json_pointer parent = p.parent_pointer();
-    if (!j.contains(parent)) throw Error("no such element in the scene", s.file, parent.to_string());
-    Json& container = j.at(parent);
-    const std::string leaf = p.back();
-    if (container.is_array()) {
-      if (leaf == "-") {
-        container.push_back(value);
+    // Walk to the parent, creating missing objects (arrays before "-" or an index): sections are
+    // omitted from the JSON form when empty. Misspelt keys are still caught by the strict readers.
+    std::vector<std::string> tokens;
+    for (Json::json_pointer q = p; !q.empty(); q = q.parent_pointer()) tokens.insert(tokens.begin(), q.back());
+    auto isIndex = [](const std::string& t) {
+      return t == "-" || (!t.empty() && std::all_of(t.begin(), t.end(), [](char c) { return c >= '0' && c <= '9'; }));
+    };
+    Json* node = &j;
+    std::string at;
+    for (size_t i = 0; i + 1 < tokens.size(); ++i) {
+      const std::string& t = tokens[i];
+      at += "/" + t;
+      if (node->is_object()) {
+        if (!node->contains(t)) (*node)[t] = isIndex(tokens[i + 1]) ? Json::array() : Json::object();
+        node = &(*node)[t];
+      } else if (node->is_array()) {
+        if (!isIndex(t) || t == "-" || std::stoul(t) >= node->size())
+          throw Error("no such array element (size " + std::to_string(node->size()) + ")", s.file, at);
+        node = &(*node)[std::stoul(t)];
       } else {
-        size_t idx = 0;
-        try {
-          idx = std::stoul(leaf);
-        } catch (const std::exception&) {
-          throw Error("expected an array index", s.file, pointer);
-        }
-        if (idx >= container.size()) throw Error("array index out of range (size " + std::to_string(container.size()) + ")", s.file, pointer);
-        container[idx] = value;
+        throw Error("cannot descend into a " + std::string(node->type_name()), s.file, at);
       }
-    } else if (container.is_object()) {
-      container[leaf] = value;
+    }
+    const std::string& leaf = tokens.back();
+    if (node->is_array()) {
+      if (leaf == "-") {
+        node->push_back(value);
+      } else {
+        if (!isIndex(leaf)) throw Error("expected an array index", s.file, pointer);
+        const size_t idx = std::stoul(leaf);
+        if (idx >= node->size()) throw Error("array index out of range (size " + std::to_string(node->size()) + ")", s.file, pointer);
+        (*node)[idx] = value;
+      }
+    } else if (node->is_object()) {
+      (*node)[leaf] = value;
     } else {
-      throw Error("parent is neither an object nor an array", s.file, parent.to_string());
+      throw Error("parent is neither an object nor an array", s.file, pointer);
     }
   } catch (const Json::exception& e) {
     throw Error(std::string("bad JSON pointer: ") + e.what(), s.file, pointer);

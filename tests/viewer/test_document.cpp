@@ -1,0 +1,261 @@
+// Document: undo/redo, gestures, save policy (never overwrite without asking), background evaluation
+// with cancellation, errors from stages, and bare meshes saving to scenes that reload to the same coat.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "actions.hpp"
+#include "document.hpp"
+#include "fixtures.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+#include "scene_edit.hpp"
+
+using namespace pteryla;
+using namespace pteryla::viewer;
+using viewer_test::scratchDir;
+using viewer_test::smallPatch;
+
+namespace {
+
+Json js(const pipeline::Scene& s) { return sceneJson(s); }
+
+std::vector<glm::vec3> coatPositions(Document& d) {
+  EXPECT_TRUE(d.waitIdle());
+  return d.idlePipeline()->coatMesh().mesh.positions;
+}
+
+}  // namespace
+
+TEST(Document, UndoRedoRestoresExactScenes) {
+  Document d;
+  d.reset(smallPatch(), "");
+  const Json original = js(d.scene());
+  actions::setTractCount(d, 0, 30);
+  actions::setRelaxIterations(d, 0, 7);
+  actions::addStylingVector(d, {0, 0, 0.5}, {0, 0, 1});
+  const Json edited = js(d.scene());
+  EXPECT_TRUE(d.modified());
+  EXPECT_EQ(d.scene().tracts[0]["count"], 30);
+  ASSERT_TRUE(d.undo());
+  ASSERT_TRUE(d.undo());
+  ASSERT_TRUE(d.undo());
+  EXPECT_FALSE(d.canUndo());
+  EXPECT_EQ(js(d.scene()), original);
+  ASSERT_TRUE(d.redo());
+  ASSERT_TRUE(d.redo());
+  ASSERT_TRUE(d.redo());
+  EXPECT_FALSE(d.canRedo());
+  EXPECT_EQ(js(d.scene()), edited);
+  // A new edit after an undo drops the redo branch.
+  d.undo();
+  actions::setTractCount(d, 0, 40);
+  EXPECT_FALSE(d.canRedo());
+}
+
+TEST(Document, EditsInOneGestureShareOneUndoStep) {
+  Document d;
+  d.reset(smallPatch(), "");
+  const Json original = js(d.scene());
+  // A slider drag: many edits with the same label before the mouse is released.
+  for (int i = 1; i <= 5; ++i) actions::setBrdf(d, 1.0 + 0.1 * i, 0.0);
+  d.endGesture();
+  actions::setBrdf(d, 3.0, 0.2);  // a new gesture
+  ASSERT_TRUE(d.undo());
+  EXPECT_DOUBLE_EQ(d.scene().render.brdfD, 1.5);
+  ASSERT_TRUE(d.undo());
+  EXPECT_EQ(js(d.scene()), original);
+  EXPECT_FALSE(d.canUndo());
+}
+
+TEST(Document, ThrowingEditChangesNothing) {
+  Document d;
+  d.reset(smallPatch(), "");
+  const Json before = js(d.scene());
+  EXPECT_THROW(actions::setControlValue(d, 3, "lift", 0.5, 0.0), Error);  // no control 3
+  EXPECT_THROW(actions::addKeyFeather(d, 0, "no_such_feather", 1), Error);
+  EXPECT_EQ(js(d.scene()), before);
+  EXPECT_FALSE(d.canUndo());
+  EXPECT_FALSE(d.modified());
+}
+
+TEST(Document, SaveAsNeverOverwritesWithoutBeingAsked) {
+  const std::string dir = scratchDir("save_policy");
+  const std::string path = dir + "/taken.json";
+  { std::ofstream(path) << "{\"precious\": true}\n"; }
+  Document d;
+  d.reset(smallPatch(), "");
+  actions::setTractCount(d, 0, 31);
+  EXPECT_FALSE(d.saveAs(path, false));
+  EXPECT_EQ(readJsonFile(path), Json({{"precious", true}}));
+  EXPECT_TRUE(d.modified());
+  EXPECT_TRUE(d.saveAs(path, true));
+  EXPECT_FALSE(d.modified());
+  EXPECT_EQ(d.path(), std::filesystem::absolute(path).lexically_normal().string());
+  // Saving again to the document's own file is a plain Save.
+  actions::setTractCount(d, 0, 32);
+  EXPECT_TRUE(d.saveAs(path, false));
+  d.save();
+  EXPECT_THROW(d.saveAs(dir + "/scene.txt", true), Error);
+  EXPECT_THROW(d.saveAs(dir + "/missing_dir/scene.json", true), Error);
+}
+
+TEST(Document, SavedSceneReloadsIdentically) {
+  const std::string dir = scratchDir("round_trip");
+  Document d;
+  d.reset(smallPatch(), "");
+  actions::addControl(d, {0, 0.05, 0}, 0.5);
+  actions::setControlValue(d, 0, "lift", 0.6, 0.0);
+  actions::addControlKeyframe(d, 0, 1.0);
+  actions::addBrush(d, {0.3, 0.05, 0}, 0.2, 40);
+  d.setTime(0.5);
+  const std::string path = dir + "/out.json";
+  ASSERT_TRUE(d.saveAs(path));
+  const pipeline::Scene back = pipeline::loadScene(path);
+  EXPECT_EQ(pipeline::sceneToJson(back, path), readJsonFile(path));
+  EXPECT_EQ(js(back), js(d.scene()));
+  EXPECT_DOUBLE_EQ(back.time, 0.5);
+}
+
+TEST(Document, BareMeshSavesToASceneWithTheSameCoat) {
+  // The implicit bare-mesh defaults are written explicitly, so the saved file evaluates to the coat
+  // the viewer showed (and that a bare-mesh evaluation gives).
+  const std::string dir = scratchDir("bare_mesh");
+  pipeline::Scene bare = pipeline::loadScene(viewer_test::dataPath("meshes/sphere_250.obj"));
+  ASSERT_TRUE(bare.fromBareMesh);
+  bare.tracts[0]["count"] = 40;
+  bare.tracts[0]["relax"] = {{"iterations", 2}};
+  bare.render.lod = 0.1;
+  pipeline::Pipeline reference(bare);
+  const std::vector<glm::vec3> expected = reference.coatMesh().mesh.positions;
+  ASSERT_FALSE(expected.empty());
+
+  Document d;
+  pipeline::Scene explicitScene = bare;
+  makeBareMeshExplicit(explicitScene);
+  EXPECT_FALSE(explicitScene.fromBareMesh);
+  d.reset(explicitScene, "");
+  EXPECT_EQ(coatPositions(d), expected);
+  const std::string path = dir + "/sphere.json";
+  ASSERT_TRUE(d.saveAs(path));
+  Document reloaded;
+  reloaded.open(path);
+  EXPECT_EQ(coatPositions(reloaded), expected);
+}
+
+TEST(Document, OpenBareMeshAsksForAFileOnSave) {
+  Document d;
+  d.open(viewer_test::dataPath("meshes/sphere_250.obj"));
+  EXPECT_TRUE(d.path().empty());
+  EXPECT_FALSE(d.scene().fromBareMesh);
+  EXPECT_TRUE(d.scene().directions.contains("axis"));
+  EXPECT_THROW(d.save(), Error);
+}
+
+TEST(Document, EvaluatesInTheBackgroundAndEditsCancel) {
+  Document d;
+  d.reset(smallPatch(), "");
+  d.update();
+  EXPECT_TRUE(d.busy());
+  // Edits while the worker runs: the running job is cancelled and the final result is that of the
+  // final scene, equal to a fresh evaluation of it.
+  actions::setTractCount(d, 0, 26);
+  actions::setRelaxIterations(d, 0, 2);
+  ASSERT_TRUE(d.waitIdle());
+  EXPECT_TRUE(d.upToDate());
+  const auto got = d.idlePipeline()->coatMesh().mesh.positions;
+  pipeline::Pipeline fresh(d.scene());
+  fresh.setLod(d.lod());
+  EXPECT_EQ(got, fresh.coatMesh().mesh.positions);
+  const Snapshot& s = d.snapshot();
+  EXPECT_EQ(s.follicle.size(), 26u + 0u);
+  EXPECT_EQ(s.coatFeathers, fresh.coatMesh().ranges.size());
+  EXPECT_FALSE(s.skin.empty());
+  EXPECT_EQ(s.tractNames, std::vector<std::string>{"patch"});
+}
+
+TEST(Document, OnlyDownstreamStagesRerun) {
+  Document d;
+  d.reset(smallPatch(), "");
+  ASSERT_TRUE(d.waitIdle());
+  auto evals = [&](pipeline::Stage s) {
+    auto& g = d.idlePipeline()->graph();
+    return g.evaluations(g.find(pipeline::stageName(s)));
+  };
+  const auto distribute = evals(pipeline::Stage::Distribute), mesh = evals(pipeline::Stage::Mesh);
+  d.setLod(0.3);
+  ASSERT_TRUE(d.waitIdle());
+  EXPECT_EQ(evals(pipeline::Stage::Distribute), distribute);
+  EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 1);
+  // View-only edits re-run nothing.
+  actions::setBrdf(d, 2.0, 0.1);
+  d.update();
+  EXPECT_FALSE(d.busy());
+  EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 1);
+  const auto pose = evals(pipeline::Stage::Pose);
+  d.setTime(0.25);
+  ASSERT_TRUE(d.waitIdle());
+  EXPECT_EQ(evals(pipeline::Stage::Distribute), distribute);
+  EXPECT_EQ(evals(pipeline::Stage::Pose), pose + 1);
+}
+
+TEST(Document, StageErrorsAreReportedAndUndoRecovers) {
+  Document d;
+  d.reset(smallPatch(), "");
+  ASSERT_TRUE(d.waitIdle());
+  // A value only the tracts stage rejects (the scene reader keeps tract objects as JSON).
+  d.edit("bad", [](pipeline::Scene& s) { s.tracts[0]["relax"]["over_relaxation"] = 7.0; });
+  EXPECT_FALSE(d.waitIdle());
+  EXPECT_TRUE(d.failed());
+  const auto e = d.takeError();
+  ASSERT_TRUE(e.has_value());
+  EXPECT_NE(e->find("over_relaxation"), std::string::npos) << *e;
+  EXPECT_FALSE(d.takeError().has_value());
+  ASSERT_TRUE(d.undo());
+  EXPECT_TRUE(d.waitIdle());
+  EXPECT_FALSE(d.failed());
+}
+
+TEST(Document, CancelHoldsEvaluationUntilResumed) {
+  Document d;
+  d.reset(smallPatch(), "");
+  d.update();
+  d.cancel();
+  EXPECT_FALSE(d.waitIdle());
+  EXPECT_TRUE(d.halted());
+  EXPECT_FALSE(d.upToDate());
+  d.resume();
+  EXPECT_TRUE(d.waitIdle());
+}
+
+TEST(Document, CheckRunsTheCheckerAndKeepsTheViewLod) {
+  Document d;
+  d.reset(smallPatch(), "");
+  d.requestCheck();
+  ASSERT_TRUE(d.waitIdle());
+  ASSERT_TRUE(d.metrics().has_value());
+  EXPECT_EQ(d.metrics()->follicles.value_or(0), 24u);
+  auto& g = d.idlePipeline()->graph();
+  EXPECT_FALSE(g.dirty(g.find("mesh")));
+  EXPECT_DOUBLE_EQ(d.idlePipeline()->lod(), d.lod());
+}
+
+TEST(Actions, ControlsFollowTheMoultModuleSchema) {
+  Document d;
+  d.reset(smallPatch(), "");
+  const size_t c = actions::addControl(d, {0, 0.05, 0}, 0.5);
+  actions::setControlValue(d, c, "lift", 0.8, 0.0);
+  EXPECT_DOUBLE_EQ(actions::controlAt(d.scene(), c, 3.0).value[0], 0.8);
+  EXPECT_FALSE(actions::controlAt(d.scene(), c, 3.0).keyed[0]);
+  // Keying turns constants into keys; later slider edits at another time add keys there.
+  actions::addControlKeyframe(d, c, 0.0);
+  EXPECT_FALSE(d.scene().controls[c].contains("lift"));
+  actions::setControlValue(d, c, "lift", 0.2, 2.0);
+  const auto mid = actions::controlAt(d.scene(), c, 1.0);
+  EXPECT_TRUE(mid.keyed[0]);
+  EXPECT_NEAR(mid.value[0], 0.5, 1e-12);  // linear between (0, 0.8) and (2, 0.2)
+  EXPECT_THROW(actions::setControlValue(d, c, "dynamic_blend", 0.5, 0.0), Error);
+  EXPECT_THROW(actions::setControlValue(d, c, "aim", 1.5, 0.0), Error);
+  ASSERT_TRUE(d.waitIdle()) << d.takeError().value_or("");  // the pipeline accepts what the panel wrote
+}

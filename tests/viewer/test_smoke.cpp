@@ -1,0 +1,113 @@
+// CI smoke test: the real viewer binary under xvfb-run runs a scripted session on the patch scene
+// (panel actions, timeline, controls, save, screenshot, quit); the saved scene must reload identically
+// and the screenshot must show something (not one flat colour). Skipped only when xvfb-run is missing.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+
+#include "fixtures.hpp"
+#include "pteryla/core/json.hpp"
+#include "pteryla/pipeline/scene.hpp"
+#include "pteryla/render/image.hpp"
+
+using namespace pteryla;
+
+namespace {
+
+bool haveXvfbRun() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
+
+struct ViewerRun {
+  int code = -1;
+  std::string out;
+};
+
+ViewerRun runViewer(const std::string& args, const std::string& errFile) {
+  const std::string cmd = "xvfb-run -a -s \"-screen 0 1024x768x24\" \"" + std::string(PTERYLA_VIEWER_EXE) + "\" " + args +
+                          " 2>\"" + errFile + "\"";
+  ViewerRun r;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return r;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
+
+TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("smoke");
+  const std::string saved = dir + "/groomed.json", shot = dir + "/view.png", window = dir + "/window.png";
+  const std::string script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "count 0 30\n"
+                           "relax 4\n"
+                           "lod 0.3\n"
+                           "pack\n"
+                           "time 0.5\n"
+                           "control 0 0.05 0 0.6\n"
+                           "lift 0 0.8\n"
+                           "keyframe 0 0.5\n"
+                           "vector 0.3 0.05 0 1 0 0.3\n"
+                           "brush -0.3 0.05 0 0.25 40\n"
+                           "undo\n"
+                           "redo\n"
+                           "orbit 20 10\n"
+                           "frame\n"
+                           "check\n"
+                        << "save " << saved << "\n"
+                        << "screenshot " << shot << "\n"
+                        << "screenshot-window " << window << "\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("--size 800x600 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+
+  // The saved scene reloads to the same scene (what loadScene reads, sceneToJson writes back).
+  const pipeline::Scene back = pipeline::loadScene(saved);
+  EXPECT_EQ(pipeline::sceneToJson(back, saved), readJsonFile(saved));
+  EXPECT_EQ(back.tracts[0]["count"], 30);
+  ASSERT_EQ(back.controls.size(), 1u);
+  EXPECT_EQ(back.packing["styling"].size(), 1u);
+  EXPECT_DOUBLE_EQ(back.time, 0.5);
+
+  // The checker's metrics were printed as one JSON line.
+  const Json m = Json::parse(r.out.substr(0, r.out.find('\n')));
+  EXPECT_EQ(m["follicles"], 30);
+
+  // Screenshots: the 3D view (window size) and the window with its panels, both with real content.
+  for (const std::string& path : {shot, window}) {
+    const render::Image img = render::loadImage(path);
+    EXPECT_EQ(img.width, 800) << path;
+    EXPECT_EQ(img.height, 600) << path;
+    std::set<uint32_t> colours;
+    for (size_t i = 0; i + 3 < img.rgba.size() && colours.size() < 64; i += 4 * 7)
+      colours.insert(uint32_t(img.rgba[i]) << 16 | uint32_t(img.rgba[i + 1]) << 8 | img.rgba[i + 2]);
+    EXPECT_GE(colours.size(), 16u) << path << " is (nearly) one flat colour";
+    const uint8_t bg[3] = {img.rgba[0], img.rgba[1], img.rgba[2]};
+    EXPECT_GT(render::coveredFraction(img, bg, 8), 0.02) << path << ": nothing drawn over the background";
+  }
+}
+
+TEST(ViewerSmoke, BadScriptExitsWithTwoAndNamesTheLine) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("smoke_bad");
+  const std::string script = dir + "/bad.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\nrelax lots\nquit\n";
+  const ViewerRun r = runViewer("--script \"" + script + "\"", dir + "/stderr.txt");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(slurp(dir + "/stderr.txt").find("line 2"), std::string::npos) << slurp(dir + "/stderr.txt");
+}
