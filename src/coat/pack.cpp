@@ -665,9 +665,21 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
         S.best[b] = {vx, vy};
       }
     }
+    // A bin that asks for more than conflictElevation comes from a layer-order conflict (a neighbour
+    // packed earlier whose material sits right over this follicle, e.g. at a tract border): standing up
+    // would not clear it either, and would push every feather above up with it. Such bins are left out.
     double req = -kInf;
-    for (int b = 0; b < bins; ++b)
-      if (bestKey[b] >= 0 && S.psiMin[b] < kInf) req = std::max(req, std::atan2(S.best[b].y, S.best[b].x) - S.psiMin[b]);
+    bool conflict = false;
+    for (int b = 0; b < bins; ++b) {
+      if (bestKey[b] < 0 || S.psiMin[b] == kInf) continue;
+      const double v = std::atan2(S.best[b].y, S.best[b].x) - S.psiMin[b];
+      if (v > o.conflictElevation) {
+        conflict = true;
+        continue;
+      }
+      req = std::max(req, v);
+    }
+    if (conflict) ++st.conflicts;
     if (req == -kInf || req <= o.minElevation) ++st.free;
     e = std::max(o.minElevation, req);
     if (e > o.maxElevation) {
@@ -1085,6 +1097,7 @@ void finish(const Context& ctx, tbb::enumerable_thread_specific<Scratch>& scratc
     st.unopened += s.stats.unopened;
     st.free += s.stats.free;
     st.shaftClamped += s.stats.shaftClamped;
+    st.conflicts += s.stats.conflicts;
     st.barbsElevated += s.stats.barbsElevated;
     st.barbsLifted += s.stats.barbsLifted;
     st.barbsUnresolved += s.stats.barbsUnresolved;

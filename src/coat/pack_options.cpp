@@ -20,6 +20,7 @@ PackOptions parsePackOptions(JsonReader& r) {
   o.minElevation = r.number("min_elevation_deg", 0.0, -90.0, 180.0) * kDeg;
   o.maxElevation = r.number("max_elevation_deg", 90.0, -90.0, 180.0) * kDeg;
   if (o.maxElevation < o.minElevation) r.fail("max_elevation_deg", "must not be below min_elevation_deg");
+  o.conflictElevation = r.number("conflict_elevation_deg", o.conflictElevation / kDeg, 0.0, 180.0) * kDeg;
   o.openingAge = r.number("opening_age", o.openingAge, 0.0, 1.0);
   o.baseAllowance = r.number("base_allowance", o.baseAllowance, 0.0, 1.0);
   o.shaftBand = r.number("shaft_band", o.shaftBand, 0.0, 1.0);
@@ -47,6 +48,7 @@ Json packOptionsToJson(const PackOptions& o) {
   if (o.skinClearance != d.skinClearance) j["skin_clearance"] = o.skinClearance;
   if (o.minElevation != d.minElevation) j["min_elevation_deg"] = o.minElevation / kDeg;
   if (o.maxElevation != d.maxElevation) j["max_elevation_deg"] = o.maxElevation / kDeg;
+  if (o.conflictElevation != d.conflictElevation) j["conflict_elevation_deg"] = o.conflictElevation / kDeg;
   if (o.openingAge != d.openingAge) j["opening_age"] = o.openingAge;
   if (o.baseAllowance != d.baseAllowance) j["base_allowance"] = o.baseAllowance;
   if (o.shaftBand != d.shaftBand) j["shaft_band"] = o.shaftBand;

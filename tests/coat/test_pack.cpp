@@ -482,3 +482,25 @@ TEST(PackGeometry, PlacedKeyBarbsMatchTheBarbGenerator) {
   }
   EXPECT_GE(matched, 4u);  // rp 0, 0.5 and 1 exist as barbs on both vanes
 }
+
+TEST(Pack, LayerOrderConflictsDoNotStandFeathersUp) {
+  // Two follicles closer than a shaft's width: the second cannot clear the first at any angle. It must not
+  // be stood upright (which would push everything above it up as well); the conflict is reported.
+  SkinMesh patch = makeGridPatch(10, 10, 2.0, 2.0);
+  CoatFeathers c;
+  for (int k = 0; k < 2; ++k) {
+    FeatherFrame f;
+    f.origin = {0.5 + 0.002 * k, 1.0, 0};
+    c.frames.push_back(f);
+    c.params.push_back(packtest::contourFeather(1.0));
+    c.follicle.push_back(k);
+  }
+  c.layerOrder = {0, 1};
+  const PackResult r = pack(patch, c);
+  EXPECT_LE(r.elevation[1], PackOptions{}.conflictElevation);
+  EXPECT_GE(r.stats.conflicts, 1u);
+  PackOptions strict;
+  strict.conflictElevation = 10.0;  // never a conflict: the height field alone decides
+  const PackResult s = pack(patch, c, strict);
+  EXPECT_GT(s.elevation[1], r.elevation[1]);
+}

@@ -45,6 +45,8 @@ struct PackOptions {
   double skinClearance = 0;    // scene units kept above the skin; 0 = auto (= clearance)
   double minElevation = 0;     // radians; lower bound for every computed elevation
   double maxElevation = 1.5707963267948966;  // radians; upper bound (pi/2 = upright)
+  double conflictElevation = 1.3962634015954636;  // radians (80 deg): height-field bins asking for more are
+                               // layer-order conflicts and are ignored instead of standing the feather up
   double openingAge = 0.8;     // feathers with age < openingAge are unopened: straight shaft only, no barb elevation (8.3)
   double baseAllowance = 0.08; // fraction of the feather's total length around the follicle where the shaft may sink
                                // into the skin (the calamus sits in the follicle); clearance ramps up over it
@@ -96,6 +98,7 @@ struct PackStats {
   size_t unopened = 0;         // packed as straight shafts (age < openingAge)
   size_t free = 0;             // no candidate constrained the shaft (rested at the skin/minimum elevation)
   size_t shaftClamped = 0;     // the height field asked for more than maxElevation
+  size_t conflicts = 0;        // feathers with height-field bins above conflictElevation (ignored)
   size_t barbsElevated = 0;    // key barbs raised by flattening
   size_t barbsLifted = 0;      // key barbs that also needed the rotation fallback
   size_t barbsUnresolved = 0;  // key barbs still below their height field at the limits
