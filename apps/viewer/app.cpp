@@ -166,19 +166,22 @@ void App::frame() {
   glfwGetFramebufferSize(window_, &fw, &fh);
   windowSize_ = {w, h};
   fbSize_ = {fw, fh};
+  layoutViewport();
   syncView();
   if (options_.benchmarkOrbit > 0) benchmarkStep();
-  if (fw > 0 && fh > 0) renderView();
+  if (viewPixels_.x > 0 && viewPixels_.y > 0) renderView();
 
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
-  if (viewTexture_ && doc_.hasScene())
+  if (viewTexture_ && doc_.hasScene()) {
+    const glm::vec2 o = view_.viewOrigin, e = o + glm::vec2(view_.viewSize);
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(static_cast<intptr_t>(viewTexture_)),
-                                             ImVec2(0, 0), ImVec2(float(w), float(h)));
+                                             ImVec2(o.x, o.y), ImVec2(e.x, e.y));
+  }
   handleInput();
   buildUi();
-  if (doc_.hasScene() && options_.benchmarkOrbit <= 0) drawOverlays(ImGui::GetBackgroundDrawList(), *panels_, windowSize_);
+  if (doc_.hasScene() && options_.benchmarkOrbit <= 0) drawOverlays(ImGui::GetBackgroundDrawList(), *panels_);
   ImGui::Render();
 
   if (fw > 0 && fh > 0) {
@@ -208,10 +211,20 @@ void App::updateFps() {
   }
 }
 
+void App::layoutViewport() {
+  const float panel = view_.hidePanels ? 0.0f : std::min(kPanelWidth, 0.45f * float(windowSize_.x));
+  view_.viewOrigin = {panel, menuHeight_};
+  view_.viewSize = {std::max(1, int(float(windowSize_.x) - panel)), std::max(1, int(float(windowSize_.y) - menuHeight_ - kStatusHeight))};
+  const float sx = windowSize_.x > 0 ? float(fbSize_.x) / float(windowSize_.x) : 1.0f;
+  const float sy = windowSize_.y > 0 ? float(fbSize_.y) / float(windowSize_.y) : 1.0f;
+  viewPixels_ = {int(std::lround(float(view_.viewSize.x) * sx)), int(std::lround(float(view_.viewSize.y) * sy))};
+}
+
 void App::initCamera() {
   const Snapshot& s = doc_.snapshot();
-  const float aspect = float(std::max(windowSize_.x, 1)) / float(std::max(windowSize_.y, 1));
-  camera_.set(render::sceneCamera(doc_.scene(), s.skin, TriMesh{}, std::max(windowSize_.x, 1), std::max(windowSize_.y, 1)));
+  const glm::ivec2 vs = view_.viewSize;
+  const float aspect = float(vs.x) / float(vs.y);
+  camera_.set(render::sceneCamera(doc_.scene(), s.skin, TriMesh{}, vs.x, vs.y));
   if (doc_.scene().camera.autoFrame) camera_.frame(s.skinLo, s.skinHi, aspect);
   const float diag = glm::length(s.skinHi - s.skinLo);
   if (diag > 0) {
@@ -230,7 +243,7 @@ void App::frameAll() {
     lo = glm::min(lo, s.coatLo);
     hi = glm::max(hi, s.coatHi);
   }
-  camera_.frame(lo, hi, float(std::max(windowSize_.x, 1)) / float(std::max(windowSize_.y, 1)));
+  camera_.frame(lo, hi, float(view_.viewSize.x) / float(view_.viewSize.y));
 }
 
 // Results to the renderer: the skin as soon as a job publishes it (progressive display), the coat and
@@ -286,7 +299,7 @@ void App::uploadResults() {
 std::vector<float> App::viewKey() const {
   const render::Camera& c = camera_.camera();
   const pipeline::Scene& s = doc_.scene();
-  std::vector<float> k = {float(fbSize_.x), float(fbSize_.y), c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z,
+  std::vector<float> k = {float(viewPixels_.x), float(viewPixels_.y), c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z,
                           c.up.x, c.up.y, c.up.z, c.fovYDegrees, c.zNear, c.zFar, float(uploadVersion_),
                           float(view_.showSkin), float(view_.showCoat), float(view_.wireframe), float(s.render.ambient),
                           float(s.render.background.x), float(s.render.background.y), float(s.render.background.z),
@@ -303,7 +316,7 @@ void App::renderView() {
   std::vector<float> key = viewKey();
   if (key == lastViewKey_ && viewTexture_) return;
   const pipeline::Scene& scene = doc_.scene();
-  render::RenderSettings settings = render::sceneSettings(scene, fbSize_.x, fbSize_.y);
+  render::RenderSettings settings = render::sceneSettings(scene, viewPixels_.x, viewPixels_.y);
   settings.drawSkin = view_.showSkin;
   settings.drawCoat = view_.showCoat;
   const auto t0 = std::chrono::steady_clock::now();
@@ -311,6 +324,11 @@ void App::renderView() {
   if (view_.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
   viewImage_ = renderer_->renderImage(camera_.camera(), render::sceneLights(scene), settings);
   if (view_.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  // Renderer::renderImage can leave its own target bound when it (re)creates it (it reads the previous
+  // binding after creating the target): draw the window into the window again.
+  using BindFramebufferFn = void (*)(GLenum, GLuint);
+  static const auto bindFramebuffer = reinterpret_cast<BindFramebufferFn>(glfwGetProcAddress("glBindFramebuffer"));
+  if (bindFramebuffer) bindFramebuffer(0x8D40 /* GL_FRAMEBUFFER */, 0);
   if (!viewTexture_) glGenTextures(1, &viewTexture_);
   glBindTexture(GL_TEXTURE_2D, viewTexture_);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -349,8 +367,8 @@ void App::captureScreenshot(int fbw, int fbh, bool afterUi) {
     } else if (doc_.scene().render.style == "scratchboard" && doc_.idlePipeline()) {
       pipeline::Pipeline& p = *doc_.idlePipeline();
       render::ScratchboardSettings ss;
-      ss.width = fbw;
-      ss.height = fbh;
+      ss.width = viewPixels_.x;
+      ss.height = viewPixels_.y;
       img = render::renderScratchboard(p.coatMesh().mesh, p.skinTriMesh(), camera_.camera(), render::sceneLights(p.scene()), ss);
     } else {
       img = viewImage_;  // exactly the 3D view on screen, without the panels
@@ -383,7 +401,7 @@ void App::benchmarkStep() {
     const auto& st = renderer_->lastStats();
     std::printf("{\"orbit_frames\": %d, \"seconds\": %.4f, \"fps\": %.2f, \"render_ms\": %.1f, \"width\": %d, \"height\": %d, "
                 "\"lod\": %.3f, \"feathers\": %zu, \"coat_triangles\": %zu, \"drawn_triangles\": %zu, \"gl\": \"%s\"}\n",
-                n, secs, double(n) / secs, 1000.0 * benchRenderSeconds_ / n, fbSize_.x, fbSize_.y, doc_.lod(), s.coatFeathers,
+                n, secs, double(n) / secs, 1000.0 * benchRenderSeconds_ / n, viewPixels_.x, viewPixels_.y, doc_.lod(), s.coatFeathers,
                 s.coatTriangles, st.triangles, renderer_->glVersion().c_str());
     std::fflush(stdout);
     quit_ = true;

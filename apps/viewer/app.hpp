@@ -28,6 +28,10 @@ namespace pteryla::viewer {
 
 class GlfwContext;
 
+// Layout of the window: menu bar, panel column on the left, status bar, the 3D view in the rest.
+inline constexpr float kStatusHeight = 30.0f;
+inline constexpr float kPanelWidth = 420.0f;
+
 struct ViewerOptions {
   std::string scene;              // scene file or bare mesh to open ("" = none)
   std::string script;             // --script
@@ -59,6 +63,7 @@ class App {
   bool initWindow();
   bool scripted() const;  // script, --screenshot or --benchmark-orbit: errors end the run
   void frame();
+  void layoutViewport();  // view rectangle from the window size and the panel layout
   void syncView();
   void uploadResults();
   void renderView();
@@ -114,6 +119,8 @@ class App {
   double lastBrdfD_ = -1, lastBrdfH_ = -1;
   size_t lastMaterialCount_ = 0;
   glm::ivec2 windowSize_{0}, fbSize_{0};
+  glm::ivec2 viewPixels_{0};  // the 3D view in framebuffer pixels
+  float menuHeight_ = 19.0f;
 
   // Dialogs.
   std::vector<std::string> errors_;

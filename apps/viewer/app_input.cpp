@@ -30,9 +30,10 @@ bool rayPlane(const Ray& r, const glm::vec3& p, const glm::vec3& n, glm::vec3& o
 void App::handleInput() {
   ImGuiIO& io = ImGui::GetIO();
   if (!doc_.hasScene() || !cameraReady_) return;
-  const glm::vec2 mouse(io.MousePos.x, io.MousePos.y);
-  const float h = float(std::max(windowSize_.y, 1));
-  const bool overUi = io.WantCaptureMouse && !dragging_;
+  const glm::vec2 mouse = glm::vec2(io.MousePos.x, io.MousePos.y) - view_.viewOrigin;  // view pixels
+  const float h = float(view_.viewSize.y);
+  const bool inView = mouse.x >= 0 && mouse.y >= 0 && mouse.x < float(view_.viewSize.x) && mouse.y < float(view_.viewSize.y);
+  const bool overUi = (io.WantCaptureMouse || !inView) && !dragging_ && !toolDrag_;
   if (!overUi && io.MouseWheel != 0.0f) {
     camera_.zoom(std::pow(0.88f, io.MouseWheel));
     cameraMoved_ = true;
@@ -65,13 +66,13 @@ void App::handleInput() {
 void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse) {
   const Snapshot& snap = doc_.snapshot();
   const render::Camera& cam = camera_.camera();
-  const Ray ray = pixelRay(cam, mouse, windowSize_);
+  const Ray ray = pixelRay(cam, mouse, view_.viewSize);
   PanelContext& ctx = *panels_;
   auto tractIndex = [&] { return size_t(std::max(view_.selectedTract, 0)); };
 
   if (pressed) {
     if (view_.tool == Tool::PlaceKey) {
-      const int f = pickPoint(snap.follicle, snap.follicleNormal, cam, windowSize_, mouse, 12.0f);
+      const int f = pickPoint(snap.follicle, snap.follicleNormal, cam, view_.viewSize, mouse, 12.0f);
       if (f >= 0) {
         view_.selectedFollicle = f;
         const size_t tract = f < int(snap.follicleTract.size()) ? snap.follicleTract[size_t(f)] : 0;
@@ -90,7 +91,7 @@ void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
         if (glm::length(dir) > 0) dir = glm::normalize(dir);
         tips.push_back(glm::vec3(actions::jsonVec3(v.value("at", Json()))) + dir * len);
       }
-      const int k = pickPoint(tips, {}, cam, windowSize_, mouse, 12.0f);
+      const int k = pickPoint(tips, {}, cam, view_.viewSize, mouse, 12.0f);
       if (k < 0) return;
       const Json& v = d["vectors"][size_t(k)];
       view_.dragVector = k;

@@ -17,11 +17,6 @@
 
 namespace pteryla::viewer {
 
-namespace {
-constexpr float kStatusHeight = 30.0f;
-constexpr float kPanelWidth = 420.0f;
-}  // namespace
-
 void App::showError(const std::string& message) {
   errors_.push_back(message);
   if (popupToOpen_.empty()) popupToOpen_ = "Error";
@@ -92,7 +87,8 @@ void App::afterSave() {
 
 void App::buildUi() {
   menuBar();
-  panelColumn();
+  menuHeight_ = ImGui::GetFrameHeight();
+  if (!view_.hidePanels) panelColumn();
   drawStatusBar(*panels_, kStatusHeight);
   if (view_.showDesigner && doc_.hasScene()) designer_.draw(*panels_, &view_.showDesigner);
   if (view_.showJsonInspector && doc_.hasScene()) sceneJsonWindow();
@@ -111,6 +107,7 @@ void App::buildUi() {
     if (!ctrl && ImGui::IsKeyPressed('F')) frameAll();
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space))) view_.playing = !view_.playing;
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) view_.tool = Tool::Orbit;
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Tab))) view_.hidePanels = !view_.hidePanels;
   }
   // Releasing the mouse ends a gesture: the next slider drag is a new undo step.
   if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) doc_.endGesture();
@@ -143,6 +140,7 @@ void App::menuBar() {
     ImGui::MenuItem("Feather designer", nullptr, &view_.showDesigner);
     ImGui::MenuItem("Scene JSON", nullptr, &view_.showJsonInspector);
     ImGui::MenuItem("Help", nullptr, &view_.showHelp);
+    ImGui::MenuItem("Hide panels", "Tab", &view_.hidePanels);
     ImGui::EndMenu();
   }
   if (doc_.hasScene()) {
@@ -156,7 +154,7 @@ void App::menuBar() {
 void App::panelColumn() {
   const ImGuiViewport* vp = ImGui::GetMainViewport();
   ImGui::SetNextWindowPos(vp->WorkPos, ImGuiCond_Always);
-  ImGui::SetNextWindowSize(ImVec2(kPanelWidth, vp->WorkSize.y - kStatusHeight), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(view_.viewOrigin.x, vp->WorkSize.y - kStatusHeight), ImGuiCond_Always);
   ImGui::Begin("Panels", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                                       ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoBringToFrontOnFocus);
   if (!doc_.hasScene()) {

@@ -24,10 +24,11 @@ ImU32 tractColour(uint32_t t, int alpha = 255) {
 struct Projector {
   const render::Camera& cam;
   glm::ivec2 vp;
+  glm::vec2 origin;
   bool operator()(const glm::vec3& p, ImVec2& out) const {
     glm::vec2 q;
     if (!projectToPixel(cam, p, vp, q)) return false;
-    out = ImVec2(q.x, q.y);
+    out = ImVec2(origin.x + q.x, origin.y + q.y);
     return true;
   }
   bool facing(const glm::vec3& p, const glm::vec3& n) const { return glm::dot(n, cam.eye - p) >= 0.0f; }
@@ -64,11 +65,12 @@ float overlayArrowLength(const Snapshot& s) {
   return diag > 0 ? diag * 0.06f : 0.1f;
 }
 
-void drawOverlays(ImDrawList* dl, PanelContext& ctx, const glm::ivec2& viewport) {
+void drawOverlays(ImDrawList* dl, PanelContext& ctx) {
   const Snapshot& snap = ctx.doc.snapshot();
   const pipeline::Scene& scene = ctx.doc.scene();
   const ViewState& v = ctx.view;
-  const Projector proj{ctx.camera.camera(), viewport};
+  const Projector proj{ctx.camera.camera(), v.viewSize, v.viewOrigin};
+  dl->PushClipRect(ImVec2(v.viewOrigin.x, v.viewOrigin.y), ImVec2(v.viewOrigin.x + float(v.viewSize.x), v.viewOrigin.y + float(v.viewSize.y)), true);
   const float arrowLen = overlayArrowLength(snap);
 
   // Selected tract: its triangles, translucent, front-facing only.
@@ -203,6 +205,7 @@ void drawOverlays(ImDrawList* dl, PanelContext& ctx, const glm::ivec2& viewport)
       dl->AddText(ImVec2(p.x + 6, p.y - 16), col, c.value("name", "control " + std::to_string(k)).c_str());
     }
   }
+  dl->PopClipRect();
 }
 
 }  // namespace pteryla::viewer

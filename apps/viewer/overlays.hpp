@@ -10,7 +10,8 @@ struct ImDrawList;
 
 namespace pteryla::viewer {
 
-void drawOverlays(ImDrawList* dl, PanelContext& ctx, const glm::ivec2& viewport);
+// Draws into the view rectangle ctx.view.viewOrigin / viewSize.
+void drawOverlays(ImDrawList* dl, PanelContext& ctx);
 
 // Length of drawn direction arrows, scene units (a fraction of the skin's size).
 float overlayArrowLength(const Snapshot& s);

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "camera_controller.hpp"
@@ -29,7 +30,7 @@ enum class Tool {
 // View settings and selections shared by panels, overlays and the app.
 struct ViewState {
   bool showCoat = true, showSkin = true, wireframe = false;
-  bool showFollicles = false, showDirections = false, showTract = true, showKeys = true;
+  bool showFollicles = false, showDirections = false, showTract = false, showKeys = true;
   bool showVectors = true, showBrushes = true, showControls = true;
   int selectedTract = 0;
   int selectedFollicle = -1;
@@ -47,6 +48,11 @@ struct ViewState {
   bool loop = true;
   // Measured frame rate (frames per second over the last half second).
   float fps = 0.0f;
+  // The 3D view's rectangle in window coordinates (right of the panel column, between the menu bar
+  // and the status bar); overlays and picking work in it.
+  glm::vec2 viewOrigin{0.0f};
+  glm::ivec2 viewSize{1, 1};
+  bool hidePanels = false;
   // Windows.
   bool showDesigner = false, showJsonInspector = false, showHelp = false;
   // A styling vector being dragged (preview until release).

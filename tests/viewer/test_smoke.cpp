@@ -73,7 +73,7 @@ TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
                         << "screenshot " << shot << "\n"
                         << "screenshot-window " << window << "\n"
                         << "quit\n";
-  const ViewerRun r = runViewer("--size 800x600 --script \"" + script + "\"", dir + "/stderr.txt");
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
 
   // The saved scene reloads to the same scene (what loadScene reads, sceneToJson writes back).
@@ -88,11 +88,17 @@ TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
   const Json m = Json::parse(r.out.substr(0, r.out.find('\n')));
   EXPECT_EQ(m["follicles"], 30);
 
-  // Screenshots: the 3D view (window size) and the window with its panels, both with real content.
+  // Screenshots: the 3D view (right of the panels) and the whole window, both with real content.
   for (const std::string& path : {shot, window}) {
     const render::Image img = render::loadImage(path);
-    EXPECT_EQ(img.width, 800) << path;
-    EXPECT_EQ(img.height, 600) << path;
+    if (path == window) {
+      EXPECT_EQ(img.width, 1000);
+      EXPECT_EQ(img.height, 700);
+    } else {
+      EXPECT_GT(img.width, 400);
+      EXPECT_LT(img.width, 1000);
+      EXPECT_GT(img.height, 400);
+    }
     std::set<uint32_t> colours;
     for (size_t i = 0; i + 3 < img.rgba.size() && colours.size() < 64; i += 4 * 7)
       colours.insert(uint32_t(img.rgba[i]) << 16 | uint32_t(img.rgba[i + 1]) << 8 | img.rgba[i + 2]);
@@ -100,6 +106,23 @@ TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
     const uint8_t bg[3] = {img.rgba[0], img.rgba[1], img.rgba[2]};
     EXPECT_GT(render::coveredFraction(img, bg, 8), 0.02) << path << ": nothing drawn over the background";
   }
+  // The window capture is drawn everywhere: menu bar and panels on the left, the 3D view on the
+  // right, the status bar at the bottom (a stale or mis-bound framebuffer leaves flat regions).
+  const render::Image win = render::loadImage(window);
+  auto distinct = [&](int x0, int y0, int x1, int y1) {
+    std::set<uint32_t> c;
+    for (int y = y0; y < y1; y += 3)
+      for (int x = x0; x < x1; x += 3) {
+        const uint8_t* p = win.pixel(x, y);
+        c.insert(uint32_t(p[0]) << 16 | uint32_t(p[1]) << 8 | p[2]);
+      }
+    return c.size();
+  };
+  EXPECT_GE(distinct(0, 0, 500, 20), 3u) << "menu bar";
+  EXPECT_GE(distinct(0, 0, 400, 700), 8u) << "panel column";
+  EXPECT_GE(distinct(500, 50, 1000, 650), 8u) << "3D view";
+  EXPECT_GE(distinct(0, 672, 1000, 700), 3u) << "status bar";
+  EXPECT_GE(distinct(900, 0, 1000, 700), 2u) << "right edge";
 }
 
 TEST(ViewerSmoke, BadScriptExitsWithTwoAndNamesTheLine) {
