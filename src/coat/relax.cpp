@@ -44,12 +44,33 @@ struct FaceLimits {
   bool any = false;
 };
 
+// Polygon with, per vertex j, the label of edge j -> j+1: the triangle edge (0..2) it lies on, or -1 for
+// a piece of a bisector.
+struct Poly {
+  std::vector<glm::dvec3> v;     // storage; the polygon is v[0 .. n)
+  std::vector<int8_t> label;
+  size_t n = 0;
+  void fit(size_t m) {
+    if (v.size() < m) {
+      v.resize(m);
+      label.resize(m);
+    }
+  }
+  void setTriangle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+    fit(3);
+    v[0] = a, v[1] = b, v[2] = c;
+    label[0] = 0, label[1] = 1, label[2] = 2;
+    n = 3;
+  }
+};
+
 struct ThreadScratch {
   std::vector<uint32_t> stamp;
   uint32_t epoch = 0;
   std::vector<uint32_t> queue, shell;
   std::vector<std::pair<double, uint32_t>> knn;
-  std::vector<glm::dvec3> polyA, polyB, q, candPos;
+  Poly polyA, polyB;
+  std::vector<glm::dvec3> q, candPos;
   std::vector<double> qq;
   std::vector<uint32_t> cand;
   std::vector<double> f;
@@ -336,41 +357,53 @@ class Relaxer {
   // Keeps the part of polygon `a` with n.y <= d (Sutherland-Hodgman), result in `a` (using `b` and `f` as
   // scratch); returns false when nothing is left.
   enum ClipResult { kEmpty, kUnchanged, kClipped };
-  static ClipResult clip(std::vector<glm::dvec3>& a, std::vector<glm::dvec3>& b, std::vector<double>& f,
-                         const glm::dvec3& n, double d) {
-    const size_t m = a.size();
+  static ClipResult clip(Poly& a, Poly& b, std::vector<double>& f, const glm::dvec3& n, double d) {
+    const size_t m = a.n;
     if (f.size() < m) f.resize(m);
+    double* fv = f.data();
+    const glm::dvec3* av = a.v.data();
     bool anyOut = false, anyIn = false;
     for (size_t j = 0; j < m; ++j) {
-      f[j] = glm::dot(n, a[j]) - d;
-      if (f[j] > 0) anyOut = true;
+      fv[j] = glm::dot(n, av[j]) - d;
+      if (fv[j] > 0) anyOut = true;
       else anyIn = true;
     }
     if (!anyOut) return kUnchanged;
     if (!anyIn) return kEmpty;
-    b.clear();
+    b.fit(m + 1);  // a convex polygon gains at most one vertex per cut
+    glm::dvec3* bv = b.v.data();
+    int8_t* bl = b.label.data();
+    const int8_t* al = a.label.data();
+    size_t k = 0;
     size_t prev = m - 1;
     for (size_t j = 0; j < m; ++j) {
-      const double fa = f[prev], fb = f[j];
-      if ((fa <= 0) != (fb <= 0)) b.push_back(a[prev] + (a[j] - a[prev]) * (fa / (fa - fb)));
-      if (fb <= 0) b.push_back(a[j]);
+      const double fa = fv[prev], fb = fv[j];
+      if ((fa <= 0) != (fb <= 0)) {
+        bv[k] = av[prev] + (av[j] - av[prev]) * (fa / (fa - fb));
+        bl[k++] = fa <= 0 ? int8_t(-1) : al[prev];  // leaving: along the bisector
+      }
+      if (fb <= 0) {
+        bv[k] = av[j];
+        bl[k++] = al[j];
+      }
       prev = j;
     }
-    a.swap(b);
-    return a.size() >= 3 ? kClipped : kEmpty;
+    b.n = k;
+    std::swap(a, b);
+    return a.n >= 3 ? kClipped : kEmpty;
   }
 
-  static double maxNorm2(const std::vector<glm::dvec3>& a) {
+  static double maxNorm2(const Poly& a) {
     double r2 = 0;
-    for (const auto& v : a) r2 = std::max(r2, glm::dot(v, v));
+    for (size_t j = 0; j < a.n; ++j) r2 = std::max(r2, glm::dot(a.v[j], a.v[j]));
     return r2;
   }
 
-  void integrate(const std::vector<glm::dvec3>& poly, uint32_t fi, size_t lf, const glm::dvec3& site, Cell& cell) const {
-    const glm::dvec3& a = poly[0];
-    for (size_t j = 1; j + 1 < poly.size(); ++j) {
-      const glm::dvec3& b = poly[j];
-      const glm::dvec3& c = poly[j + 1];
+  void integrate(const Poly& poly, uint32_t fi, size_t lf, const glm::dvec3& site, Cell& cell) const {
+    const glm::dvec3& a = poly.v[0];
+    for (size_t j = 1; j + 1 < poly.n; ++j) {
+      const glm::dvec3& b = poly.v[j];
+      const glm::dvec3& c = poly.v[j + 1];
       const double A = 0.5 * glm::length(glm::cross(b - a, c - a));
       if (!(A > 0)) continue;
       cell.area += A;
@@ -461,7 +494,7 @@ class Relaxer {
         const uint32_t fi = sc.queue[qi];
         const size_t lf = static_cast<size_t>(local_[fi]);
         const auto& t = mesh_.faces[fi];
-        sc.polyA.assign({mesh_.positions[t[0]] - p, mesh_.positions[t[1]] - p, mesh_.positions[t[2]] - p});
+        sc.polyA.setTriangle(mesh_.positions[t[0]] - p, mesh_.positions[t[1]] - p, mesh_.positions[t[2]] - p);
         bool alive = true;
         double r2 = maxNorm2(sc.polyA);
         for (size_t j = 0; j < sc.q.size(); ++j) {
@@ -485,7 +518,15 @@ class Relaxer {
         if (!alive) continue;
         r2max = std::max(r2max, r2);
         integrate(sc.polyA, fi, lf, p, cell);
+        // Grow across the triangle edges the cell actually crosses (a stretch of non-zero length).
+        uint8_t crossed = 0;
+        const size_t pm = sc.polyA.n;
+        for (size_t j = 0; j < pm; ++j) {
+          const int8_t l = sc.polyA.label[j];
+          if (l >= 0 && sc.polyA.v[j] != sc.polyA.v[(j + 1) % pm]) crossed |= static_cast<uint8_t>(1u << l);
+        }
         for (int c = 0; c < 3; ++c) {
+          if (!(crossed & (1u << c))) continue;
           const int32_t g = mesh_.faceNeighbors[fi][c];
           if (g < 0) continue;
           const int32_t lg = local_[static_cast<size_t>(g)];
