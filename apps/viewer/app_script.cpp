@@ -51,6 +51,24 @@ void App::scriptStep() {
       if (!(f > 0)) throw Error("zoom factor must be positive", file, "line " + std::to_string(c.line));
       camera_.zoom(float(f));
       cameraMoved_ = true;
+    } else if (c.verb == "panel") {
+      needArgs(c, 2, 2, "panel NAME|* open|closed", file);
+      if (c.args[1] != "open" && c.args[1] != "closed") throw Error("usage: panel NAME|* open|closed", file, "line " + std::to_string(c.line));
+      view_.panelRequests[c.args[0]] = c.args[1] == "open" ? 1 : 0;
+      scriptWaitFrames_ = 1;
+    } else if (c.verb == "show") {
+      needArgs(c, 2, 2, "show WHAT on|off", file);
+      const std::string& w = c.args[0];
+      if (c.args[1] != "on" && c.args[1] != "off") throw Error("usage: show WHAT on|off", file, "line " + std::to_string(c.line));
+      const bool on = c.args[1] == "on";
+      bool* flag = w == "designer" ? &view_.showDesigner : w == "json" ? &view_.showJsonInspector : w == "help" ? &view_.showHelp
+                 : w == "panels" ? nullptr : w == "follicles" ? &view_.showFollicles : w == "directions" ? &view_.showDirections
+                 : w == "tract" ? &view_.showTract : w == "wireframe" ? &view_.wireframe : w == "coat" ? &view_.showCoat
+                 : w == "skin" ? &view_.showSkin : nullptr;
+      if (w == "panels") view_.hidePanels = !on;
+      else if (!flag) throw Error("unknown view item '" + w + "' (designer, json, help, panels, follicles, directions, tract, wireframe, coat, skin)", file, "line " + std::to_string(c.line));
+      else *flag = on;
+      scriptWaitFrames_ = 1;
     } else if (c.verb == "frame") {
       needArgs(c, 0, 0, "frame", file);
       frameAll();

@@ -166,23 +166,30 @@ void App::panelColumn() {
     return;
   }
   PanelContext& ctx = *panels_;
-  if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) drawViewPanel(ctx);
-  if (ImGui::CollapsingHeader("Feather designer")) {
-    ImGui::Checkbox("Show the designer window", &view_.showDesigner);
-  }
-  if (ImGui::CollapsingHeader("Tracts")) drawTractsPanel(ctx);
-  if (ImGui::CollapsingHeader("Follicles")) drawFolliclesPanel(ctx);
-  if (ImGui::CollapsingHeader("Key feathers")) drawKeyFeathersPanel(ctx);
-  if (ImGui::CollapsingHeader("Directions")) drawDirectionsPanel(ctx);
-  if (ImGui::CollapsingHeader("Packing")) drawPackingPanel(ctx);
-  if (ImGui::CollapsingHeader("Timeline", ImGuiTreeNodeFlags_DefaultOpen)) drawTimelinePanel(ctx);
-  if (ImGui::CollapsingHeader("Expressive controls")) drawControlsPanel(ctx);
-  if (ImGui::CollapsingHeader("Render")) drawRenderPanel(ctx);
-  if (ImGui::CollapsingHeader("Stage timings")) {
+  // Scripts can open and close headers (panelRequests); a request applies once.
+  auto header = [&](const char* name, bool defaultOpen) {
+    auto it = view_.panelRequests.find(name);
+    if (it == view_.panelRequests.end()) it = view_.panelRequests.find("*");
+    if (it != view_.panelRequests.end()) ImGui::SetNextItemOpen(it->second != 0);
+    return ImGui::CollapsingHeader(name, defaultOpen ? ImGuiTreeNodeFlags_DefaultOpen : 0);
+  };
+  if (header("View", true)) drawViewPanel(ctx);
+  if (header("Feather designer", false)) ImGui::Checkbox("Show the designer window", &view_.showDesigner);
+  if (header("Tracts", false)) drawTractsPanel(ctx);
+  if (header("Follicles", false)) drawFolliclesPanel(ctx);
+  if (header("Key feathers", false)) drawKeyFeathersPanel(ctx);
+  if (header("Directions", false)) drawDirectionsPanel(ctx);
+  if (header("Packing", false)) drawPackingPanel(ctx);
+  if (header("Timeline", true)) drawTimelinePanel(ctx);
+  if (header("Expressive controls", false)) drawControlsPanel(ctx);
+  if (header("Render", false)) drawRenderPanel(ctx);
+  if (header("Stage timings", false)) {
     const Snapshot& s = doc_.snapshot();
     for (int i = 0; i < 10; ++i)
       ImGui::Text("%-12s %8.3f s", pipeline::stageName(pipeline::Stage(i)), s.stageSeconds[i]);
+    ImGui::Text("%-12s %8.3f s", "view render", lastRenderSeconds_);
   }
+  view_.panelRequests.clear();
   ImGui::End();
 }
 
@@ -307,6 +314,7 @@ void App::dialogs() {
 }
 
 void App::sceneJsonWindow() {
+  ImGui::SetNextWindowPos(ImVec2(view_.viewOrigin.x + 24, view_.viewOrigin.y + 24), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSize(ImVec2(560, 620), ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Scene JSON", &view_.showJsonInspector)) {
     ImGui::End();
@@ -327,6 +335,7 @@ void App::sceneJsonWindow() {
 }
 
 void App::helpWindow() {
+  ImGui::SetNextWindowPos(ImVec2(view_.viewOrigin.x + 24, view_.viewOrigin.y + 24), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSize(ImVec2(620, 560), ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Help", &view_.showHelp)) {
     ImGui::End();
@@ -343,6 +352,7 @@ void App::helpWindow() {
 }
 
 void App::scratchboardWindow() {
+  ImGui::SetNextWindowPos(ImVec2(view_.viewOrigin.x + 24, view_.viewOrigin.y + 24), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSize(ImVec2(520, 460), ImGuiCond_FirstUseEver);
   ImGui::Begin("Scratchboard preview");
   const bool ready = doc_.upToDate() && doc_.idlePipeline();

@@ -215,7 +215,8 @@ FeatherDesigner::~FeatherDesigner() = default;
 
 void FeatherDesigner::draw(PanelContext& ctx, bool* open) {
   Impl& d = *impl_;
-  ImGui::SetNextWindowSize(ImVec2(720, 760), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowPos(ImVec2(ctx.view.viewOrigin.x + 12, ctx.view.viewOrigin.y + 12), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(860, 780), ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Feather designer", open)) {
     ImGui::End();
     return;

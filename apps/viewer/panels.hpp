@@ -4,6 +4,7 @@
 // Viewport tools (placing key feathers, styling vectors, brushes, controls, bias vectors) are modes
 // set here and carried out by the app on mouse input (tool.hpp-like state in ViewState).
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -53,6 +54,8 @@ struct ViewState {
   glm::vec2 viewOrigin{0.0f};
   glm::ivec2 viewSize{1, 1};
   bool hidePanels = false;
+  // Panel headers to open (1) or close (0) on the next frame, by name ("*" = all): set by scripts.
+  std::map<std::string, int> panelRequests;
   // Windows.
   bool showDesigner = false, showJsonInspector = false, showHelp = false;
   // A styling vector being dragged (preview until release).

@@ -61,6 +61,19 @@ void drawViewPanel(PanelContext& ctx) {
   ImGui::SameLine();
   ImGui::SetNextItemWidth(-FLT_MIN);
   ImGui::InputText("##shot", &shot);
+  if (ImGui::Button("Use this view as the scene camera")) {
+    const render::Camera c = ctx.camera.camera();
+    guarded(ctx, [&] {
+      doc.edit("scene camera", [&](Scene& s) {
+        s.camera.autoFrame = false;
+        s.camera.eye = glm::dvec3(c.eye);
+        s.camera.target = glm::dvec3(c.target);
+        s.camera.up = glm::dvec3(c.up);
+        s.camera.fovDeg = c.fovYDegrees;
+      });
+    });
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("pteryla render uses it (camera.eye / target)");
   const auto& cam = ctx.camera.camera();
   ImGui::TextDisabled("eye %.3g %.3g %.3g  target %.3g %.3g %.3g", cam.eye.x, cam.eye.y, cam.eye.z, cam.target.x,
                       cam.target.y, cam.target.z);

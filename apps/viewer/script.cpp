@@ -87,7 +87,7 @@ std::vector<ScriptCommand> loadScript(const std::string& path) {
 }
 
 bool isViewCommand(const std::string& v) {
-  return v == "screenshot" || v == "screenshot-window" || v == "orbit" || v == "zoom" || v == "frame" || v == "frames" || v == "quit";
+  return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "orbit" || v == "zoom" || v == "frame" || v == "frames" || v == "quit";
 }
 
 double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file) {
@@ -263,6 +263,8 @@ const char* scriptHelp() {
   echo TEXT
   screenshot PATH | screenshot-window PATH (with the panels)
   orbit YAW_DEG PITCH_DEG | zoom FACTOR | frame | frames N | quit
+  panel NAME|* open|closed       open or close panel headers (names as shown)
+  show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin on|off
 )";
 }
 

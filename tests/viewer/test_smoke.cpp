@@ -1,5 +1,6 @@
 // CI smoke test: the real viewer binary under xvfb-run runs a scripted session on the patch scene
-// (panel actions, timeline, controls, save, screenshot, quit); the saved scene must reload identically
+// (panel actions, timeline, controls, every panel and window open for a few frames, save, screenshot,
+// quit); the saved scene must reload identically
 // and the screenshot must show something (not one flat colour). Skipped only when xvfb-run is missing.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -69,6 +70,15 @@ TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
                            "orbit 20 10\n"
                            "frame\n"
                            "check\n"
+                           "panel * open\n"
+                           "show designer on\n"
+                           "show follicles on\n"
+                           "show directions on\n"
+                           "show tract on\n"
+                           "frames 2\n"
+                           "show json on\n"
+                           "show help on\n"
+                           "frames 2\n"
                         << "save " << saved << "\n"
                         << "screenshot " << shot << "\n"
                         << "screenshot-window " << window << "\n"
