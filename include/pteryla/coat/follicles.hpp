@@ -24,7 +24,8 @@ struct DensityField {
   double uniform = 0.0;            // used when perVertex is empty
   std::vector<double> perVertex;   // one value per mesh vertex (>= 0), linear across each face
   // Optional factor >= 0 on top (e.g. a painted density texture sampled through uvAt). Scattering
-  // evaluates it at face centroids (it picks faces, not points inside them); relaxation per sample.
+  // evaluates it at face centroids (it picks faces, not points inside them); relaxation at quadrature
+  // points, from several threads at once (it must be thread-safe and deterministic).
   std::function<double(uint32_t face, const glm::dvec3& bary)> multiplier;
 
   bool isUniform() const { return perVertex.empty() && !multiplier; }
