@@ -13,6 +13,7 @@
 #include <complex>
 #include <limits>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include "pteryla/core/error.hpp"

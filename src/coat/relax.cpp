@@ -23,6 +23,7 @@
 #include <cmath>
 #include <limits>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
@@ -119,6 +120,7 @@ class Relaxer {
     area_ = tractArea(mesh_, tract_);
     spacing_ = std::sqrt(2.0 * area_ / (kSqrt3 * static_cast<double>(n_)));
     res.spacing = spacing_;
+    selectBias();
     setupTract();
     classifyBoundary();
     for (uint8_t k : kind_) {
@@ -196,12 +198,30 @@ class Relaxer {
       if (!std::isfinite(b.origin.x) || !std::isfinite(b.origin.y) || !std::isfinite(b.origin.z))
         fail("origin must be finite", el);
       if (b.stretch > 1.0 && !(glm::length(b.direction) > 0)) fail("direction must be non-zero", el);
+    }
+  }
+
+  // Keeps the bias vectors that change anything: stretch > 1 or gain > 0, and within 3 sigma of the
+  // tract's bounding box (the Gaussian is cut off there). Without any, the plain Lloyd code runs.
+  void selectBias() {
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    for (uint32_t f : tract_.faces)
+      for (uint32_t v : mesh_.faces[f]) {
+        lo = glm::min(lo, mesh_.positions[v]);
+        hi = glm::max(hi, mesh_.positions[v]);
+      }
+    for (const BiasVector& b : opt_.bias) {
+      if (!(b.stretch > 1.0 || b.densityGain > 0.0)) continue;
+      if (b.sigma > 0) {
+        const glm::dvec3 d = glm::max(glm::max(lo - b.origin, b.origin - hi), glm::dvec3(0));
+        if (glm::dot(d, d) > 9.0 * b.sigma * b.sigma) continue;
+      }
       if (b.stretch > 1.0) {
         metric_ = true;
         lambdaBound_ += b.stretch * b.stretch - 1.0;
       }
       if (b.densityGain > 0.0) gain_ = true;
-      if (b.stretch > 1.0 || b.densityGain > 0.0) activeBias_.push_back(b);
+      activeBias_.push_back(b);
     }
     weighted_ = !opt_.density.isUniform() || gain_;
   }

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include "mesh_io.hpp"

@@ -128,6 +128,7 @@ TEST(Relax, ZeroBiasIsExactlyPlainLloyd) {
   RelaxOptions zero = plain;
   zero.bias.push_back({{0.5, 0.5, 0}, {1, 0, 0}, 0.2, 1.0, 0.0});  // stretch 1, no gain
   zero.bias.push_back({{0.1, 0.9, 0}, {0, 1, 0}, 0.0, 1.0, 0.0});
+  zero.bias.push_back({{5.0, 0.5, 0}, {0, 1, 0}, 1.0, 3.0, 2.0});  // strong, but beyond 3 sigma of the tract
   Follicles a = scatter(patch(), 800, 2), b = a;
   const RelaxResult ra = relaxFollicles(patch().mesh, patch().tract, a, plain);
   const RelaxResult rb = relaxFollicles(patch().mesh, patch().tract, b, zero);
