@@ -13,6 +13,7 @@
 
 #include "camera_controller.hpp"
 #include "document.hpp"
+#include "navigation.hpp"
 #include "panels.hpp"
 #include "script.hpp"
 
@@ -66,6 +67,8 @@ class App {
   void layoutViewport();  // view rectangle from the window size and the panel layout
   void syncView();
   void uploadResults();
+  void buildNavigationCoat(const pipeline::CoatMesh& coat);
+  bool cameraMoving() const;
   void renderView();
   std::vector<float> viewKey() const;
   void initCamera();
@@ -98,6 +101,11 @@ class App {
   GLFWwindow* window_ = nullptr;
   std::unique_ptr<GlfwContext> context_;
   std::unique_ptr<render::Renderer> renderer_;
+  std::unique_ptr<render::Renderer> navRenderer_;  // the navigation coat (navigation.hpp)
+  bool navReady_ = false, navNeeded_ = false, navUsed_ = false;
+  size_t navTriangles_ = 0, navStride_ = 1;
+  glm::vec3 navSkinColor_{-1.0f};  // mean colour of the last full view, for the skin while navigating
+  std::chrono::steady_clock::time_point lastWheel_;
   Document doc_;
   ViewState view_;
   CameraController camera_;
@@ -143,7 +151,8 @@ class App {
   // Measurement.
   std::chrono::steady_clock::time_point fpsStart_;
   int fpsFrames_ = 0;
-  int benchFrame_ = -1;
+  int benchFrame_ = -1, benchPass_ = 0;  // pass 0: navigation coat (when used), 1: full coat
+  double benchNavFps_ = -1, benchNavRenderMs_ = 0;
   std::chrono::steady_clock::time_point benchStart_;
   double benchRenderSeconds_ = 0;
 

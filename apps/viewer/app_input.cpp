@@ -35,6 +35,7 @@ void App::handleInput() {
   const bool inView = mouse.x >= 0 && mouse.y >= 0 && mouse.x < float(view_.viewSize.x) && mouse.y < float(view_.viewSize.y);
   const bool overUi = (io.WantCaptureMouse || !inView) && !dragging_ && !toolDrag_;
   if (!overUi && io.MouseWheel != 0.0f) {
+    lastWheel_ = std::chrono::steady_clock::now();
     camera_.zoom(std::pow(0.88f, io.MouseWheel));
     cameraMoved_ = true;
   }

@@ -42,6 +42,7 @@ void App::openNow(const std::string& path) {
   // Forget the previous scene's view.
   renderer_->setSkin(TriMesh{});
   renderer_->setCoat(TriMesh{}, {});
+  navReady_ = false;
   syncedResult_ = ~0ull;
   uploadedSkin_ = 0;
   meshEvals_ = ~0ull;

@@ -47,6 +47,12 @@ struct ViewState {
   bool playing = false;
   float timeStart = 0.0f, timeEnd = 10.0f, timeStep = 1.0f / 24.0f;
   bool loop = true;
+  // Fast navigation: while the camera moves, draw every k-th feather so at most this many coat
+  // triangles are drawn (navigation.hpp); the full coat as soon as it stops.
+  bool fastNavigation = true;
+  int navigationBudget = 120000;
+  bool navigationChanged = false;
+  bool forceNavigation = false;  // draw the navigation coat even at rest (script: show navigation on)
   // Measured frame rate (frames per second over the last half second).
   float fps = 0.0f;
   // The 3D view's rectangle in window coordinates (right of the panel column, between the menu bar

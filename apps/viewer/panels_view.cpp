@@ -54,6 +54,12 @@ void drawViewPanel(PanelContext& ctx) {
   ImGui::Checkbox("Brushes", &v.showBrushes);
   ImGui::SameLine();
   ImGui::Checkbox("Controls", &v.showControls);
+  if (ImGui::Checkbox("Fast navigation", &v.fastNavigation)) v.navigationChanged = true;
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("while the camera moves, draw a subset of the feathers");
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(140);
+  if (ImGui::SliderInt("triangles", &v.navigationBudget, 20000, 1000000, "%d", ImGuiSliderFlags_Logarithmic))
+    v.navigationChanged = true;
   if (ImGui::Button("Frame all (F)")) ctx.app.frameAll();
   ImGui::SameLine();
   static std::string shot = "screenshot.png";

@@ -264,7 +264,7 @@ const char* scriptHelp() {
   screenshot PATH | screenshot-window PATH (with the panels)
   orbit YAW_DEG PITCH_DEG | zoom FACTOR | frame | frames N | quit
   panel NAME|* open|closed       open or close panel headers (names as shown)
-  show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin on|off
+  show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin|navigation on|off
 )";
 }
 

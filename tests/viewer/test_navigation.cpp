@@ -1,0 +1,67 @@
+// Navigation coat: the long feathers whole, every k-th of the others, within the triangle budget;
+// geometry copied exactly, layer order kept.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "navigation.hpp"
+
+using namespace pteryla;
+using namespace pteryla::viewer;
+
+namespace {
+// A coat of `n` feathers, each a strip of `tris` triangles over its own vertices; feathers whose index
+// is a multiple of 10 are 10 times longer.
+pipeline::CoatMesh stripCoat(size_t n, size_t tris) {
+  pipeline::CoatMesh c;
+  for (size_t f = 0; f < n; ++f) {
+    pipeline::CoatDrawRange r;
+    r.firstIndex = static_cast<uint32_t>(c.mesh.indices.size());
+    r.origin = {float(f), 0.0f, 0.0f};
+    const float step = f % 10 == 0 ? 10.0f : 1.0f;
+    const uint32_t base = static_cast<uint32_t>(c.mesh.positions.size());
+    for (size_t v = 0; v < tris + 2; ++v) {
+      c.mesh.positions.push_back({float(f), step * float(v), 0.0f});
+      c.mesh.uvBarb.push_back({float(v), float(f)});
+      c.mesh.featherId.push_back(uint32_t(f));
+    }
+    for (uint32_t t = 0; t < tris; ++t) {
+      c.mesh.indices.push_back(base + t);
+      c.mesh.indices.push_back(base + t + 1);
+      c.mesh.indices.push_back(base + t + 2);
+    }
+    r.indexCount = static_cast<uint32_t>(3 * tris);
+    r.material = uint32_t(f % 3);
+    r.partCount[0] = r.indexCount;
+    c.ranges.push_back(r);
+  }
+  return c;
+}
+}  // namespace
+
+TEST(Navigation, LongFeathersFirstThenEveryKthWithinTheBudget) {
+  const pipeline::CoatMesh coat = stripCoat(100, 10);  // 1000 triangles; feathers 0, 10, ..., 90 long
+  EXPECT_TRUE(makeNavigationCoat(coat, 1000).mesh.empty());  // fits: nothing to do
+  const NavigationCoat nav = makeNavigationCoat(coat, 300);
+  EXPECT_LE(nav.mesh.triangleCount(), 300u);
+  EXPECT_EQ(nav.longKept, 10u);   // the ten long feathers: 100 triangles <= half the budget
+  EXPECT_EQ(nav.stride, 5u);      // 900 triangles of short feathers into the remaining 200
+  std::vector<uint32_t> kept;
+  for (const auto& r : nav.ranges) kept.push_back(nav.mesh.featherId[nav.mesh.indices[r.firstIndex]]);
+  for (uint32_t f = 0; f < 100; f += 10) EXPECT_NE(std::find(kept.begin(), kept.end(), f), kept.end()) << f;
+  EXPECT_TRUE(std::is_sorted(kept.begin(), kept.end()));  // layer order
+  EXPECT_EQ(kept.size(), 10u + 18u);                      // 90 short feathers, every 5th
+  for (size_t k = 0; k < nav.ranges.size(); ++k) {
+    const auto& r = nav.ranges[k];
+    const auto& src = coat.ranges[kept[k]];
+    EXPECT_EQ(r.material, src.material);
+    EXPECT_EQ(r.indexCount, src.indexCount);
+    EXPECT_EQ(r.partCount[0], r.indexCount);
+    for (uint32_t i = 0; i < r.indexCount; ++i) {
+      const uint32_t a = nav.mesh.indices[r.firstIndex + i], b = coat.mesh.indices[src.firstIndex + i];
+      EXPECT_EQ(nav.mesh.positions[a], coat.mesh.positions[b]);
+      EXPECT_EQ(nav.mesh.uvBarb[a], coat.mesh.uvBarb[b]);
+    }
+  }
+  EXPECT_TRUE(nav.mesh.normals.empty());  // absent attributes stay absent
+}
