@@ -174,6 +174,17 @@ void App::frame() {
 
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
+  if (fakeMouseNext_ < fakeMouse_.size()) {
+    // Scripted mouse: overrides what the GLFW backend read from the (headless) pointer.
+    const FakeMouse& m = fakeMouse_[fakeMouseNext_++];
+    ImGuiIO& io = ImGui::GetIO();
+    io.MousePos = ImVec2(view_.viewOrigin.x + m.pos.x, view_.viewOrigin.y + m.pos.y);
+    for (int b = 0; b < 3; ++b) io.MouseDown[b] = m.down[b];
+    if (fakeMouseNext_ == fakeMouse_.size()) {
+      fakeMouse_.clear();
+      fakeMouseNext_ = 0;
+    }
+  }
   ImGui::NewFrame();
   if (viewTexture_ && doc_.hasScene()) {
     const glm::vec2 o = view_.viewOrigin, e = o + glm::vec2(view_.viewSize);

@@ -156,6 +156,15 @@ class App {
   std::chrono::steady_clock::time_point benchStart_;
   double benchRenderSeconds_ = 0;
 
+  // Scripted mouse input (click / drag commands): one state per frame, in view pixels.
+  struct FakeMouse {
+    glm::vec2 pos{0};
+    bool down[3] = {false, false, false};
+  };
+  std::vector<FakeMouse> fakeMouse_;
+  size_t fakeMouseNext_ = 0;
+  glm::vec2 scriptPoint(const ScriptCommand& c, size_t arg) const;
+
   // Drag state of the viewport.
   bool dragging_ = false, toolDrag_ = false;
   glm::vec3 dragNormal_{0, 0, 1};

@@ -9,8 +9,23 @@
 
 namespace pteryla::viewer {
 
+glm::vec2 App::scriptPoint(const ScriptCommand& c, size_t arg) const {
+  glm::vec2 p;
+  for (int k = 0; k < 2; ++k) {
+    std::string s = c.args.at(arg + size_t(k));
+    const bool percent = !s.empty() && s.back() == '%';
+    if (percent) s.pop_back();
+    ScriptCommand one = c;
+    one.args = {s};
+    const double v = scriptNumber(one, 0, options_.script);
+    p[k] = percent ? float(v / 100.0) * float(k == 0 ? view_.viewSize.x : view_.viewSize.y) : float(v);
+  }
+  return p;
+}
+
 void App::scriptStep() {
   if (quit_) return;
+  if (!fakeMouse_.empty()) return;  // a scripted click or drag is being played
   if (doc_.failed()) return;  // frame() reports the error and fails the script
   if (shotWanted_) return;    // a screenshot is waiting for its frame
   if (scriptWaitFrames_ > 0) {
@@ -69,6 +84,45 @@ void App::scriptStep() {
       else if (!flag) throw Error("unknown view item '" + w + "' (designer, json, help, panels, follicles, directions, tract, wireframe, coat, skin, navigation)", file, "line " + std::to_string(c.line));
       else *flag = on;
       scriptWaitFrames_ = 1;
+    } else if (c.verb == "click" || c.verb == "drag") {
+      // View pixels from the view's top-left corner, or percentages of the view ("50%").
+      if (c.verb == "click") needArgs(c, 2, 2, "click X Y", file);
+      else needArgs(c, 4, 6, "drag X1 Y1 X2 Y2 [left|right|middle [STEPS]]", file);
+      const glm::vec2 a = scriptPoint(c, 0), b = c.verb == "drag" ? scriptPoint(c, 2) : a;
+      int button = 0;
+      if (c.args.size() > 4) {
+        const std::string& bn = c.args[4];
+        button = bn == "left" ? 0 : bn == "right" ? 1 : bn == "middle" ? 2 : -1;
+        if (button < 0) throw Error("button must be left, right or middle", file, "line " + std::to_string(c.line));
+      }
+      const int steps = c.args.size() > 5 ? int(scriptNumber(c, 5, file)) : 8;
+      FakeMouse m;
+      m.pos = a;
+      fakeMouse_.push_back(m);  // hover
+      m.down[button] = true;
+      fakeMouse_.push_back(m);  // press
+      for (int i = 1; c.verb == "drag" && i <= std::max(steps, 1); ++i) {
+        m.pos = a + (b - a) * (float(i) / float(std::max(steps, 1)));
+        fakeMouse_.push_back(m);
+      }
+      m.down[button] = false;
+      fakeMouse_.push_back(m);  // release
+      fakeMouse_.push_back(m);
+      fakeMouseNext_ = 0;
+    } else if (c.verb == "tool") {
+      needArgs(c, 1, 2, "tool orbit|key|vector|edit-vectors|bias|brush|control|pin [FEATHER]", file);
+      static const std::pair<const char*, Tool> tools[] = {{"orbit", Tool::Orbit},      {"key", Tool::PlaceKey},
+                                                           {"vector", Tool::AddVector}, {"edit-vectors", Tool::EditVectors},
+                                                           {"bias", Tool::AddBias},     {"brush", Tool::Brush},
+                                                           {"control", Tool::AddControl}, {"pin", Tool::Pin}};
+      bool found = false;
+      for (const auto& t : tools)
+        if (c.args[0] == t.first) {
+          view_.tool = t.second;
+          found = true;
+        }
+      if (!found) throw Error("unknown tool '" + c.args[0] + "' (orbit, key, vector, edit-vectors, bias, brush, control, pin)", file, "line " + std::to_string(c.line));
+      if (c.args.size() == 2) view_.toolFeather = c.args[1];
     } else if (c.verb == "frame") {
       needArgs(c, 0, 0, "frame", file);
       frameAll();

@@ -53,7 +53,12 @@ bool moultEditor(const char* id, Json& m) {
   }
   const std::string pace = m.value("pace", std::string("order"));
   int p = pace == "distance" ? 1 : 0;
-  if (ImGui::RadioButton("pace: order", &p, 0) | (ImGui::SameLine(), ImGui::RadioButton("pace: distance", &p, 1))) {
+  bool paced = ImGui::RadioButton("order", &p, 0);
+  ImGui::SameLine();
+  paced |= ImGui::RadioButton("distance", &p, 1);
+  ImGui::SameLine();
+  ImGui::TextUnformatted("pace");
+  if (paced) {
     m["pace"] = p ? "distance" : "order";
     ch = true;
   }

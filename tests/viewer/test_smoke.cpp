@@ -70,6 +70,14 @@ TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
                            "orbit 20 10\n"
                            "frame\n"
                            "check\n"
+                           "tool vector\n"
+                           "drag 50% 50% 58% 46%\n"
+                           "tool brush\n"
+                           "click 48% 52%\n"
+                           "tool control\n"
+                           "click 52% 48%\n"
+                           "tool orbit\n"
+                           "drag 50% 50% 60% 50%\n"
                            "panel * open\n"
                            "show designer on\n"
                            "show follicles on\n"
@@ -90,8 +98,10 @@ TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
   const pipeline::Scene back = pipeline::loadScene(saved);
   EXPECT_EQ(pipeline::sceneToJson(back, saved), readJsonFile(saved));
   EXPECT_EQ(back.tracts[0]["count"], 30);
-  ASSERT_EQ(back.controls.size(), 1u);
-  EXPECT_EQ(back.packing["styling"].size(), 1u);
+  // Script commands and the viewport tools (scripted mouse): patch.json has one styling vector.
+  EXPECT_EQ(back.directions["vectors"].size(), 3u);
+  EXPECT_EQ(back.controls.size(), 2u);
+  EXPECT_EQ(back.packing["styling"].size(), 2u);
   EXPECT_DOUBLE_EQ(back.time, 0.5);
 
   // The checker's metrics were printed as one JSON line.
