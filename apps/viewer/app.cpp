@@ -119,6 +119,7 @@ int App::run() {
     if (!options_.screenshot.empty()) {
       shotPath_ = options_.screenshot;
       shotWanted_ = true;
+      view_.hidePanels = script_.empty();  // the capture is the 3D view: give it the window's width
     }
   } catch (const Error& e) {
     std::fprintf(stderr, "pteryla-viewer: %s\n", e.what());
