@@ -115,6 +115,7 @@ int App::run() {
     if (!initWindow()) return 1;
     if (!options_.script.empty()) script_ = loadScript(options_.script);
     if (!options_.scene.empty()) doc_.open(options_.scene);
+    fitTimeRange();
     if (options_.lod) doc_.setLod(*options_.lod);
     if (!options_.screenshot.empty()) {
       shotPath_ = options_.screenshot;

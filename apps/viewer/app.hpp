@@ -85,6 +85,7 @@ class App {
   void showError(const std::string& message);
   void requestOpen(const std::string& path);
   void openNow(const std::string& path);
+  void fitTimeRange();  // timeline range from the scene's keys and moult windows
   void requestSave();
   void requestSaveAs();
   void afterSave();

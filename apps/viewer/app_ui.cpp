@@ -53,6 +53,19 @@ void App::openNow(const std::string& path) {
   view_.selectedControl = view_.selectedVector = view_.selectedFollicle = -1;
   view_.tool = Tool::Orbit;
   view_.playing = false;
+  fitTimeRange();
+}
+
+void App::fitTimeRange() {
+  view_.timeStart = 0.0f;
+  view_.timeEnd = 10.0f;
+  if (!doc_.hasScene()) return;
+  if (const auto span = sceneTimeSpan(doc_.scene())) {
+    view_.timeStart = float(std::min(0.0, span->first));
+    view_.timeEnd = float(std::max(span->second, span->first + 1.0));
+  }
+  view_.timeEnd = std::max(view_.timeEnd, float(doc_.time()));
+  view_.timeStart = std::min(view_.timeStart, float(doc_.time()));
 }
 
 void App::requestSave() {

@@ -118,6 +118,40 @@ void makeBareMeshExplicit(Scene& s) {
   makeBareMeshExplicit(s, lo, hi);
 }
 
+namespace {
+void collectKeyTimes(const Json& j, bool inKeys, std::vector<double>& out) {
+  if (j.is_object()) {
+    if (inKeys && j.contains("t") && j["t"].is_number()) out.push_back(j["t"].get<double>());
+    for (auto it = j.begin(); it != j.end(); ++it) collectKeyTimes(*it, it.key() == "keys", out);
+  } else if (j.is_array()) {
+    for (const auto& e : j) collectKeyTimes(e, inKeys, out);
+  }
+}
+void moultSpan(const Json& m, std::vector<double>& out) {
+  if (!m.is_object() || m.value("enabled", true) == false) return;
+  const double start = m.contains("start") && m["start"].is_number() ? m["start"].get<double>() : 0.0;
+  const double duration = m.contains("duration") && m["duration"].is_number() ? m["duration"].get<double>() : 1.0;
+  out.push_back(start);
+  out.push_back(start + duration);
+}
+}  // namespace
+
+std::optional<std::pair<double, double>> sceneTimeSpan(const Scene& s) {
+  std::vector<double> t;
+  collectKeyTimes(s.controls, false, t);
+  collectKeyTimes(s.skeleton, false, t);
+  if (!s.moult.empty()) moultSpan(s.moult, t);  // an empty scene-level object: no scene moult
+  for (const auto& tr : s.tracts) {
+    if (!tr.is_object() || !tr.contains("moult")) continue;
+    const Json& m = tr["moult"];
+    if (m.is_boolean() && m.get<bool>()) moultSpan(s.moult.empty() ? Json::object() : s.moult, t);
+    else moultSpan(m, t);
+  }
+  if (t.empty()) return std::nullopt;
+  const auto [lo, hi] = std::minmax_element(t.begin(), t.end());
+  return std::make_pair(*lo, *hi);
+}
+
 std::string tractName(const Scene& s, size_t i) {
   if (i < s.tracts.size() && s.tracts[i].is_object() && s.tracts[i].contains("name") && s.tracts[i]["name"].is_string())
     return s.tracts[i]["name"].get<std::string>();

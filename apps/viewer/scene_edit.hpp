@@ -37,6 +37,10 @@ void makeBareMeshExplicit(pipeline::Scene& s, const glm::dvec3& lo, const glm::d
 // Same, loading the scene's mesh to find its bounds.
 void makeBareMeshExplicit(pipeline::Scene& s);
 
+// Time span the scene animates over: key times ("t" of any "keys" entry: controls, skeleton) and moult
+// windows (start .. start + duration, scene and tracts). nullopt when nothing is animated.
+std::optional<std::pair<double, double>> sceneTimeSpan(const pipeline::Scene& s);
+
 // Tract reference used by panels and scripts: an index ("0"), a name ("spinal") or "*" (all tracts).
 // Returns the indices it selects; throws Error(element = `where`) for an unknown tract.
 std::vector<size_t> resolveTracts(const pipeline::Scene& s, const std::string& ref, const std::string& where);

@@ -94,3 +94,14 @@ TEST(SceneEdit, BareMeshDefaultsBecomeExplicit) {
   makeBareMeshExplicit(s, {0, 0, 0}, {5, 5, 5});
   EXPECT_EQ(sceneJson(s), before);
 }
+
+TEST(SceneEdit, TimeSpanFromKeysAndMoultWindows) {
+  pipeline::Scene s = viewer_test::smallPatch();
+  EXPECT_FALSE(sceneTimeSpan(s).has_value());
+  s.moult = {{"start", 2.0}, {"duration", 3.0}};
+  EXPECT_EQ(sceneTimeSpan(s), std::make_pair(2.0, 5.0));
+  s.controls = Json::parse(R"([{"at": [0, 0, 0], "radius": 1, "keys": [{"t": -1, "lift": 0}, {"t": 7.5, "lift": 1}]}])");
+  EXPECT_EQ(sceneTimeSpan(s), std::make_pair(-1.0, 7.5));
+  s.tracts[0]["moult"] = {{"start", 9.0}};
+  EXPECT_EQ(sceneTimeSpan(s), std::make_pair(-1.0, 10.0));
+}
