@@ -9,6 +9,7 @@
 #include "document.hpp"
 #include "fixtures.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/feather/io.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "scene_edit.hpp"
 
@@ -258,4 +259,46 @@ TEST(Actions, ControlsFollowTheMoultModuleSchema) {
   EXPECT_THROW(actions::setControlValue(d, c, "dynamic_blend", 0.5, 0.0), Error);
   EXPECT_THROW(actions::setControlValue(d, c, "aim", 1.5, 0.0), Error);
   ASSERT_TRUE(d.waitIdle()) << d.takeError().value_or("");  // the pipeline accepts what the panel wrote
+}
+
+TEST(Actions, DesignedFeatherIsWrittenInlineAndChangesTheCoat) {
+  const std::string dir = scratchDir("designer");
+  Document d;
+  d.reset(smallPatch(), "");
+  const auto before = coatPositions(d);
+  feather::FeatherParams p = feather::loadFeather(viewer_test::dataPath("feathers/contour.json"));
+  p.rachisLength *= 0.5;
+  p.rachisLateralCurvature = 0.3;
+  actions::setFeatherInline(d, "contour", p);
+  ASSERT_TRUE(d.scene().feathers["contour"].is_object());
+  const auto after = coatPositions(d);
+  EXPECT_NE(after, before);
+  // Saved inline, reloaded, evaluated: the same coat.
+  ASSERT_TRUE(d.saveAs(dir + "/designed.json"));
+  Document back;
+  back.open(dir + "/designed.json");
+  back.setLod(d.lod());
+  EXPECT_EQ(coatPositions(back), after);
+  // An invalid design is refused before it reaches the scene.
+  p.spacingBase = -1;
+  EXPECT_THROW(actions::setFeatherInline(d, "contour", p), Error);
+}
+
+TEST(Document, FailedOpenKeepsTheCurrentScene) {
+  const std::string dir = scratchDir("bad_open");
+  { std::ofstream(dir + "/broken.json") << "{\"pteryla\": 1, \"mesh\": \"nope.obj\", \"tractz\": []}\n"; }
+  Document d;
+  d.reset(smallPatch(), "");
+  actions::setTractCount(d, 0, 25);
+  const Json before = js(d.scene());
+  EXPECT_THROW(d.open(dir + "/missing.json"), Error);
+  try {
+    d.open(dir + "/broken.json");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("broken.json"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(js(d.scene()), before);
+  EXPECT_TRUE(d.modified());
+  EXPECT_TRUE(d.canUndo());
 }
