@@ -50,7 +50,7 @@ struct ViewState {
   // Fast navigation: while the camera moves, draw every k-th feather so at most this many coat
   // triangles are drawn (navigation.hpp); the full coat as soon as it stops.
   bool fastNavigation = true;
-  int navigationBudget = 120000;
+  int navigationBudget = 90000;
   bool navigationChanged = false;
   bool forceNavigation = false;  // draw the navigation coat even at rest (script: show navigation on)
   // Measured frame rate (frames per second over the last half second).
