@@ -234,8 +234,10 @@ void Document::update() {
   try {
     if (pending_) pipeline_->editScene(*pending_, [&](Scene& s) { s = scene_; });
     pending_.reset();
-    if (timeDirty_) pipeline_->setTime(time_);
-    if (lodDirty_) pipeline_->setLod(lod_);
+    // Always (no-ops when equal): a job cancelled inside Pipeline::check() leaves the checker's full
+    // level of detail set.
+    pipeline_->setTime(time_);
+    pipeline_->setLod(lod_);
     timeDirty_ = lodDirty_ = false;
   } catch (const std::exception& e) {
     error_ = e.what();
