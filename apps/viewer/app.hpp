@@ -94,7 +94,8 @@ class App {
   void scratchboardWindow();
   // app_input.cpp
   void handleInput();
-  void handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse);
+  // Returns false when a press hit nothing the tool uses (the drag then orbits as usual).
+  bool handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse);
   // app_script.cpp
   void scriptStep();
 

@@ -42,8 +42,9 @@ void App::handleInput() {
   const bool leftPressed = ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !overUi;
   const bool toolActive = view_.tool != Tool::Orbit && !io.KeyShift;
   if (toolActive && (leftPressed || toolDrag_)) {
-    handleTool(leftPressed, ImGui::IsMouseDown(ImGuiMouseButton_Left), ImGui::IsMouseReleased(ImGuiMouseButton_Left), mouse);
-    if (toolDrag_ || leftPressed) return;
+    const bool used = handleTool(leftPressed, ImGui::IsMouseDown(ImGuiMouseButton_Left),
+                                 ImGui::IsMouseReleased(ImGuiMouseButton_Left), mouse);
+    if (used) return;
   }
   const bool anyDown = ImGui::IsMouseDown(ImGuiMouseButton_Left) || ImGui::IsMouseDown(ImGuiMouseButton_Right) ||
                        ImGui::IsMouseDown(ImGuiMouseButton_Middle);
@@ -64,7 +65,7 @@ void App::handleInput() {
   }
 }
 
-void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse) {
+bool App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse) {
   const Snapshot& snap = doc_.snapshot();
   const render::Camera& cam = camera_.camera();
   const Ray ray = pixelRay(cam, mouse, view_.viewSize);
@@ -78,13 +79,14 @@ void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
         view_.selectedFollicle = f;
         const size_t tract = f < int(snap.follicleTract.size()) ? snap.follicleTract[size_t(f)] : 0;
         guarded(ctx, [&] { actions::addKeyFeather(doc_, tract, view_.toolFeather, snap.follicleId[size_t(f)]); });
+        return true;
       }
-      return;
+      return false;
     }
     if (view_.tool == Tool::EditVectors) {
       // Grab the styling vector whose tip is nearest the mouse.
       const Json& d = doc_.scene().directions;
-      if (!d.contains("vectors") || !d["vectors"].is_array()) return;
+      if (!d.contains("vectors") || !d["vectors"].is_array()) return false;
       const float len = overlayArrowLength(snap);
       std::vector<glm::vec3> tips;
       for (const auto& v : d["vectors"]) {
@@ -93,7 +95,7 @@ void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
         tips.push_back(glm::vec3(actions::jsonVec3(v.value("at", Json()))) + dir * len);
       }
       const int k = pickPoint(tips, {}, cam, view_.viewSize, mouse, 12.0f);
-      if (k < 0) return;
+      if (k < 0) return false;
       const Json& v = d["vectors"][size_t(k)];
       view_.dragVector = k;
       view_.selectedVector = k;
@@ -104,10 +106,10 @@ void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
       dragNormal_ = hit ? hit->normal : -cam.forward();
       view_.dragActive = true;
       toolDrag_ = true;
-      return;
+      return true;
     }
     const auto hit = raycast(snap.skin, ray);
-    if (!hit) return;
+    if (!hit) return false;
     const glm::dvec3 at(hit->point);
     switch (view_.tool) {
       case Tool::AddVector:
@@ -132,14 +134,14 @@ void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
         });
         break;
       default:
-        break;
+        return false;
     }
-    return;
+    return true;
   }
-  if (!toolDrag_) return;
+  if (!toolDrag_) return false;
   glm::vec3 q;
   if (rayPlane(ray, view_.dragAt, dragNormal_, q)) view_.dragDirection = q - view_.dragAt;
-  if (down && !released) return;
+  if (down && !released) return true;
   // Release: commit the dragged vector (a click without a drag uses the camera's right, in the plane).
   toolDrag_ = false;
   view_.dragActive = false;
@@ -148,7 +150,7 @@ void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
     dir = glm::cross(cam.forward(), cam.up);
     dir -= dragNormal_ * glm::dot(dir, dragNormal_);
   }
-  if (glm::length(dir) == 0) return;
+  if (glm::length(dir) == 0) return true;
   const glm::dvec3 at(view_.dragAt), d(glm::normalize(dir));
   guarded(ctx, [&] {
     if (view_.tool == Tool::AddVector) {
@@ -162,6 +164,7 @@ void App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
     }
   });
   view_.dragVector = -1;
+  return true;
 }
 
 }  // namespace pteryla::viewer
