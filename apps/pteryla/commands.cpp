@@ -207,8 +207,6 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
   if (ec) throw Error("cannot create output directory: " + ec.message(), a.out, "--out");
   render::OsMesaContext ctx(l.width, l.height);
   render::SceneView view(ctx);
-  Common quietStages = c;
-  quietStages.quiet = true;
   l.pipeline->setProgress({});
   const ProgressFn bar = makeProgress(c);
   for (int k = 0; k < count; ++k) {
