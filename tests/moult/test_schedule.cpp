@@ -201,7 +201,9 @@ TEST(MoultSchedule, LargerFeathersAndBoundaryFeathersGrowSlower) {
   const MoultPlan p = planMoult(t.uv, t.size, t.id, o);
   for (size_t i = 0; i < t.uv.size(); ++i)
     for (size_t k = 0; k < t.uv.size(); ++k)
-      if (t.size[i] > t.size[k]) EXPECT_GT(p.window[i], p.window[k]);
+      if (t.size[i] > t.size[k]) {
+        EXPECT_GT(p.window[i], p.window[k]);
+      }
   MoultOptions b;
   b.boundarySlowdown = 2.0;
   const MoultPlan q = planMoult(t.uv, t.size, t.id, b);
