@@ -79,7 +79,7 @@ TEST(Cli, EmptyAndNanMeshesExit2NamingTheProblem) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(contains(r.err, "empty_mesh.obj")) << r.err;
   const auto nan = writeTemp("nan_mesh.obj", "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n");
-  r = runPteryla("render " + nan + " --out " + std::string(PTERYLA_BUILD_DIR) + "/nan.png");
+  r = runPteryla("render " + nan + " --out " + std::string(PTERYLA_BUILD_DIR) + "/nan.png -q");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(contains(r.err, "nan_mesh.obj")) << r.err;
   EXPECT_EQ(lineCount(r.err), 1) << r.err;
