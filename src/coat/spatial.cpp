@@ -3,6 +3,8 @@
 // (T. Moeller, "A Fast Triangle-Triangle Intersection Test", J. Graphics Tools 2(2), 1997).
 #include "spatial.hpp"
 
+#include "pteryla/coat/skin.hpp"
+
 #include <algorithm>
 #include <array>
 
@@ -250,42 +252,6 @@ double boxDist2(const TriangleBvh::Node& n, const glm::dvec3& p) {
   return d2;
 }
 
-glm::dvec3 closestOnTriangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
-                             glm::dvec3& bary) {
-  // Ericson, Real-Time Collision Detection 5.1.5 (Voronoi regions).
-  auto out = [&](double u, double v, double w) {
-    bary = {u, v, w};
-    return u * a + v * b + w * c;
-  };
-  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return out(1, 0, 0);
-  const glm::dvec3 bp = p - b;
-  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return out(0, 1, 0);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double v = d1 / (d1 - d3);
-    return out(1 - v, v, 0);
-  }
-  const glm::dvec3 cp = p - c;
-  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return out(0, 0, 1);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double w = d2 / (d2 - d6);
-    return out(1 - w, 0, w);
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return out(0, 1 - w, w);
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  return out(1 - v - w, v, w);
-}
-
 }  // namespace
 
 int64_t TriangleBvh::nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& bary, double& dist2) const {
@@ -303,7 +269,7 @@ int64_t TriangleBvh::nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& b
       for (uint32_t k = 0; k < n.count; ++k) {
         const uint32_t t = prims_[n.first + k];
         glm::dvec3 b;
-        const glm::dvec3 q = closestOnTriangle(p, vertex(t, 0), vertex(t, 1), vertex(t, 2), b);
+        const glm::dvec3 q = closestPointOnTriangle(p, vertex(t, 0), vertex(t, 1), vertex(t, 2), &b);
         const glm::dvec3 d = q - p;
         const double dd = glm::dot(d, d);
         // Ties go to the lower triangle index, so the answer does not depend on traversal order.
