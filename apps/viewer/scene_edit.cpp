@@ -16,13 +16,13 @@ std::optional<Stage> earliestChangedStage(const Scene& a, const Scene& b) {
   if (a.meshPath != b.meshPath || a.meshRepair != b.meshRepair || a.feathers != b.feathers ||
       a.fromBareMesh != b.fromBareMesh)
     return Stage::Skin;
-  // Tracts, directions, packing and ordering are all parsed by the tracts stage.
-  if (a.tracts != b.tracts || a.directions != b.directions || a.packing != b.packing || a.ordering != b.ordering)
-    return Stage::Tracts;
+  if (a.tracts != b.tracts) return Stage::Tracts;
   if (a.seed != b.seed) return Stage::Distribute;  // scatter and jitter seeds
+  // Directions and ordering are read by the directions stage, packing by the controls stage.
+  if (a.directions != b.directions || a.ordering != b.ordering) return Stage::Directions;
   if (a.skeleton != b.skeleton) return Stage::Pose;
   if (a.moult != b.moult) return Stage::Ages;
-  if (a.controls != b.controls) return Stage::Controls;
+  if (a.controls != b.controls || a.packing != b.packing) return Stage::Controls;
   return std::nullopt;
 }
 

@@ -244,34 +244,6 @@ void Pipeline::Impl::computeTracts() {
     tracts.push_back(t.tract);
     tractSettings.push_back(std::move(t));
   }
-  directionOptions = coat::DirectionOptions{};
-  orderOptions = coat::OrderOptions{};
-  if (scene.fromBareMesh) {
-    // Any mesh with one command: feathers flow along the longest bounding-box axis and are layered
-    // along it (roof tiles from the far end).
-    glm::dvec3 lo, hi;
-    int ax[3];
-    boxAxes(rest, lo, hi, ax);
-    glm::dvec3 a = 0.5 * (lo + hi), b = a;
-    a[ax[0]] = lo[ax[0]];
-    b[ax[0]] = hi[ax[0]];
-    directionOptions.field.axis = {a, b};
-    orderOptions.method = coat::OrderMethod::Axis;
-    orderOptions.axis = {a, b};
-  }
-  if (!scene.directions.empty()) {
-    JsonReader r(scene.directions, scene.file, "directions");
-    directionOptions = coat::parseDirections(r);
-  }
-  packOptions = coat::PackOptions{};
-  if (!scene.packing.empty()) {
-    JsonReader r(scene.packing, scene.file, "packing");
-    packOptions = coat::parsePackOptions(r);
-  }
-  if (!scene.ordering.empty()) {
-    JsonReader r(scene.ordering, scene.file, "ordering");
-    orderOptions = coat::parseOrdering(r);
-  }
 }
 
 void Pipeline::Impl::computeDistribute() {
@@ -366,7 +338,32 @@ void Pipeline::Impl::computeInterpolate() {
   report(progress, "interpolate", 1);
 }
 
+// Directions and ordering are read here, not with the tracts, so editing them re-orients and
+// repacks without re-relaxing follicles.
 void Pipeline::Impl::computeDirections() {
+  directionOptions = coat::DirectionOptions{};
+  orderOptions = coat::OrderOptions{};
+  if (scene.fromBareMesh) {
+    // Any mesh with one command: feathers flow along the longest bounding-box axis and are layered
+    // along it (roof tiles from the far end).
+    glm::dvec3 lo, hi;
+    int ax[3];
+    boxAxes(rest, lo, hi, ax);
+    glm::dvec3 a = 0.5 * (lo + hi), b = a;
+    a[ax[0]] = lo[ax[0]];
+    b[ax[0]] = hi[ax[0]];
+    directionOptions.field.axis = {a, b};
+    orderOptions.method = coat::OrderMethod::Axis;
+    orderOptions.axis = {a, b};
+  }
+  if (!scene.directions.empty()) {
+    JsonReader r(scene.directions, scene.file, "directions");
+    directionOptions = coat::parseDirections(r);
+  }
+  if (!scene.ordering.empty()) {
+    JsonReader r(scene.ordering, scene.file, "ordering");
+    orderOptions = coat::parseOrdering(r);
+  }
   directions = coat::computeSurfaceDirections(rest, tracts, follicles, directionOptions);
   coat::evaluateFrames(rest, follicles, directions, coatRest);
   coat::orderLayers(rest, tracts, params, follicles, directions, orderOptions, coatRest);
@@ -387,7 +384,13 @@ void Pipeline::Impl::computeAges() {
   featherAges(scene, time, params, posedFollicles, timeState, coatNow);
 }
 
+// Packing options (and their styling selections) are read here so a packing edit only repacks.
 void Pipeline::Impl::computeControls() {
+  packOptions = coat::PackOptions{};
+  if (!scene.packing.empty()) {
+    JsonReader r(scene.packing, scene.file, "packing");
+    packOptions = coat::parsePackOptions(r);
+  }
   fixedElevation.assign(coatNow.size(), std::nan(""));
   if (!packOptions.styling.empty()) fixedElevation = coat::applyStyling(coatNow, packOptions.styling, fixedElevation).fixedElevation;
   applyControls(scene, time, posed, posedFollicles, timeState, coatNow, fixedElevation);

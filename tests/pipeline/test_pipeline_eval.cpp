@@ -54,6 +54,15 @@ TEST(PipelineEval, TimeAndLodEditsDirtyOnlyDownstreamStages) {
   p.coatMesh();
   EXPECT_EQ(g.evaluations(dist), 1u);  // repacking does not re-relax
   EXPECT_EQ(g.evaluations(pack), 3u);
+  // Packing and direction settings are read by their own stages: editing them never re-relaxes.
+  p.editScene(Stage::Controls, [](Scene& s) { s.packing["clearance"] = 0.002; });
+  p.coatMesh();
+  EXPECT_EQ(g.evaluations(dist), 1u);
+  EXPECT_EQ(g.evaluations(pack), 4u);
+  p.editScene(Stage::Directions, [](Scene& s) { s.directions["axis"] = Json::array({{1.5, 0, 0}, {-1.5, 0, 0}}); });
+  p.coatMesh();
+  EXPECT_EQ(g.evaluations(dist), 1u);
+  EXPECT_EQ(g.evaluations(pack), 5u);
 }
 
 TEST(PipelineEval, LodReducesTrianglesAndEveryFeatherHasARange) {

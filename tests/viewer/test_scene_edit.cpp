@@ -24,7 +24,8 @@ TEST(SceneEdit, EarliestChangedStage) {
   EXPECT_EQ(changed([](pipeline::Scene& s) { s.feathers["x"] = s.feathers["contour"]; }), Stage::Skin);
   EXPECT_EQ(changed([](pipeline::Scene& s) { s.meshPath += "x"; }), Stage::Skin);
   EXPECT_EQ(changed([](pipeline::Scene& s) { s.tracts[0]["count"] = 5; }), Stage::Tracts);
-  EXPECT_EQ(changed([](pipeline::Scene& s) { s.packing["clearance"] = 0.1; }), Stage::Tracts);
+  EXPECT_EQ(changed([](pipeline::Scene& s) { s.packing["clearance"] = 0.1; }), Stage::Controls);
+  EXPECT_EQ(changed([](pipeline::Scene& s) { s.directions["falloff"] = 0.2; }), Stage::Directions);
   EXPECT_EQ(changed([](pipeline::Scene& s) { s.seed = 77; }), Stage::Distribute);
   EXPECT_EQ(changed([](pipeline::Scene& s) { s.skeleton["x"] = 1; }), Stage::Pose);
   EXPECT_EQ(changed([](pipeline::Scene& s) { s.moult["start"] = 1; }), Stage::Ages);
