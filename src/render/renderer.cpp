@@ -734,9 +734,10 @@ Image Renderer::renderImage(const Camera& camera, const std::vector<Light>& ligh
   GLint maxSamples = 0;
   r.gl.GetIntegerv(GL_MAX_SAMPLES, &maxSamples);
   const int samples = std::clamp(s.msaaSamples, 0, std::max(0, int(maxSamples)));
-  r.ensureTarget(s.width, s.height, samples);
+  // Remember the caller's framebuffer before ensureTarget, which binds the target while creating it.
   GLint previous = 0;
   r.gl.GetIntegerv(GL_FRAMEBUFFER_BINDING, &previous);
+  r.ensureTarget(s.width, s.height, samples);
   r.gl.BindFramebuffer(GL_FRAMEBUFFER, samples > 0 ? r.target.msFbo : r.target.fbo);
   render(camera, lights, s);
   if (samples > 0) {

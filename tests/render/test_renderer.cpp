@@ -526,3 +526,22 @@ TEST(Renderer, FewerBarbsWithTexturesStayCloseToFullGeometry) {
   EXPECT_LT(e60, e20);
 }
 
+
+// renderImage draws off screen and must leave the caller's framebuffer bound (the viewer draws into
+// framebuffer 0 right after taking a screenshot).
+TEST(RendererState, RenderImageRestoresTheCallersFramebuffer) {
+  pteryla::render::OsMesaContext ctx(32, 32);
+  pteryla::render::Renderer r(ctx);
+  pteryla::render::RenderSettings s;
+  s.width = 48;  // a new size forces the off-screen target to be (re)created
+  s.height = 40;
+  using GetIntegervFn = void (*)(unsigned, int*);
+  auto getIntegerv = reinterpret_cast<GetIntegervFn>(ctx.getProcAddress("glGetIntegerv"));
+  ASSERT_NE(getIntegerv, nullptr);
+  int before = -1, after = -1;
+  getIntegerv(0x8CA6 /* GL_FRAMEBUFFER_BINDING */, &before);
+  r.renderImage(pteryla::render::Camera{}, {pteryla::render::Light{}}, s);
+  getIntegerv(0x8CA6, &after);
+  EXPECT_EQ(before, 0);
+  EXPECT_EQ(after, before);
+}
