@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "run.hpp"
 
 namespace {
@@ -105,4 +107,16 @@ TEST(Cli, FeatherCommandWritesMeshAndRejectsBadFiles) {
   r = runPteryla("feather " + bad + " --out x.obj");
   EXPECT_EQ(r.code, 2);
   EXPECT_TRUE(contains(r.err, "bad_feather.json")) << r.err;
+}
+
+TEST(Cli, BenchPrintsEveryStageWithRealTimings) {
+  auto r = runPteryla("bench " + std::string(PTERYLA_DATA_DIR) + "/scenes/patch.json --size 64x64 -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* k : {"load", "distribute", "interpolate", "pack", "mesh", "render"}) {
+    ASSERT_TRUE(j.contains(k)) << k;
+    EXPECT_GT(j[k].get<double>(), 0.0) << k << " was not timed";  // every stage ran once
+  }
+  EXPECT_GT(j["triangles"].get<double>(), 0.0);
+  EXPECT_GT(j["peak_rss_mb"].get<double>(), 0.0);
 }
