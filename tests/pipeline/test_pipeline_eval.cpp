@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/follicles.hpp"
 #include "pteryla/core/error.hpp"
@@ -92,4 +94,16 @@ TEST(PipelineEval, BadTractKeyNamesItsPath) {
   } catch (const Error& e) {
     EXPECT_EQ(e.element(), "tracts[0].densty") << e.what();
   }
+}
+
+// A helical (Zhang & Kanai) feather is an ordinary feather to the coat: it distributes, packs and meshes.
+TEST(PipelineEval, CoatOfHelicalFeathers) {
+  Scene s = smallScene();
+  s.feathers = Json::object();
+  s.feathers["contour"] = std::string(PTERYLA_DATA_DIR) + "/feathers/helical-contour.json";
+  Pipeline p(std::move(s));
+  const CoatMesh& m = p.coatMesh();
+  EXPECT_EQ(m.ranges.size(), p.follicles().size());
+  EXPECT_GT(m.mesh.triangleCount(), 100u * m.ranges.size());
+  for (double e : p.elevations()) EXPECT_TRUE(std::isfinite(e));
 }
