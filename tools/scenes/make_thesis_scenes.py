@@ -1,0 +1,337 @@
+#!/usr/bin/env python3
+"""Write the bundled thesis scenes (Streit 2003) into data/scenes/.
+
+    python3 tools/scenes/make_thesis_scenes.py
+
+Scenes (all but bird.json, which tools/scenes/make_bird_scene.py writes):
+  wing.json                 210 feathers in two tracts on wing.obj, skeleton bends down and up (Figs 8.6, 9.19)
+  moult.json                three patches moulting sequentially, radially and randomly (Figs 8.3-8.5)
+  crest.json                head.obj with a crest lifted by an expressive control (AnimFur)
+  patch.json                ~60 feathers, two key feathers, relaxed (Lloyd) follicles
+  patch_grid.json, patch_hex.json, patch_stretched.json
+                            the same patch with pinned grid / hexagonal / stretched follicles (Fig 9.11)
+  sphere.json               426 feathers on the 1600-triangle sphere (Figs 9.12, 9.13)
+  sphere_small.json, sphere_large.json
+                            the same with smaller / larger feathers (Fig 9.12)
+  sphere_250.json           426 feathers on the 250-triangle sphere (Fig 9.13)
+
+Hand-placed follicle positions (flight feathers, patch layouts) are computed here from the meshes and
+their side files, so the scenes follow the meshes when tools/meshgen changes them.
+"""
+import json
+import math
+import os
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCENES = os.path.join(ROOT, "data", "scenes")
+MESHES = os.path.join(ROOT, "data", "meshes")
+
+
+def r5(x):
+    return round(x, 5)
+
+
+def vec(v):
+    return [r5(c) for c in v]
+
+
+def write(name, scene):
+    path = os.path.join(SCENES, name)
+    with open(path, "w") as f:
+        json.dump(scene, f, indent=1)
+        f.write("\n")
+    print("wrote", os.path.relpath(path, ROOT))
+
+
+def read_obj(name):
+    """Vertices and, per group, the source face indices and vertex indices of an OBJ mesh."""
+    verts, faces, groups, group = [], [], {}, None
+    for line in open(os.path.join(MESHES, name)):
+        w = line.split()
+        if not w:
+            continue
+        if w[0] == "v":
+            verts.append([float(c) for c in w[1:4]])
+        elif w[0] == "g":
+            group = w[1]
+        elif w[0] == "f":
+            groups.setdefault(group, []).append(len(faces))
+            faces.append([int(c.split("/")[0]) - 1 for c in w[1:]])
+    return verts, faces, groups
+
+
+def face_normal(verts, face):
+    a, b, c = (verts[i] for i in face[:3])
+    u = [b[k] - a[k] for k in range(3)]
+    v = [c[k] - a[k] for k in range(3)]
+    n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+    length = math.sqrt(sum(x * x for x in n)) or 1.0
+    return [x / length for x in n]
+
+
+def polyline_resample(points, n, t0=0.0, t1=1.0):
+    """n points evenly spaced by arc length between fractions t0 and t1 of the polyline."""
+    seg = [math.dist(points[i], points[i + 1]) for i in range(len(points) - 1)]
+    total = sum(seg)
+    out = []
+    for k in range(n):
+        s = (t0 + (t1 - t0) * (k / (n - 1) if n > 1 else 0.5)) * total
+        i = 0
+        while i < len(seg) - 1 and s > seg[i]:
+            s -= seg[i]
+            i += 1
+        a = min(1.0, s / seg[i]) if seg[i] > 0 else 0.0
+        out.append([points[i][c] + a * (points[i + 1][c] - points[i][c]) for c in range(3)])
+    return out
+
+
+# ---------------------------------------------------------------- wing (Figs 8.6, 9.19)
+
+WING_KEYS = [
+    # (t, elbow degrees, wrist degrees) about +Z: positive bends the wing up, negative down.
+    (0, 0, 0),
+    (1, -20, -15),
+    (2, 20, 20),
+    (3, 35, 35),
+    (4, 0, 0),
+]
+
+
+def wing_scene():
+    axes = json.load(open(os.path.join(MESHES, "wing.axes.json")))
+    edge = axes["trailing_edge"]
+    n_remiges = 44
+    # Flight feathers root in a row on the dorsal side, a little inboard of the trailing edge (6.1.5).
+    pinned = []
+    for p in polyline_resample(edge, n_remiges, 0.05, 0.97):
+        pinned.append({"at": vec([p[0], p[1] + 0.03, p[2] - 0.07])})
+    xs = [p["at"][0] for p in pinned]
+    # Coverts on the dorsal side only: over the rounded leading edge a feather would either lie along the
+    # span edge-on or stand above the wing.
+    verts, faces, groups = read_obj("wing.obj")
+    dorsal = [f for f in groups["coverts"] if face_normal(verts, faces[f])[1] > 0.55]
+    keys = []
+    for x, f in ((xs[0], "secondary"), (1.1, "secondary"), (1.35, "primary"), (xs[-1], "primary")):
+        near = min(pinned, key=lambda p: abs(p["at"][0] - x))
+        keys.append({"feather": f, "at": near["at"]})
+    return {
+        "pteryla": 1,
+        "name": "wing",
+        "seed": 819,
+        "time": 1,
+        "mesh": "../meshes/wing.obj",
+        "feathers": {
+            "covert": "../feathers/covert.json",
+            "secondary": "../feathers/secondary.json",
+            "primary": "../feathers/primary.json",
+        },
+        "tracts": [
+            {"name": "coverts", "faces": dorsal, "count": 166, "feather": "covert",
+             "feather_scale": "auto", "feather_spacings": 3.5, "scale_jitter": 0.06,
+             "relax": {"iterations": 40}},
+            {"name": "remiges", "groups": ["remiges_base"], "count": 0, "pinned": pinned,
+             "key_feathers": keys, "feather_scale": 0.03},
+        ],
+        "directions": {
+            "tracts": {
+                "coverts": {"vectors": [{"at": [0.3, 0, 0], "direction": [0.2, 0, 1]},
+                                        {"at": [1.1, 0, 0], "direction": [0.3, 0, 1]},
+                                        {"at": [1.8, 0, 0], "direction": [0.8, 0, 1]}]},
+                "remiges": {"vectors": [{"at": [0.3, 0, 0.25], "direction": [0.1, 0, 1]},
+                                        {"at": [1.15, 0, 0.25], "direction": [0.35, 0, 1]},
+                                        {"at": [1.85, 0, 0.1], "direction": [1, 0, 0.45]}]},
+            }
+        },
+        "ordering": {"method": "tracts", "tracts": ["remiges", "coverts"]},
+        "packing": {"skin_sample_spacing": 0.002, "shaft_band": 0.5},
+        "skeleton": {
+            "file": "../meshes/wing.skeleton.json",
+            "interpolation": "smooth",
+            "keys": [k for t, e, w in WING_KEYS for k in (
+                {"joint": "elbow", "t": t, "rotation": [0, 0, 1, e]},
+                {"joint": "wrist", "t": t, "rotation": [0, 0, 1, w]})],
+        },
+        "camera": {"eye": [1.25, 1.9, 1.9], "target": [0.95, 0.0, 0.2], "up": [0, 1, 0], "fov": 34},
+        "render": {"size": [640, 360], "lod": 0.8},
+    }
+
+
+# ---------------------------------------------------------------- moult (Figs 8.3-8.5)
+
+def patch_strips(n):
+    """Source face indices of patch.obj split into n strips along x (by face centroid)."""
+    verts, faces, _ = read_obj("patch.obj")
+    strips = [[] for _ in range(n)]
+    for i, f in enumerate(faces):
+        cx = sum(verts[v][0] for v in f) / len(f)
+        strips[min(n - 1, int((cx + 1.0) / 2.0 * n))].append(i)
+    return strips
+
+
+def moult_scene():
+    strips = patch_strips(3)
+    tract = {"count": 170, "feather_scale": "auto", "feather_spacings": 2.6, "scale_jitter": 0.05,
+             "relax": {"iterations": 40}}
+    return {
+        "pteryla": 1,
+        "name": "moult",
+        "seed": 83,
+        "time": 4,
+        "mesh": "../meshes/patch.obj",
+        "feathers": {"contour": "../feathers/contour.json"},
+        # Three strips, one moult sequence each: sequential along the strip (Fig 8.3), a radial wave from
+        # the centre (Fig 8.5) and a random order (Fig 8.4 right). Gaps are lost feathers, short ones regrow.
+        "moult": {"start": 0, "duration": 10, "window": 0.3, "gap": 0.3, "seed": 3},
+        "tracts": [
+            dict(name="sequential", faces=strips[0], moult={"sequence": "increasing_v"}, **tract),
+            dict(name="radial", faces=strips[1], moult={"sequence": "radial", "pace": "distance"}, **tract),
+            dict(name="random", faces=strips[2], moult={"sequence": "random"}, **tract),
+        ],
+        "directions": {"vectors": [{"at": [0, 0, 0], "direction": [0, 0, 1]}]},
+        # Feathers point +Z: the +Z-most are the bottom layer.
+        "ordering": {"method": "axis", "axis": [[0, 0, -1.5], [0, 0, 1.5]]},
+        "camera": {"eye": [0, 3.9, 2.0], "target": [0, 0, 0.1], "up": [0, 1, 0], "fov": 38},
+        "render": {"size": [640, 360], "lod": 1.0},
+    }
+
+
+# ---------------------------------------------------------------- crest (expressive controls, AnimFur)
+
+HEAD_AXIS = [[0.62, 0.02, 0], [0.3, 0.08, 0], [0.0, 0.1, 0], [-0.3, 0.02, 0], [-0.3, -0.4, 0], [-0.25, -1.1, 0]]
+
+
+def crest_scene():
+    return {
+        "pteryla": 1,
+        "name": "crest",
+        "seed": 2019,
+        "time": 1.5,
+        "mesh": "../meshes/head.obj",
+        "feathers": {"head": "../feathers/bird/head.json", "crest": "../feathers/contour.json"},
+        "tracts": [
+            {"name": "capital", "groups": ["capital"], "count": 1300, "feather": "head",
+             "feather_scale": "auto", "feather_spacings": 3.2, "scale_jitter": 0.08, "relax": {"iterations": 30}},
+            {"name": "crest", "groups": ["crest"], "count": 110, "feather": "crest",
+             "feather_scale": "auto", "feather_spacings": 3.8, "scale_jitter": 0.1, "relax": {"iterations": 40}},
+        ],
+        "directions": {"axis": HEAD_AXIS},
+        "ordering": {"method": "axis", "axis": HEAD_AXIS},
+        "packing": {"shaft_band": 0.5},
+        # The crest rises (lift toward the skin normal), holds with a little random twist, and settles.
+        "controls": [
+            {"name": "crest", "at": [-0.05, 0.32, 0.0], "radius": 0.45, "falloff": 0.4, "tracts": ["crest"],
+             "seed": 7, "twist_angle": 12, "max_lift": 70, "interpolation": "smooth",
+             "keys": [{"t": 0, "lift": 0, "random": 0}, {"t": 1, "lift": 1, "random": 1},
+                      {"t": 2, "lift": 1}, {"t": 3, "lift": 0, "random": 0}]},
+        ],
+        "camera": {"eye": [0.55, 0.35, 2.6], "target": [0.05, -0.2, 0], "up": [0, 1, 0], "fov": 34},
+        "render": {"size": [640, 360], "lod": 0.8},
+    }
+
+
+# ---------------------------------------------------------------- patch layouts (Fig 9.11)
+
+PATCH_KEYS = [{"feather": "contour", "at": [-0.8, 0.05, 0.0]}, {"feather": "covert", "at": [0.8, 0.05, 0.0]}]
+PATCH_LENGTH = 0.72    # mean feather length on the patches, scene units (about 3 follicle spacings)
+
+
+def patch_height(x, z):
+    """A point just above patch.obj's dome (pinned follicles snap to the closest skin point)."""
+    return 0.12 * max(0.0, 1.0 - 0.5 * (x * x + z * z)) + 0.01
+
+
+def patch_scene(name, tract_extra, note):
+    contour = json.load(open(os.path.join(ROOT, "data", "feathers", "contour.json")))
+    length = contour["calamus"]["length"] + contour["rachis"]["length"]
+    tract = {"name": "patch", "groups": ["patch"]}
+    tract.update(tract_extra)
+    if "pinned" in tract:
+        tract["feather_scale"] = r5(PATCH_LENGTH / length)
+    else:
+        tract.update({"feather_scale": "auto", "feather_spacings": 3.0})
+    tract["key_feathers"] = PATCH_KEYS
+    return {
+        "pteryla": 1,
+        "name": name,
+        "seed": 9,
+        "mesh": "../meshes/patch.obj",
+        "feathers": {"contour": "../feathers/contour.json", "covert": "../feathers/covert.json"},
+        "tracts": [tract],
+        "directions": {"vectors": [{"at": [0, 0, 0], "direction": [1, 0, 0]}]},
+        "ordering": {"method": "axis", "axis": [[-1.5, 0, 0], [1.5, 0, 0]]},
+        # Side by side in a grid column the vanes overlap; with the whole vane in the shaft's height field
+        # (shaft_band 1) a column stacks up sideways, so lateral overlaps are left to the barbs.
+        "packing": {"shaft_band": 0.5},
+        "camera": {"view_direction": [-0.3, -0.8, -0.5], "fov": 35},
+        "render": {"size": [640, 360], "lod": 1.0},
+    }, note
+
+
+def grid_points(nx, nz, half_x, half_z, shift_odd_rows=False):
+    pts = []
+    for j in range(nz):
+        z = -half_z + 2 * half_z * j / (nz - 1)
+        off = 0.5 if shift_odd_rows and j % 2 else 0.0
+        for i in range(nx):
+            if shift_odd_rows and j % 2 and i == nx - 1:
+                continue
+            x = -half_x + 2 * half_x * (i + off) / (nx - 1)
+            pts.append({"at": vec([x, patch_height(x, z), z])})
+    return pts
+
+
+def patch_scenes():
+    # Grid: 8 x 8 follicles. Hexagonal: rows 0.87 of the column spacing apart, odd rows shifted half a
+    # spacing (8 + 7 + ... = 60). Stretched: Lloyd relaxation with a bias vector that packs the follicles
+    # twice as close along the feather direction as across it (6.1.4).
+    yield patch_scene("patch", {"count": 60, "relax": {"iterations": 40}}, "relaxed (Lloyd)")
+    yield patch_scene("patch_grid", {"count": 0, "pinned": grid_points(8, 8, 0.84, 0.84)}, "grid")
+    yield patch_scene("patch_hex", {"count": 0, "pinned": grid_points(8, 8, 0.84, 0.84 * 0.866, True)},
+                      "hexagonal")
+    yield patch_scene("patch_stretched", {"count": 60, "relax": {"iterations": 60, "bias": [
+        {"at": [0, 0.1, 0], "direction": [1, 0, 0], "stretch": 2.0}]}}, "stretched")
+
+
+# ---------------------------------------------------------------- spheres (Figs 9.12, 9.13)
+
+SPHERE_AXIS = [[0, 1.5, 0], [0, -1.5, 0]]
+
+
+def sphere_scene(name, mesh, spacings, note):
+    return {
+        "pteryla": 1,
+        "name": name,
+        "seed": 12,
+        "mesh": "../meshes/" + mesh,
+        "feathers": {"contour": "../feathers/contour.json"},
+        "tracts": [
+            {"name": "all", "count": 426, "feather_scale": "auto", "feather_spacings": spacings,
+             "scale_jitter": 0.05, "relax": {"iterations": 40},
+             "parameterization": {"method": "projection", "view_direction": [0, -1, 0]}}
+        ],
+        "directions": {"axis": SPHERE_AXIS},
+        "ordering": {"method": "axis", "axis": SPHERE_AXIS},
+        "camera": {"view_direction": [-0.5, -0.35, -1.0], "fov": 30},
+        "render": {"size": [640, 360], "lod": 0.6},
+    }, note
+
+
+def sphere_scenes():
+    # 426 feathers at three feather scales (Fig 9.12: mean length 2, 3 and 4.5 follicle spacings) on the
+    # 1,600-triangle sphere, and the middle scale on the 250-triangle sphere (Fig 9.13).
+    yield sphere_scene("sphere", "sphere_1600.obj", 3.0, "1,600 triangles, feathers 3 spacings long")
+    yield sphere_scene("sphere_small", "sphere_1600.obj", 2.0, "1,600 triangles, feathers 2 spacings long")
+    yield sphere_scene("sphere_large", "sphere_1600.obj", 4.5, "1,600 triangles, feathers 4.5 spacings long")
+    yield sphere_scene("sphere_250", "sphere_250.obj", 3.0, "250 triangles, feathers 3 spacings long")
+
+
+def main():
+    write("wing.json", wing_scene())
+    write("moult.json", moult_scene())
+    write("crest.json", crest_scene())
+    for scene, _ in list(patch_scenes()) + list(sphere_scenes()):
+        write(scene["name"] + ".json", scene)
+
+
+if __name__ == "__main__":
+    main()
