@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Write the bundled thesis scenes (Streit 2003) into data/scenes/.
 
-    python3 tools/scenes/make_thesis_scenes.py
+    python3 tools/scenes/make_thesis_scenes.py           # write
+    python3 tools/scenes/make_thesis_scenes.py --check   # exit 1 if a committed scene differs
 
 Scenes (all but bird.json, which tools/scenes/make_bird_scene.py writes):
   wing.json                 210 feathers in two tracts on wing.obj, skeleton bends down and up (Figs 8.6, 9.19)
@@ -21,6 +22,7 @@ their side files, so the scenes follow the meshes when tools/meshgen changes the
 import json
 import math
 import os
+import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENES = os.path.join(ROOT, "data", "scenes")
@@ -35,11 +37,21 @@ def vec(v):
     return [r5(c) for c in v]
 
 
+CHECK_ONLY = "--check" in sys.argv[1:]
+STALE = []
+
+
 def write(name, scene):
+    """Writes a scene; with --check only compares it with the committed file."""
     path = os.path.join(SCENES, name)
+    text = json.dumps(scene, indent=1) + "\n"
+    if CHECK_ONLY:
+        old = open(path).read() if os.path.exists(path) else None
+        if old != text:
+            STALE.append(os.path.relpath(path, ROOT))
+        return
     with open(path, "w") as f:
-        json.dump(scene, f, indent=1)
-        f.write("\n")
+        f.write(text)
     print("wrote", os.path.relpath(path, ROOT))
 
 
@@ -190,6 +202,10 @@ def moult_scene():
         "directions": {"vectors": [{"at": [0, 0, 0], "direction": [0, 0, 1]}]},
         # Feathers point +Z: the +Z-most are the bottom layer.
         "ordering": {"method": "axis", "axis": [[0, 0, -1.5], [0, 0, 1.5]]},
+        # Regrowing feathers pack with their barbs: unopened pin feathers (age < opening_age, packed as
+        # bare shafts) are meshed with barbs that reach into the skin (skin_penetrations > 0), see
+        # docs/gallery.md.
+        "packing": {"opening_age": 0.0},
         "camera": {"eye": [0, 3.9, 2.0], "target": [0, 0, 0.1], "up": [0, 1, 0], "fov": 38},
         "render": {"size": [640, 360], "lod": 1.0},
     }
@@ -216,7 +232,8 @@ def crest_scene():
         ],
         "directions": {"axis": HEAD_AXIS},
         "ordering": {"method": "axis", "axis": HEAD_AXIS},
-        "packing": {"shaft_band": 0.5},
+        # Small head feathers on a curved skin: dense skin samples keep flat-lying vanes above it.
+        "packing": {"shaft_band": 0.5, "skin_sample_spacing": 0.004},
         # The crest rises (lift toward the skin normal), holds with a little random twist, and settles.
         "controls": [
             {"name": "crest", "at": [-0.05, 0.32, 0.0], "radius": 0.45, "falloff": 0.4, "tracts": ["crest"],
@@ -335,3 +352,6 @@ def main():
 
 if __name__ == "__main__":
     main()
+    if STALE:
+        print("out of date (run tools/scenes/make_thesis_scenes.py):", " ".join(STALE))
+        sys.exit(1)

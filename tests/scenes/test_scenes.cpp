@@ -1,0 +1,208 @@
+// The bundled scenes (issue #12, thesis Figs 8.3-8.6, 9.11-9.13, 9.19): every scene in data/scenes loads
+// and evaluates; every scene but the bird (whose full check takes minutes) has no coat vertex below the
+// skin at full geometry (the skin part of `pteryla check`, without the slow intersection and coverage
+// passes); and each thesis scene shows what its figure shows.
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "pteryla/coat/check.hpp"
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/follicles.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/pipeline/scene.hpp"
+
+using namespace pteryla;
+
+namespace {
+
+std::string scenePath(const std::string& name) { return std::string(PTERYLA_DATA_DIR) + "/scenes/" + name; }
+
+std::vector<std::string> bundledScenes() {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(std::string(PTERYLA_DATA_DIR) + "/scenes"))
+    if (e.path().extension() == ".json") names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// Coat vertices below the skin at full geometry, exactly as `pteryla check` counts skin_penetrations.
+size_t skinPenetrations(pipeline::Pipeline& p) {
+  const double savedLod = p.lod();
+  p.setLod(1.0);
+  coat::CheckOptions co;
+  co.intersections = false;
+  co.coverage = false;
+  const Json& packing = p.scene().packing;
+  const double baseAllowance = packing.contains("base_allowance") ? packing["base_allowance"].get<double>() : 0.08;
+  coat::setFeatherBases(co, p.feathers(), baseAllowance);
+  const size_t n = coat::check(p.posedSkin(), {}, p.coatMesh().mesh, co).skinPenetrations;
+  p.setLod(savedLod);
+  return n;
+}
+
+size_t presentCount(const coat::CoatFeathers& c) {
+  return static_cast<size_t>(std::count(c.present.begin(), c.present.end(), uint8_t(1)));
+}
+
+double meanElevation(pipeline::Pipeline& p, uint32_t tract) {
+  const auto& c = p.feathers();
+  const auto& e = p.elevations();
+  double sum = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (c.tract[i] == tract && c.present[i]) sum += e[i], ++n;
+  return n ? sum / double(n) : 0.0;
+}
+
+}  // namespace
+
+TEST(Scenes, TheThesisScenesAreBundled) {
+  const auto names = bundledScenes();
+  for (const char* n : {"bird.json", "wing.json", "moult.json", "crest.json", "patch.json", "patch_grid.json",
+                        "patch_hex.json", "patch_stretched.json", "sphere.json", "sphere_small.json",
+                        "sphere_large.json", "sphere_250.json"})
+    EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
+}
+
+// Every scene, the bird included, parses and evaluates to a coat with every present feather meshed (at low
+// level of detail, so the bird costs seconds, not minutes).
+TEST(Scenes, EverySceneLoadsAndEvaluates) {
+  for (const std::string& name : bundledScenes()) {
+    SCOPED_TRACE(name);
+    pipeline::Pipeline p(pipeline::loadScene(scenePath(name)));
+    p.setLod(0.05);
+    const auto& mesh = p.coatMesh();
+    EXPECT_GT(p.follicles().size(), 0u);
+    EXPECT_EQ(mesh.ranges.size(), presentCount(p.feathers()));
+    EXPECT_GT(mesh.mesh.triangleCount(), mesh.ranges.size());
+  }
+}
+
+TEST(Scenes, NoSkinPenetrationsInAnySceneButTheBird) {
+  for (const std::string& name : bundledScenes()) {
+    if (name == "bird.json" || name == "wing.json") continue;  // the wing: four poses below
+    SCOPED_TRACE(name);
+    pipeline::Pipeline p(pipeline::loadScene(scenePath(name)));
+    EXPECT_EQ(skinPenetrations(p), 0u) << "at t = " << p.time();
+  }
+}
+
+// Figs 8.6 / 9.19: 210 feathers in two tracts; the skeleton bends the wing down (t = 1) and up (t = 2, 3),
+// and the coat repacked on each pose stays above the skin (issue #9: four poses).
+TEST(Scenes, WingBendsDownAndUpWithoutSkinPenetrations) {
+  pipeline::Pipeline p(pipeline::loadScene(scenePath("wing.json")));
+  EXPECT_EQ(p.follicles().size(), 210u);
+  EXPECT_EQ(p.tracts().size(), 2u);
+  // The wing tip: the rest vertex farthest along the span (+X).
+  const auto& rest = p.restSkin().positions;
+  const size_t tip = size_t(std::max_element(rest.begin(), rest.end(), [](auto& a, auto& b) { return a.x < b.x; }) -
+                            rest.begin());
+  std::map<double, double> tipY;
+  for (double t : {0.0, 1.0, 2.0, 3.0}) {
+    SCOPED_TRACE(t);
+    p.setTime(t);
+    tipY[t] = p.posedSkin().positions[tip].y;
+    EXPECT_EQ(skinPenetrations(p), 0u);
+  }
+  EXPECT_NEAR(tipY[0], rest[tip].y, 1e-9);
+  EXPECT_LT(tipY[1], tipY[0] - 0.2);  // bent down
+  EXPECT_GT(tipY[2], tipY[0] + 0.2);  // bent up
+  EXPECT_GT(tipY[3], tipY[2]);        // further up
+}
+
+// Figs 8.3-8.5: at t = 4 each of the three strips has a wave of lost and regrowing feathers; the sequential
+// strip's wave is ordered along v, so its gaps form a band, the random strip's are spread over the strip.
+TEST(Scenes, MoultShowsGapsAndRegrowthInEveryStrip) {
+  pipeline::Pipeline p(pipeline::loadScene(scenePath("moult.json")));
+  ASSERT_EQ(p.tracts().size(), 3u);
+  p.setTime(0);
+  EXPECT_EQ(presentCount(p.feathers()), p.feathers().size());
+  p.setTime(4);
+  const auto& c = p.feathers();
+  for (uint32_t t = 0; t < 3; ++t) {
+    SCOPED_TRACE(p.tracts()[t].name);
+    size_t lost = 0, growing = 0, total = 0;
+    for (size_t i = 0; i < c.size(); ++i) {
+      if (c.tract[i] != t) continue;
+      ++total;
+      if (!c.present[i]) ++lost;
+      else if (c.age[i] < 1) ++growing;
+    }
+    EXPECT_GT(lost, total / 30);
+    EXPECT_GT(growing, total / 10);
+    EXPECT_LT(lost + growing, total / 2);
+  }
+}
+
+// AnimFur lift: the crest control raises the crest feathers at t = 1.5 and leaves the rest of the head
+// lying as it was.
+TEST(Scenes, CrestControlLiftsTheCrest) {
+  pipeline::Pipeline p(pipeline::loadScene(scenePath("crest.json")));
+  uint32_t crest = 0, capital = 0;
+  for (uint32_t i = 0; i < p.tracts().size(); ++i) {
+    if (p.tracts()[i].name == "crest") crest = i;
+    if (p.tracts()[i].name == "capital") capital = i;
+  }
+  ASSERT_NE(crest, capital);
+  p.setTime(0);
+  const double crest0 = meanElevation(p, crest), capital0 = meanElevation(p, capital);
+  p.setTime(1.5);
+  const double crest1 = meanElevation(p, crest), capital1 = meanElevation(p, capital);
+  EXPECT_GT(crest1, crest0 + 20.0 * M_PI / 180.0);
+  EXPECT_NEAR(capital1, capital0, 2.0 * M_PI / 180.0);
+}
+
+// Fig 9.11: about 60 feathers in each layout; the grid and the hexagonal layout are what they say.
+TEST(Scenes, PatchLayouts) {
+  for (const char* name : {"patch.json", "patch_grid.json", "patch_hex.json", "patch_stretched.json"}) {
+    SCOPED_TRACE(name);
+    pipeline::Pipeline p(pipeline::loadScene(scenePath(name)));
+    EXPECT_NEAR(double(p.follicles().size()), 60.0, 4.0);
+  }
+  // Nearest-neighbour distances in the grid take one value; in the hexagonal layout every interior
+  // follicle has six neighbours at that distance.
+  pipeline::Pipeline hex(pipeline::loadScene(scenePath("patch_hex.json")));
+  const auto& f = hex.follicles().position;
+  double nn = 1e9;
+  for (size_t i = 0; i < f.size(); ++i)
+    for (size_t j = i + 1; j < f.size(); ++j) nn = std::min(nn, glm::distance(f[i], f[j]));
+  size_t sixes = 0;
+  for (size_t i = 0; i < f.size(); ++i) {
+    size_t k = 0;
+    for (size_t j = 0; j < f.size(); ++j)
+      if (j != i && glm::distance(f[i], f[j]) < nn * 1.1) ++k;
+    EXPECT_LE(k, 6u);
+    sixes += (k == 6);
+  }
+  EXPECT_GE(sixes, 20u);
+}
+
+// Figs 9.12 / 9.13: 426 feathers; three feather scales on one sphere, and a coarse sphere.
+TEST(Scenes, SpheresAtThreeScalesAndTwoResolutions) {
+  std::map<std::string, double> meanLength;
+  for (const char* name : {"sphere_small.json", "sphere.json", "sphere_large.json", "sphere_250.json"}) {
+    SCOPED_TRACE(name);
+    pipeline::Pipeline p(pipeline::loadScene(scenePath(name)));
+    EXPECT_EQ(p.follicles().size(), 426u);
+    double sum = 0;
+    for (const auto& fp : p.feathers().params) sum += fp.rachisLength;
+    meanLength[name] = sum / double(p.feathers().size());
+    if (std::string(name) == "sphere_250.json") {
+      EXPECT_EQ(p.restSkin().faceCount(), 250u);
+    }
+    if (std::string(name) == "sphere.json") {
+      EXPECT_EQ(p.restSkin().faceCount(), 1600u);
+    }
+  }
+  EXPECT_LT(meanLength["sphere_small.json"] * 1.3, meanLength["sphere.json"]);
+  EXPECT_LT(meanLength["sphere.json"] * 1.3, meanLength["sphere_large.json"]);
+}
