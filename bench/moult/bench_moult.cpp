@@ -39,8 +39,10 @@ Json birdWings() {
       {"joint": "elbow_right", "t": 10, "rotation": [1, 0, 0, -30]}]})");
 }
 
-// Builds and fully evaluates a pipeline once (rest stages cached), then times frames at new times.
-void runFrames(benchmark::State& state, pipeline::Scene scene) {
+// Builds and fully evaluates a pipeline once (rest stages cached), then times frames at new times:
+// jumps across the timeline (scrub = 0: little to reuse between frames) or consecutive frames at
+// 24 per time unit (scrub = 1: dragging the timeline; feathers whose inputs did not change are reused).
+void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive) {
   std::unique_ptr<pipeline::Pipeline> p;
   try {
     p = std::make_unique<pipeline::Pipeline>(std::move(scene));
@@ -53,10 +55,18 @@ void runFrames(benchmark::State& state, pipeline::Scene scene) {
   }
   const double times[] = {3.0, 5.5, 4.25, 6.0, 2.5, 7.75, 5.0, 3.5};
   size_t k = 0;
+  double packChanged = 0, packRecomputed = 0, naturalRecomputed = 0, meshRegenerated = 0, meshReused = 0, incremental = 0;
   p->resetTimings();
   for (auto _ : state) {
-    p->setTime(times[k++ % 8]);
+    p->setTime(consecutive ? 4.0 + double(++k) / 24.0 : times[k++ % 8]);
     benchmark::DoNotOptimize(p->coatMesh().mesh.vertexCount());
+    const pipeline::FrameReuse r = p->frameReuse();
+    packChanged += double(r.packChanged);
+    packRecomputed += double(r.packRecomputed);
+    naturalRecomputed += double(r.naturalRecomputed);
+    meshRegenerated += double(r.meshRegenerated);
+    meshReused += double(r.meshReused);
+    incremental += r.packIncremental ? 1 : 0;
   }
   const auto& c = p->feathers();
   size_t absent = 0, growing = 0;
@@ -75,6 +85,15 @@ void runFrames(benchmark::State& state, pipeline::Scene scene) {
   state.counters["controls_ms"] = 1e3 * p->stageSeconds(Stage::Controls) / n;
   state.counters["pack_ms"] = 1e3 * p->stageSeconds(Stage::Pack) / n;
   state.counters["mesh_ms"] = 1e3 * p->stageSeconds(Stage::Mesh) / n;
+  // Reuse per frame: feathers changed / packed by the frame's pack (and the controls' natural pack),
+  // fraction of frames repacked incrementally, feathers whose barb curves were regenerated and whose
+  // triangles were copied from the last frame.
+  state.counters["pack_changed"] = packChanged / n;
+  state.counters["pack_recomputed"] = packRecomputed / n;
+  state.counters["natural_recomputed"] = naturalRecomputed / n;
+  state.counters["incremental"] = incremental / n;
+  state.counters["mesh_regen"] = meshRegenerated / n;
+  state.counters["mesh_reused"] = meshReused / n;
 }
 
 void BM_FrameBirdScene(benchmark::State& state) {
@@ -94,9 +113,9 @@ void BM_FrameBirdScene(benchmark::State& state) {
       {"name": "chest", "at": [0.62, -0.05, 0.0], "radius": 0.3, "seed": 7, "random": 0.5,
        "keys": [{"t": 2, "lift": 0.1}, {"t": 8, "lift": 0.5}]}])");
   }
-  runFrames(state, std::move(s));
+  runFrames(state, std::move(s), state.range(2) != 0);
 }
-BENCHMARK(BM_FrameBirdScene)->ArgsProduct({{0, 1}, {0, 1}})->ArgNames({"skeleton", "controls"})->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_FrameBirdScene)->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})->ArgNames({"skeleton", "controls", "scrub"})->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 void BM_FrameSynthetic(benchmark::State& state) {
   Json j = Json::parse(R"({"pteryla": 1, "seed": 4, "mesh": "../meshes/bird.obj",
@@ -108,9 +127,9 @@ void BM_FrameSynthetic(benchmark::State& state) {
       "directions": {"axis": [[0.97, 0.327, 0], [-0.95, 0.1, 0]]}})");
   j["moult"] = moultSection();
   if (state.range(0)) j["skeleton"] = birdWings();
-  runFrames(state, pipeline::sceneFromJson(j, kData + "/scenes/bench_synthetic.json"));
+  runFrames(state, pipeline::sceneFromJson(j, kData + "/scenes/bench_synthetic.json"), state.range(1) != 0);
 }
-BENCHMARK(BM_FrameSynthetic)->Arg(0)->Arg(1)->ArgName("skeleton")->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_FrameSynthetic)->ArgsProduct({{0, 1}, {0, 1}})->ArgNames({"skeleton", "scrub"})->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 
 // The schedule alone: plan + ages for 3,000 feathers.
 void BM_MoultSchedule(benchmark::State& state) {

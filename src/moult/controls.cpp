@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/rng.hpp"
@@ -165,6 +166,21 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
                                const coat::SkinMesh& posed, const coat::Follicles& follicles, double t,
                                const coat::PackOptions& pack, coat::CoatFeathers& coat,
                                std::vector<double>& fixedElevation) {
+  coat::PackResult natural;
+  const NaturalPackFn own = [&natural](const coat::SkinMesh& s, const coat::CoatFeathers& c,
+                                       const coat::PackOptions& o) -> const coat::PackResult& {
+    natural = coat::pack(s, c, o);
+    return natural;
+  };
+  ControlResult res = evaluateControls(controls, binding, posed, follicles, t, pack, coat, fixedElevation, own);
+  if (res.naturalPacked) res.natural = std::move(natural);
+  return res;
+}
+
+ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const ControlBinding& binding,
+                               const coat::SkinMesh& posed, const coat::Follicles& follicles, double t,
+                               const coat::PackOptions& pack, coat::CoatFeathers& coat,
+                               std::vector<double>& fixedElevation, const NaturalPackFn& naturalPack) {
   ControlResult res;
   const size_t n = coat.size();
   PTERYLA_CHECK(binding.control.size() == follicles.size(), "control binding was made for other follicles");
@@ -226,10 +242,12 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
   if (!needNatural && std::none_of(wantsRaise.begin(), wantsRaise.end(), [](uint8_t x) { return x != 0; }))
     return res;
 
+  const std::vector<double>* natural = nullptr;
   if (needNatural) {
     coat::PackOptions o = pack;
     o.fixedElevation = fixedElevation;
-    res.natural = coat::pack(posed, coat, o);
+    natural = &naturalPack(posed, coat, o).elevation;
+    PTERYLA_CHECK(natural->size() == n, "the natural pack must have one elevation per feather");
     res.naturalPacked = true;
   }
 
@@ -244,7 +262,7 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
     const ControlValues& v = values[c];
     const coat::FeatherFrame& F = coat.frames[i];
     const glm::dvec3& N = F.normal;
-    const double base = std::isnan(fixedElevation[i]) ? res.natural.elevation[i] : fixedElevation[i];
+    const double base = std::isnan(fixedElevation[i]) ? (*natural)[i] : fixedElevation[i];
     double e = base;
     auto raise = [&](double target, double weight) {
       target = std::min(target, cs.maxLift);

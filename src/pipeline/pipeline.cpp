@@ -2,11 +2,13 @@
 // each owning its cached result. See include/pteryla/pipeline/pipeline.hpp for the graph.
 #include "pteryla/pipeline/pipeline.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <glm/common.hpp>
 #include <cmath>
+#include <cstring>
 #include <map>
 
 #include "pteryla/coat/check.hpp"
@@ -104,11 +106,37 @@ struct Pipeline::Impl {
   coat::CoatFeathers coatNow;     // at the current time: posed frames, ages, presence
   TimeState timeState;
   std::vector<double> fixedElevation;
-  coat::PackResult packed;
-  bool havePacked = false;
+  const coat::PackResult* packed = nullptr;  // timeState.frame.result once packed
   CoatMesh mesh;
-  std::vector<feather::FeatherCurves> curves, refCurves;
-  std::vector<feather::LodOrder> lodOrders;
+  // Rest-state generation: bumped whenever the directions stage (downstream of every rest stage) runs,
+  // so caches of time-stage results know when the rest state they were made from is gone.
+  uint64_t restGeneration = 1;
+  uint64_t coatNowGeneration = 0;   // generation coatNow was copied from coatRest at
+  uint64_t posedGeneration = 0;     // generation `posed` is an untouched copy of `rest` at (0 = not)
+  // Per-feather mesh inputs kept across frames (each reused only when its inputs are exactly equal):
+  // the packed parameters the mature curves and LOD order were generated from, and the age of the
+  // grown (pin feather) curves.
+  std::vector<feather::FeatherParams> meshParams;
+  std::vector<uint8_t> matureValid;
+  std::vector<double> grownAge;     // NaN = no grown curves
+  std::vector<feather::FeatherCurves> matureCurves, grownCurves;
+  std::vector<feather::LodOrder> lodOrders, grownOrders;
+  size_t meshRegenerated = 0;       // feathers whose curves the last mesh evaluation generated
+  std::vector<uint64_t> curvesVersion;  // per feather: bumped whenever its curves are regenerated
+  // Where each feather sits in mesh.mesh and what it was meshed from: a feather whose curves, placement,
+  // level of detail and sheath are unchanged is copied from the last mesh instead of re-meshed.
+  struct MeshSlice {
+    bool valid = false;
+    uint64_t version = 0;
+    bool growing = false;             // meshed from the grown curves (else the mature ones)
+    feather::FeatherPlacement placement;
+    double lod = 0, shed = 0;
+    uint32_t v0 = 0, vn = 0, i0 = 0, in = 0;
+    feather::FeatherMeshRanges ranges;  // absolute, in mesh.mesh
+  };
+  std::vector<MeshSlice> slices;
+  TriMesh spareMesh, freshMesh;     // buffers kept across frames (no reallocation per frame)
+  size_t meshReused = 0;            // feathers copied from the last mesh
 
   Stage stageOf(StageGraph::Id id) const {
     for (int i = 0; i < 10; ++i)
@@ -129,6 +157,8 @@ struct Pipeline::Impl {
   void computeControls();
   void computePack();
   void computeMesh();
+  void assembleMesh(const std::vector<feather::FeatherMeshInput>& inputs, const std::vector<uint32_t>& which,
+                    const std::vector<double>& shed, std::vector<feather::FeatherMeshRanges>& ranges);
 };
 
 void Pipeline::Impl::build() {
@@ -364,17 +394,26 @@ void Pipeline::Impl::computeDirections() {
     JsonReader r(scene.ordering, scene.file, "ordering");
     orderOptions = coat::parseOrdering(r);
   }
+  ++restGeneration;
   directions = coat::computeSurfaceDirections(rest, tracts, follicles, directionOptions);
   coat::evaluateFrames(rest, follicles, directions, coatRest);
   coat::orderLayers(rest, tracts, params, follicles, directions, orderOptions, coatRest);
 }
 
 void Pipeline::Impl::computePose() {
-  posed = rest;
+  timeState.generation = restGeneration;
+  // poseSkin wants `posed` as a copy of `rest` and touches it only when the pose moves the skin.
+  if (posedGeneration != restGeneration) posed = rest;
   poseSkin(scene, time, rest, posed, timeState);
+  posedGeneration = timeState.posedMoved ? 0 : restGeneration;
   posedFollicles = follicles;
   coat::updateFollicleGeometry(posed, posedFollicles);
-  coatNow = coatRest;
+  // Rest data (params, follicles, layer order) is copied once per rest state; the time stages rewrite
+  // frames, ages and presence every frame.
+  if (coatNowGeneration != restGeneration) {
+    coatNow = coatRest;
+    coatNowGeneration = restGeneration;
+  }
   coat::evaluateFrames(posed, posedFollicles, directions, coatNow);
 }
 
@@ -400,57 +439,256 @@ void Pipeline::Impl::computePack() {
   report(progress, "pack", 0);
   coat::PackOptions o = packOptions;
   o.fixedElevation = fixedElevation;
-  packed = packFrame(posed, coatNow, o, timeState);  // repacks from the controls' natural pack when there is one
-  havePacked = true;
+  // Repacks incrementally from the last frame's pack or this frame's natural pack when it can.
+  packed = &packFrame(scene, posed, coatNow, o, timeState);
   report(progress, "pack", 1);
+}
+
+namespace {
+
+// Empties every array of `m` keeping its capacity.
+void truncate(TriMesh& m) {
+  m.positions.clear();
+  m.normals.clear();
+  m.tangents.clear();
+  m.uvGlobal.clear();
+  m.uvBarb.clear();
+  m.uvGrowth.clear();
+  m.alpha.clear();
+  m.sheath.clear();
+  m.barbCount.clear();
+  m.featherId.clear();
+  m.indices.clear();
+}
+
+void resizeAll(TriMesh& m, size_t verts, size_t indices) {
+  m.positions.resize(verts);
+  m.normals.resize(verts);
+  m.tangents.resize(verts);
+  m.uvGlobal.resize(verts);
+  m.uvBarb.resize(verts);
+  m.uvGrowth.resize(verts);
+  m.alpha.resize(verts);
+  m.sheath.resize(verts);
+  m.barbCount.resize(verts);
+  m.featherId.resize(verts);
+  m.indices.resize(indices);
+}
+
+template <class T>
+void copySlice(const std::vector<T>& from, size_t f0, std::vector<T>& to, size_t t0, size_t count) {
+  if (count) std::memcpy(to.data() + t0, from.data() + f0, count * sizeof(T));
+}
+
+// Moves the part offsets of a feather's ranges from index position `from` to `to`. An afterfeather
+// range that was never set (no afterfeather: afterFirst stays 0) stays 0.
+feather::FeatherMeshRanges rebase(feather::FeatherMeshRanges r, uint32_t from, uint32_t to) {
+  auto move = [&](uint32_t& first) { first = first - from + to; };
+  move(r.shaftFirst);
+  move(r.leftFirst);
+  move(r.rightFirst);
+  if (!(r.afterFirst == 0 && r.afterCount == 0)) move(r.afterFirst);
+  return r;
+}
+
+}  // namespace
+
+// Meshes the present feathers (inputs, in layer order) into mesh.mesh: feathers whose inputs equal those
+// of their slice in the last mesh are copied from it, the rest are meshed (in parallel), and the result
+// is exactly what meshing every feather afresh gives (each feather's vertices and indices depend only
+// on its own input and its position in the mesh).
+void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& inputs, const std::vector<uint32_t>& which,
+                                  const std::vector<double>& shed, std::vector<feather::FeatherMeshRanges>& ranges) {
+  const size_t count = inputs.size();
+  const feather::MeshOptions mo;
+  std::vector<uint8_t> reuse(count, 0);
+  size_t reused = 0;
+  for (size_t k = 0; k < count; ++k) {
+    const uint32_t i = which[k];
+    const MeshSlice& sl = slices[i];
+    const bool growing = inputs[k].reference != nullptr;
+    const bool same = sl.valid && sl.version == curvesVersion[i] && sl.growing == growing && sl.lod == lod &&
+                      std::memcmp(&sl.shed, &shed[i], sizeof(double)) == 0 &&
+                      std::memcmp(&sl.placement, &inputs[k].placement, sizeof(feather::FeatherPlacement)) == 0 &&
+                      sl.in > 0;  // empty feathers are re-meshed (nothing to copy; keeps range offsets exact)
+    reuse[k] = same ? 1 : 0;
+    reused += reuse[k];
+  }
+  meshReused = reused;
+  ranges.assign(count, feather::FeatherMeshRanges{});
+  std::vector<MeshSlice> next(count);
+  if (reused * 10 < count) {
+    // Little to reuse: mesh everything straight into the output.
+    truncate(mesh.mesh);
+    feather::appendFeatherMeshes(inputs.data(), count, mo, mesh.mesh, &ranges);
+    uint32_t iEnd = 0, vEnd = 0;
+    for (size_t k = 0; k < count; ++k) {
+      MeshSlice& sl = next[k];
+      const auto& r = ranges[k];
+      sl.i0 = iEnd;
+      iEnd = std::max({iEnd, r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
+                       r.afterFirst + r.afterCount});
+      sl.in = iEnd - sl.i0;
+      sl.v0 = vEnd;
+      const uint32_t id = inputs[k].featherId;
+      while (vEnd < mesh.mesh.featherId.size() && mesh.mesh.featherId[vEnd] == id) ++vEnd;
+      sl.vn = vEnd - sl.v0;
+      sl.ranges = r;
+    }
+  } else {
+    // Mesh the changed feathers into freshMesh, then copy every slice into the spare buffer in order.
+    std::vector<feather::FeatherMeshInput> changed;
+    std::vector<size_t> changedAt;
+    for (size_t k = 0; k < count; ++k)
+      if (!reuse[k]) {
+        changed.push_back(inputs[k]);
+        changedAt.push_back(k);
+      }
+    truncate(freshMesh);
+    std::vector<feather::FeatherMeshRanges> freshRanges;
+    feather::appendFeatherMeshes(changed.data(), changed.size(), mo, freshMesh, &freshRanges);
+    // Source slices: in the last mesh (reused) or in freshMesh.
+    std::vector<MeshSlice> src(count);
+    uint32_t iEnd = 0, vEnd = 0;
+    for (size_t c = 0; c < changed.size(); ++c) {
+      MeshSlice& sl = src[changedAt[c]];
+      const auto& r = freshRanges[c];
+      sl.i0 = iEnd;
+      iEnd = std::max({iEnd, r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
+                       r.afterFirst + r.afterCount});
+      sl.in = iEnd - sl.i0;
+      sl.v0 = vEnd;
+      while (vEnd < freshMesh.featherId.size() && freshMesh.featherId[vEnd] == changed[c].featherId) ++vEnd;
+      sl.vn = vEnd - sl.v0;
+      sl.ranges = r;
+    }
+    for (size_t k = 0; k < count; ++k)
+      if (reuse[k]) src[k] = slices[which[k]];
+    size_t vTotal = 0, iTotal = 0;
+    for (size_t k = 0; k < count; ++k) {
+      next[k].v0 = static_cast<uint32_t>(vTotal);
+      next[k].i0 = static_cast<uint32_t>(iTotal);
+      next[k].vn = src[k].vn;
+      next[k].in = src[k].in;
+      next[k].ranges = rebase(src[k].ranges, src[k].i0, next[k].i0);
+      vTotal += src[k].vn;
+      iTotal += src[k].in;
+    }
+    PTERYLA_CHECK(vTotal <= UINT32_MAX, "mesh exceeds 32-bit vertex indices");
+    resizeAll(spareMesh, vTotal, iTotal);  // every element is overwritten below
+    const TriMesh& last = mesh.mesh;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t k = range.begin(); k < range.end(); ++k) {
+        const TriMesh& from = reuse[k] ? last : freshMesh;
+        const MeshSlice& a = src[k];
+        const MeshSlice& b = next[k];
+        copySlice(from.positions, a.v0, spareMesh.positions, b.v0, a.vn);
+        copySlice(from.normals, a.v0, spareMesh.normals, b.v0, a.vn);
+        copySlice(from.tangents, a.v0, spareMesh.tangents, b.v0, a.vn);
+        copySlice(from.uvGlobal, a.v0, spareMesh.uvGlobal, b.v0, a.vn);
+        copySlice(from.uvBarb, a.v0, spareMesh.uvBarb, b.v0, a.vn);
+        copySlice(from.uvGrowth, a.v0, spareMesh.uvGrowth, b.v0, a.vn);
+        copySlice(from.alpha, a.v0, spareMesh.alpha, b.v0, a.vn);
+        copySlice(from.sheath, a.v0, spareMesh.sheath, b.v0, a.vn);
+        copySlice(from.barbCount, a.v0, spareMesh.barbCount, b.v0, a.vn);
+        copySlice(from.featherId, a.v0, spareMesh.featherId, b.v0, a.vn);
+        const uint32_t shift = b.v0 - a.v0;  // modular: vertex indices move by the slice's shift
+        const uint32_t* fi = from.indices.data() + a.i0;
+        uint32_t* ti = spareMesh.indices.data() + b.i0;
+        for (uint32_t q = 0; q < a.in; ++q) ti[q] = fi[q] + shift;
+      }
+    });
+    std::swap(mesh.mesh, spareMesh);
+    for (size_t k = 0; k < count; ++k) ranges[k] = next[k].ranges;
+  }
+  // Remember what each slice of the new mesh was made from.
+  for (auto& sl : slices) sl.valid = false;
+  for (size_t k = 0; k < count; ++k) {
+    MeshSlice& sl = slices[which[k]];
+    sl = next[k];
+    sl.valid = true;
+    sl.version = curvesVersion[which[k]];
+    sl.growing = inputs[k].reference != nullptr;
+    sl.placement = inputs[k].placement;
+    sl.lod = lod;
+    sl.shed = shed[which[k]];
+  }
 }
 
 void Pipeline::Impl::computeMesh() {
   report(progress, "mesh", 0);
   const size_t n = coatNow.size();
-  curves.resize(n);
-  refCurves.resize(n);
-  lodOrders.resize(n);
+  if (meshParams.size() != n) {
+    meshParams.assign(n, feather::FeatherParams{});
+    matureValid.assign(n, 0);
+    grownAge.assign(n, std::nan(""));
+    matureCurves.assign(n, {});
+    grownCurves.assign(n, {});
+    lodOrders.assign(n, {});
+    grownOrders.assign(n, {});
+    curvesVersion.assign(n, 0);
+    slices.assign(n, MeshSlice{});
+  }
   std::vector<uint8_t> grown(n, 1);
   std::vector<double> shed(n, 1.0);
+  std::vector<uint8_t> regenerated(n, 0);
   const feather::GrowthSchedule& schedule = feather::defaultGrowthSchedule();
-  tbb::parallel_for(size_t(0), n, [&](size_t i) {
-    if (!coatNow.present[i]) return;
-    const double age = coatNow.age[i];
-    const feather::FeatherParams& p = packed.packedParams.empty() ? coatNow.params[i] : packed.packedParams[i];
-    if (age >= 1.0) {
-      feather::generateBarbs(p, curves[i]);
-      grown[i] = 1;
-    } else {
-      const feather::GrowthState st = feather::growthStateAt(age, schedule);
-      feather::generateBarbs(feather::featherAtState(p, st, schedule), curves[i]);
-      feather::generateBarbs(p, refCurves[i]);
-      shed[i] = st[feather::GrowthParam::Sheath];
-      grown[i] = 0;
+  // Barb curves are a pure function of the packed parameters (and the age while growing), so a feather
+  // whose inputs equal those of its cached curves keeps them. A growing feather keeps the mature
+  // feather's LOD order (docs/growth.md), so its kept barbs do not change as it opens.
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i < range.end(); ++i) {
+      if (!coatNow.present[i]) continue;
+      const double age = coatNow.age[i];
+      const feather::FeatherParams& p = packed->packedParams.empty() ? coatNow.params[i] : packed->packedParams[i];
+      if (!matureValid[i] || !(meshParams[i] == p)) {
+        meshParams[i] = p;
+        feather::generateBarbs(p, matureCurves[i]);
+        feather::computeLodOrder(matureCurves[i], lodOrders[i]);
+        matureValid[i] = 1;
+        grownAge[i] = std::nan("");
+        regenerated[i] = 1;
+      }
+      if (age < 1.0) {
+        const feather::GrowthState st = feather::growthStateAt(age, schedule);
+        if (std::memcmp(&grownAge[i], &age, sizeof(double)) != 0) {
+          feather::generateBarbs(feather::featherAtState(p, st, schedule), grownCurves[i]);
+          // Same barbs as the mature feather (the usual case): its LOD order (as buildFeatherMesh does).
+          if (grownCurves[i].barbs.size() != matureCurves[i].barbs.size())
+            feather::computeLodOrder(grownCurves[i], grownOrders[i]);
+          grownAge[i] = age;
+          regenerated[i] = 1;
+        }
+        shed[i] = st[feather::GrowthParam::Sheath];
+        grown[i] = 0;
+      }
     }
-    feather::computeLodOrder(curves[i], lodOrders[i]);
   });
+  meshRegenerated = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (regenerated[i]) {
+      ++meshRegenerated;
+      ++curvesVersion[i];
+    }
   std::vector<feather::FeatherMeshInput> inputs;
   std::vector<uint32_t> which;
   inputs.reserve(n);
   for (uint32_t i : coatNow.layerOrder) {
     if (!coatNow.present[i]) continue;
     feather::FeatherMeshInput in;
-    in.curves = &curves[i];
-    in.reference = grown[i] ? nullptr : &refCurves[i];
-    in.order = &lodOrders[i];
+    in.curves = grown[i] ? &matureCurves[i] : &grownCurves[i];
+    in.reference = grown[i] ? nullptr : &matureCurves[i];
+    in.order = !grown[i] && grownCurves[i].barbs.size() != matureCurves[i].barbs.size() ? &grownOrders[i] : &lodOrders[i];
     const coat::FeatherFrame& fr = coatNow.frames[i];
-    in.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, packed.elevation[i]);
+    in.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, packed->elevation[i]);
     in.featherId = i;
     in.lod = lod;
     in.sheathShed = shed[i];
     inputs.push_back(in);
     which.push_back(i);
   }
-  mesh.mesh.clear();
   std::vector<feather::FeatherMeshRanges> ranges;
-  feather::MeshOptions mo;
-  feather::appendFeatherMeshes(inputs.data(), inputs.size(), mo, mesh.mesh, &ranges);
+  assembleMesh(inputs, which, shed, ranges);
   mesh.ranges.clear();
   mesh.ranges.reserve(ranges.size());
   std::map<std::string, uint32_t> matIndex;
@@ -471,7 +709,7 @@ void Pipeline::Impl::computeMesh() {
     const auto it = matIndex.find(coatNow.params[i].name);
     d.material = it == matIndex.end() ? 0 : it->second;
     const coat::FeatherFrame& fr = coatNow.frames[i];
-    const auto pl = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, packed.elevation[i]);
+    const auto pl = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, packed->elevation[i]);
     d.origin = glm::vec3(fr.origin);
     d.axisX = glm::vec3(pl.x);
     d.axisY = glm::vec3(pl.y);
@@ -549,7 +787,7 @@ const coat::CoatFeathers& Pipeline::feathers() {
 }
 const std::vector<double>& Pipeline::elevations() {
   impl_->graph.pull(impl_->id(Stage::Pack));
-  return impl_->packed.elevation;
+  return impl_->packed->elevation;
 }
 const CoatMesh& Pipeline::coatMesh() {
   impl_->graph.pull(impl_->id(Stage::Mesh));
@@ -596,7 +834,7 @@ QualityMetrics Pipeline::check() {
   m.coverage = r.coverage;
   std::vector<double> el;
   for (size_t i = 0; i < impl_->coatNow.size(); ++i)
-    if (impl_->coatNow.present[i]) el.push_back(impl_->packed.elevation[i]);
+    if (impl_->coatNow.present[i]) el.push_back(impl_->packed->elevation[i]);
   double median = 0;
   if (!el.empty()) {
     std::nth_element(el.begin(), el.begin() + el.size() / 2, el.end());
@@ -604,12 +842,27 @@ QualityMetrics Pipeline::check() {
   }
   const std::vector<double> flat(impl_->coatNow.size(), median);
   const TriMesh unpacked = coat::proxyCoatMesh(impl_->coatNow, flat, impl_->coatNow.params);
-  const TriMesh packedProxy = coat::proxyCoatMesh(impl_->coatNow, impl_->packed.elevation, impl_->packed.packedParams);
+  const TriMesh packedProxy = coat::proxyCoatMesh(impl_->coatNow, impl_->packed->elevation, impl_->packed->packedParams);
   m.intersectingPairsUnpacked = coat::countIntersectingPairs(unpacked);
   m.intersectingPairsProxy = coat::countIntersectingPairs(packedProxy);
   report(impl_->progress, "check", 1);
   setLod(savedLod);
   return m;
+}
+
+FrameReuse Pipeline::frameReuse() const {
+  FrameReuse r;
+  const PackReport& p = impl_->timeState.packReport;
+  r.naturalPacked = impl_->timeState.controlResult.naturalPacked;
+  r.naturalIncremental = p.naturalIncremental;
+  r.naturalChanged = p.naturalChanged;
+  r.naturalRecomputed = p.naturalRecomputed;
+  r.packIncremental = p.finalIncremental;
+  r.packChanged = p.finalChanged;
+  r.packRecomputed = p.finalRecomputed;
+  r.meshRegenerated = impl_->meshRegenerated;
+  r.meshReused = impl_->meshReused;
+  return r;
 }
 
 StageGraph& Pipeline::graph() { return impl_->graph; }

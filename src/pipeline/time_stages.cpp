@@ -3,6 +3,10 @@
 #include "time_stages.hpp"
 
 #include <cmath>
+#include <cstring>
+#include <limits>
+#include <optional>
+#include <utility>
 
 #include "pteryla/core/error.hpp"
 
@@ -94,7 +98,89 @@ void parseControls(const Scene& scene, TimeState& state) {
   state.controlsParsed = true;
 }
 
+bool sameBits(const void* a, const void* b, size_t bytes) { return bytes == 0 || std::memcmp(a, b, bytes) == 0; }
+
+bool sameFixed(double a, double b) { return (std::isnan(a) && std::isnan(b)) || sameBits(&a, &b, sizeof(double)); }
+
+double fixedAt(const coat::PackOptions& o, size_t i) {
+  return o.fixedElevation.empty() ? std::numeric_limits<double>::quiet_NaN() : o.fixedElevation[i];
+}
+
+uint8_t unopenedAt(const coat::CoatFeathers& c, size_t i, const coat::PackOptions& o) {
+  return !c.age.empty() && c.age[i] < o.openingAge ? 1 : 0;
+}
+
+uint8_t presentAt(const coat::CoatFeathers& c, size_t i) { return c.present.empty() ? 1 : c.present[i]; }
+
+// Packs `coat` through `memo`: reuses the memo's result when no feather's input changed, repacks
+// incrementally from the memo (or from `alternative` when that differs in fewer feathers), else packs
+// fully. The memo then holds this pack.
+const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative, const coat::SkinMesh& skin,
+                                     const coat::CoatFeathers& coat, const coat::PackOptions& options,
+                                     uint64_t generation, const Json& packing, bool& incremental, size_t& changedCount,
+                                     size_t& recomputed) {
+  std::optional<std::vector<uint32_t>> changed = memo.changes(skin, coat, options, generation, packing);
+  const PackMemo* seed = changed ? &memo : nullptr;
+  if (alternative && alternative != &memo) {
+    std::optional<std::vector<uint32_t>> alt = alternative->changes(skin, coat, options, generation, packing);
+    if (alt && (!changed || alt->size() < changed->size())) {
+      changed = std::move(alt);
+      seed = alternative;
+    }
+  }
+  incremental = seed != nullptr;
+  changedCount = changed ? changed->size() : coat.size();
+  if (seed == &memo && changed->empty()) {
+    recomputed = 0;
+    return memo.result;  // same inputs, same pack
+  }
+  coat::PackResult result = seed ? (changed->empty() ? seed->result : coat::repack(skin, coat, seed->result, *changed, options))
+                                 : coat::pack(skin, coat, options);
+  recomputed = result.stats.recomputed;
+  memo.remember(skin, coat, options, generation, packing, std::move(result));
+  return memo.result;
+}
+
 }  // namespace
+
+std::optional<std::vector<uint32_t>> PackMemo::changes(const coat::SkinMesh& skinNow, const coat::CoatFeathers& coat,
+                                                       const coat::PackOptions& options, uint64_t gen,
+                                                       const Json& packingNow) const {
+  const size_t n = coat.size();
+  if (!valid || gen != generation || frames.size() != n || coat.frames.size() != n || packingNow != packing)
+    return std::nullopt;
+  if (!options.fixedElevation.empty() && options.fixedElevation.size() != n) return std::nullopt;
+  if (skinNow.positions.size() != skin.size() ||
+      !sameBits(skinNow.positions.data(), skin.data(), skin.size() * sizeof(glm::dvec3)))
+    return std::nullopt;
+  std::vector<uint32_t> out;
+  for (size_t i = 0; i < n; ++i) {
+    const bool same = sameBits(&coat.frames[i], &frames[i], sizeof(coat::FeatherFrame)) &&
+                      presentAt(coat, i) == present[i] && unopenedAt(coat, i, options) == unopened[i] &&
+                      sameFixed(fixedAt(options, i), fixed[i]);
+    if (!same) out.push_back(static_cast<uint32_t>(i));
+  }
+  return out;
+}
+
+void PackMemo::remember(const coat::SkinMesh& skinNow, const coat::CoatFeathers& coat, const coat::PackOptions& options,
+                        uint64_t gen, const Json& packingNow, coat::PackResult&& r) {
+  const size_t n = coat.size();
+  valid = true;
+  generation = gen;
+  packing = packingNow;
+  skin = skinNow.positions;
+  frames = coat.frames;
+  present.resize(n);
+  unopened.resize(n);
+  fixed.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    present[i] = presentAt(coat, i);
+    unopened[i] = unopenedAt(coat, i, options);
+    fixed[i] = fixedAt(options, i);
+  }
+  result = std::move(r);
+}
 
 void poseSkin(const Scene& scene, double t, const coat::SkinMesh& rest, coat::SkinMesh& posed, TimeState& state) {
   state.rest = &rest;
@@ -126,27 +212,30 @@ void featherAges(const Scene& scene, double t, const std::vector<coat::TractPara
 void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, const coat::Follicles& follicles,
                    TimeState& state, coat::CoatFeathers& coat, std::vector<double>& fixedElevation) {
   state.controlResult = moult::ControlResult{};
+  state.packReport = PackReport{};
   if (scene.controls.empty()) return;
   parseControls(scene, state);
   if (state.controls.empty()) return;
   const coat::SkinMesh& rest = state.rest ? *state.rest : posed;
   const moult::ControlBinding binding = moult::bindControls(rest, follicles, state.controls, state.controlTracts);
+  // The natural pack (the frame without its raises) repacks from the last natural pack when it can.
+  const moult::NaturalPackFn natural = [&](const coat::SkinMesh& skin, const coat::CoatFeathers& c,
+                                           const coat::PackOptions& o) -> const coat::PackResult& {
+    return packWithMemo(state.natural, {}, skin, c, o, state.generation, scene.packing, state.packReport.naturalIncremental,
+                        state.packReport.naturalChanged, state.packReport.naturalRecomputed);
+  };
   state.controlResult = moult::evaluateControls(state.controls, binding, posed, follicles, t, state.packOptions, coat,
-                                                fixedElevation);
+                                                fixedElevation, natural);
 }
 
-coat::PackResult packFrame(const coat::SkinMesh& posed, const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                           TimeState& state) {
-  moult::ControlResult& cr = state.controlResult;
-  if (!cr.naturalPacked) return coat::pack(posed, coat, options);
-  cr.naturalPacked = false;
-  coat::PackResult natural = std::move(cr.natural);
-  cr.natural = coat::PackResult{};
-  // The natural pack must have used the same options (it did unless the packing section was edited
-  // without re-running the tracts stage, where the pipeline parses its own copy).
-  if (coat::packOptionsToJson(options) != coat::packOptionsToJson(state.packOptions))
-    return coat::pack(posed, coat, options);
-  return coat::repack(posed, coat, natural, cr.changed, options);
+const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
+                                  const coat::PackOptions& options, TimeState& state) {
+  PackReport& r = state.packReport;
+  // Controls that ran a natural pack this frame make it a candidate seed: it differs from this frame's
+  // pack in the raised feathers only.
+  const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
+  return packWithMemo(state.frame, alternative, posed, coat, options, state.generation, scene.packing,
+                      r.finalIncremental, r.finalChanged, r.finalRecomputed);
 }
 
 }  // namespace pteryla::pipeline

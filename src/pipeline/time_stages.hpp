@@ -19,6 +19,39 @@
 
 namespace pteryla::pipeline {
 
+// A pack and the inputs it was computed from, so a later frame can repack incrementally
+// (coat::repack, bit-identical to a full pack) when only some feathers' packing inputs changed: same
+// rest state (generation), same "packing" section, same posed skin; the frames, presence, opened/unopened
+// class (the only way the packer reads a feather's age: PackOptions::openingAge) and fixed elevations
+// are compared per feather.
+struct PackMemo {
+  bool valid = false;
+  uint64_t generation = 0;               // Pipeline rest-state generation the inputs belong to
+  Json packing;                          // the scene's "packing" section the options were parsed from
+  std::vector<glm::dvec3> skin;          // posed skin positions
+  std::vector<coat::FeatherFrame> frames;
+  std::vector<uint8_t> present, unopened;
+  std::vector<double> fixed;             // per feather, NaN = free
+  coat::PackResult result;
+
+  void clear() { *this = PackMemo{}; }
+  // Feathers whose packing input differs from the memo's, or nullopt when the memo cannot seed a repack
+  // (empty, other rest state, options, skin or feather count).
+  std::optional<std::vector<uint32_t>> changes(const coat::SkinMesh& skin, const coat::CoatFeathers& coat,
+                                               const coat::PackOptions& options, uint64_t generation,
+                                               const Json& packing) const;
+  // Stores `result` with the inputs it was packed from.
+  void remember(const coat::SkinMesh& skin, const coat::CoatFeathers& coat, const coat::PackOptions& options,
+                uint64_t generation, const Json& packing, coat::PackResult&& result);
+};
+
+// How the last frame's packs were made (diagnostics for tests and benchmarks).
+struct PackReport {
+  bool naturalIncremental = false, finalIncremental = false;
+  size_t naturalChanged = 0, finalChanged = 0;  // feathers handed to repack as changed
+  size_t naturalRecomputed = 0, finalRecomputed = 0;
+};
+
 // Parsed time settings, cached across frames. Each cache remembers the JSON it was parsed from and is
 // re-parsed when that changes (scene edits), so the cache never changes a result.
 struct TimeState {
@@ -42,7 +75,13 @@ struct TimeState {
   std::vector<moult::ControlSpec> controls;
   std::vector<std::vector<uint32_t>> controlTracts;  // per control: tract indices (empty = any)
   coat::PackOptions packOptions;
-  moult::ControlResult controlResult;     // of the last evaluation; its natural pack is consumed by packFrame
+  moult::ControlResult controlResult;     // of the last evaluation (its natural pack lives in `natural`)
+
+  // Packs remembered across frames (see PackMemo): the controls' natural pack and the frame's pack.
+  uint64_t generation = 0;                // set by the pipeline: changes whenever the rest state changes
+  PackMemo natural, frame;
+  bool naturalThisFrame = false;          // `natural` holds the pack of the current frame without raises
+  PackReport packReport;
 };
 
 // posed = rest deformed by the scene's skeleton at time t (identity without a skeleton). `posed` comes
@@ -55,11 +94,10 @@ void featherAges(const Scene& scene, double t, const std::vector<coat::TractPara
 void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, const coat::Follicles& follicles,
                    TimeState& state, coat::CoatFeathers& coat, std::vector<double>& fixedElevation);
 
-// The frame's pack: when applyControls had to pack the frame without its raises (to find natural
-// elevations), an incremental repack from that pack over the raised feathers (bit-identical to a full
-// pack, coat/pack.hpp); else a full pack. The natural pack is used once, so a later re-pack of the same
-// frame (e.g. after editing packing options) packs fully.
-coat::PackResult packFrame(const coat::SkinMesh& posed, const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                           TimeState& state);
+// The frame's pack (state.frame.result): an incremental repack (bit-identical to a full pack,
+// coat/pack.hpp) from whichever remembered pack differs in fewer feathers, the previous frame's pack or
+// this frame's natural pack (which differs in the raised feathers only); a full pack when neither fits.
+const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
+                                  const coat::PackOptions& options, TimeState& state);
 
 }  // namespace pteryla::pipeline

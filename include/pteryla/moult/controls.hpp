@@ -15,6 +15,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -87,6 +88,18 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
                                const coat::SkinMesh& posed, const coat::Follicles& follicles, double t,
                                const coat::PackOptions& pack, coat::CoatFeathers& coat,
                                std::vector<double>& fixedElevation);
+
+// The same with the natural pack supplied by the caller (e.g. an incremental repack from the previous
+// frame's natural pack): naturalPack(posed, coat, options) must return what coat::pack(posed, coat,
+// options) returns, valid until evaluateControls returns. It is called at most once, only when some
+// bound feather rises from a free elevation; ControlResult::naturalPacked then says so, but
+// ControlResult::natural stays empty (the caller owns that pack).
+using NaturalPackFn = std::function<const coat::PackResult&(const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
+                                                            const coat::PackOptions& options)>;
+ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const ControlBinding& binding,
+                               const coat::SkinMesh& posed, const coat::Follicles& follicles, double t,
+                               const coat::PackOptions& pack, coat::CoatFeathers& coat,
+                               std::vector<double>& fixedElevation, const NaturalPackFn& naturalPack);
 
 // JSON (docs/controls.md): one control object; calls r.finish().
 ControlSpec readControl(JsonReader& r);

@@ -63,6 +63,19 @@ struct QualityMetrics {
   std::optional<double> coverage;
 };
 
+// How the last evaluation of the pack and mesh stages reused earlier work (diagnostics for tests and
+// benchmarks; results never depend on it).
+struct FrameReuse {
+  bool naturalPacked = false;       // the controls packed the frame without its raises
+  bool naturalIncremental = false;  // ... by repacking (or reusing) an earlier natural pack
+  size_t naturalChanged = 0, naturalRecomputed = 0;
+  bool packIncremental = false;     // the frame's pack repacked (or reused) an earlier pack
+  size_t packChanged = 0;           // feathers whose packing input differed from the seed pack's
+  size_t packRecomputed = 0;        // feathers whose packing was computed (0: the earlier pack was reused)
+  size_t meshRegenerated = 0;       // present feathers whose barb curves the mesh stage generated
+  size_t meshReused = 0;            // present feathers whose triangles were copied from the last mesh
+};
+
 class Pipeline {
  public:
   explicit Pipeline(Scene scene, ProgressFn progress = {});
@@ -93,6 +106,8 @@ class Pipeline {
 
   // Runs the independent checker (and an unpacked evaluation for intersecting_pairs_unpacked).
   QualityMetrics check();
+
+  FrameReuse frameReuse() const;
 
   StageGraph& graph();
   double stageSeconds(Stage s) const;  // summed since the last resetTimings()
