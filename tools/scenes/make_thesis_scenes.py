@@ -163,7 +163,7 @@ def wing_scene():
                 {"joint": "elbow", "t": t, "rotation": [0, 0, 1, e]},
                 {"joint": "wrist", "t": t, "rotation": [0, 0, 1, w]})],
         },
-        "camera": {"eye": [1.25, 1.9, 1.9], "target": [0.95, 0.0, 0.2], "up": [0, 1, 0], "fov": 34},
+        "camera": {"eye": [1.25, 2.0, 2.0], "target": [0.95, 0.12, 0.2], "up": [0, 1, 0], "fov": 38},
         "render": {"size": [640, 360], "lod": 0.8},
     }
 
@@ -206,7 +206,7 @@ def moult_scene():
         # bare shafts) are meshed with barbs that reach into the skin (skin_penetrations > 0), see
         # docs/gallery.md.
         "packing": {"opening_age": 0.0},
-        "camera": {"eye": [0, 3.9, 2.0], "target": [0, 0, 0.1], "up": [0, 1, 0], "fov": 38},
+        "camera": {"eye": [0, 3.3, 2.0], "target": [0, 0, 0.25], "up": [0, 1, 0], "fov": 37},
         "render": {"size": [640, 360], "lod": 1.0},
     }
 
@@ -216,6 +216,25 @@ def moult_scene():
 HEAD_AXIS = [[0.62, 0.02, 0], [0.3, 0.08, 0], [0.0, 0.1, 0], [-0.3, 0.02, 0], [-0.3, -0.4, 0], [-0.25, -1.1, 0]]
 
 
+def head_feather():
+    """The contour feather with the barred brown pattern (not the bird's head feather, which is tuned for
+    the bird and changes with it)."""
+    f = json.load(open(os.path.join(ROOT, "data", "feathers", "contour.json")))
+    f["name"] = "head"
+    f["material"] = {"pattern": "barred_brown"}
+    return f
+
+
+def crest_feather():
+    """The contour feather, longer, narrower and red, so the raised crest reads against the head."""
+    f = json.load(open(os.path.join(ROOT, "data", "feathers", "contour.json")))
+    f["name"] = "crest"
+    f["rachis"]["length"] = 3.4
+    f["barbs"]["length"] = 0.8
+    f["material"] = {"base_color": [0.62, 0.16, 0.1]}
+    return f
+
+
 def crest_scene():
     return {
         "pteryla": 1,
@@ -223,7 +242,7 @@ def crest_scene():
         "seed": 2019,
         "time": 1.5,
         "mesh": "../meshes/head.obj",
-        "feathers": {"head": "../feathers/bird/head.json", "crest": "../feathers/contour.json"},
+        "feathers": {"head": head_feather(), "crest": crest_feather()},
         "tracts": [
             {"name": "capital", "groups": ["capital"], "count": 1300, "feather": "head",
              "feather_scale": "auto", "feather_spacings": 3.2, "scale_jitter": 0.08, "relax": {"iterations": 30}},
@@ -237,7 +256,7 @@ def crest_scene():
         # The crest rises (lift toward the skin normal), holds with a little random twist, and settles.
         "controls": [
             {"name": "crest", "at": [-0.05, 0.32, 0.0], "radius": 0.45, "falloff": 0.4, "tracts": ["crest"],
-             "seed": 7, "twist_angle": 12, "max_lift": 70, "interpolation": "smooth",
+             "seed": 7, "twist_angle": 12, "max_lift": 75, "interpolation": "smooth",
              "keys": [{"t": 0, "lift": 0, "random": 0}, {"t": 1, "lift": 1, "random": 1},
                       {"t": 2, "lift": 1}, {"t": 3, "lift": 0, "random": 0}]},
         ],

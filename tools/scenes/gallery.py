@@ -1,0 +1,210 @@
+#!/usr/bin/env python3
+"""Render the bundled scenes into docs/gallery/ and write docs/gallery.md with their check and bench numbers.
+
+    python3 tools/scenes/gallery.py --pteryla build/apps/pteryla/pteryla [--only wing,crest] [--no-bench]
+
+Usually run through tools/gallery.sh (which builds the CLI first). Every image is rendered by
+`pteryla render`, every number comes from `pteryla check` / `pteryla bench` on the same scene and time.
+The bird goes last (it is the slowest: its full check runs for minutes). With --only, the other
+sections keep the numbers recorded in docs/gallery/results.json.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+GALLERY = os.path.join(ROOT, "docs", "gallery")
+RESULTS = os.path.join(GALLERY, "results.json")
+MAX_BYTES = 300 * 1024
+
+# Sections: (key, title, text, scene, images [(file stem, time, caption)], check times, bench time)
+SECTIONS = [
+    ("wing", "Wing: skin deformation (Figs 8.6, 9.19)",
+     "`wing.json`: 210 feathers in two tracts on `wing.obj`: 166 coverts relaxed on the dorsal side and 44 "
+     "flight feathers pinned in a row along the trailing edge (secondaries blending into primaries). The "
+     "elbow and wrist are keyframed: rest at t = 0, bent down at t = 1, up at t = 2 and further up at t = 3. "
+     "On every pose the follicles ride the skin and the coat is repacked in its rest layer order.",
+     "wing.json", [("wing_rest", 0, "t = 0, rest"), ("wing_down", 1, "t = 1, bent down"),
+                   ("wing_up", 3, "t = 3, bent up")], [0, 1, 2, 3], 1),
+    ("moult", "Moult: sequential, radial and random (Figs 8.3-8.5)",
+     "`moult.json`: three strips of one patch, each with its own moult sequence (docs/moult.md): left "
+     "`increasing_v` (a sequential band), middle `radial` at constant wave speed (a ring moving out from the "
+     "centre), right `random`. The window holds 30% of each strip's feathers; the first 30% of a feather's "
+     "window is a gap (bare skin), then it regrows.",
+     "moult.json", [("moult_t3", 3, "t = 3"), ("moult_t6", 6, "t = 6")], [3, 6], 3),
+    ("crest", "Crest: expressive lift control (AnimFur)",
+     "`crest.json`: `head.obj` with 1,300 head and neck feathers and 110 longer, red crest feathers. One control on "
+     "the crown binds the crest tract; its keyframed `lift` (max 75 degrees) and `random` twist raise the "
+     "crest from t = 0 to t = 1, hold it to t = 2 and lower it by t = 3. Raised feathers become fixed-angle "
+     "feathers and the rest of the coat packs against them.",
+     "crest.json", [("crest_down", 0, "t = 0, crest lying"), ("crest_up", 1.5, "t = 1.5, crest raised")],
+     [0, 1.5], 1.5),
+    ("patch", "Follicle layouts on a patch (Fig 9.11)",
+     "About 60 feathers between two key feathers (a contour feather on the left, a covert on the right) on "
+     "`patch.obj`. `patch.json` relaxes random follicles with Lloyd's algorithm; `patch_grid.json` and "
+     "`patch_hex.json` pin follicles on a grid and a hexagonal lattice; `patch_stretched.json` relaxes with a "
+     "bias vector that packs follicles twice as close along the feathers as across them (6.1.4). In the "
+     "grid each feather lies right on the one ahead of it, so the columns stack up.",
+     None, [("patch", None, "patch.json: relaxed"), ("patch_grid", None, "patch_grid.json: grid"),
+            ("patch_hex", None, "patch_hex.json: hexagonal"),
+            ("patch_stretched", None, "patch_stretched.json: stretched")], None, None),
+    ("sphere", "Spheres: feather scale and skin resolution (Figs 9.12, 9.13)",
+     "426 feathers on unit spheres, flowing from pole to pole. Fig 9.12: the same follicles with feathers "
+     "2, 3 and 4.5 follicle spacings long on the 1,600-triangle sphere (`sphere_small.json`, `sphere.json`, "
+     "`sphere_large.json`). Fig 9.13: `sphere_250.json` is the middle scale on the 250-triangle sphere; the "
+     "packing keeps the coat above the coarse facets.",
+     None, [("sphere_small", None, "sphere_small.json"), ("sphere", None, "sphere.json"),
+            ("sphere_large", None, "sphere_large.json"), ("sphere_250", None, "sphere_250.json: 250 triangles")],
+     None, None),
+    ("bird", "Bird (Fig 9.20)",
+     "`bird.json`, the default scene of the README's main command.",
+     "bird.json", [("bird", None, "bird.json")], [None], None),
+]
+
+
+def run(cmd):
+    t0 = time.time()
+    r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit("failed: " + " ".join(cmd) + "\n" + r.stderr)
+    return r.stdout, time.time() - t0
+
+
+def time_args(t):
+    return [] if t is None else ["--time", str(t)]
+
+
+def scene_path(name):
+    return os.path.join("data", "scenes", name)
+
+
+def process(pteryla, key, scene, images, check_times, bench_time, do_bench):
+    out = {"images": {}, "checks": [], "bench": []}
+    for stem, t, _ in images:
+        path = os.path.join(GALLERY, stem + ".png")
+        _, secs = run([pteryla, "-q", "render", scene_path(scene or stem + ".json"), "--size", "640x360", "-o", path]
+                      + time_args(t))
+        size = os.path.getsize(path)
+        print(f"{key}: rendered {os.path.relpath(path, ROOT)} ({size // 1024} KB, {secs:.1f} s)")
+        if size > MAX_BYTES:
+            print(f"warning: {path} is larger than {MAX_BYTES // 1024} KB", file=sys.stderr)
+        out["images"][stem] = {"seconds": round(secs, 1), "kb": size // 1024}
+    # Scene and times for the numbers: a scene section checks its scene at each time, a multi-scene
+    # section checks each image's scene at its own time.
+    targets = [(scene, t) for t in check_times] if scene else [(s + ".json", t) for s, t, _ in images]
+    for sc, t in targets:
+        text, secs = run([pteryla, "-q", "check", scene_path(sc)] + time_args(t))
+        m = json.loads(text)
+        m["scene"] = sc
+        m["time"] = t
+        m["seconds"] = round(secs, 1)
+        print(f"{key}: check {m['scene']} t={t}: skin_penetrations {m['skin_penetrations']} ({secs:.0f} s)")
+        out["checks"].append(m)
+    if do_bench:
+        bench_targets = [(scene, bench_time)] if scene else [(s + ".json", t) for s, t, _ in images]
+        for sc, t in bench_targets:
+            text, _ = run([pteryla, "-q", "bench", scene_path(sc), "--size", "640x360"] + time_args(t))
+            b = json.loads(text)
+            b["scene"] = sc
+            b["time"] = t
+            print(f"{key}: bench {b['scene']}: {text.strip()}")
+            out["bench"].append(b)
+    return out
+
+
+def fmt(v, digits=2):
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.{digits}f}"
+    return str(v)
+
+
+def write_markdown(results):
+    lines = [
+        "# Gallery",
+        "",
+        "Every image below is rendered by `pteryla render` from a scene in `data/scenes/` (640 x 360, the "
+        "scene's level of detail), and every number is printed by `pteryla check` / `pteryla bench` on the "
+        "same scene and time. Regenerate all of it (images, numbers and this page) with",
+        "",
+        "```sh",
+        "bash tools/gallery.sh            # builds the CLI, renders, checks and benchmarks every scene (~10 min)",
+        "bash tools/gallery.sh --only wing,crest --no-bench   # some sections; the others keep their numbers",
+        "```",
+        "",
+        "The scenes themselves (all but `bird.json`) are written by `python3 tools/scenes/make_thesis_scenes.py`;",
+        "`ctest -L scenes` checks that every scene evaluates and, except the bird, stays free of skin "
+        "penetrations.",
+        "",
+        "Columns: `feathers` present at that time; `skin_penetrations` coat vertices below the skin at full "
+        "geometry (0 = none); `intersecting_pairs` triangle pairs of different feathers that cross, after "
+        "packing and (`unpacked`) with every feather at the median elevation; `coverage` fraction of the "
+        "tract area under feathers.",
+        "",
+    ]
+    for key, title, text, scene, images, _, _ in SECTIONS:
+        r = results.get(key)
+        lines += [f"## {title}", "", text, ""]
+        if not r:
+            lines += ["(not generated yet)", ""]
+            continue
+        # Two images per row (GitHub scales table cells to the page width).
+        for k in range(0, len(images), 2):
+            row = images[k:k + 2]
+            lines.append("| " + " | ".join(f"![{c}](gallery/{s}.png)" for s, _, c in row) + " |")
+            lines.append("|" + "---|" * len(row))
+            lines.append("| " + " | ".join(f"*{c}*" for _, _, c in row) + " |")
+            lines.append("")
+        lines += ["| scene | t | feathers | skin_penetrations | intersecting_pairs | unpacked | coverage | check s |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for m in r["checks"]:
+            lines.append(f"| `{m['scene']}` | {fmt(m['time'])} | {m['feathers']} | **{m['skin_penetrations']}** | "
+                         f"{m['intersecting_pairs']} | {m['intersecting_pairs_unpacked']} | {fmt(m['coverage'], 3)} | "
+                         f"{fmt(m['seconds'], 0)} |")
+        lines.append("")
+        if r.get("bench"):
+            lines += ["| bench | t | distribute s | interpolate s | pack s | mesh s | render s | frame s | triangles |",
+                      "|---|---|---|---|---|---|---|---|---|"]
+            for b in r["bench"]:
+                lines.append(f"| `{b['scene']}` | {fmt(b['time'])} | {fmt(b['distribute'])} | {fmt(b['interpolate'])} | "
+                             f"{fmt(b['pack'])} | {fmt(b['mesh'])} | {fmt(b['render'])} | {fmt(b['frame'])} | "
+                             f"{b['triangles']} |")
+            lines.append("")
+    with open(os.path.join(ROOT, "docs", "gallery.md"), "w") as f:
+        f.write("\n".join(lines))
+    print("wrote docs/gallery.md")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--pteryla", required=True)
+    ap.add_argument("--only", default="")
+    ap.add_argument("--no-bench", action="store_true")
+    a = ap.parse_args()
+    pteryla = os.path.abspath(a.pteryla)
+    only = [s for s in a.only.split(",") if s]
+    known = [s[0] for s in SECTIONS]
+    for s in only:
+        if s not in known:
+            sys.exit(f"unknown section '{s}' (known: {', '.join(known)})")
+    os.makedirs(GALLERY, exist_ok=True)
+    results = json.load(open(RESULTS)) if os.path.exists(RESULTS) else {}
+    for key, _, _, scene, images, check_times, bench_time in SECTIONS:
+        if only and key not in only:
+            continue
+        old = results.get(key, {})
+        results[key] = process(pteryla, key, scene, images, check_times, bench_time, not a.no_bench)
+        if a.no_bench and old.get("bench"):
+            results[key]["bench"] = old["bench"]
+        with open(RESULTS, "w") as f:
+            json.dump(results, f, indent=1)
+            f.write("\n")
+    write_markdown(results)
+
+
+if __name__ == "__main__":
+    main()
