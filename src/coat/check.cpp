@@ -34,14 +34,18 @@ uint32_t triFeather(const TriMesh& m, size_t t) {
   return m.featherId.empty() ? 0u : m.featherId[m.indices[3 * t]];
 }
 
-size_t intersectingPairs(const TriMesh& coat) {
+// Counts intersecting triangle pairs of different feathers; with `attribution`, also lists the feather
+// pair of every intersecting triangle pair (as (a << 32 | b), a < b, unsorted).
+size_t intersectingPairs(const TriMesh& coat, std::vector<uint64_t>* attribution = nullptr) {
   const size_t nt = coat.triangleCount();
   if (nt < 2) return 0;
   detail::TriangleBvh bvh;
   bvh.build(coat.positions.data(), coat.indices.data(), nt);
-  return tbb::parallel_reduce(
+  tbb::combinable<std::vector<uint64_t>> found;
+  const size_t total = tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, nt, 256), size_t(0),
       [&](const tbb::blocked_range<size_t>& r, size_t acc) {
+        std::vector<uint64_t>* mine = attribution ? &found.local() : nullptr;
         for (size_t t = r.begin(); t < r.end(); ++t) {
           const uint32_t ft = triFeather(coat, t);
           const dvec3 a0 = bvh.vertex(static_cast<uint32_t>(t), 0), a1 = bvh.vertex(static_cast<uint32_t>(t), 1),
@@ -52,13 +56,36 @@ size_t intersectingPairs(const TriMesh& coat) {
             hi[k] = static_cast<float>(std::max({a0[k], a1[k], a2[k]}));
           }
           bvh.queryBox(lo, hi, [&](uint32_t u) {
-            if (u <= t || triFeather(coat, u) == ft) return;
-            if (detail::trianglesIntersect(a0, a1, a2, bvh.vertex(u, 0), bvh.vertex(u, 1), bvh.vertex(u, 2))) ++acc;
+            if (u <= t) return;
+            const uint32_t fu = triFeather(coat, u);
+            if (fu == ft) return;
+            if (detail::trianglesIntersect(a0, a1, a2, bvh.vertex(u, 0), bvh.vertex(u, 1), bvh.vertex(u, 2))) {
+              ++acc;
+              if (mine) mine->push_back((uint64_t(std::min(ft, fu)) << 32) | std::max(ft, fu));
+            }
           });
         }
         return acc;
       },
       [](size_t a, size_t b) { return a + b; });
+  if (attribution) {
+    attribution->clear();
+    found.combine_each([&](const std::vector<uint64_t>& v) { attribution->insert(attribution->end(), v.begin(), v.end()); });
+  }
+  return total;
+}
+
+std::vector<FeatherPairCount> groupPairs(std::vector<uint64_t>& keys) {
+  std::sort(keys.begin(), keys.end());
+  std::vector<FeatherPairCount> out;
+  for (size_t k = 0; k < keys.size();) {
+    size_t e = k;
+    while (e < keys.size() && keys[e] == keys[k]) ++e;
+    out.push_back({static_cast<uint32_t>(keys[k] >> 32), static_cast<uint32_t>(keys[k] & 0xffffffffu),
+                   static_cast<uint32_t>(e - k)});
+    k = e;
+  }
+  return out;
 }
 
 double diagonal(const SkinMesh& s) {
@@ -119,6 +146,17 @@ size_t countIntersectingPairs(const TriMesh& coat, int threads) {
   return intersectingPairs(coat);
 }
 
+std::vector<FeatherPairCount> intersectingFeatherPairs(const TriMesh& coat, int threads) {
+  std::vector<uint64_t> keys;
+  if (threads >= 1) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] { intersectingPairs(coat, &keys); });
+  } else {
+    intersectingPairs(coat, &keys);
+  }
+  return groupPairs(keys);
+}
+
 CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces, const TriMesh& coat,
                   const CheckOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -132,7 +170,15 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
   CheckResult res;
   res.coatTriangles = coat.triangleCount();
   auto body = [&] {
-    if (o.intersections) res.intersectingPairs = intersectingPairs(coat);
+    if (o.intersections) {
+      if (o.attribute) {
+        std::vector<uint64_t> keys;
+        res.intersectingPairs = intersectingPairs(coat, &keys);
+        res.featherPairs = groupPairs(keys);
+      } else {
+        res.intersectingPairs = intersectingPairs(coat);
+      }
+    }
     const double diag = diagonal(skin);
     const double tol = o.skinTolerance > 0 ? o.skinTolerance : 1e-6 * diag;
     if ((o.penetrations || o.coverage) && !skin.faces.empty()) {
@@ -179,6 +225,10 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
           const uint32_t f = coat.featherId.empty() ? 0 : coat.featherId[v];
           if (featherBad.size() <= f) featherBad.resize(f + 1, 0);
           featherBad[f] = 1;
+          if (o.attribute) {
+            if (res.featherPenetrations.size() <= f) res.featherPenetrations.resize(f + 1, 0);
+            ++res.featherPenetrations[f];
+          }
         }
         for (uint32_t f = 0; f < featherBad.size(); ++f)
           if (featherBad[f]) res.penetratingFeathers.push_back(f);

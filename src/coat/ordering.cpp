@@ -3,6 +3,8 @@
 // body axis).
 #include "pteryla/coat/ordering.hpp"
 
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCore>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -11,6 +13,7 @@
 #include <numeric>
 
 #include "pteryla/core/error.hpp"
+#include "spatial.hpp"
 
 namespace pteryla::coat {
 
@@ -30,6 +33,98 @@ double axisArcLength(const std::vector<glm::dvec3>& axis, const glm::dvec3& p) {
   return s;
 }
 
+std::vector<double> flowPotential(const std::vector<glm::dvec3>& x, const std::vector<glm::dvec3>& dir, int neighbours) {
+  const size_t n = x.size();
+  PTERYLA_CHECK(dir.size() == n, "flowPotential: one direction per point");
+  std::vector<double> phi(n, 0.0);
+  if (n < 2) return phi;
+  const size_t k = static_cast<size_t>(std::clamp(neighbours, 1, 64));
+  // Typical spacing from a deterministic sample of nearest-neighbour distances.
+  std::vector<double> nn;
+  const size_t stride = std::max<size_t>(1, n / 256);
+  for (size_t i = 0; i < n; i += stride) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < n; ++j)
+      if (j != i) best = std::min(best, glm::length(x[j] - x[i]));
+    if (best > 0 && std::isfinite(best)) nn.push_back(best);
+  }
+  detail::Box box;
+  for (const auto& p : x) box.add(p);
+  const double diag = std::max(1e-12, glm::length(box.hi - box.lo));
+  double h = diag / std::sqrt(static_cast<double>(n));
+  if (!nn.empty()) {
+    std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
+    h = std::max(nn[nn.size() / 2], 1e-9 * diag);
+  }
+  detail::PointGrid grid;
+  grid.build(x, 2 * h);
+  // Edges i < j from each point's k nearest neighbours (ties by index), deduplicated.
+  std::vector<uint64_t> edges;
+  std::vector<std::pair<double, uint32_t>> found;
+  for (size_t i = 0; i < n; ++i) {
+    double r = 2 * h;
+    for (;;) {
+      found.clear();
+      grid.query(x[i] - glm::dvec3(r), x[i] + glm::dvec3(r), [&](uint32_t j) {
+        if (j == i) return;
+        const double d = glm::length(x[j] - x[i]);
+        if (d <= r) found.push_back({d, j});
+      });
+      if (found.size() >= k || r > diag) break;
+      r *= 2;
+    }
+    const size_t m = std::min(k, found.size());
+    std::partial_sort(found.begin(), found.begin() + m, found.end());
+    for (size_t q = 0; q < m; ++q) {
+      const uint64_t a = std::min<uint64_t>(i, found[q].second), b = std::max<uint64_t>(i, found[q].second);
+      edges.push_back(a << 32 | b);
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  // Normal equations of sum_e w_e (phi_j - phi_i - g_e)^2 + lambda sum phi^2, w_e = 1 / |x_j - x_i|^2
+  // (residuals in units of gradient), g_e = (x_j - x_i) . mean direction. Edges across opposed directions
+  // (a parting) carry less weight.
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(4 * edges.size() + n);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
+  std::vector<double> diagSum(n, 0.0);
+  for (uint64_t e : edges) {
+    const auto i = static_cast<Eigen::Index>(e >> 32), j = static_cast<Eigen::Index>(e & 0xffffffffu);
+    const glm::dvec3 d = x[j] - x[i];
+    const double l2 = glm::dot(d, d);
+    if (!(l2 > 0)) continue;
+    const double agree = glm::dot(dir[i], dir[j]);
+    const double w = std::max(0.05, agree) / l2;
+    const double g = glm::dot(d, 0.5 * (dir[i] + dir[j]));
+    trip.emplace_back(i, i, w);
+    trip.emplace_back(j, j, w);
+    trip.emplace_back(i, j, -w);
+    trip.emplace_back(j, i, -w);
+    b[i] -= w * g;
+    b[j] += w * g;
+    diagSum[i] += w;
+    diagSum[j] += w;
+  }
+  double mean = 0;
+  for (double v : diagSum) mean += v;
+  mean /= static_cast<double>(n);
+  const double lambda = 1e-9 * std::max(mean, 1e-300);
+  for (size_t i = 0; i < n; ++i) trip.emplace_back(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i), lambda);
+  Eigen::SparseMatrix<double> A(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  A.setFromTriplets(trip.begin(), trip.end());
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
+  cg.setTolerance(1e-10);
+  cg.setMaxIterations(static_cast<Eigen::Index>(std::max<size_t>(2000, 4 * n)));
+  cg.compute(A);
+  const Eigen::VectorXd sol = cg.solve(b);
+  double avg = 0;
+  for (size_t i = 0; i < n; ++i) avg += sol[static_cast<Eigen::Index>(i)];
+  avg /= static_cast<double>(n);
+  for (size_t i = 0; i < n; ++i) phi[i] = sol[static_cast<Eigen::Index>(i)] - avg;
+  return phi;
+}
+
 OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
                         const std::vector<TractParameterization>& params, const Follicles& follicles,
                         const SurfaceDirections& directions, const OrderOptions& options, CoatFeathers& coat) {
@@ -40,6 +135,14 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
   if (options.method == OrderMethod::Axis) {
     if (options.axis.size() < 2) throw Error("ordering by axis needs an \"axis\" polyline (head to tail)", {}, "ordering.axis");
     for (size_t i = 0; i < n; ++i) res.key[i] = axisArcLength(options.axis, follicles.position[coat.follicle[i]]);
+  } else if (options.method == OrderMethod::Flow) {
+    PTERYLA_CHECK(coat.frames.size() == n, "orderLayers: flow ordering needs the feather frames");
+    std::vector<glm::dvec3> x(n), d(n);
+    for (size_t i = 0; i < n; ++i) {
+      x[i] = coat.frames[i].origin;
+      d[i] = coat.frames[i].tangent;
+    }
+    res.key = flowPotential(x, d, options.neighbours);
   } else {
     PTERYLA_CHECK(params.size() == tracts.size(), "orderLayers: one parameterization per tract");
     PTERYLA_CHECK(directions.faceCoords.size() == follicles.size(), "orderLayers: directions of other follicles");
@@ -100,7 +203,13 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
 
 OrderOptions parseOrdering(JsonReader& r) {
   OrderOptions o;
-  o.method = r.oneOf("method", "tracts", {"tracts", "axis"}) == "axis" ? OrderMethod::Axis : OrderMethod::Tracts;
+  const std::string method = r.oneOf("method", "tracts", {"tracts", "axis", "flow"});
+  o.method = method == "axis" ? OrderMethod::Axis : (method == "flow" ? OrderMethod::Flow : OrderMethod::Tracts);
+  if (r.has("neighbours")) {
+    const double k = r.number("neighbours");
+    if (!(k >= 1 && k <= 64 && k == std::floor(k))) r.fail("neighbours", "expected an integer in [1, 64]");
+    o.neighbours = static_cast<int>(k);
+  }
   if (r.has("tracts")) {
     const Json& a = r.raw("tracts");
     if (!a.is_array()) r.fail("tracts", "expected an array of tract names, bottom layer first");

@@ -41,9 +41,21 @@ def resample(poly, n):
         out.append([round(poly[i][m] + t * (poly[i + 1][m] - poly[i][m]), 5) for m in range(3)])
     return out
 
-def variant(base, name, pattern=None, color=None, **over):
+def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeather=True, **over):
+    """A bird feather from a library feather. barbs_per_vane sets the barb spacing so each vane has about
+    that many barbs (full-geometry triangles ~ 16 per barb plus the shaft): the bird's ~3,150 feathers
+    come to ~2.2M triangles at full detail, like the thesis' bird (issues #10, #12)."""
     f = json.load(open(os.path.join(DATA, 'feathers', base + '.json')))
     f['name'] = name
+    if barbs_per_vane:
+        b = dict(f['barbs'])
+        ratio = b['spacing_tip'] / b['spacing_base']
+        mean = f['rachis']['length'] / barbs_per_vane
+        b['spacing_base'] = round(2 * mean / (1 + ratio), 4)
+        b['spacing_tip'] = round(2 * mean * ratio / (1 + ratio), 4)
+        f['barbs'] = b
+    if not afterfeather:
+        f.pop('afterfeather', None)
     mat = {}
     if pattern: mat['pattern'] = pattern
     if color: mat['base_color'] = color
@@ -53,20 +65,22 @@ def variant(base, name, pattern=None, color=None, **over):
     json.dump(f, open(os.path.join(DATA, 'feathers', 'bird', name + '.json'), 'w'), indent=2)
     return '../feathers/bird/' + name + '.json'
 
-feathers = {
-    'back': variant('contour', 'back', 'scalloped_grey'),
-    'breast': variant('contour', 'breast', 'spotted'),
-    'head': variant('contour', 'head', 'barred_brown'),
-    'covert': variant('covert', 'covert', 'barred_brown'),
-    'flank': variant('semiplume', 'flank', 'down_grey'),
-    'primary': variant('primary', 'primary', 'flight_dark'),
-    'secondary': variant('secondary', 'secondary', 'flight_dark'),
-    'rectrix': variant('rectrix', 'rectrix', 'barred_brown'),
+BODY_BARBS = int(os.environ.get('BIRD_BODY_BARBS', 15))
+FLIGHT_BARBS = int(os.environ.get('BIRD_FLIGHT_BARBS', 85))
+feathers = {  # body feathers without afterfeathers (hidden under the vanes; they cost a third of the triangles)
+    'back': variant('contour', 'back', 'scalloped_grey', barbs_per_vane=BODY_BARBS, afterfeather=False),
+    'breast': variant('contour', 'breast', 'spotted', barbs_per_vane=BODY_BARBS, afterfeather=False),
+    'head': variant('contour', 'head', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False),
+    'covert': variant('covert', 'covert', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False),
+    'flank': variant('semiplume', 'flank', 'down_grey', barbs_per_vane=BODY_BARBS, afterfeather=False),
+    'primary': variant('primary', 'primary', 'flight_dark', barbs_per_vane=FLIGHT_BARBS),
+    'secondary': variant('secondary', 'secondary', 'flight_dark', barbs_per_vane=FLIGHT_BARBS),
+    'rectrix': variant('rectrix', 'rectrix', 'barred_brown', barbs_per_vane=FLIGHT_BARBS),
 }
 
 groups = load_obj_groups(os.path.join(DATA, 'meshes', 'bird.obj'))
 axes = json.load(open(os.path.join(DATA, 'meshes', 'bird.axes.json')))
-DENSITY = 1050.0  # follicles per unit area on body tracts (~3,000 body feathers)
+DENSITY = float(os.environ.get('BIRD_DENSITY', 1140.0))  # follicles per unit area on body tracts (~3,000 body feathers)
 
 body = [  # tract, feather types for its key feathers (cycled), key count
     ('capital', ['head'], 4), ('capital_left', ['head'], 3), ('capital_right', ['head'], 3),
@@ -81,7 +95,7 @@ tracts = []
 for name, kinds, n in body:
     pts = farthest_points(groups[name], n)
     keys = [{'feather': kinds[i % len(kinds)], 'at': [round(c, 5) for c in p]} for i, p in enumerate(pts)]
-    t = {'name': name, 'groups': [name], 'density': DENSITY, 'feather_scale': 'auto', 'feather_spacings': 3.6,
+    t = {'name': name, 'groups': [name], 'density': DENSITY, 'feather_scale': 'auto', 'feather_spacings': float(os.environ.get('BIRD_SPACINGS', 2.4)),
          'scale_jitter': 0.08, 'key_feathers': keys, 'relax': {'iterations': 30}}
     if name.startswith(('alar', 'humeral', 'spinal', 'caudal', 'capital', 'cervical')):
         t['parameterization'] = {'method': 'projection', 'view_direction': [0, -1, 0]}
@@ -122,7 +136,7 @@ scene = {
                                           {'at': [0.0, 0.2, -1.0], 'direction': [-0.6, 0.0, -1.0]}]},
         },
     },
-    'ordering': {'method': 'axis', 'axis': body_axis},
+    'ordering': {'method': os.environ.get('BIRD_ORDER', 'flow')},
     'camera': {'view_direction': [-0.45, -0.6, -0.66], 'fov': 30},
     'lights': [{'direction': [-0.4, -1.0, -0.5], 'intensity': 1.0},
                {'direction': [0.6, -0.2, 0.7], 'color': [0.6, 0.65, 0.75], 'intensity': 0.5}],

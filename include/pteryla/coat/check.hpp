@@ -34,6 +34,15 @@ struct CheckOptions {
   std::vector<glm::dvec3> featherOrigins;
   std::vector<double> featherBaseRadius;
   int threads = 0;                 // 0 = all available
+  // Diagnostics: also list which feathers the intersecting pairs and skin penetrations belong to
+  // (CheckResult::featherPairs, featherPenetrations). The counts are the same either way.
+  bool attribute = false;
+};
+
+// Intersecting triangle pairs between two feathers (a < b): `pairs` of their triangles intersect.
+struct FeatherPairCount {
+  uint32_t a = 0, b = 0;
+  uint32_t pairs = 0;
 };
 
 struct CheckResult {
@@ -45,6 +54,11 @@ struct CheckResult {
   double coverage = 0;                     // [0,1]
   size_t coverageSamples = 0, coveredSamples = 0;
   double seconds = 0;
+  // CheckOptions::attribute only: per pair of feathers the intersecting triangle pairs (sorted by a, b;
+  // the counts sum to intersectingPairs), and per featherId the penetrating vertices (sums to
+  // skinPenetrations; sized to the largest featherId + 1).
+  std::vector<FeatherPairCount> featherPairs;
+  std::vector<uint32_t> featherPenetrations;
 };
 
 // `tractFaces`: skin triangle indices the coverage is measured on (empty = every face). The coat's
@@ -54,6 +68,9 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
 
 // Only the intersecting pair count.
 size_t countIntersectingPairs(const TriMesh& coat, int threads = 0);
+// The intersecting pairs per pair of feathers (FeatherPairCount, sorted; counts sum to
+// countIntersectingPairs).
+std::vector<FeatherPairCount> intersectingFeatherPairs(const TriMesh& coat, int threads = 0);
 
 // Fills featherOrigins / featherBaseRadius from the coat: radius = baseAllowance x total feather length
 // (use the same value as PackOptions::baseAllowance), at least the calamus radius.

@@ -11,6 +11,11 @@
 //    hand-made parameterization without corner (u,v) gives flow (1,0)).
 //  - Axis: one global order by the arc length of the follicle's closest point on a body-axis polyline
 //    (head to tail), tail-most first; tracts are ignored.
+//  - Flow: one global order by a potential phi over all follicles whose gradient follows the feather
+//    directions (least squares over each follicle's nearest neighbours: phi_j - phi_i ~ (x_j - x_i) . T),
+//    largest phi (furthest downstream) first. Unlike Axis it follows directions that leave the body axis
+//    (wings, legs, flanks), and unlike Tracts it is one order across tract borders, so two neighbouring
+//    feathers of different tracts are layered like two of the same tract.
 // Ties are broken by follicle id (Follicles::id), then by feather index, so the order is total and
 // deterministic.
 #include <glm/vec2.hpp>
@@ -29,16 +34,17 @@
 
 namespace pteryla::coat {
 
-enum class OrderMethod { Tracts, Axis };
+enum class OrderMethod { Tracts, Axis, Flow };
 
 struct OrderOptions {
   OrderMethod method = OrderMethod::Tracts;
   std::vector<std::string> tractOrder;  // Tracts: names, bottom layer first
   std::vector<glm::dvec3> axis;         // Axis: polyline head to tail, >= 2 distinct points
+  int neighbours = 8;                   // Flow: nearest follicles each follicle is compared with
 };
 
 struct OrderResult {
-  std::vector<double> key;              // per feather: s (Tracts) or axis arc length (Axis); larger = lower
+  std::vector<double> key;              // per feather: s (Tracts), axis arc length (Axis) or phi (Flow); larger = lower
   std::vector<glm::dvec2> tractFlow;    // per tract: unit mean direction in (u,v) (Tracts)
   std::vector<uint32_t> tractRank;      // per tract: position in the tract order (Tracts)
 };
@@ -53,7 +59,13 @@ OrderResult orderLayers(const SkinMesh& restSkin, const std::vector<Tract>& trac
                         const std::vector<TractParameterization>& params, const Follicles& follicles,
                         const SurfaceDirections& directions, const OrderOptions& options, CoatFeathers& coat);
 
-// JSON (docs/coat.md): {"method": "tracts"|"axis", "tracts": [names], "axis": [[x,y,z], ...]}.
+// Flow potential (OrderMethod::Flow) of points with unit directions: phi with grad phi ~ direction,
+// least squares over each point's `neighbours` nearest points; mean 0. Deterministic.
+std::vector<double> flowPotential(const std::vector<glm::dvec3>& position, const std::vector<glm::dvec3>& direction,
+                                  int neighbours = 8);
+
+// JSON (docs/coat.md): {"method": "tracts"|"axis"|"flow", "tracts": [names], "axis": [[x,y,z], ...],
+// "neighbours": k}.
 // Calls r.finish().
 OrderOptions parseOrdering(JsonReader& r);
 
