@@ -345,3 +345,45 @@ TEST(Controls, JsonIsStrict) {
   EXPECT_EQ(err(j), "controls[0].max_lift");
   EXPECT_EQ(err(Json::object()), "controls");
 }
+
+// The caller may supply the natural pack (the pipeline repacks it from the last frame's): the raises are
+// the same as with the controls' own pack, the callback runs only when a feather rises, and the result
+// then carries no copy of the pack.
+TEST(Controls, CallerSuppliedNaturalPackGivesTheSameRaises) {
+  SmallCoat s = smallCoat();
+  coat::PackOptions po;
+  po.threads = 1;
+  std::vector<ControlSpec> cs = {control({0.0, 0.5, 0.0}, 0.2)};
+  cs[0].lift.addKey(0, {0, 0, 0});
+  cs[0].lift.addKey(1, {1, 0, 0});
+  const ControlBinding b = bindControls(s.skin, s.follicles, cs);
+  coat::PackResult supplied;
+  int calls = 0;
+  const NaturalPackFn natural = [&](const coat::SkinMesh& skin, const coat::CoatFeathers& c,
+                                    const coat::PackOptions& o) -> const coat::PackResult& {
+    ++calls;
+    EXPECT_EQ(o.threads, 1);
+    supplied = coat::pack(skin, c, o);
+    return supplied;
+  };
+  {
+    coat::CoatFeathers c = s.coat;
+    std::vector<double> fixed;
+    const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.0, po, c, fixed, natural);
+    EXPECT_EQ(calls, 0);  // lift 0: nothing rises, no pack needed
+    EXPECT_FALSE(r.naturalPacked);
+  }
+  coat::CoatFeathers own = s.coat, viaFn = s.coat;
+  std::vector<double> fixedOwn, fixedFn;
+  const ControlResult a = evaluateControls(cs, b, s.skin, s.follicles, 0.6, po, own, fixedOwn);
+  const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.6, po, viaFn, fixedFn, natural);
+  EXPECT_EQ(calls, 1);
+  EXPECT_TRUE(r.naturalPacked);
+  EXPECT_TRUE(r.natural.elevation.empty());
+  EXPECT_EQ(r.changed, a.changed);
+  EXPECT_GT(r.raised, 0u);
+  ASSERT_EQ(fixedFn.size(), fixedOwn.size());
+  for (size_t i = 0; i < fixedFn.size(); ++i)
+    EXPECT_TRUE((std::isnan(fixedFn[i]) && std::isnan(fixedOwn[i])) || fixedFn[i] == fixedOwn[i]) << i;
+  EXPECT_EQ(supplied.elevation, a.natural.elevation);
+}
