@@ -30,6 +30,7 @@ void parseMoult(const Scene& scene, TimeState& state) {
   }
   if (state.moultParsed && key == state.moultKey) return;
   state.moultParsed = false;
+  state.moultPlan.reset();
   state.moultOptions.assign(scene.tracts.size(), std::nullopt);
   std::optional<moult::MoultOptions> defaults;
   if (!scene.moult.empty()) {
@@ -203,10 +204,13 @@ void featherAges(const Scene& scene, double t, const std::vector<coat::TractPara
     state.moultStats.old = coat.size();
     return;
   }
-  // The plan depends only on rest data (parameterization, feather sizes, ids); it is cheap next to
-  // packing, so it is rebuilt per evaluation rather than cached against upstream edits.
-  const moult::CoatMoultPlan plan = moult::planCoatMoult(params, follicles, coat, state.moultOptions);
-  state.moultStats = moult::applyMoult(plan, t, coat);
+  // The plan depends only on rest data (parameterization, feather sizes, ids) and the moult sections:
+  // planned once per rest state (generation) and section edit.
+  if (!state.moultPlan || state.moultPlanGeneration != state.generation) {
+    state.moultPlan = moult::planCoatMoult(params, follicles, coat, state.moultOptions);
+    state.moultPlanGeneration = state.generation;
+  }
+  state.moultStats = moult::applyMoult(*state.moultPlan, t, coat);
 }
 
 void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, const coat::Follicles& follicles,

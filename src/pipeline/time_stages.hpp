@@ -68,6 +68,9 @@ struct TimeState {
   bool moultParsed = false;
   std::vector<std::optional<moult::MoultOptions>> moultOptions;  // per tract
   moult::MoultStats moultStats;           // of the last evaluation
+  // The plan depends only on rest data and the moult sections: kept while both are unchanged.
+  std::optional<moult::CoatMoultPlan> moultPlan;
+  uint64_t moultPlanGeneration = 0;
 
   // Controls ("controls" array) and the packing options they need for natural elevations.
   Json controlsKey;

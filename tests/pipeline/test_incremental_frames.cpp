@@ -184,3 +184,18 @@ TEST(IncrementalFrames, PackingEditsDoNotReuseStalePacks) {
   j["packing"]["clearance"] = 0.002;
   expectIdentical(edited, fresh(pipeline::sceneFromJson(j, kSceneFile), 4.0, 0.2), 4.0);
 }
+
+// The moult plan is kept across frames; editing the moult section (or anything upstream) re-plans.
+TEST(IncrementalFrames, MoultEditsReplan) {
+  Json j = patchScene();
+  j["moult"] = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "gap": 0.2, "seed": 3})");
+  Pipeline p(pipeline::sceneFromJson(j, kSceneFile));
+  p.setLod(0.2);
+  p.setTime(4.0);
+  const Frame before = grab(p);
+  p.editScene(pipeline::Stage::Ages, [](pipeline::Scene& s) { s.moult["sequence"] = "increasing_u"; });
+  const Frame edited = grab(p);
+  j["moult"]["sequence"] = "increasing_u";
+  expectIdentical(edited, fresh(pipeline::sceneFromJson(j, kSceneFile), 4.0, 0.2), 4.0);
+  EXPECT_NE(before.age, edited.age);
+}
