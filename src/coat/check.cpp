@@ -249,6 +249,8 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
         const double tMax = o.maxRayDistance > 0 ? o.maxRayDistance : std::numeric_limits<double>::infinity();
         const size_t ns = acc > 0 ? o.coverageSamples : 0;
         std::atomic<size_t> covered{0};
+        std::vector<std::atomic<uint32_t>> faceSamples(o.attribute ? skin.faces.size() : 0),
+            faceUncovered(o.attribute ? skin.faces.size() : 0);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, ns, 256), [&](const tbb::blocked_range<size_t>& r) {
           size_t hits = 0;
           for (size_t s = r.begin(); s < r.end(); ++s) {
@@ -261,10 +263,23 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
             const dvec3 bary(1 - a - b, a, b);
             const dvec3 p = pointAt(skin, f, bary);
             const dvec3 n = normalAt(skin, f, bary);
-            if (cb.anyHit(p + off * skin.faceNormals[f], n, 0.0, tMax)) ++hits;
+            const bool hit = cb.anyHit(p + off * skin.faceNormals[f], n, 0.0, tMax);
+            if (hit) ++hits;
+            if (o.attribute) {
+              faceSamples[f].fetch_add(1, std::memory_order_relaxed);
+              if (!hit) faceUncovered[f].fetch_add(1, std::memory_order_relaxed);
+            }
           }
           covered += hits;
         });
+        if (o.attribute) {
+          res.faceSamples.resize(skin.faces.size());
+          res.faceUncovered.resize(skin.faces.size());
+          for (size_t f = 0; f < skin.faces.size(); ++f) {
+            res.faceSamples[f] = faceSamples[f].load();
+            res.faceUncovered[f] = faceUncovered[f].load();
+          }
+        }
         res.coverageSamples = ns;
         res.coveredSamples = covered.load();
         res.coverage = ns > 0 ? static_cast<double>(res.coveredSamples) / ns : 0.0;

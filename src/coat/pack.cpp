@@ -323,6 +323,7 @@ struct Context {
   std::vector<glm::dvec3> skinPts;
   detail::PointGrid skinGrid;
   std::vector<double> fixed;
+  std::vector<double> minElevation;  // per feather from styling (NaN = none); empty = none
 };
 
 dvec3 toFrame(const FeatherFrame& F, const dvec3& q) {
@@ -682,6 +683,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     if (conflict) ++st.conflicts;
     if (req == -kInf || req <= o.minElevation) ++st.free;
     e = std::max(o.minElevation, req);
+    if (!ctx.minElevation.empty() && !std::isnan(ctx.minElevation[i])) e = std::max(e, ctx.minElevation[i]);
     if (e > o.maxElevation) {
       ++st.shaftClamped;
       e = o.maxElevation;
@@ -888,6 +890,7 @@ void setup(Context& ctx) {
   const PackOptions& o = ctx.opt;
   const size_t n = coat.size();
   ctx.fixed = o.fixedElevation;
+  ctx.minElevation = resolveMinElevation(coat, o.styling);
   ctx.order.clear();
   if (coat.layerOrder.empty()) {
     for (uint32_t i = 0; i < n; ++i) ctx.order.push_back(i);

@@ -96,6 +96,17 @@ std::vector<double> resolveStyling(const CoatFeathers& coat, const std::vector<S
   return fixed;
 }
 
+std::vector<double> resolveMinElevation(const CoatFeathers& coat, const std::vector<StyleSelection>& selections) {
+  std::vector<double> lo;
+  for (size_t k = 0; k < selections.size(); ++k) {
+    const StyleSelection& s = selections[k];
+    if (!s.minElevation) continue;
+    if (lo.empty()) lo.assign(coat.size(), std::numeric_limits<double>::quiet_NaN());
+    for (uint32_t i : selectFeathers(coat, s, "styling[" + std::to_string(k) + "]")) lo[i] = *s.minElevation;
+  }
+  return lo;
+}
+
 StyleSelection parseStyleSelection(JsonReader& r) {
   StyleSelection s;
   const std::string kind = r.oneOf("select", "ids", {"ids", "sphere", "comb"});
@@ -125,7 +136,10 @@ StyleSelection parseStyleSelection(JsonReader& r) {
     if (!(glm::length(d) > 0)) r.fail("direction", "direction must not be zero");
     s.direction = d;
   }
-  if (!s.elevation && !s.direction) r.fail("elevation_deg", "a styling selection needs elevation_deg and/or direction");
+  if (r.has("min_elevation_deg"))
+    s.minElevation = r.number("min_elevation_deg", -90.0, 180.0) * 3.14159265358979323846 / 180.0;
+  if (!s.elevation && !s.direction && !s.minElevation)
+    r.fail("elevation_deg", "a styling selection needs elevation_deg, min_elevation_deg and/or direction");
   r.finish();
   return s;
 }
@@ -150,6 +164,7 @@ Json styleSelectionToJson(const StyleSelection& s) {
       break;
   }
   if (s.elevation) j["elevation_deg"] = *s.elevation * 180.0 / 3.14159265358979323846;
+  if (s.minElevation) j["min_elevation_deg"] = *s.minElevation * 180.0 / 3.14159265358979323846;
   if (s.direction) j["direction"] = {s.direction->x, s.direction->y, s.direction->z};
   return j;
 }

@@ -191,6 +191,26 @@ int main(int argc, char** argv) {
                   pct(tLen[t], 0.5), pct(tE[t], 0.1), pct(tE[t], 0.5), pct(tE[t], 0.9), tPairs[t], tSame[t], tPp[t],
                   tUp[t], tPen[t], tPenF[t], area / areaAll, cov);
     }
+    // Uncovered samples per tract by the direction of the skin normal (dominant axis, sign).
+    std::printf("\nuncovered coverage samples by tract and normal direction (+x forward, +y up, +z left wing):\n");
+    const char* dn[6] = {"+x", "-x", "+y", "-y", "+z", "-z"};
+    for (size_t t = 0; t < nt; ++t) {
+      size_t u[6] = {0, 0, 0, 0, 0, 0}, sm[6] = {0, 0, 0, 0, 0, 0};
+      for (uint32_t f : tracts[t].faces) {
+        if (f >= cr.faceSamples.size()) continue;
+        const glm::dvec3 nn = skin.faceNormals[f];
+        int ax = 0;
+        for (int q = 1; q < 3; ++q)
+          if (std::abs(nn[q]) > std::abs(nn[ax])) ax = q;
+        const int d = 2 * ax + (nn[ax] < 0 ? 1 : 0);
+        u[d] += cr.faceUncovered[f];
+        sm[d] += cr.faceSamples[f];
+      }
+      std::printf("  %-16s", tracts[t].name.c_str());
+      for (int d = 0; d < 6; ++d) std::printf("  %s %4zu/%-5zu", dn[d], u[d], sm[d]);
+      std::printf("\n");
+    }
+
     std::vector<std::pair<size_t, std::pair<uint32_t, uint32_t>>> cs;
     for (const auto& [k, v] : cross) cs.push_back({v, k});
     std::sort(cs.rbegin(), cs.rend());

@@ -19,6 +19,54 @@ def load_obj_groups(path):
             groups.setdefault(cur, []).append(c)
     return groups
 
+def load_obj(path):
+    """Vertices and (face, group) lists of an OBJ of triangles."""
+    verts, faces, cur = [], [], None
+    for line in open(path):
+        t = line.split()
+        if not t: continue
+        if t[0] == 'v': verts.append(tuple(map(float, t[1:4])))
+        elif t[0] == 'g': cur = t[1]
+        elif t[0] == 'f': faces.append(([int(x.split('/')[0]) - 1 for x in t[1:]], cur))
+    return verts, faces
+
+def sub(a, b): return [a[i] - b[i] for i in range(3)]
+def dot(a, b): return sum(a[i] * b[i] for i in range(3))
+def cross(a, b): return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+def unit(a):
+    l = math.sqrt(dot(a, a)); return [c / l for c in a]
+
+def surface_normal(verts, faces, p, group_prefix):
+    """Normal of the face of the given groups nearest to p (by centroid)."""
+    best, n = 1e30, None
+    for idx, g in faces:
+        if not g or not g.startswith(group_prefix): continue
+        c = [sum(verts[i][k] for i in idx) / 3 for k in range(3)]
+        d = dot(sub(c, p), sub(c, p))
+        if d < best:
+            a, b, cc = (verts[i] for i in idx)
+            best, n = d, unit(cross(sub(b, a), sub(cc, a)))
+    return n
+
+def flight_styling(verts, faces, pins, dirs, group_prefix, min_elevation=True):
+    """Styling for pinned flight feathers: `dirs` are world directions in the (horizontal) wing and tail
+    planes. Each feather's surface direction is set to it and its elevation kept at or above the angle
+    that points it along it (min_elevation_deg, from the skin normal at the pin), so the packer only ever
+    raises it over the ones under it: remiges and rectrices lie in the wing and tail planes, overlapping
+    like a fan."""
+    out = []
+    gap = min(math.dist(pins[i], pins[i + 1]) for i in range(len(pins) - 1))
+    for p, d in zip(pins, dirs):
+        d = unit(d)
+        n_skin = surface_normal(verts, faces, p, group_prefix)
+        e = math.degrees(math.asin(max(-1.0, min(1.0, dot(d, n_skin)))))
+        sel = {'select': 'sphere', 'center': [round(c, 5) for c in p], 'radius': round(0.3 * gap, 5),
+               'direction': [round(c, 4) for c in d]}
+        if min_elevation:
+            sel['min_elevation_deg'] = round(max(0.0, min(85.0, e)), 2)
+        out.append(sel)
+    return out
+
 def farthest_points(points, k):
     if not points: return []
     cx = [sum(p[i] for p in points) / len(points) for i in range(3)]
@@ -41,7 +89,7 @@ def resample(poly, n):
         out.append([round(poly[i][m] + t * (poly[i + 1][m] - poly[i][m]), 5) for m in range(3)])
     return out
 
-def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeather=True, **over):
+def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeather=True, barb_length=None, **over):
     """A bird feather from a library feather. barbs_per_vane sets the barb spacing so each vane has about
     that many barbs (full-geometry triangles ~ 16 per barb plus the shaft): the bird's ~3,150 feathers
     come to ~2.2M triangles at full detail, like the thesis' bird (issues #10, #12)."""
@@ -54,6 +102,11 @@ def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeat
         b['spacing_base'] = round(2 * mean / (1 + ratio), 4)
         b['spacing_tip'] = round(2 * mean * ratio / (1 + ratio), 4)
         f['barbs'] = b
+    if barb_length:  # wider vanes: barb lengths (and the silhouette's length profile) scaled to it
+        k = barb_length / f['barbs']['length']
+        f['barbs'] = dict(f['barbs'], length=barb_length)
+        if 'silhouette' in f:
+            f['silhouette'] = {v: [[rp, round(l * k, 4)] for rp, l in f['silhouette'][v]] for v in ('left', 'right')}
     if not afterfeather:
         f.pop('afterfeather', None)
     mat = {}
@@ -68,14 +121,14 @@ def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeat
 BODY_BARBS = int(os.environ.get('BIRD_BODY_BARBS', 15))
 FLIGHT_BARBS = int(os.environ.get('BIRD_FLIGHT_BARBS', 85))
 feathers = {  # body feathers without afterfeathers (hidden under the vanes; they cost a third of the triangles)
-    'back': variant('contour', 'back', 'scalloped_grey', barbs_per_vane=BODY_BARBS, afterfeather=False),
-    'breast': variant('contour', 'breast', 'spotted', barbs_per_vane=BODY_BARBS, afterfeather=False),
-    'head': variant('contour', 'head', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False),
-    'covert': variant('covert', 'covert', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False),
-    'flank': variant('semiplume', 'flank', 'down_grey', barbs_per_vane=BODY_BARBS, afterfeather=False),
-    'primary': variant('primary', 'primary', 'flight_dark', barbs_per_vane=FLIGHT_BARBS),
-    'secondary': variant('secondary', 'secondary', 'flight_dark', barbs_per_vane=FLIGHT_BARBS),
-    'rectrix': variant('rectrix', 'rectrix', 'barred_brown', barbs_per_vane=FLIGHT_BARBS),
+    'back': variant('contour', 'back', 'scalloped_grey', barbs_per_vane=BODY_BARBS, afterfeather=False, barb_length=float(os.environ.get('BIRD_CONTOUR_W', 1.0))),
+    'breast': variant('contour', 'breast', 'spotted', barbs_per_vane=BODY_BARBS, afterfeather=False, barb_length=float(os.environ.get('BIRD_CONTOUR_W', 1.0))),
+    'head': variant('contour', 'head', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False, barb_length=float(os.environ.get('BIRD_CONTOUR_W', 1.0))),
+    'covert': variant('covert', 'covert', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False, barb_length=float(os.environ.get('BIRD_COVERT_W', 1.7))),
+    'flank': variant('semiplume', 'flank', 'down_grey', barbs_per_vane=BODY_BARBS, afterfeather=False, barb_length=float(os.environ.get('BIRD_FLANK_W', 0.75))),
+    'primary': variant('primary', 'primary', 'flight_dark', barbs_per_vane=FLIGHT_BARBS, barb_length=4.0),
+    'secondary': variant('secondary', 'secondary', 'flight_dark', barbs_per_vane=FLIGHT_BARBS, barb_length=3.8),
+    'rectrix': variant('rectrix', 'rectrix', 'barred_brown', barbs_per_vane=FLIGHT_BARBS, barb_length=2.0),
 }
 
 groups = load_obj_groups(os.path.join(DATA, 'meshes', 'bird.obj'))
@@ -91,11 +144,16 @@ body = [  # tract, feather types for its key feathers (cycled), key count
     ('femoral_left', ['flank', 'breast'], 3), ('femoral_right', ['flank', 'breast'], 3),
     ('crural_left', ['flank'], 3), ('crural_right', ['flank'], 3),
 ]
+# Feather length in follicle spacings: short enough that the layers lie flat (a feather 2-2.5 spacings
+# long rests on the next rows at a low angle; 3.6 stood them up to ~55 deg), longer on the wing coverts
+# (flat, wide surfaces) and short on the leg stubs, whose feathers otherwise reach the other leg.
+SPACINGS = {'body': float(os.environ.get('BIRD_SPACINGS', 2.4)), 'alar': float(os.environ.get('BIRD_ALAR_SPACINGS', 2.8)),
+            'crural': float(os.environ.get('BIRD_CRURAL_SPACINGS', 1.6))}
 tracts = []
 for name, kinds, n in body:
     pts = farthest_points(groups[name], n)
     keys = [{'feather': kinds[i % len(kinds)], 'at': [round(c, 5) for c in p]} for i, p in enumerate(pts)]
-    t = {'name': name, 'groups': [name], 'density': DENSITY, 'feather_scale': 'auto', 'feather_spacings': float(os.environ.get('BIRD_SPACINGS', 2.4)),
+    t = {'name': name, 'groups': [name], 'density': DENSITY, 'feather_scale': 'auto', 'feather_spacings': SPACINGS.get(name.split('_')[0], SPACINGS['body']),
          'scale_jitter': 0.08, 'key_feathers': keys, 'relax': {'iterations': 30}}
     if name.startswith(('alar', 'humeral', 'spinal', 'caudal', 'capital', 'cervical')):
         t['parameterization'] = {'method': 'projection', 'view_direction': [0, -1, 0]}
@@ -111,12 +169,27 @@ for side, sgn in (('left', 1), ('right', -1)):
                    'key_feathers': [{'feather': 'secondary', 'at': sec[0]}, {'feather': 'secondary', 'at': sec[-1]},
                                     {'feather': 'primary', 'at': prim[0]}, {'feather': 'primary', 'at': prim[-1]}],
                    'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
+verts, faces = load_obj(os.path.join(DATA, 'meshes', 'bird.obj'))
+styling = []
+for side, sgn in (('left', 1), ('right', -1)):
+    prim = resample(axes['primaries_' + side], 10)
+    sec = resample(axes['secondaries_' + side], 10)
+    # Secondaries straight back, primaries sweeping out toward the wing tip.
+    dirs = [[-1.0, 0.0, sgn * (0.1 + 0.2 * k / 9)] for k in range(10)]
+    dirs += [[-1.0 + 0.55 * k / 9, 0.0, sgn * (0.35 + 0.75 * k / 9)] for k in range(10)]
+    styling += flight_styling(verts, faces, sec + prim, dirs, 'remiges_' + side)
 rect = resample(axes['tail_edge'], 12)
+# Rectrices fan out from the tail's end, the outer ones up to 30 degrees from the body axis.
+rdirs = [[-math.cos(a), 0.0, math.sin(a)] for a in (math.radians(30 - 60 * k / 11) for k in range(12))]
+styling += flight_styling(verts, faces, rect, rdirs, 'caudal', os.environ.get('BIRD_TAIL_MIN', '0') == '1')
 tracts.append({'name': 'rectrices', 'groups': ['caudal'], 'count': 0, 'feather_scale': 0.055,
                'pinned': [{'at': p} for p in rect], 'feather': 'rectrix',
                'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
 
 body_axis = [[round(c, 5) for c in p] for p in axes['body_axis']]
+# Framed on the feathered bird (body, spread wings, tail) so it fills most of the 1280x720 frame.
+VIEW = unit([-0.45, -0.6, -0.66]); TARGET = [-0.38, 0.1, 0.02]; DIST = float(os.environ.get('BIRD_CAM_DIST', 5.0))
+CAMERA = {'eye': [round(TARGET[k] - DIST * VIEW[k], 4) for k in range(3)], 'target': TARGET, 'fov': 30}
 wing_dir = lambda sgn: [-1.0, 0.0, 0.45 * sgn]
 scene = {
     'pteryla': 1,
@@ -137,7 +210,8 @@ scene = {
         },
     },
     'ordering': {'method': os.environ.get('BIRD_ORDER', 'flow')},
-    'camera': {'view_direction': [-0.45, -0.6, -0.66], 'fov': 30},
+    'packing': {'styling': styling},
+    'camera': CAMERA,
     'lights': [{'direction': [-0.4, -1.0, -0.5], 'intensity': 1.0},
                {'direction': [0.6, -0.2, 0.7], 'color': [0.6, 0.65, 0.75], 'intensity': 0.5}],
     'render': {'size': [1280, 720], 'lod': 0.6, 'background': [0.84, 0.87, 0.9]},

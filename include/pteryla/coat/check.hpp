@@ -59,6 +59,7 @@ struct CheckResult {
   // skinPenetrations; sized to the largest featherId + 1).
   std::vector<FeatherPairCount> featherPairs;
   std::vector<uint32_t> featherPenetrations;
+  std::vector<uint32_t> faceSamples, faceUncovered;  // per skin face: coverage samples, of them not covered
 };
 
 // `tractFaces`: skin triangle indices the coverage is measured on (empty = every face). The coat's

@@ -28,6 +28,8 @@ struct StyleSelection {
   glm::dvec3 from{0}, to{0};         // Comb
   double radius = 0;                 // Sphere / Comb, scene units
   std::optional<double> elevation;   // radians: fixed elevation of the selected feathers
+  std::optional<double> minElevation;  // radians: the selected feathers pack freely but never below this
+                                     // (e.g. flight feathers kept in the wing plane, packing above it)
   std::optional<glm::dvec3> direction;  // world direction: new surface direction (projected to each tangent plane)
 };
 
@@ -48,6 +50,9 @@ StyleApplied applyStyling(CoatFeathers& coat, const std::vector<StyleSelection>&
 
 // Only the fixed elevations of the selections (no frame edits).
 std::vector<double> resolveStyling(const CoatFeathers& coat, const std::vector<StyleSelection>& selections);
+// Per feather the minimum elevation of the selections (later ones win; NaN = none); empty when no
+// selection has one. pack() applies these itself from PackOptions::styling.
+std::vector<double> resolveMinElevation(const CoatFeathers& coat, const std::vector<StyleSelection>& selections);
 
 // One selection object of "packing.styling" (docs/packing.md).
 StyleSelection parseStyleSelection(JsonReader& r);
