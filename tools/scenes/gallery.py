@@ -62,7 +62,8 @@ SECTIONS = [
             ("sphere_large", None, "sphere_large.json"), ("sphere_250", None, "sphere_250.json: 250 triangles")],
      None, None),
     ("bird", "Bird (Fig 9.20)",
-     "`bird.json`, the default scene of the README's main command.",
+     "`bird.json` (written by `tools/scenes/make_bird_scene.py`): the bundled bird with its 18 tracts, "
+     "flight feathers on the wings and tail; the default scene of the README's main command.",
      "bird.json", [("bird", None, "bird.json")], [None], None),
 ]
 
@@ -87,7 +88,8 @@ def process(pteryla, key, scene, images, check_times, bench_time, do_bench):
     out = {"images": {}, "checks": [], "bench": []}
     for stem, t, _ in images:
         path = os.path.join(GALLERY, stem + ".png")
-        _, secs = run([pteryla, "-q", "render", scene_path(scene or stem + ".json"), "--size", "640x360", "-o", path]
+        size = "960x540" if key == "bird" else "640x360"
+        _, secs = run([pteryla, "-q", "render", scene_path(scene or stem + ".json"), "--size", size, "-o", path]
                       + time_args(t))
         size = os.path.getsize(path)
         print(f"{key}: rendered {os.path.relpath(path, ROOT)} ({size // 1024} KB, {secs:.1f} s)")
@@ -133,7 +135,7 @@ def write_markdown(results):
         "",
         "Every image below is rendered by `pteryla render` from a scene in `data/scenes/` (640 x 360, the "
         "scene's level of detail), and every number is printed by `pteryla check` / `pteryla bench` on the "
-        "same scene and time. Regenerate all of it (images, numbers and this page) with",
+        "same scene and time (the bird 960 x 540). Regenerate all of it (images, numbers and this page) with",
         "",
         "```sh",
         "bash tools/gallery.sh            # builds the CLI, renders, checks and benchmarks every scene (~10 min)",
@@ -147,10 +149,14 @@ def write_markdown(results):
         "Columns: `feathers` present at that time; `skin_penetrations` coat vertices below the skin at full "
         "geometry (0 = none); `intersecting_pairs` triangle pairs of different feathers that cross, after "
         "packing and (`unpacked`) with every feather at the median elevation; `coverage` fraction of the "
-        "tract area under feathers.",
+        "tract area under feathers; `check s` the check's wall time. `t` - is the scene's own time. Bench "
+        "(`pteryla bench --size 640x360`): first-evaluation seconds per stage, `frame` a timeline step "
+        "(pose, ages, controls, pack, mesh at the scene's level of detail), `triangles` the rendered coat. "
+        "Times are wall seconds on the shared 2-core build machine while other builds ran.",
         "",
     ]
-    for key, title, text, scene, images, _, _ in SECTIONS:
+    # The bird first on the page (it is processed last: it is the slowest and changes most).
+    for key, title, text, scene, images, _, _ in sorted(SECTIONS, key=lambda s: s[0] != "bird"):
         r = results.get(key)
         lines += [f"## {title}", "", text, ""]
         if not r:
