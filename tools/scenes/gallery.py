@@ -55,9 +55,10 @@ SECTIONS = [
             ("patch_stretched", None, "patch_stretched.json: stretched")], None, None),
     ("sphere", "Spheres: feather scale and skin resolution (Figs 9.12, 9.13)",
      "426 feathers on unit spheres, flowing from pole to pole. Fig 9.12: the same follicles with feathers "
-     "2, 3 and 4.5 follicle spacings long on the 1,600-triangle sphere (`sphere_small.json`, `sphere.json`, "
-     "`sphere_large.json`). Fig 9.13: `sphere_250.json` is the middle scale on the 250-triangle sphere; the "
-     "packing keeps the coat above the coarse facets.",
+     "2, 3 and 4 follicle spacings long (the largest twice the smallest) on the 1,600-triangle sphere "
+     "(`sphere_small.json`, `sphere.json`, `sphere_large.json`): larger feathers hide the surface but bulk up "
+     "toward the lower pole. Fig 9.13: `sphere_250.json` is the middle scale on the 250-triangle sphere; "
+     "the packing keeps the coat above the coarse facets.",
      None, [("sphere_small", None, "sphere_small.json"), ("sphere", None, "sphere.json"),
             ("sphere_large", None, "sphere_large.json"), ("sphere_250", None, "sphere_250.json: 250 triangles")],
      None, None),

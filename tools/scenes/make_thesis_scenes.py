@@ -353,11 +353,12 @@ def sphere_scene(name, mesh, spacings, note):
 
 
 def sphere_scenes():
-    # 426 feathers at three feather scales (Fig 9.12: mean length 2, 3 and 4.5 follicle spacings) on the
-    # 1,600-triangle sphere, and the middle scale on the 250-triangle sphere (Fig 9.13).
+    # 426 feathers at three feather scales (Fig 9.12: the largest twice as long as the smallest; mean
+    # length 2, 3 and 4 follicle spacings) on the 1,600-triangle sphere, and the middle scale on the
+    # 250-triangle sphere (Fig 9.13 compares the two tessellations).
     yield sphere_scene("sphere", "sphere_1600.obj", 3.0, "1,600 triangles, feathers 3 spacings long")
     yield sphere_scene("sphere_small", "sphere_1600.obj", 2.0, "1,600 triangles, feathers 2 spacings long")
-    yield sphere_scene("sphere_large", "sphere_1600.obj", 4.5, "1,600 triangles, feathers 4.5 spacings long")
+    yield sphere_scene("sphere_large", "sphere_1600.obj", 4.0, "1,600 triangles, feathers 4 spacings long")
     yield sphere_scene("sphere_250", "sphere_250.obj", 3.0, "250 triangles, feathers 3 spacings long")
 
 
