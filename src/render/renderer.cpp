@@ -37,7 +37,7 @@ struct GpuMesh {
   bool present[kAttrCount] = {};
   GLuint ebo = 0;
   size_t eboBytes = 0;
-  size_t indexCount = 0;  // forward indices; the buffer holds forward then reversed triangles
+  size_t indexCount = 0;
 };
 
 struct GpuMaterial {
@@ -61,8 +61,29 @@ struct Renderer::Impl {
   std::vector<FeatherDrawRange> ranges;
   std::vector<glm::vec4> rangeSpheres;  // per range: bounding sphere (centre, radius) for culling
   std::vector<glm::vec3> rangeBoxes;    // per range: lo, hi (2 entries) for occlusion culling
-  std::vector<GLsizei> batchCounts;     // pending multi-draw, reused between frames
-  std::vector<const void*> batchOffsets;
+  // Each feather part split into chunks of at most kChunkTriangles consecutive triangles (a few
+  // barbs), each with its own box, so the part of a feather behind the body is skipped too. The
+  // chunks of part k of range i are chunks[partChunks[5 i + k], partChunks[5 i + k + 1]).
+  struct Chunk {
+    glm::vec3 lo, hi;
+    uint32_t first, count;  // indices
+    uint32_t vertexLo, vertexHi;  // the vertices its triangles use lie in [vertexLo, vertexHi]
+  };
+  static constexpr uint32_t kChunkTriangles = 32;
+  std::vector<Chunk> chunks;
+  std::vector<uint32_t> partChunks;
+  // CPU mirror of the coat for per-frame culling; each frame's surviving triangles are written to
+  // frameIndices in draw order (layer order, octant order) and drawn in one call per material run.
+  std::vector<glm::vec3> coatPositions;
+  std::vector<uint32_t> coatIndices;
+  std::vector<uint32_t> frameIndices;
+  std::vector<glm::vec3> projected;  // per chunk vertex: window x, y (pixels), depth [0,1]; x = NaN
+                                     // when the vertex is behind the camera
+  struct Run {
+    uint32_t material;
+    size_t first, count;  // in frameIndices
+  };
+  std::vector<Run> runs;
   std::vector<float> depth;              // skin depth read back for occlusion culling
   std::vector<float> tileMax;            // per kTile x kTile block: farthest depth
   int tilesX = 0, tilesY = 0;
@@ -232,7 +253,7 @@ struct Renderer::Impl {
     if (!m.present[kBarbCount]) gl.VertexAttrib1f(kBarbCount, 1.0f);
   }
 
-  void upload(GpuMesh& m, const TriMesh& mesh, const std::vector<glm::vec3>* normalsOverride) {
+  void upload(GpuMesh& m, const TriMesh& mesh, const std::vector<glm::vec3>* normalsOverride, bool staticIndices) {
     if (mesh.indices.size() % 3 != 0) throw Error("mesh index count is not a multiple of 3", {}, "indices");
     const size_t nv = mesh.vertexCount();
     for (size_t i = 0; i < mesh.indices.size(); ++i)
@@ -251,60 +272,95 @@ struct Renderer::Impl {
     syncAttr(m, kAlpha, mesh.alpha, nv, 1, "alpha");
     syncAttr(m, kSheath, mesh.sheath, nv, 1, "sheath");
     syncAttr(m, kBarbCount, mesh.barbCount, nv, 1, "barbCount");
-    // Forward triangles followed by the same triangles in reverse order, so any index range can be
-    // drawn backward from one buffer (view-dependent order, 7.1.2).
+    // Static indices (skin), or none here: the coat's are written every frame (streamIndices).
     const size_t n = mesh.indices.size();
-    std::vector<uint32_t> both(2 * n);
-    std::copy(mesh.indices.begin(), mesh.indices.end(), both.begin());
-    const size_t tris = n / 3;
-    for (size_t t = 0; t < tris; ++t)
-      for (int k = 0; k < 3; ++k) both[n + 3 * (tris - 1 - t) + k] = mesh.indices[3 * t + k];
     if (!m.ebo) gl.GenBuffers(1, &m.ebo);
-    gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
-    const size_t bytes = both.size() * sizeof(uint32_t);
-    if (bytes == m.eboBytes && bytes > 0) {
-      gl.BufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), both.data());
-    } else {
-      gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), both.empty() ? nullptr : both.data(),
-                    GL_STATIC_DRAW);
-      m.eboBytes = bytes;
-    }
+    if (staticIndices) streamIndices(m, mesh.indices, GL_STATIC_DRAW);
     m.indexCount = n;
     gl.BindVertexArray(0);
   }
 
-  // Queues a range for one glMultiDrawElements per material run; ranges that continue the previous
-  // one in the buffer are merged (a feather drawn forward right after its predecessor, or the parts
-  // of a feather drawn backward in reverse part order).
-  void queue(const GpuMesh& m, uint32_t first, uint32_t count, bool backward) {
-    if (count == 0) return;
-    const size_t start = backward ? m.indexCount + (m.indexCount - first - count) : first;
-    if (!batchCounts.empty()) {
-      const size_t lastStart = reinterpret_cast<size_t>(batchOffsets.back()) / sizeof(uint32_t);
-      if (lastStart + static_cast<size_t>(batchCounts.back()) == start) {
-        batchCounts.back() += static_cast<GLsizei>(count);
-        return;
-      }
+  void streamIndices(GpuMesh& m, const std::vector<uint32_t>& indices, GLenum usage) {
+    gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
+    const size_t bytes = indices.size() * sizeof(uint32_t);
+    if (bytes <= m.eboBytes && bytes > 0 && usage == GL_STREAM_DRAW) {
+      gl.BufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), indices.data());
+    } else {
+      gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), indices.empty() ? nullptr : indices.data(),
+                    usage);
+      m.eboBytes = bytes;
     }
-    batchCounts.push_back(static_cast<GLsizei>(count));
-    batchOffsets.push_back(reinterpret_cast<const void*>(start * sizeof(uint32_t)));
   }
 
-  size_t flush() {
-    const size_t n = batchCounts.size();
-    if (n == 1) gl.DrawElements(GL_TRIANGLES, batchCounts[0], GL_UNSIGNED_INT, batchOffsets[0]);
-    else if (n > 1)
-      gl.MultiDrawElements(GL_TRIANGLES, batchCounts.data(), GL_UNSIGNED_INT, batchOffsets.data(), static_cast<GLsizei>(n));
-    batchCounts.clear();
-    batchOffsets.clear();
-    return n;  // index ranges submitted
-  }
-
-  void drawIndices(const GpuMesh& m, uint32_t first, uint32_t count, bool backward) {
+  void drawIndices(size_t first, size_t count) {
     if (count == 0) return;
-    const size_t start = backward ? m.indexCount + (m.indexCount - first - count) : first;
     gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
-                    reinterpret_cast<const void*>(start * sizeof(uint32_t)));
+                    reinterpret_cast<const void*>(first * sizeof(uint32_t)));
+  }
+
+  // Appends a chunk's triangles to frameIndices, forward or in reverse triangle order; with `test`,
+  // only the triangles that may be visible: a triangle is dropped when it lies outside the viewport
+  // or its nearest vertex is behind the farthest skin depth over every tile its bounds touch (window
+  // depth is affine over a triangle, so its nearest point is a vertex). Returns triangles dropped.
+  size_t emitChunk(const Chunk& ch, bool backward, bool test, const glm::mat4& viewProj, int w, int h) {
+    const uint32_t* idx = coatIndices.data() + ch.first;
+    const uint32_t tris = ch.count / 3;
+    if (!test) {
+      const size_t at = frameIndices.size();
+      frameIndices.resize(at + ch.count);
+      uint32_t* out = frameIndices.data() + at;
+      if (!backward) {
+        std::copy(idx, idx + ch.count, out);
+      } else {
+        for (uint32_t t = 0; t < tris; ++t) std::copy(idx + 3 * (tris - 1 - t), idx + 3 * (tris - t), out + 3 * t);
+      }
+      return 0;
+    }
+    const uint32_t nv = ch.vertexHi - ch.vertexLo + 1;
+    projected.resize(nv);
+    for (uint32_t v = 0; v < nv; ++v) {
+      const glm::vec4 q = viewProj * glm::vec4(coatPositions[ch.vertexLo + v], 1.0f);
+      if (q.w <= 1e-6f) {
+        projected[v] = glm::vec3(std::numeric_limits<float>::quiet_NaN());
+        continue;
+      }
+      const float inv = 1.0f / q.w;
+      projected[v] = glm::vec3((q.x * inv * 0.5f + 0.5f) * float(w), (q.y * inv * 0.5f + 0.5f) * float(h),
+                               q.z * inv * 0.5f + 0.5f);
+    }
+    size_t dropped = 0;
+    for (uint32_t n = 0; n < tris; ++n) {
+      const uint32_t* t = idx + 3 * (backward ? tris - 1 - n : n);
+      const glm::vec3& a = projected[t[0] - ch.vertexLo];
+      const glm::vec3& b = projected[t[1] - ch.vertexLo];
+      const glm::vec3& c = projected[t[2] - ch.vertexLo];
+      bool keep = true;
+      if (!(std::isnan(a.x) || std::isnan(b.x) || std::isnan(c.x))) {
+        const float x0 = std::min({a.x, b.x, c.x}), x1 = std::max({a.x, b.x, c.x});
+        const float y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y});
+        if (x1 < -1.0f || y1 < -1.0f || x0 > float(w) + 1.0f || y0 > float(h) + 1.0f) {
+          keep = false;
+        } else {
+          const float nearest = std::min({a.z, b.z, c.z});
+          keep = !(nearest > 0.0f) || !hiddenRect(x0, y0, x1, y1, nearest);
+        }
+      }
+      if (keep) frameIndices.insert(frameIndices.end(), t, t + 3);
+      else ++dropped;
+    }
+    return dropped;
+  }
+
+  // True when every depth tile over the pixel rectangle is nearer than windowDepth.
+  bool hiddenRect(float x0, float y0, float x1, float y1, float windowDepth) const {
+    const int tx0 = std::clamp(static_cast<int>(std::floor(x0)) / kTile, 0, tilesX - 1);
+    const int tx1 = std::clamp(static_cast<int>(std::ceil(x1)) / kTile, 0, tilesX - 1);
+    const int ty0 = std::clamp(static_cast<int>(std::floor(y0)) / kTile, 0, tilesY - 1);
+    const int ty1 = std::clamp(static_cast<int>(std::ceil(y1)) / kTile, 0, tilesY - 1);
+    for (int ty = ty0; ty <= ty1; ++ty)
+      for (int tx = tx0; tx <= tx1; ++tx)
+        if (tileMax[static_cast<size_t>(ty) * tilesX + tx] >= windowDepth - 1e-6f) return false;
+    return true;
   }
 
   void buildDepthTiles(int w, int h) {
@@ -334,17 +390,9 @@ struct Renderer::Impl {
       x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
     }
     if (nearest <= zNear * 1.01f) return false;
-    const int tx0 = std::clamp(static_cast<int>(std::floor(x0)) / kTile, 0, tilesX - 1);
-    const int tx1 = std::clamp(static_cast<int>(std::ceil(x1)) / kTile, 0, tilesX - 1);
-    const int ty0 = std::clamp(static_cast<int>(std::floor(y0)) / kTile, 0, tilesY - 1);
-    const int ty1 = std::clamp(static_cast<int>(std::ceil(y1)) / kTile, 0, tilesY - 1);
     // Window depth of the nearest point (glm perspective: z_clip = P22 z + P32, w = -z).
     const float ndc = (proj[2][2] * -nearest + proj[3][2]) / nearest;
-    const float windowDepth = ndc * 0.5f + 0.5f;
-    for (int ty = ty0; ty <= ty1; ++ty)
-      for (int tx = tx0; tx <= tx1; ++tx)
-        if (tileMax[static_cast<size_t>(ty) * tilesX + tx] >= windowDepth - 1e-6f) return false;
-    return true;
+    return hiddenRect(x0, y0, x1, y1, ndc * 0.5f + 0.5f);
   }
 
   void ensureTarget(int w, int h, int samples) {
@@ -427,7 +475,7 @@ void Renderer::setSkin(const TriMesh& skin) {
   Impl& r = *impl_;
   r.ctx.makeCurrent();
   if (!skin.normals.empty() || skin.positions.empty()) {
-    r.upload(r.skin, skin, nullptr);
+    r.upload(r.skin, skin, nullptr, true);
     return;
   }
   // Area-weighted vertex normals when the skin has none.
@@ -445,7 +493,7 @@ void Renderer::setSkin(const TriMesh& skin) {
     const float len = glm::length(n);
     n = len > 0.0f ? n / len : glm::vec3(0, 0, 1);
   }
-  r.upload(r.skin, skin, &normals);
+  r.upload(r.skin, skin, &normals, true);
 }
 
 void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>& ranges) {
@@ -471,7 +519,9 @@ void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>&
   }
   Impl& r = *impl_;
   r.ctx.makeCurrent();
-  r.upload(r.coat, coat, nullptr);
+  r.upload(r.coat, coat, nullptr, false);
+  r.coatPositions = coat.positions;
+  r.coatIndices = coat.indices;
   r.ranges = ranges;
   if (r.ranges.empty() && n > 0) {
     FeatherDrawRange all;
@@ -479,17 +529,37 @@ void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>&
     all.origin = glm::vec3(0.0f);
     r.ranges.push_back(all);
   }
-  // Bounding sphere per feather (box centre, farthest vertex) for frustum culling.
+  // Per feather: chunk boxes, and the feather's box and bounding sphere (box centre, farthest
+  // vertex) for frustum and occlusion culling.
   r.rangeSpheres.resize(r.ranges.size());
   r.rangeBoxes.resize(2 * r.ranges.size());
+  r.chunks.clear();
+  r.partChunks.assign(5 * r.ranges.size() + 1, 0);
   for (size_t i = 0; i < r.ranges.size(); ++i) {
     const FeatherDrawRange& f = r.ranges[i];
     glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-    for (uint32_t k = f.firstIndex; k < f.firstIndex + f.indexCount; ++k) {
-      const glm::vec3& q = coat.positions[coat.indices[k]];
-      lo = glm::min(lo, q);
-      hi = glm::max(hi, q);
+    const bool hasParts = f.partCount[0] + f.partCount[1] + f.partCount[2] + f.partCount[3] > 0;
+    uint32_t partFirst = f.firstIndex;
+    for (int k = 0; k < 4; ++k) {
+      r.partChunks[5 * i + k] = static_cast<uint32_t>(r.chunks.size());
+      const uint32_t count = hasParts ? f.partCount[k] : (k == 0 ? f.indexCount : 0);
+      for (uint32_t c = 0; c < count; c += 3 * Impl::kChunkTriangles) {
+        Impl::Chunk ch{glm::vec3(std::numeric_limits<float>::max()), glm::vec3(-std::numeric_limits<float>::max()),
+                       partFirst + c, std::min(3 * Impl::kChunkTriangles, count - c), UINT32_MAX, 0};
+        for (uint32_t j = ch.first; j < ch.first + ch.count; ++j) {
+          const glm::vec3& q = coat.positions[coat.indices[j]];
+          ch.lo = glm::min(ch.lo, q);
+          ch.hi = glm::max(ch.hi, q);
+          ch.vertexLo = std::min(ch.vertexLo, coat.indices[j]);
+          ch.vertexHi = std::max(ch.vertexHi, coat.indices[j]);
+        }
+        lo = glm::min(lo, ch.lo);
+        hi = glm::max(hi, ch.hi);
+        r.chunks.push_back(ch);
+      }
+      partFirst += count;
     }
+    r.partChunks[5 * i + 4] = static_cast<uint32_t>(r.chunks.size());
     if (f.indexCount == 0) lo = hi = glm::vec3(0.0f);
     const glm::vec3 c = 0.5f * (lo + hi);
     r.rangeSpheres[i] = glm::vec4(c, glm::length(hi - c) * 1.001f + 1e-6f);
@@ -594,7 +664,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     gl.Uniform3f(r.U(r.skinProg, "uSkinColor"), s.skinColor.r, s.skinColor.g, s.skinColor.b);
     gl.BindVertexArray(r.skin.vao);
     r.applyDefaults(r.skin);
-    r.drawIndices(r.skin, 0, static_cast<uint32_t>(r.skin.indexCount), false);
+    r.drawIndices(0, r.skin.indexCount);
     ++stats_.drawCalls;
     stats_.triangles += r.skin.indexCount / 3;
   }
@@ -643,7 +713,9 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       return true;
     };
 
-    uint32_t bound = UINT32_MAX;
+    // Pass 1: this frame's coat indices in draw order, split into runs of one material.
+    r.frameIndices.clear();
+    r.runs.clear();
     for (size_t i = 0; i < r.ranges.size(); ++i) {
       const FeatherDrawRange& f = r.ranges[i];
       if (f.indexCount == 0) continue;
@@ -659,12 +731,58 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
         ++stats_.occludedFeathers;
         continue;
       }
-      if (f.material != bound) {
-        const size_t n = r.flush();
-        stats_.drawCalls += n > 0 ? 1 : 0;
-        stats_.drawRanges += n;
-        bound = f.material;
-        const GpuMaterial& mat = r.materials[bound];
+      if (r.runs.empty() || r.runs.back().material != f.material)
+        r.runs.push_back({f.material, r.frameIndices.size(), 0});
+      // Octant rule (7.1.2): farther substructures first, from this feather's own view direction.
+      const glm::vec3 toEye = camera.eye - f.origin;
+      const glm::vec3 axisZ = glm::cross(f.axisX, f.axisY);
+      const bool ordered = s.viewDependentOrder;
+      const bool backward = ordered && glm::dot(toEye, f.axisX) <= 0.0f;
+      const bool hasParts = f.partCount[0] + f.partCount[1] + f.partCount[2] + f.partCount[3] > 0;
+      // A part's chunks in draw order (reversed when the part is drawn backward); with occlusion
+      // culling, chunks hidden behind the skin are left out and the others tested per triangle.
+      const bool chunked = r.partChunks[5 * i + 4] - r.partChunks[5 * i] > 1;
+      auto drawPart = [&](int k) {
+        const uint32_t c0 = r.partChunks[5 * i + k], c1 = r.partChunks[5 * i + k + 1];
+        if (c0 == c1) return;
+        for (uint32_t n = 0; n < c1 - c0; ++n) {
+          const Impl::Chunk& ch = r.chunks[backward ? c1 - 1 - n : c0 + n];
+          if (occlusion && chunked && r.occluded(ch.lo, ch.hi, viewProj, view, proj, s.width, s.height)) {
+            stats_.occludedTriangles += ch.count / 3;
+            continue;
+          }
+          const size_t dropped = r.emitChunk(ch, backward, occlusion, viewProj, s.width, s.height);
+          stats_.occludedTriangles += dropped;
+          stats_.triangles += ch.count / 3 - dropped;
+        }
+        stats_.backwardParts += backward ? 1 : 0;
+      };
+      if (!hasParts) {
+        drawPart(0);
+      } else {
+        int order[4] = {0, 1, 2, 3};  // shaft, left, right, afterfeather
+        if (ordered) {
+          const bool leftNear = glm::dot(toEye, f.axisY) > 0.0f;
+          const int farVane = leftNear ? 2 : 1, nearVane = leftNear ? 1 : 2;
+          if (glm::dot(toEye, axisZ) > 0.0f) {
+            const int o[4] = {3, farVane, nearVane, 0};
+            std::copy(o, o + 4, order);
+          } else {
+            const int o[4] = {0, farVane, nearVane, 3};
+            std::copy(o, o + 4, order);
+          }
+        }
+        for (int k : order) drawPart(k);
+      }
+      r.runs.back().count = r.frameIndices.size() - r.runs.back().first;
+    }
+
+    // Pass 2: upload the indices once, one draw call per material run.
+    r.streamIndices(r.coat, r.frameIndices, GL_STREAM_DRAW);
+    for (const Impl::Run& run : r.runs) {
+      if (run.count == 0) continue;
+      {
+        const GpuMaterial& mat = r.materials[run.material];
         const FeatherMaterial& d = mat.desc;
         gl.ActiveTexture(GL_TEXTURE0);
         gl.BindTexture(GL_TEXTURE_2D, mat.colorTex);
@@ -682,42 +800,10 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
         gl.Uniform1f(r.U(p, "uConeInv2s2"), 1.0f / (2.0f * cone * cone));
         gl.Uniform1f(r.U(p, "uTranslucency"), d.translucency);
       }
-      // Octant rule (7.1.2): farther substructures first, from this feather's own view direction.
-      const glm::vec3 toEye = camera.eye - f.origin;
-      const glm::vec3 axisZ = glm::cross(f.axisX, f.axisY);
-      const bool ordered = s.viewDependentOrder;
-      const bool backward = ordered && glm::dot(toEye, f.axisX) <= 0.0f;
-      const bool hasParts = f.partCount[0] + f.partCount[1] + f.partCount[2] + f.partCount[3] > 0;
-      stats_.triangles += f.indexCount / 3;
-      if (!hasParts) {
-        r.queue(r.coat, f.firstIndex, f.indexCount, backward);
-        stats_.backwardParts += backward ? 1 : 0;
-        continue;
-      }
-      uint32_t start[4];
-      start[0] = f.firstIndex;
-      for (int k = 1; k < 4; ++k) start[k] = start[k - 1] + f.partCount[k - 1];
-      int order[4] = {0, 1, 2, 3};  // shaft, left, right, afterfeather
-      if (ordered) {
-        const bool leftNear = glm::dot(toEye, f.axisY) > 0.0f;
-        const int farVane = leftNear ? 2 : 1, nearVane = leftNear ? 1 : 2;
-        if (glm::dot(toEye, axisZ) > 0.0f) {
-          const int o[4] = {3, farVane, nearVane, 0};
-          std::copy(o, o + 4, order);
-        } else {
-          const int o[4] = {0, farVane, nearVane, 3};
-          std::copy(o, o + 4, order);
-        }
-      }
-      for (int k : order) {
-        if (f.partCount[k] == 0) continue;
-        r.queue(r.coat, start[k], f.partCount[k], backward);
-        stats_.backwardParts += backward ? 1 : 0;
-      }
+      r.drawIndices(run.first, run.count);
+      ++stats_.drawCalls;
+      ++stats_.drawRanges;
     }
-    const size_t n = r.flush();
-    stats_.drawCalls += n > 0 ? 1 : 0;
-    stats_.drawRanges += n;
     gl.DepthMask(GL_TRUE);
     gl.Disable(GL_BLEND);
   }

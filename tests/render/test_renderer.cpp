@@ -371,9 +371,14 @@ TEST(Renderer, OcclusionCullingSkipsHiddenFeathersWithoutChangingTheImage) {
   s.width = s.height = 128;
   const Image culled = r.renderImage(cam, {Light{}}, s);
   const size_t hidden = r.lastStats().occludedFeathers;
+  const size_t hiddenTriangles = r.lastStats().occludedTriangles;  // of feathers partly behind the body
+  const size_t drawn = r.lastStats().triangles;
   s.occlusionCulling = false;
   const Image all = r.renderImage(cam, {Light{}}, s);
   EXPECT_EQ(r.lastStats().occludedFeathers, 0u);
+  EXPECT_EQ(r.lastStats().occludedTriangles, 0u);
+  EXPECT_GT(hiddenTriangles, 0u);
+  EXPECT_LT(drawn + hiddenTriangles, r.lastStats().triangles);
   EXPECT_GT(hidden, 10u);  // feathers on the far side of the body
   EXPECT_LT(hidden, 160u);
   EXPECT_EQ(meanAbsoluteError(culled, all), 0.0);

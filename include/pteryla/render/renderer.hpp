@@ -21,7 +21,11 @@
 //  blends toward the opaque sheath colour (pin feathers, 8.1). featherId is not used for drawing.
 // Texture images are top row first: row 0 of a colour pattern is v = 1 (the feather tip).
 // Feathers whose bounds fall outside the view, or (RenderSettings::occlusionCulling) entirely behind
-// the skin's depth, are skipped; RenderStats reports how many.
+// the skin's depth, are skipped; so are, within the other feathers, runs of a few barbs (32
+// triangles) and then single triangles that lie behind the skin or outside the view (conservative
+// tests against the skin depth read back once per frame: the image is unchanged). The surviving
+// triangles are written into one index buffer per frame in draw order and drawn with one call per
+// run of feathers sharing a material. RenderStats reports the counts.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -103,8 +107,9 @@ struct RenderSettings {
   // thesis computes the projected angles per vertex (7.1.3); about twice as fast on llvmpipe and
   // indistinguishable at full geometry. true: per fragment, for close-ups of coarse LOD polygons.
   bool brdfPerFragment = false;
-  // Skip feathers whose bounding sphere lies entirely behind the skin (the skin's depth is read back
-  // once per frame). Exact for opaque skin; turn off to measure raw throughput.
+  // Skip feathers, runs of barbs and triangles that lie entirely behind the skin (the skin's depth is
+  // read back once per frame) or outside the view. Exact for opaque skin; turn off to measure raw
+  // throughput.
   bool occlusionCulling = true;
   // Minified colour and alpha textures: true samples the nearest texel of the nearest mip level
   // (about 20% faster on llvmpipe); false filters bilinearly within it. Magnification is bilinear.
@@ -112,12 +117,14 @@ struct RenderSettings {
 };
 
 struct RenderStats {
-  size_t drawCalls = 0;       // GL draw submissions (a multi-draw counts once)
-  size_t drawRanges = 0;      // index ranges in those submissions, after merging contiguous ones
+  size_t drawCalls = 0;       // GL draw submissions (the coat: one per run of feathers of one material)
+  size_t drawRanges = 0;      // index ranges in those submissions
   size_t triangles = 0;       // triangles submitted (skin + feathers not culled)
   size_t backwardParts = 0;   // feather parts drawn in reverse order (view-dependent ordering at work)
   size_t culledFeathers = 0;  // feathers outside the view frustum, skipped
   size_t occludedFeathers = 0;  // feathers hidden behind the skin, skipped
+  size_t occludedTriangles = 0;  // triangles of drawn feathers skipped: behind the skin (runs of a few
+                                 // barbs, then single triangles) or outside the view
 };
 
 class Renderer {
