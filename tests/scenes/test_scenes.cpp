@@ -69,7 +69,7 @@ TEST(Scenes, TheThesisScenesAreBundled) {
   const auto names = bundledScenes();
   for (const char* n : {"bird.json", "wing.json", "moult.json", "crest.json", "patch.json", "patch_grid.json",
                         "patch_hex.json", "patch_stretched.json", "sphere.json", "sphere_small.json",
-                        "sphere_large.json", "sphere_250.json"})
+                        "sphere_large.json", "sphere_250_small.json", "sphere_250.json", "sphere_250_large.json"})
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
 
@@ -186,23 +186,23 @@ TEST(Scenes, PatchLayouts) {
   EXPECT_GE(sixes, 20u);
 }
 
-// Figs 9.12 / 9.13: 426 feathers; three feather scales on one sphere, and a coarse sphere.
+// Figs 9.12 / 9.13: 426 feathers at three feather scales (the largest twice the smallest) on the 250- and
+// the 1,600-triangle sphere.
 TEST(Scenes, SpheresAtThreeScalesAndTwoResolutions) {
-  std::map<std::string, double> meanLength;
-  for (const char* name : {"sphere_small.json", "sphere.json", "sphere_large.json", "sphere_250.json"}) {
-    SCOPED_TRACE(name);
-    pipeline::Pipeline p(pipeline::loadScene(scenePath(name)));
-    EXPECT_EQ(p.follicles().size(), 426u);
-    double sum = 0;
-    for (const auto& fp : p.feathers().params) sum += fp.rachisLength;
-    meanLength[name] = sum / double(p.feathers().size());
-    if (std::string(name) == "sphere_250.json") {
-      EXPECT_EQ(p.restSkin().faceCount(), 250u);
+  for (const std::string prefix : {"sphere", "sphere_250"}) {
+    std::vector<double> meanLength;
+    for (const char* scale : {"_small", "", "_large"}) {
+      const std::string name = prefix + scale + ".json";
+      SCOPED_TRACE(name);
+      pipeline::Pipeline p(pipeline::loadScene(scenePath(name)));
+      EXPECT_EQ(p.follicles().size(), 426u);
+      EXPECT_EQ(p.restSkin().faceCount(), prefix == "sphere" ? 1600u : 250u);
+      double sum = 0;
+      for (const auto& fp : p.feathers().params) sum += fp.rachisLength;
+      meanLength.push_back(sum / double(p.feathers().size()));
     }
-    if (std::string(name) == "sphere.json") {
-      EXPECT_EQ(p.restSkin().faceCount(), 1600u);
-    }
+    EXPECT_LT(meanLength[0] * 1.3, meanLength[1]) << prefix;
+    EXPECT_LT(meanLength[1] * 1.3, meanLength[2]) << prefix;
+    EXPECT_NEAR(meanLength[2] / meanLength[0], 2.0, 0.1) << prefix;
   }
-  EXPECT_LT(meanLength["sphere_small.json"] * 1.3, meanLength["sphere.json"]);
-  EXPECT_LT(meanLength["sphere.json"] * 1.3, meanLength["sphere_large.json"]);
 }

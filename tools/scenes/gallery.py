@@ -54,13 +54,15 @@ SECTIONS = [
             ("patch_hex", None, "patch_hex.json: hexagonal"),
             ("patch_stretched", None, "patch_stretched.json: stretched")], None, None),
     ("sphere", "Spheres: feather scale and skin resolution (Figs 9.12, 9.13)",
-     "426 feathers on unit spheres, flowing from pole to pole. Fig 9.12: the same follicles with feathers "
-     "2, 3 and 4 follicle spacings long (the largest twice the smallest) on the 1,600-triangle sphere "
-     "(`sphere_small.json`, `sphere.json`, `sphere_large.json`): larger feathers hide the surface but bulk up "
-     "toward the lower pole. Fig 9.13: `sphere_250.json` is the middle scale on the 250-triangle sphere; "
-     "the packing keeps the coat above the coarse facets.",
-     None, [("sphere_small", None, "sphere_small.json"), ("sphere", None, "sphere.json"),
-            ("sphere_large", None, "sphere_large.json"), ("sphere_250", None, "sphere_250.json: 250 triangles")],
+     "426 feathers on unit spheres, flowing from pole to pole, with feathers 2, 3 and 4 follicle spacings "
+     "long (the largest twice the smallest). Fig 9.12: the 250-triangle sphere (`sphere_250_small.json`, "
+     "`sphere_250.json`, `sphere_250_large.json`): small feathers follow the coarse facets, larger ones hide "
+     "them but bulk up toward the lower pole (the coarse spheres sample their skin every 0.01 units for "
+     "packing: with the automatic spacing 8 barb vertices of the small feathers dipped between facets). Fig 9.13: the same on the 1,600-triangle sphere "
+     "(`sphere_small.json`, `sphere.json`, `sphere_large.json`), where every scale follows the smooth surface.",
+     None, [("sphere_250_small", None, "250 triangles, small"), ("sphere_250", None, "250 triangles, middle"),
+            ("sphere_250_large", None, "250 triangles, large"), ("sphere_small", None, "1,600 triangles, small"),
+            ("sphere", None, "1,600 triangles, middle"), ("sphere_large", None, "1,600 triangles, large")],
      None, None),
     ("bird", "Bird (Fig 9.20)",
      "`bird.json` (written by `tools/scenes/make_bird_scene.py`): the bundled bird with its 18 tracts, "
@@ -163,9 +165,10 @@ def write_markdown(results):
         if not r:
             lines += ["(not generated yet)", ""]
             continue
-        # Two images per row (GitHub scales table cells to the page width).
-        for k in range(0, len(images), 2):
-            row = images[k:k + 2]
+        # Two or three images per row (GitHub scales table cells to the page width).
+        per_row = 3 if len(images) % 3 == 0 else 2
+        for k in range(0, len(images), per_row):
+            row = images[k:k + per_row]
             lines.append("| " + " | ".join(f"![{c}](gallery/{s}.png)" for s, _, c in row) + " |")
             lines.append("|" + "---|" * len(row))
             lines.append("| " + " | ".join(f"*{c}*" for _, _, c in row) + " |")

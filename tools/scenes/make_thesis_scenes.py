@@ -11,10 +11,10 @@ Scenes (all but bird.json, which tools/scenes/make_bird_scene.py writes):
   patch.json                ~60 feathers, two key feathers, relaxed (Lloyd) follicles
   patch_grid.json, patch_hex.json, patch_stretched.json
                             the same patch with pinned grid / hexagonal / stretched follicles (Fig 9.11)
-  sphere.json               426 feathers on the 1600-triangle sphere (Figs 9.12, 9.13)
-  sphere_small.json, sphere_large.json
-                            the same with smaller / larger feathers (Fig 9.12)
-  sphere_250.json           426 feathers on the 250-triangle sphere (Fig 9.13)
+  sphere_small.json, sphere.json, sphere_large.json
+                            426 feathers at three scales on the 1,600-triangle sphere (Fig 9.13)
+  sphere_250_small.json, sphere_250.json, sphere_250_large.json
+                            the same on the 250-triangle sphere (Fig 9.12)
 
 Hand-placed follicle positions (flight feathers, patch layouts) are computed here from the meshes and
 their side files, so the scenes follow the meshes when tools/meshgen changes them.
@@ -334,7 +334,7 @@ SPHERE_AXIS = [[0, 1.5, 0], [0, -1.5, 0]]
 
 
 def sphere_scene(name, mesh, spacings, note):
-    return {
+    scene = {
         "pteryla": 1,
         "name": name,
         "seed": 12,
@@ -349,17 +349,24 @@ def sphere_scene(name, mesh, spacings, note):
         "ordering": {"method": "axis", "axis": SPHERE_AXIS},
         "camera": {"view_direction": [-0.5, -0.35, -1.0], "fov": 30},
         "render": {"size": [640, 360], "lod": 0.6},
-    }, note
+    }
+    if mesh == "sphere_250.obj":
+        # Coarse facets: with the automatic skin sample spacing a few barbs of the small feathers dip
+        # between samples where two facets meet.
+        scene["packing"] = {"skin_sample_spacing": 0.01}
+    return scene, note
 
 
 def sphere_scenes():
-    # 426 feathers at three feather scales (Fig 9.12: the largest twice as long as the smallest; mean
-    # length 2, 3 and 4 follicle spacings) on the 1,600-triangle sphere, and the middle scale on the
-    # 250-triangle sphere (Fig 9.13 compares the two tessellations).
-    yield sphere_scene("sphere", "sphere_1600.obj", 3.0, "1,600 triangles, feathers 3 spacings long")
-    yield sphere_scene("sphere_small", "sphere_1600.obj", 2.0, "1,600 triangles, feathers 2 spacings long")
-    yield sphere_scene("sphere_large", "sphere_1600.obj", 4.0, "1,600 triangles, feathers 4 spacings long")
-    yield sphere_scene("sphere_250", "sphere_250.obj", 3.0, "250 triangles, feathers 3 spacings long")
+    # 426 feathers at three feather scales (the largest twice as long as the smallest: mean length 2, 3
+    # and 4 follicle spacings) on the 250-triangle sphere (Fig 9.12) and on the 1,600-triangle sphere
+    # (Fig 9.13 compares the two tessellations).
+    for mesh, prefix in (("sphere_1600.obj", "sphere"), ("sphere_250.obj", "sphere_250")):
+        tris = mesh[len("sphere_"):-len(".obj")]
+        yield sphere_scene(prefix + "_small", mesh, 2.0,
+                           tris + " triangles, feathers 2 spacings long")
+        yield sphere_scene(prefix, mesh, 3.0, tris + " triangles, feathers 3 spacings long")
+        yield sphere_scene(prefix + "_large", mesh, 4.0, tris + " triangles, feathers 4 spacings long")
 
 
 def main():
