@@ -37,6 +37,12 @@ SECTIONS = [
      "(`packing.opening_age` 0): with the default 0.8, unopened pin feathers are packed as bare shafts but "
      "meshed with barbs that reach into the skin (40,781 penetrating vertices at t = 4).",
      "moult.json", [("moult_t3", 3, "t = 3"), ("moult_t6", 6, "t = 6")], [3, 6], 3),
+    ("moult_radial", "Radial moult with and without randomness (Fig 8.5)",
+     "`moult_radial.json`: two halves of the patch moult radially from their centres at constant wave speed. "
+     "Left: the order is strictly the distance from the centre, a clean ring of gaps and regrowing feathers. "
+     "Right: the order is jittered (`random` 0.4) and the window is wider (0.45), so the wave is ragged, "
+     "but every feather still goes through the same loss and regrowth.",
+     "moult_radial.json", [("moult_radial_t3", 3, "t = 3"), ("moult_radial_t6", 6, "t = 6")], [3, 6], 3),
     ("crest", "Crest: expressive lift control (AnimFur)",
      "`crest.json`: `head.obj` with 1,300 head and neck feathers and 110 longer, red crest feathers. One control on "
      "the crown binds the crest tract; its keyframed `lift` (max 75 degrees) and `random` twist raise the "

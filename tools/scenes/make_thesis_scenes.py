@@ -7,6 +7,7 @@
 Scenes (all but bird.json, which tools/scenes/make_bird_scene.py writes):
   wing.json                 210 feathers in two tracts on wing.obj, skeleton bends down and up (Figs 8.6, 9.19)
   moult.json                three patches moulting sequentially, radially and randomly (Figs 8.3-8.5)
+  moult_radial.json         radial moult, strictly sequential and with random jitter (Fig 8.5)
   crest.json                head.obj with a crest lifted by an expressive control (AnimFur)
   patch.json                ~60 feathers, two key feathers, relaxed (Lloyd) follicles
   patch_grid.json, patch_hex.json, patch_stretched.json
@@ -211,6 +212,26 @@ def moult_scene():
     }
 
 
+def moult_radial_scene():
+    halves = patch_strips(2)
+    tract = {"count": 230, "feather_scale": "auto", "feather_spacings": 2.6, "scale_jitter": 0.05,
+             "relax": {"iterations": 40}}
+    scene = moult_scene()
+    scene.update({
+        "name": "moult_radial",
+        "time": 4,
+        # Fig 8.5: a radial wave, strictly sequential on the left; on the right with random order jitter and a
+        # wider window, so the wave is no longer a clean ring but every feather still develops the same way.
+        "moult": {"start": 0, "duration": 10, "window": 0.3, "gap": 0.3, "seed": 5, "sequence": "radial",
+                  "pace": "distance"},
+        "tracts": [
+            dict(name="radial", faces=halves[0], **tract),
+            dict(name="radial_random", faces=halves[1], moult={"random": 0.4, "window": 0.45}, **tract),
+        ],
+    })
+    return scene
+
+
 # ---------------------------------------------------------------- crest (expressive controls, AnimFur)
 
 HEAD_AXIS = [[0.62, 0.02, 0], [0.3, 0.08, 0], [0.0, 0.1, 0], [-0.3, 0.02, 0], [-0.3, -0.4, 0], [-0.25, -1.1, 0]]
@@ -372,6 +393,7 @@ def sphere_scenes():
 def main():
     write("wing.json", wing_scene())
     write("moult.json", moult_scene())
+    write("moult_radial.json", moult_radial_scene())
     write("crest.json", crest_scene())
     for scene, _ in list(patch_scenes()) + list(sphere_scenes()):
         write(scene["name"] + ".json", scene)
