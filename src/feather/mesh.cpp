@@ -38,20 +38,24 @@ struct Dst {
 struct Xform {
   glm::mat3 m{1.0f}, nm{1.0f};
   glm::vec3 o{0.0f};
-  explicit Xform(const FeatherPlacement& p) {
+  bool raw = false;  // FeatherMeshInput::unplaced: pass local values through (placed later, same functions)
+  explicit Xform(const FeatherPlacement& p, bool unplaced = false) : raw(unplaced) {
     const glm::dmat3 md(p.x, p.y, p.z);
     m = glm::mat3(md);
     o = glm::vec3(p.origin);
     const double det = glm::determinant(md);
     nm = std::abs(det) > 1e-300 ? glm::mat3(glm::transpose(glm::inverse(md))) : m;
   }
-  glm::vec3 point(const glm::vec3& q) const { return o + m * q; }
+  glm::vec3 point(const glm::vec3& q) const { return raw ? q : place(q); }
+  glm::vec3 place(const glm::vec3& q) const { return o + m * q; }
   static glm::vec3 unit(const glm::vec3& v, const glm::vec3& fallback) {
     const float l2 = glm::dot(v, v);
     return l2 > 1e-30f ? v / std::sqrt(l2) : fallback;
   }
-  glm::vec3 normal(const glm::vec3& n) const { return unit(nm * n, n); }
-  glm::vec3 tangent(const glm::vec3& t) const { return unit(m * t, t); }
+  glm::vec3 normal(const glm::vec3& n) const { return raw ? n : placeNormal(n); }
+  glm::vec3 tangent(const glm::vec3& t) const { return raw ? t : placeTangent(t); }
+  glm::vec3 placeNormal(const glm::vec3& n) const { return unit(nm * n, n); }
+  glm::vec3 placeTangent(const glm::vec3& t) const { return unit(m * t, t); }
 };
 
 glm::vec3 safeUnit(const glm::vec3& v, const glm::vec3& fallback) { return Xform::unit(v, fallback); }
@@ -759,7 +763,7 @@ void writeShaft(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& 
 void writeFeather(const FeatherMeshInput& in, const MeshOptions& opt, Dst& d, FeatherMeshRanges* ranges) {
   Scratch& s = scratch();
   const Plan pl = makePlan(in, opt, s);
-  const Xform xf(in.placement);
+  const Xform xf(in.placement, in.unplaced);
   buildReference(pl, s);
   if (pl.ref == pl.c) {
     s.geo = &s.refFrames;
@@ -915,6 +919,17 @@ void appendFeatherMeshes(const FeatherMeshInput* inputs, size_t count, const Mes
       writeFeather(inputs[i], opt, d, ranges ? &(*ranges)[i] : nullptr);
     }
   });
+}
+
+void placeFeatherVertices(const FeatherPlacement& placement, const glm::vec3* positions, const glm::vec3* normals,
+                          const glm::vec3* tangents, size_t count, glm::vec3* outPositions, glm::vec3* outNormals,
+                          glm::vec3* outTangents) {
+  const Xform xf(placement);
+  for (size_t k = 0; k < count; ++k) {
+    outPositions[k] = xf.place(positions[k]);
+    outNormals[k] = xf.placeNormal(normals[k]);
+    outTangents[k] = xf.placeTangent(tangents[k]);
+  }
 }
 
 TriMesh buildFeatherMesh(const FeatherParams& p, double age, double lod, const MeshOptions& opt,

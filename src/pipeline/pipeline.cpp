@@ -123,19 +123,20 @@ struct Pipeline::Impl {
   std::vector<feather::LodOrder> lodOrders, grownOrders;
   size_t meshRegenerated = 0;       // feathers whose curves the last mesh evaluation generated
   std::vector<uint64_t> curvesVersion;  // per feather: bumped whenever its curves are regenerated
-  // Where each feather sits in mesh.mesh and what it was meshed from: a feather whose curves, placement,
-  // level of detail and sheath are unchanged is copied from the last mesh instead of re-meshed.
+  // Where each feather sits in mesh.mesh and what it was meshed from: a feather whose curves, level of
+  // detail and sheath are unchanged is copied (unplaced) from the last mesh instead of re-meshed.
   struct MeshSlice {
     bool valid = false;
     uint64_t version = 0;
     bool growing = false;             // meshed from the grown curves (else the mature ones)
-    feather::FeatherPlacement placement;
     double lod = 0, shed = 0;
     uint32_t v0 = 0, vn = 0, i0 = 0, in = 0;
     feather::FeatherMeshRanges ranges;  // absolute, in mesh.mesh
   };
   std::vector<MeshSlice> slices;
   TriMesh spareMesh, freshMesh;     // buffers kept across frames (no reallocation per frame)
+  // Unplaced positions, normals and tangents of mesh.mesh's vertices (and spares).
+  std::vector<glm::vec3> localPos, localNrm, localTan, spareLocalPos, spareLocalNrm, spareLocalTan;
   size_t meshReused = 0;            // feathers copied from the last mesh
 
   Stage stageOf(StageGraph::Id id) const {
@@ -493,14 +494,18 @@ feather::FeatherMeshRanges rebase(feather::FeatherMeshRanges r, uint32_t from, u
 
 }  // namespace
 
-// Meshes the present feathers (inputs, in layer order) into mesh.mesh: feathers whose inputs equal those
-// of their slice in the last mesh are copied from it, the rest are meshed (in parallel), and the result
-// is exactly what meshing every feather afresh gives (each feather's vertices and indices depend only
-// on its own input and its position in the mesh).
-void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& inputs, const std::vector<uint32_t>& which,
+// Meshes the present feathers (inputs, in layer order) into mesh.mesh. Feathers are meshed unplaced
+// (feather-local positions, normals, tangents; feather/mesh.hpp) and kept that way in localPos/Nrm/Tan:
+// a feather whose curves, level of detail and sheath are unchanged is copied from the last mesh instead
+// of meshed again, and every feather is then placed. The result is exactly what meshing every feather
+// afresh gives (each feather's vertices and indices depend only on its own input and its position in
+// the mesh, and placing later applies the same arithmetic).
+void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& placed, const std::vector<uint32_t>& which,
                                   const std::vector<double>& shed, std::vector<feather::FeatherMeshRanges>& ranges) {
-  const size_t count = inputs.size();
+  const size_t count = placed.size();
   const feather::MeshOptions mo;
+  std::vector<feather::FeatherMeshInput> inputs = placed;
+  for (auto& in : inputs) in.unplaced = true;
   std::vector<uint8_t> reuse(count, 0);
   size_t reused = 0;
   for (size_t k = 0; k < count; ++k) {
@@ -509,7 +514,6 @@ void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& 
     const bool growing = inputs[k].reference != nullptr;
     const bool same = sl.valid && sl.version == curvesVersion[i] && sl.growing == growing && sl.lod == lod &&
                       std::memcmp(&sl.shed, &shed[i], sizeof(double)) == 0 &&
-                      std::memcmp(&sl.placement, &inputs[k].placement, sizeof(feather::FeatherPlacement)) == 0 &&
                       sl.in > 0;  // empty feathers are re-meshed (nothing to copy; keeps range offsets exact)
     reuse[k] = same ? 1 : 0;
     reused += reuse[k];
@@ -535,8 +539,11 @@ void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& 
       sl.vn = vEnd - sl.v0;
       sl.ranges = r;
     }
+    std::swap(mesh.mesh.positions, localPos);
+    std::swap(mesh.mesh.normals, localNrm);
+    std::swap(mesh.mesh.tangents, localTan);
   } else {
-    // Mesh the changed feathers into freshMesh, then copy every slice into the spare buffer in order.
+    // Mesh the changed feathers into freshMesh, then copy every slice into the spare buffers in order.
     std::vector<feather::FeatherMeshInput> changed;
     std::vector<size_t> changedAt;
     for (size_t k = 0; k < count; ++k)
@@ -575,16 +582,20 @@ void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& 
       iTotal += src[k].in;
     }
     PTERYLA_CHECK(vTotal <= UINT32_MAX, "mesh exceeds 32-bit vertex indices");
-    resizeAll(spareMesh, vTotal, iTotal);  // every element is overwritten below
+    resizeAll(spareMesh, vTotal, iTotal);  // every element is overwritten (positions etc. when placed)
+    spareLocalPos.resize(vTotal);
+    spareLocalNrm.resize(vTotal);
+    spareLocalTan.resize(vTotal);
     const TriMesh& last = mesh.mesh;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t k = range.begin(); k < range.end(); ++k) {
-        const TriMesh& from = reuse[k] ? last : freshMesh;
+        const bool old = reuse[k] != 0;
+        const TriMesh& from = old ? last : freshMesh;
         const MeshSlice& a = src[k];
         const MeshSlice& b = next[k];
-        copySlice(from.positions, a.v0, spareMesh.positions, b.v0, a.vn);
-        copySlice(from.normals, a.v0, spareMesh.normals, b.v0, a.vn);
-        copySlice(from.tangents, a.v0, spareMesh.tangents, b.v0, a.vn);
+        copySlice(old ? localPos : freshMesh.positions, a.v0, spareLocalPos, b.v0, a.vn);
+        copySlice(old ? localNrm : freshMesh.normals, a.v0, spareLocalNrm, b.v0, a.vn);
+        copySlice(old ? localTan : freshMesh.tangents, a.v0, spareLocalTan, b.v0, a.vn);
         copySlice(from.uvGlobal, a.v0, spareMesh.uvGlobal, b.v0, a.vn);
         copySlice(from.uvBarb, a.v0, spareMesh.uvBarb, b.v0, a.vn);
         copySlice(from.uvGrowth, a.v0, spareMesh.uvGrowth, b.v0, a.vn);
@@ -599,8 +610,24 @@ void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& 
       }
     });
     std::swap(mesh.mesh, spareMesh);
+    std::swap(localPos, spareLocalPos);
+    std::swap(localNrm, spareLocalNrm);
+    std::swap(localTan, spareLocalTan);
     for (size_t k = 0; k < count; ++k) ranges[k] = next[k].ranges;
   }
+  // Place every feather.
+  const size_t vertices = localPos.size();
+  mesh.mesh.positions.resize(vertices);
+  mesh.mesh.normals.resize(vertices);
+  mesh.mesh.tangents.resize(vertices);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) {
+      const MeshSlice& sl = next[k];
+      feather::placeFeatherVertices(placed[k].placement, localPos.data() + sl.v0, localNrm.data() + sl.v0,
+                                    localTan.data() + sl.v0, sl.vn, mesh.mesh.positions.data() + sl.v0,
+                                    mesh.mesh.normals.data() + sl.v0, mesh.mesh.tangents.data() + sl.v0);
+    }
+  });
   // Remember what each slice of the new mesh was made from.
   for (auto& sl : slices) sl.valid = false;
   for (size_t k = 0; k < count; ++k) {
@@ -609,7 +636,6 @@ void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& 
     sl.valid = true;
     sl.version = curvesVersion[which[k]];
     sl.growing = inputs[k].reference != nullptr;
-    sl.placement = inputs[k].placement;
     sl.lod = lod;
     sl.shed = shed[which[k]];
   }

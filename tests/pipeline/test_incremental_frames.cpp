@@ -8,7 +8,14 @@
 #include <string>
 #include <vector>
 
+#include <glm/geometric.hpp>
+
 #include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/feather/barbs.hpp"
+#include "pteryla/feather/growth.hpp"
+#include "pteryla/feather/io.hpp"
+#include "pteryla/feather/lod.hpp"
+#include "pteryla/feather/mesh.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
 
@@ -198,4 +205,45 @@ TEST(IncrementalFrames, MoultEditsReplan) {
   j["moult"]["sequence"] = "increasing_u";
   expectIdentical(edited, fresh(pipeline::sceneFromJson(j, kSceneFile), 4.0, 0.2), 4.0);
   EXPECT_NE(before.age, edited.age);
+}
+
+// Meshing unplaced and placing later (how the pipeline moves a feather without meshing it again) writes
+// exactly what meshing with the placement writes, for a mature and a growing feather at two LODs.
+TEST(IncrementalFrames, UnplacedMeshPlacedLaterEqualsPlacedMesh) {
+  const feather::FeatherParams p = feather::loadFeather(std::string(PTERYLA_DATA_DIR) + "/feathers/contour.json");
+  const feather::FeatherCurves mature = feather::generateBarbs(p);
+  const feather::GrowthState st = feather::growthStateAt(0.7, feather::defaultGrowthSchedule());
+  const feather::FeatherCurves grown =
+      feather::generateBarbs(feather::featherAtState(p, st, feather::defaultGrowthSchedule()));
+  const feather::LodOrder order = feather::computeLodOrder(mature);
+  for (int growing = 0; growing < 2; ++growing)
+    for (double lod : {1.0, 0.2}) {
+      feather::FeatherMeshInput in;
+      in.curves = growing ? &grown : &mature;
+      in.reference = growing ? &mature : nullptr;
+      in.order = &order;
+      in.lod = lod;
+      in.sheathShed = growing ? st[feather::GrowthParam::Sheath] : 1.0;
+      in.featherId = 7;
+      in.placement = feather::FeatherPlacement::fromFollicle({0.3, -1.2, 0.05}, glm::normalize(glm::dvec3(1, 0.2, -0.1)),
+                                                             glm::normalize(glm::dvec3(-0.2, 1, 0.05)), 0.37);
+      TriMesh placedMesh, unplacedMesh;
+      feather::appendFeatherMesh(in, {}, placedMesh);
+      in.unplaced = true;
+      feather::appendFeatherMesh(in, {}, unplacedMesh);
+      const size_t n = unplacedMesh.vertexCount();
+      ASSERT_EQ(n, placedMesh.vertexCount());
+      ASSERT_GT(n, 0u);
+      EXPECT_FALSE(sameBytes(unplacedMesh.positions, placedMesh.positions));  // really unplaced
+      std::vector<glm::vec3> pos(n), nrm(n), tan(n);
+      feather::placeFeatherVertices(in.placement, unplacedMesh.positions.data(), unplacedMesh.normals.data(),
+                                    unplacedMesh.tangents.data(), n, pos.data(), nrm.data(), tan.data());
+      EXPECT_TRUE(sameBytes(pos, placedMesh.positions));
+      EXPECT_TRUE(sameBytes(nrm, placedMesh.normals));
+      EXPECT_TRUE(sameBytes(tan, placedMesh.tangents));
+      EXPECT_TRUE(sameBytes(unplacedMesh.uvGlobal, placedMesh.uvGlobal));
+      EXPECT_TRUE(sameBytes(unplacedMesh.uvGrowth, placedMesh.uvGrowth));
+      EXPECT_TRUE(sameBytes(unplacedMesh.sheath, placedMesh.sheath));
+      EXPECT_TRUE(sameBytes(unplacedMesh.indices, placedMesh.indices));
+    }
 }

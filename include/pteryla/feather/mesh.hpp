@@ -92,6 +92,10 @@ struct FeatherMeshInput {
   double lod = 1;              // fraction of geometry, (0, 1]
   double sheathShed = 1;       // GrowthState[GrowthParam::Sheath]; 1 = no sheath
   double sheathBand = 0.05;    // GrowthSchedule::sheathBand
+  // Write positions, normals and tangents before placement (`placement` is ignored): placeFeatherVertices
+  // places them later exactly as meshing with a placement would, so a coat can move a feather without
+  // meshing it again. Every other attribute and the indices do not depend on the placement.
+  bool unplaced = false;
 };
 
 struct FeatherMeshSize {
@@ -109,6 +113,12 @@ void appendFeatherMesh(const FeatherCurves& curves, const MeshOptions& opt, cons
 // into its own slice. Same result as appending them one by one. `ranges` (optional) gets `count` entries.
 void appendFeatherMeshes(const FeatherMeshInput* inputs, size_t count, const MeshOptions& opt, TriMesh& out,
                          std::vector<FeatherMeshRanges>* ranges = nullptr);
+
+// Places vertices written with FeatherMeshInput::unplaced: out = what meshing with `placement` writes,
+// bit for bit. Input and output arrays must not overlap.
+void placeFeatherVertices(const FeatherPlacement& placement, const glm::vec3* positions, const glm::vec3* normals,
+                          const glm::vec3* tangents, size_t count, glm::vec3* outPositions, glm::vec3* outNormals,
+                          glm::vec3* outTangents);
 
 // Single-feather convenience (CLI `pteryla feather`): the feather at `age` (growth.hpp) at level `lod`
 // in (0, 1], texture coordinates from the mature feather, in feather-local coordinates.
