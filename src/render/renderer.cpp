@@ -16,6 +16,9 @@
 #include <glm/matrix.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "gl_api.hpp"
 #include "pteryla/core/error.hpp"
 #include "shaders.hpp"
@@ -77,8 +80,16 @@ struct Renderer::Impl {
   std::vector<glm::vec3> coatPositions;
   std::vector<uint32_t> coatIndices;
   std::vector<uint32_t> frameIndices;
-  std::vector<glm::vec3> projected;  // per chunk vertex: window x, y (pixels), depth [0,1]; x = NaN
-                                     // when the vertex is behind the camera
+  std::vector<uint32_t> scratch;  // per frame: each chunk's surviving indices at the chunk's offset
+  std::vector<uint32_t> kept;     // per frame and chunk: indices surviving
+  struct Plan {                   // per frame and feather
+    enum State : uint8_t { kEmpty, kCulled, kOccluded, kDrawn };
+    State state = kEmpty;
+    bool backward = false;
+    int8_t order[4] = {0, 1, 2, 3};  // parts: shaft, left, right, afterfeather
+    uint32_t triangles = 0, occludedTriangles = 0;
+  };
+  std::vector<Plan> plans;
   struct Run {
     uint32_t material;
     size_t first, count;  // in frameIndices
@@ -86,6 +97,7 @@ struct Renderer::Impl {
   std::vector<Run> runs;
   std::vector<float> depth;              // skin depth read back for occlusion culling
   std::vector<float> tileMax;            // per kTile x kTile block: farthest depth
+  std::vector<float> tileMin;            // per kTile x kTile block: nearest depth
   int tilesX = 0, tilesY = 0;
   static constexpr int kTile = 8;
   std::vector<GpuMaterial> materials;
@@ -298,23 +310,22 @@ struct Renderer::Impl {
                     reinterpret_cast<const void*>(first * sizeof(uint32_t)));
   }
 
-  // Appends a chunk's triangles to frameIndices, forward or in reverse triangle order; with `test`,
-  // only the triangles that may be visible: a triangle is dropped when it lies outside the viewport
-  // or its nearest vertex is behind the farthest skin depth over every tile its bounds touch (window
-  // depth is affine over a triangle, so its nearest point is a vertex). Returns triangles dropped.
-  size_t emitChunk(const Chunk& ch, bool backward, bool test, const glm::mat4& viewProj, int w, int h) {
+  // Writes a chunk's triangles to `out`, forward or in reverse triangle order; with `test`, only the
+  // triangles that may be visible: a triangle is dropped when it lies outside the viewport or its
+  // nearest vertex is behind the farthest skin depth over every tile its bounds touch (window depth
+  // is affine over a triangle, so its nearest point is a vertex). Returns the indices written.
+  // `projected` is scratch space. Thread-safe (reads shared state only).
+  uint32_t emitChunk(const Chunk& ch, bool backward, bool test, const glm::mat4& viewProj, int w, int h,
+                     uint32_t* out, std::vector<glm::vec3>& projected) const {
     const uint32_t* idx = coatIndices.data() + ch.first;
     const uint32_t tris = ch.count / 3;
     if (!test) {
-      const size_t at = frameIndices.size();
-      frameIndices.resize(at + ch.count);
-      uint32_t* out = frameIndices.data() + at;
       if (!backward) {
         std::copy(idx, idx + ch.count, out);
       } else {
         for (uint32_t t = 0; t < tris; ++t) std::copy(idx + 3 * (tris - 1 - t), idx + 3 * (tris - t), out + 3 * t);
       }
-      return 0;
+      return ch.count;
     }
     const uint32_t nv = ch.vertexHi - ch.vertexLo + 1;
     projected.resize(nv);
@@ -328,7 +339,7 @@ struct Renderer::Impl {
       projected[v] = glm::vec3((q.x * inv * 0.5f + 0.5f) * float(w), (q.y * inv * 0.5f + 0.5f) * float(h),
                                q.z * inv * 0.5f + 0.5f);
     }
-    size_t dropped = 0;
+    uint32_t written = 0;
     for (uint32_t n = 0; n < tris; ++n) {
       const uint32_t* t = idx + 3 * (backward ? tris - 1 - n : n);
       const glm::vec3& a = projected[t[0] - ch.vertexLo];
@@ -345,10 +356,12 @@ struct Renderer::Impl {
           keep = !(nearest > 0.0f) || !hiddenRect(x0, y0, x1, y1, nearest);
         }
       }
-      if (keep) frameIndices.insert(frameIndices.end(), t, t + 3);
-      else ++dropped;
+      if (keep) {
+        std::copy(t, t + 3, out + written);
+        written += 3;
+      }
     }
-    return dropped;
+    return written;
   }
 
   // True when every depth tile over the pixel rectangle is nearer than windowDepth.
@@ -367,32 +380,52 @@ struct Renderer::Impl {
     tilesX = (w + kTile - 1) / kTile;
     tilesY = (h + kTile - 1) / kTile;
     tileMax.assign(static_cast<size_t>(tilesX) * tilesY, 0.0f);
+    tileMin.assign(static_cast<size_t>(tilesX) * tilesY, 1.0f);
     for (int y = 0; y < h; ++y) {
       const float* row = depth.data() + static_cast<size_t>(y) * w;
-      float* tiles = tileMax.data() + static_cast<size_t>(y / kTile) * tilesX;
-      for (int x = 0; x < w; ++x) tiles[x / kTile] = std::max(tiles[x / kTile], row[x]);
+      float* hi = tileMax.data() + static_cast<size_t>(y / kTile) * tilesX;
+      float* lo = tileMin.data() + static_cast<size_t>(y / kTile) * tilesX;
+      for (int x = 0; x < w; ++x) {
+        hi[x / kTile] = std::max(hi[x / kTile], row[x]);
+        lo[x / kTile] = std::min(lo[x / kTile], row[x]);
+      }
     }
   }
 
   // True when the box [lo, hi] is certainly hidden behind the skin depth: its nearest point lies
   // behind the farthest skin depth over every tile its projection touches.
-  bool occluded(const glm::vec3& lo, const glm::vec3& hi, const glm::mat4& viewProj, const glm::mat4& view,
-                const glm::mat4& proj, int w, int h) const {
+  enum class Depth { Hidden, InFront, Mixed };
+  // Where the box [lo, hi] lies against the skin depth: Hidden when its nearest point is behind the
+  // farthest skin depth over every tile its projection touches; InFront when its farthest point is
+  // nearer than the nearest skin depth over all those tiles (nothing of it can be hidden); else Mixed.
+  Depth classify(const glm::vec3& lo, const glm::vec3& hi, const glm::mat4& viewProj, const glm::mat4& view,
+                 const glm::mat4& proj, int w, int h) const {
     const float zNear = proj[3][2] / (proj[2][2] - 1.0f);
-    float nearest = std::numeric_limits<float>::max();
+    float nearest = std::numeric_limits<float>::max(), farthest = 0.0f;
     float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
     for (int k = 0; k < 8; ++k) {
       const glm::vec4 corner(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z, 1.0f);
-      nearest = std::min(nearest, -(view * corner).z);
+      const float d = -(view * corner).z;
+      nearest = std::min(nearest, d);
+      farthest = std::max(farthest, d);
       const glm::vec4 q = viewProj * corner;
-      if (q.w <= 0.0f) return false;
+      if (q.w <= 0.0f) return Depth::Mixed;
       const float sx = (q.x / q.w * 0.5f + 0.5f) * w, sy = (q.y / q.w * 0.5f + 0.5f) * h;
       x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
     }
-    if (nearest <= zNear * 1.01f) return false;
-    // Window depth of the nearest point (glm perspective: z_clip = P22 z + P32, w = -z).
-    const float ndc = (proj[2][2] * -nearest + proj[3][2]) / nearest;
-    return hiddenRect(x0, y0, x1, y1, ndc * 0.5f + 0.5f);
+    if (nearest <= zNear * 1.01f) return Depth::Mixed;
+    // Window depth at view distance d (glm perspective: z_clip = P22 z + P32, w = -z).
+    auto windowDepth = [&](float d) { return ((proj[2][2] * -d + proj[3][2]) / d) * 0.5f + 0.5f; };
+    if (hiddenRect(x0, y0, x1, y1, windowDepth(nearest))) return Depth::Hidden;
+    const float far = windowDepth(farthest);
+    const int tx0 = std::clamp(static_cast<int>(std::floor(x0)) / kTile, 0, tilesX - 1);
+    const int tx1 = std::clamp(static_cast<int>(std::ceil(x1)) / kTile, 0, tilesX - 1);
+    const int ty0 = std::clamp(static_cast<int>(std::floor(y0)) / kTile, 0, tilesY - 1);
+    const int ty1 = std::clamp(static_cast<int>(std::ceil(y1)) / kTile, 0, tilesY - 1);
+    for (int ty = ty0; ty <= ty1; ++ty)
+      for (int tx = tx0; tx <= tx1; ++tx)
+        if (tileMin[static_cast<size_t>(ty) * tilesX + tx] <= far + 1e-6f) return Depth::Mixed;
+    return Depth::InFront;
   }
 
   void ensureTarget(int w, int h, int samples) {
@@ -713,69 +746,93 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       return true;
     };
 
-    // Pass 1: this frame's coat indices in draw order, split into runs of one material.
-    r.frameIndices.clear();
-    r.runs.clear();
-    for (size_t i = 0; i < r.ranges.size(); ++i) {
-      const FeatherDrawRange& f = r.ranges[i];
-      if (f.indexCount == 0) continue;
-      if (f.material >= r.materials.size())
-        throw Error("feather draw range uses material " + std::to_string(f.material) + " but " +
+    for (size_t i = 0; i < r.ranges.size(); ++i)
+      if (r.ranges[i].indexCount > 0 && r.ranges[i].material >= r.materials.size())
+        throw Error("feather draw range uses material " + std::to_string(r.ranges[i].material) + " but " +
                         std::to_string(r.materials.size()) + " materials are set",
                     {}, "ranges[" + std::to_string(i) + "].material");
-      if (!visible(r.rangeSpheres[i])) {
-        ++stats_.culledFeathers;
-        continue;
-      }
-      if (occlusion && r.occluded(r.rangeBoxes[2 * i], r.rangeBoxes[2 * i + 1], viewProj, view, proj, s.width, s.height)) {
-        ++stats_.occludedFeathers;
-        continue;
-      }
-      if (r.runs.empty() || r.runs.back().material != f.material)
-        r.runs.push_back({f.material, r.frameIndices.size(), 0});
-      // Octant rule (7.1.2): farther substructures first, from this feather's own view direction.
-      const glm::vec3 toEye = camera.eye - f.origin;
-      const glm::vec3 axisZ = glm::cross(f.axisX, f.axisY);
-      const bool ordered = s.viewDependentOrder;
-      const bool backward = ordered && glm::dot(toEye, f.axisX) <= 0.0f;
-      const bool hasParts = f.partCount[0] + f.partCount[1] + f.partCount[2] + f.partCount[3] > 0;
-      // A part's chunks in draw order (reversed when the part is drawn backward); with occlusion
-      // culling, chunks hidden behind the skin are left out and the others tested per triangle.
-      const bool chunked = r.partChunks[5 * i + 4] - r.partChunks[5 * i] > 1;
-      auto drawPart = [&](int k) {
-        const uint32_t c0 = r.partChunks[5 * i + k], c1 = r.partChunks[5 * i + k + 1];
-        if (c0 == c1) return;
-        for (uint32_t n = 0; n < c1 - c0; ++n) {
-          const Impl::Chunk& ch = r.chunks[backward ? c1 - 1 - n : c0 + n];
-          if (occlusion && chunked && r.occluded(ch.lo, ch.hi, viewProj, view, proj, s.width, s.height)) {
-            stats_.occludedTriangles += ch.count / 3;
-            continue;
-          }
-          const size_t dropped = r.emitChunk(ch, backward, occlusion, viewProj, s.width, s.height);
-          stats_.occludedTriangles += dropped;
-          stats_.triangles += ch.count / 3 - dropped;
+    // Pass 1, in parallel over feathers: visibility and octant order of each feather, and the
+    // surviving triangles of each chunk in its draw direction, written to the chunk's own slot of
+    // `scratch` (same offsets as the coat's indices).
+    using Depth = Impl::Depth;
+    const bool ordered = s.viewDependentOrder;
+    r.plans.resize(r.ranges.size());
+    r.scratch.resize(r.coatIndices.size());
+    r.kept.resize(r.chunks.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, r.ranges.size(), 16), [&](const tbb::blocked_range<size_t>& br) {
+      std::vector<glm::vec3> projected;
+      for (size_t i = br.begin(); i != br.end(); ++i) {
+        Impl::Plan& pl = r.plans[i];
+        pl = Impl::Plan();
+        const FeatherDrawRange& f = r.ranges[i];
+        if (f.indexCount == 0) continue;
+        if (!visible(r.rangeSpheres[i])) {
+          pl.state = Impl::Plan::kCulled;
+          continue;
         }
-        stats_.backwardParts += backward ? 1 : 0;
-      };
-      if (!hasParts) {
-        drawPart(0);
-      } else {
-        int order[4] = {0, 1, 2, 3};  // shaft, left, right, afterfeather
+        const Depth depth = occlusion ? r.classify(r.rangeBoxes[2 * i], r.rangeBoxes[2 * i + 1], viewProj, view, proj,
+                                                   s.width, s.height)
+                                      : Depth::InFront;
+        if (depth == Depth::Hidden) {
+          pl.state = Impl::Plan::kOccluded;
+          continue;
+        }
+        pl.state = Impl::Plan::kDrawn;
+        // Octant rule (7.1.2): farther substructures first, from this feather's own view direction.
+        const glm::vec3 toEye = camera.eye - f.origin;
+        pl.backward = ordered && glm::dot(toEye, f.axisX) <= 0.0f;
         if (ordered) {
           const bool leftNear = glm::dot(toEye, f.axisY) > 0.0f;
-          const int farVane = leftNear ? 2 : 1, nearVane = leftNear ? 1 : 2;
-          if (glm::dot(toEye, axisZ) > 0.0f) {
-            const int o[4] = {3, farVane, nearVane, 0};
-            std::copy(o, o + 4, order);
-          } else {
-            const int o[4] = {0, farVane, nearVane, 3};
-            std::copy(o, o + 4, order);
-          }
+          const int8_t farVane = leftNear ? 2 : 1, nearVane = leftNear ? 1 : 2;
+          const bool dorsal = glm::dot(toEye, glm::cross(f.axisX, f.axisY)) > 0.0f;
+          const int8_t o[4] = {int8_t(dorsal ? 3 : 0), farVane, nearVane, int8_t(dorsal ? 0 : 3)};
+          std::copy(o, o + 4, pl.order);
         }
-        for (int k : order) drawPart(k);
+        // Chunks hidden behind the skin are left out, the ones that may be partly hidden are tested
+        // per triangle.
+        const uint32_t c0 = r.partChunks[5 * i], c1 = r.partChunks[5 * i + 4];
+        for (uint32_t c = c0; c < c1; ++c) {
+          const Impl::Chunk& ch = r.chunks[c];
+          Depth d = depth;
+          if (d == Depth::Mixed && c1 - c0 > 1) d = r.classify(ch.lo, ch.hi, viewProj, view, proj, s.width, s.height);
+          const uint32_t n = d == Depth::Hidden ? 0
+                                                : r.emitChunk(ch, pl.backward, d == Depth::Mixed, viewProj, s.width,
+                                                              s.height, r.scratch.data() + ch.first, projected);
+          r.kept[c] = n;
+          pl.triangles += n / 3;
+          pl.occludedTriangles += (ch.count - n) / 3;
+        }
       }
-      r.runs.back().count = r.frameIndices.size() - r.runs.back().first;
+    });
+
+    // Pass 2: the surviving triangles in draw order (layer order, then each feather's parts in
+    // octant order), split into runs of one material.
+    r.frameIndices.resize(r.coatIndices.size());
+    size_t used = 0;
+    r.runs.clear();
+    for (size_t i = 0; i < r.ranges.size(); ++i) {
+      const Impl::Plan& pl = r.plans[i];
+      if (pl.state == Impl::Plan::kCulled) ++stats_.culledFeathers;
+      if (pl.state == Impl::Plan::kOccluded) ++stats_.occludedFeathers;
+      if (pl.state != Impl::Plan::kDrawn) continue;
+      stats_.triangles += pl.triangles;
+      stats_.occludedTriangles += pl.occludedTriangles;
+      const uint32_t material = r.ranges[i].material;
+      if (r.runs.empty() || r.runs.back().material != material) r.runs.push_back({material, used, 0});
+      for (int8_t k : pl.order) {
+        const uint32_t c0 = r.partChunks[5 * i + k], c1 = r.partChunks[5 * i + k + 1];
+        if (c0 == c1) continue;
+        stats_.backwardParts += pl.backward ? 1 : 0;
+        for (uint32_t n = 0; n < c1 - c0; ++n) {
+          const uint32_t c = pl.backward ? c1 - 1 - n : c0 + n;
+          const uint32_t* from = r.scratch.data() + r.chunks[c].first;
+          std::copy(from, from + r.kept[c], r.frameIndices.data() + used);
+          used += r.kept[c];
+        }
+      }
+      r.runs.back().count = used - r.runs.back().first;
     }
+    r.frameIndices.resize(used);
 
     // Pass 2: upload the indices once, one draw call per material run.
     r.streamIndices(r.coat, r.frameIndices, GL_STREAM_DRAW);
