@@ -36,17 +36,60 @@ def cross(a, b): return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a
 def unit(a):
     l = math.sqrt(dot(a, a)); return [c / l for c in a]
 
-def surface_normal(verts, faces, p, group_prefix):
-    """Normal of the face of the given groups nearest to p (by centroid)."""
-    best, n = 1e30, None
+def add(a, b): return [a[i] + b[i] for i in range(3)]
+def scale(a, k): return [c * k for c in a]
+
+def closest_on_triangle(p, a, b, c):
+    """Closest point to p on triangle abc and its barycentric coordinates (Ericson, Real-Time Collision
+    Detection 5.1.5)."""
+    ab, ac, ap = sub(b, a), sub(c, a), sub(p, a)
+    d1, d2 = dot(ab, ap), dot(ac, ap)
+    if d1 <= 0 and d2 <= 0: return a, (1, 0, 0)
+    bp = sub(p, b); d3, d4 = dot(ab, bp), dot(ac, bp)
+    if d3 >= 0 and d4 <= d3: return b, (0, 1, 0)
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0 and d1 >= 0 and d3 <= 0:
+        v = d1 / (d1 - d3); return add(a, scale(ab, v)), (1 - v, v, 0)
+    cp = sub(p, c); d5, d6 = dot(ab, cp), dot(ac, cp)
+    if d6 >= 0 and d5 <= d6: return c, (0, 0, 1)
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0 and d2 >= 0 and d6 <= 0:
+        w = d2 / (d2 - d6); return add(a, scale(ac, w)), (1 - w, 0, w)
+    va = d3 * d6 - d5 * d4
+    if va <= 0 and (d4 - d3) >= 0 and (d5 - d6) >= 0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6)); return add(b, scale(sub(c, b), w)), (0, 1 - w, w)
+    den = 1 / (va + vb + vc); v, w = vb * den, vc * den
+    return add(a, add(scale(ab, v), scale(ac, w))), (1 - v - w, v, w)
+
+_vnormals = {}
+def vertex_normals(verts, faces):
+    """Area-weighted vertex normals (sum of face cross products), as the skin computes them."""
+    key = id(verts)
+    if key not in _vnormals:
+        acc = [[0.0, 0.0, 0.0] for _ in verts]
+        for idx, g in faces:
+            a, b, c = (verts[i] for i in idx)
+            cr = cross(sub(b, a), sub(c, a))
+            for i in idx: acc[i] = add(acc[i], cr)
+        _vnormals[key] = [unit(n) if dot(n, n) > 0 else [0, 0, 1] for n in acc]
+    return _vnormals[key]
+
+def closest_surface(verts, faces, p, group_prefix):
+    """Closest point to p on the faces of the given groups and the interpolated vertex normal there (the
+    follicle frame's N)."""
+    vn = vertex_normals(verts, faces)
+    best = (1e30, None, None)
     for idx, g in faces:
         if not g or not g.startswith(group_prefix): continue
-        c = [sum(verts[i][k] for i in idx) / 3 for k in range(3)]
-        d = dot(sub(c, p), sub(c, p))
-        if d < best:
-            a, b, cc = (verts[i] for i in idx)
-            best, n = d, unit(cross(sub(b, a), sub(cc, a)))
-    return n
+        q, bc = closest_on_triangle(p, *(verts[i] for i in idx))
+        d = dot(sub(q, p), sub(q, p))
+        if d < best[0]: best = (d, q, (idx, bc))
+    idx, bc = best[2]
+    n = [sum(bc[k] * vn[idx[k]][m] for k in range(3)) for m in range(3)]
+    return best[1], unit(n)
+
+def surface_normal(verts, faces, p, group_prefix):
+    return closest_surface(verts, faces, p, group_prefix)[1]
 
 def flight_styling(verts, faces, pins, dirs, group_prefix, min_elevation=True):
     """Styling for pinned flight feathers: `dirs` are world directions in the (horizontal) wing and tail
@@ -149,11 +192,15 @@ body = [  # tract, feather types for its key feathers (cycled), key count
 # (flat, wide surfaces) and short on the leg stubs, whose feathers otherwise reach the other leg.
 SPACINGS = {'body': float(os.environ.get('BIRD_SPACINGS', 2.4)), 'alar': float(os.environ.get('BIRD_ALAR_SPACINGS', 2.8)),
             'crural': float(os.environ.get('BIRD_CRURAL_SPACINGS', 1.6))}
+ALAR_REMIGES = os.environ.get('BIRD_ALAR_REMIGES', '0') == '1'
 tracts = []
 for name, kinds, n in body:
     pts = farthest_points(groups[name], n)
     keys = [{'feather': kinds[i % len(kinds)], 'at': [round(c, 5) for c in p]} for i, p in enumerate(pts)]
-    t = {'name': name, 'groups': [name], 'density': DENSITY, 'feather_scale': 'auto', 'feather_spacings': SPACINGS.get(name.split('_')[0], SPACINGS['body']),
+    grp = [name]
+    if ALAR_REMIGES and name.startswith('alar'):  # coverts also over the band where the flight feathers root
+        grp.append('remiges_' + name.split('_')[1])
+    t = {'name': name, 'groups': grp, 'density': DENSITY, 'feather_scale': 'auto', 'feather_spacings': SPACINGS.get(name.split('_')[0], SPACINGS['body']),
          'scale_jitter': 0.08, 'key_feathers': keys, 'relax': {'iterations': 30}}
     if name.startswith(('alar', 'humeral', 'spinal', 'caudal', 'capital', 'cervical')):
         t['parameterization'] = {'method': 'projection', 'view_direction': [0, -1, 0]}
@@ -179,18 +226,63 @@ for side, sgn in (('left', 1), ('right', -1)):
     dirs += [[-1.0 + 0.55 * k / 9, 0.0, sgn * (0.35 + 0.75 * k / 9)] for k in range(10)]
     styling += flight_styling(verts, faces, sec + prim, dirs, 'remiges_' + side)
 rect = resample(axes['tail_edge'], 12)
+# The tail edge runs around the stub's end, where the skin faces straight back: a rectrix pointing back
+# would point along its normal (no tangent direction). Rectrices root on the upper back of the stub
+# instead (over the pygostyle), where pointing back is a well-defined, moderate elevation.
+TAIL_LIFT = float(os.environ.get('BIRD_TAIL_LIFT', 0.04))
+if TAIL_LIFT > 0:
+    rect = [[round(c, 5) for c in closest_surface(verts, faces, add(p, [0.0, TAIL_LIFT, 0.0]), 'caudal')[0]] for p in rect]
 # Rectrices fan out from the tail's end, the outer ones up to 30 degrees from the body axis.
 rdirs = [[-math.cos(a), 0.0, math.sin(a)] for a in (math.radians(30 - 60 * k / 11) for k in range(12))]
-styling += flight_styling(verts, faces, rect, rdirs, 'caudal', os.environ.get('BIRD_TAIL_MIN', '0') == '1')
+styling += flight_styling(verts, faces, rect, rdirs, 'caudal', os.environ.get('BIRD_TAIL_MIN', '1') == '1')
 tracts.append({'name': 'rectrices', 'groups': ['caudal'], 'count': 0, 'feather_scale': 0.055,
                'pinned': [{'at': p} for p in rect], 'feather': 'rectrix',
                'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
 
+# Denser obstacle samples than the packer's defaults: with 16 points per key barb and 12 key barbs per
+# vane handed to later feathers (and finer barb height fields), feathers see the barbs of the ones under
+# them instead of slipping between samples (full-geometry pairs 3608 -> ~2000); skin samples every
+# 0.004 units (a twentieth of a body feather) keep the small head and wing feathers above the skin.
+PACKING = {'barb_samples': 16, 'key_barbs_per_vane': 12, 'shaft_samples': 24, 'barb_field_bins': 32,
+           'skin_sample_spacing': 0.004, 'styling': styling}
+for kv in os.environ.get('BIRD_PACK', '').split(','):
+    if kv: PACKING[kv.split('=')[0]] = json.loads(kv.split('=')[1])
 body_axis = [[round(c, 5) for c in p] for p in axes['body_axis']]
 # Framed on the feathered bird (body, spread wings, tail) so it fills most of the 1280x720 frame.
 VIEW = unit([-0.45, -0.6, -0.66]); TARGET = [-0.38, 0.1, 0.02]; DIST = float(os.environ.get('BIRD_CAM_DIST', 5.0))
 CAMERA = {'eye': [round(TARGET[k] - DIST * VIEW[k], 4) for k in range(3)], 'target': TARGET, 'fov': 30}
 wing_dir = lambda sgn: [-1.0, 0.0, 0.45 * sgn]
+WRAP = float(os.environ.get('BIRD_WRAP', 1.0))
+WRAP_FALLOFF = float(os.environ.get('BIRD_WRAP_FALLOFF', 0.06))
+
+def edge_vectors(group, sgn, zs, back, wrap, out_z, inner):
+    """Direction vectors for a wing tract: on its leading edge (the most forward vertices at each span
+    position) the direction also points up, so feathers rooted on the rounded edge wrap over it onto the
+    upper surface (marginal coverts) instead of lying along it; `back` units behind the edge and at the
+    trailing edge they point back and out."""
+    vs = [v for v, g in vert_groups if g == group]
+    out = []
+    for z in zs:
+        s = [v for v in vs if abs(abs(v[2]) - z) < 0.03]
+        if not s: continue
+        lead = max(s, key=lambda v: v[0]); trail = min(s, key=lambda v: v[0])
+        zz = z * sgn
+        out.append({'at': [round(lead[0], 4), round(lead[1], 4), round(zz, 4)], 'direction': [-1.0, wrap, out_z * sgn]})
+        for x in (lead[0] - back, trail[0]):
+            if x >= trail[0] - 1e-9:
+                out.append({'at': [round(x, 4), round(lead[1], 4), round(zz, 4)], 'direction': [-1.0, 0.0, out_z * sgn]})
+    return out
+
+vert_groups = []
+for idx, g in faces:
+    for i in idx: vert_groups.append((verts[i], g))
+def wing_directions(sgn, side):
+    if WRAP <= 0:
+        return {'alar_' + side: {'vectors': [{'at': [0.1, 0.2, 0.5 * sgn], 'direction': wing_dir(sgn)}]}}
+    return {'alar_' + side: {'vectors': edge_vectors('alar_' + side, sgn, [0.42 + 0.08 * k for k in range(10)], 0.12, WRAP, 0.45, None),
+                             'falloff': WRAP_FALLOFF},
+            'humeral_' + side: {'vectors': edge_vectors('humeral_' + side, sgn, [0.3, 0.38, 0.46], 0.15, WRAP, 0.15, None),
+                                'falloff': WRAP_FALLOFF}}
 scene = {
     'pteryla': 1,
     'name': 'bird',
@@ -201,8 +293,7 @@ scene = {
     'directions': {
         'axis': body_axis,
         'tracts': {
-            'alar_left': {'vectors': [{'at': [0.1, 0.2, 0.5], 'direction': wing_dir(1)}]},
-            'alar_right': {'vectors': [{'at': [0.1, 0.2, -0.5], 'direction': wing_dir(-1)}]},
+            **wing_directions(1, 'left'), **wing_directions(-1, 'right'),
             'remiges_left': {'vectors': [{'at': [0.0, 0.2, 0.5], 'direction': [-1.0, 0.0, 0.25]},
                                          {'at': [0.0, 0.2, 1.0], 'direction': [-0.6, 0.0, 1.0]}]},
             'remiges_right': {'vectors': [{'at': [0.0, 0.2, -0.5], 'direction': [-1.0, 0.0, -0.25]},
@@ -210,11 +301,11 @@ scene = {
         },
     },
     'ordering': {'method': os.environ.get('BIRD_ORDER', 'flow')},
-    'packing': {'styling': styling},
+    'packing': PACKING,
     'camera': CAMERA,
     'lights': [{'direction': [-0.4, -1.0, -0.5], 'intensity': 1.0},
                {'direction': [0.6, -0.2, 0.7], 'color': [0.6, 0.65, 0.75], 'intensity': 0.5}],
     'render': {'size': [1280, 720], 'lod': 0.6, 'background': [0.84, 0.87, 0.9]},
 }
-json.dump(scene, open(os.path.join(DATA, 'scenes', 'bird.json'), 'w'), indent=1)
+json.dump(scene, open(os.path.join(DATA, 'scenes', os.environ.get('BIRD_OUT', 'bird.json')), 'w'), indent=1)
 print('keys', sum(len(t.get('key_feathers', [])) for t in tracts), 'tracts', len(tracts))
