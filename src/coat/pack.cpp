@@ -317,8 +317,25 @@ struct Context {
   std::vector<uint32_t> order, pos;  // pos[i] = position in order, UINT32_MAX if not packed
   // dependency graph (CSR)
   std::vector<uint32_t> depOff, deps, succOff, succ;
-  detail::PointGrid originGrid;  // over origins of packed feathers, indexed by position in `order`
+  // Origins of packed feathers in reach classes (class c holds reaches up to 2^(c+1) x the median), one
+  // grid each with its own largest reach, so a small feather's neighbour search is not sized by the
+  // longest flight feather. members[c][item] = position in `order`.
+  struct ReachClass {
+    detail::PointGrid grid;
+    std::vector<uint32_t> members;
+    double maxReach = 0;
+  };
+  std::vector<ReachClass> reachClasses;
   double maxReach = 0;
+  // Calls f(position in order) for every packed feather whose origin lies within `range` + its class's
+  // largest reach of `centre` (a superset; callers test the exact condition).
+  template <class F>
+  void forNearOrigins(const dvec3& centre, double range, F&& f) const {
+    for (const ReachClass& rc : reachClasses) {
+      const double q = range + rc.maxReach;
+      rc.grid.query(centre - dvec3(q), centre + dvec3(q), [&](uint32_t item) { f(rc.members[item]); });
+    }
+  }
   // skin samples
   std::vector<glm::dvec3> skinPts;
   detail::PointGrid skinGrid;
@@ -926,19 +943,36 @@ void setup(Context& ctx) {
   ctx.maxReach = maxReach;
 
   // Dependency graph: j before i whose reach ball can touch i's footprint.
-  std::vector<glm::dvec3> origins(ctx.order.size());
-  for (size_t k = 0; k < ctx.order.size(); ++k) origins[k] = coat.frames[ctx.order[k]].origin;
-  detail::PointGrid& grid = ctx.originGrid;
-  grid.build(origins, std::max(maxReach, 1e-9));
+  {
+    std::vector<std::vector<uint32_t>> members;
+    for (size_t k = 0; k < ctx.order.size(); ++k) {
+      const double ratio = ctx.local[ctx.order[k]].reach / (2 * medReach);
+      const size_t c = ratio <= 1 ? 0 : std::min<size_t>(16, static_cast<size_t>(std::ceil(std::log2(ratio))));
+      if (members.size() <= c) members.resize(c + 1);
+      members[c].push_back(static_cast<uint32_t>(k));
+    }
+    ctx.reachClasses.clear();
+    for (auto& m : members) {
+      if (m.empty()) continue;
+      Context::ReachClass rc;
+      std::vector<glm::dvec3> origins(m.size());
+      for (size_t q = 0; q < m.size(); ++q) {
+        origins[q] = coat.frames[ctx.order[m[q]]].origin;
+        rc.maxReach = std::max(rc.maxReach, ctx.local[ctx.order[m[q]]].reach);
+      }
+      rc.grid.build(origins, std::max(rc.maxReach, 1e-9));
+      rc.members = std::move(m);
+      ctx.reachClasses.push_back(std::move(rc));
+    }
+  }
   std::vector<std::vector<uint32_t>> depLists(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ctx.order.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k < r.end(); ++k) {
       const uint32_t i = ctx.order[k];
       const LocalFeather& L = ctx.local[i];
       const FeatherFrame& F = coat.frames[i];
-      const double range = L.reach + maxReach;
       std::vector<uint32_t>& d = depLists[i];
-      grid.query(F.origin - dvec3(range), F.origin + dvec3(range), [&](uint32_t kj) {
+      ctx.forNearOrigins(F.origin, L.reach, [&](uint32_t kj) {
         if (kj >= k) return;
         const uint32_t j = ctx.order[kj];
         const double Rj = ctx.local[j].reach;
@@ -1177,8 +1211,7 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
       const dvec3 c(prev.bounds[j]);
       const double rj = prev.bounds[j].w;
       const uint32_t pj = ctx.pos[j];
-      const double range = rj + ctx.maxReach;
-      ctx.originGrid.query(c - dvec3(range), c + dvec3(range), [&](uint32_t ki) {
+      ctx.forNearOrigins(c, rj, [&](uint32_t ki) {
         const uint32_t i = ctx.order[ki];
         if (pj != UINT32_MAX && ki <= pj) return;
         const LocalFeather& L = ctx.local[i];
