@@ -153,8 +153,10 @@ class App {
   // Measurement.
   std::chrono::steady_clock::time_point fpsStart_;
   int fpsFrames_ = 0;
-  int benchFrame_ = -1, benchPass_ = 0;  // pass 0: navigation coat (when used), 1: full coat
-  double benchNavFps_ = -1, benchNavRenderMs_ = 0;
+  // Orbit benchmark passes: 0 what moving the camera draws (navigation coat when used, reduced
+  // resolution), 1 the full coat at the reduced resolution, 2 the full coat at rest (full resolution).
+  int benchFrame_ = -1, benchPass_ = 0;
+  double benchNavFps_ = -1, benchNavRenderMs_ = 0, benchMovingFps_ = -1, benchMovingRenderMs_ = 0;
   std::chrono::steady_clock::time_point benchStart_;
   double benchRenderSeconds_ = 0;
 

@@ -51,6 +51,9 @@ struct ViewState {
   // triangles are drawn (navigation.hpp); the full coat as soon as it stops.
   bool fastNavigation = true;
   int navigationBudget = 90000;
+  // While the camera moves the 3D view is also rendered at 1/navigationScale of its resolution (per
+  // axis) and stretched; full resolution as soon as it stops. 1 = off.
+  int navigationScale = 2;
   bool navigationChanged = false;
   bool forceNavigation = false;  // draw the navigation coat even at rest (script: show navigation on)
   // Measured frame rate (frames per second over the last half second).

@@ -60,6 +60,10 @@ void drawViewPanel(PanelContext& ctx) {
   ImGui::SetNextItemWidth(140);
   if (ImGui::SliderInt("triangles", &v.navigationBudget, 20000, 1000000, "%d", ImGuiSliderFlags_Logarithmic))
     v.navigationChanged = true;
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(80);
+  ImGui::SliderInt("1/res", &v.navigationScale, 1, 4);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("while the camera moves, render the view at 1/N of its resolution");
   if (ImGui::Button("Frame all (F)")) ctx.app.frameAll();
   ImGui::SameLine();
   static std::string shot = "screenshot.png";
