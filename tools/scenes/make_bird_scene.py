@@ -105,7 +105,9 @@ def flight_styling(verts, faces, pins, dirs, group_prefix, min_elevation=True):
         e = math.degrees(math.asin(max(-1.0, min(1.0, dot(d, n_skin)))))
         sel = {'select': 'sphere', 'center': [round(c, 5) for c in p], 'radius': round(0.3 * gap, 5),
                'direction': [round(c, 4) for c in d]}
-        if min_elevation:
+        if min_elevation == 'fixed':
+            sel['elevation_deg'] = round(max(0.0, min(85.0, e)), 2)
+        elif min_elevation:
             sel['min_elevation_deg'] = round(max(0.0, min(85.0, e)), 2)
         out.append(sel)
     return out
@@ -132,12 +134,17 @@ def resample(poly, n):
         out.append([round(poly[i][m] + t * (poly[i + 1][m] - poly[i][m]), 5) for m in range(3)])
     return out
 
-def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeather=True, barb_length=None, **over):
+FTAG = os.environ.get('BIRD_FTAG', '')  # experiments: write feather variants under another name
+
+def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeather=True, barb_length=None, size=None, **over):
     """A bird feather from a library feather. barbs_per_vane sets the barb spacing so each vane has about
     that many barbs (full-geometry triangles ~ 16 per barb plus the shaft): the bird's ~3,150 feathers
     come to ~2.2M triangles at full detail, like the thesis' bird (issues #10, #12)."""
     f = json.load(open(os.path.join(DATA, 'feathers', base + '.json')))
     f['name'] = name
+    if size:  # a larger feather of the same shape: rachis and (below) barbs scaled
+        f['rachis'] = dict(f['rachis'], length=round(f['rachis']['length'] * size, 4))
+        barb_length = (barb_length or f['barbs']['length']) * size
     if barbs_per_vane:
         b = dict(f['barbs'])
         ratio = b['spacing_tip'] / b['spacing_base']
@@ -158,9 +165,10 @@ def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeat
     f['material'] = mat
     for k, v in over.items(): f[k] = v
     os.makedirs(os.path.join(DATA, 'feathers', 'bird'), exist_ok=True)
-    json.dump(f, open(os.path.join(DATA, 'feathers', 'bird', name + '.json'), 'w'), indent=2)
-    return '../feathers/bird/' + name + '.json'
+    json.dump(f, open(os.path.join(DATA, 'feathers', 'bird', name + FTAG + '.json'), 'w'), indent=2)
+    return '../feathers/bird/' + name + FTAG + '.json'
 
+GREATER = float(os.environ.get('BIRD_GREATER', 0))  # greater coverts: size relative to the wing coverts
 BODY_BARBS = int(os.environ.get('BIRD_BODY_BARBS', 15))
 FLIGHT_BARBS = int(os.environ.get('BIRD_FLIGHT_BARBS', 85))
 feathers = {  # body feathers without afterfeathers (hidden under the vanes; they cost a third of the triangles)
@@ -174,6 +182,9 @@ feathers = {  # body feathers without afterfeathers (hidden under the vanes; the
     'rectrix': variant('rectrix', 'rectrix', 'barred_brown', barbs_per_vane=FLIGHT_BARBS, barb_length=2.0),
 }
 
+if GREATER:
+    feathers['greater_covert'] = variant('covert', 'greater_covert', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False,
+                                         barb_length=float(os.environ.get('BIRD_COVERT_W', 1.7)), size=GREATER)
 groups = load_obj_groups(os.path.join(DATA, 'meshes', 'bird.obj'))
 axes = json.load(open(os.path.join(DATA, 'meshes', 'bird.axes.json')))
 DENSITY = float(os.environ.get('BIRD_DENSITY', 1140.0))  # follicles per unit area on body tracts (~3,000 body feathers)
@@ -197,6 +208,13 @@ tracts = []
 for name, kinds, n in body:
     pts = farthest_points(groups[name], n)
     keys = [{'feather': kinds[i % len(kinds)], 'at': [round(c, 5) for c in p]} for i, p in enumerate(pts)]
+    if GREATER and name.startswith('alar'):
+        # Greater coverts: larger key feathers along the wing's trailing border, over the band where the
+        # flight feathers root (real wings have rows of coverts growing larger toward the remiges).
+        for z in (0.45, 0.65, 0.85, 1.05):
+            zs = [c for c in groups[name] if abs(abs(c[2]) - z) < 0.03 and c[1] > 0.15]
+            c = min(zs, key=lambda c: c[0])
+            keys.append({'feather': 'greater_covert', 'at': [round(v, 5) for v in c]})
     grp = [name]
     if ALAR_REMIGES and name.startswith('alar'):  # coverts also over the band where the flight feathers root
         grp.append('remiges_' + name.split('_')[1])
@@ -208,23 +226,39 @@ for name, kinds, n in body:
         t['parameterization'] = {'method': 'projection', 'view_direction': [0, 1, 0]}
     tracts.append(t)
 
-for side, sgn in (('left', 1), ('right', -1)):
+REMEX_SHIFT = float(os.environ.get('BIRD_REMEX_SHIFT', 0.0))
+_vo, _fo = load_obj(os.path.join(DATA, 'meshes', 'bird.obj'))
+def remex_pins(side):
+    """Secondaries and primaries along the wing's axes. With REMEX_SHIFT the follicles move forward
+    (and up) onto the upper side of the band where the flight feathers root (on a real wing they insert
+    on the ulna and manus, inside the wing, not on its trailing edge), so their bases lie over the band."""
     prim = resample(axes['primaries_' + side], 10)
     sec = resample(axes['secondaries_' + side], 10)
+    if REMEX_SHIFT > 0:
+        move = lambda p: [round(c, 5) for c in closest_surface(_vo, _fo, add(p, [REMEX_SHIFT, 0.03, 0.0]), 'remiges_' + side)[0]]
+        prim, sec = [move(p) for p in prim], [move(p) for p in sec]
+    return prim, sec
+
+for side, sgn in (('left', 1), ('right', -1)):
+    prim, sec = remex_pins(side)
     tracts.append({'name': 'remiges_' + side, 'groups': ['remiges_' + side], 'count': 0, 'feather_scale': 0.05,
                    'pinned': [{'at': p} for p in sec + prim],
                    'key_feathers': [{'feather': 'secondary', 'at': sec[0]}, {'feather': 'secondary', 'at': sec[-1]},
                                     {'feather': 'primary', 'at': prim[0]}, {'feather': 'primary', 'at': prim[-1]}],
                    'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
 verts, faces = load_obj(os.path.join(DATA, 'meshes', 'bird.obj'))
+# 'min': flight feathers pack freely above the wing/tail plane; 'fixed': they lie in it (others pack
+# against them, their barbs still lift over the ones under them).
+mode = lambda v: 'fixed' if v == 'fixed' else v == 'min'
+FLIGHT_MODE = mode(os.environ.get('BIRD_FLIGHT_MODE', 'min'))
+TAIL_MODE = mode(os.environ.get('BIRD_TAIL_MODE', 'min'))
 styling = []
 for side, sgn in (('left', 1), ('right', -1)):
-    prim = resample(axes['primaries_' + side], 10)
-    sec = resample(axes['secondaries_' + side], 10)
+    prim, sec = remex_pins(side)
     # Secondaries straight back, primaries sweeping out toward the wing tip.
     dirs = [[-1.0, 0.0, sgn * (0.1 + 0.2 * k / 9)] for k in range(10)]
     dirs += [[-1.0 + 0.55 * k / 9, 0.0, sgn * (0.35 + 0.75 * k / 9)] for k in range(10)]
-    styling += flight_styling(verts, faces, sec + prim, dirs, 'remiges_' + side)
+    styling += flight_styling(verts, faces, sec + prim, dirs, 'remiges_' + side, FLIGHT_MODE)
 rect = resample(axes['tail_edge'], 12)
 # The tail edge runs around the stub's end, where the skin faces straight back: a rectrix pointing back
 # would point along its normal (no tangent direction). Rectrices root on the upper back of the stub
@@ -234,7 +268,7 @@ if TAIL_LIFT > 0:
     rect = [[round(c, 5) for c in closest_surface(verts, faces, add(p, [0.0, TAIL_LIFT, 0.0]), 'caudal')[0]] for p in rect]
 # Rectrices fan out from the tail's end, the outer ones up to 30 degrees from the body axis.
 rdirs = [[-math.cos(a), 0.0, math.sin(a)] for a in (math.radians(30 - 60 * k / 11) for k in range(12))]
-styling += flight_styling(verts, faces, rect, rdirs, 'caudal', os.environ.get('BIRD_TAIL_MIN', '1') == '1')
+styling += flight_styling(verts, faces, rect, rdirs, 'caudal', TAIL_MODE)
 tracts.append({'name': 'rectrices', 'groups': ['caudal'], 'count': 0, 'feather_scale': 0.055,
                'pinned': [{'at': p} for p in rect], 'feather': 'rectrix',
                'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
@@ -243,7 +277,7 @@ tracts.append({'name': 'rectrices', 'groups': ['caudal'], 'count': 0, 'feather_s
 # vane handed to later feathers (and finer barb height fields), feathers see the barbs of the ones under
 # them instead of slipping between samples (full-geometry pairs 3608 -> ~2000); skin samples every
 # 0.004 units (a twentieth of a body feather) keep the small head and wing feathers above the skin.
-PACKING = {'barb_samples': 16, 'key_barbs_per_vane': 12, 'shaft_samples': 24, 'barb_field_bins': 32,
+PACKING = {'conflict_elevation_deg': float(os.environ.get('BIRD_CONFLICT', 88)), 'barb_samples': 16, 'key_barbs_per_vane': 12, 'shaft_samples': 24, 'barb_field_bins': 32,
            'skin_sample_spacing': 0.004, 'styling': styling}
 for kv in os.environ.get('BIRD_PACK', '').split(','):
     if kv: PACKING[kv.split('=')[0]] = json.loads(kv.split('=')[1])
@@ -273,6 +307,14 @@ def edge_vectors(group, sgn, zs, back, wrap, out_z, inner):
                 out.append({'at': [round(x, 4), round(lead[1], 4), round(zz, 4)], 'direction': [-1.0, 0.0, out_z * sgn]})
     return out
 
+LEG_DOWN = float(os.environ.get('BIRD_LEG_DOWN', 0))
+def leg_directions():
+    """Leg (crural) feathers point down the leg toward the foot, as on real birds, instead of back along
+    the body axis (around the leg), so they overhang the leg's end."""
+    if LEG_DOWN <= 0: return {}
+    return {'crural_' + side: {'vectors': [{'at': [-0.45, -0.22, 0.08 * sgn], 'direction': [-0.3, -LEG_DOWN, 0.0]}]}
+            for side, sgn in (('left', 1), ('right', -1))}
+
 vert_groups = []
 for idx, g in faces:
     for i in idx: vert_groups.append((verts[i], g))
@@ -293,7 +335,7 @@ scene = {
     'directions': {
         'axis': body_axis,
         'tracts': {
-            **wing_directions(1, 'left'), **wing_directions(-1, 'right'),
+            **wing_directions(1, 'left'), **wing_directions(-1, 'right'), **leg_directions(),
             'remiges_left': {'vectors': [{'at': [0.0, 0.2, 0.5], 'direction': [-1.0, 0.0, 0.25]},
                                          {'at': [0.0, 0.2, 1.0], 'direction': [-0.6, 0.0, 1.0]}]},
             'remiges_right': {'vectors': [{'at': [0.0, 0.2, -0.5], 'direction': [-1.0, 0.0, -0.25]},
