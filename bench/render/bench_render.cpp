@@ -3,6 +3,8 @@
 // with the alpha + BRDF textures standing in for the removed barbs. Targets: 100% < 0.6 s/frame,
 // 60% < 0.25 s/frame. Also the BRDF table build, the mesh upload and the CPU scratchboard.
 //   bench_render --benchmark_filter=Frame
+// BM_SceneFrame renders the bundled bird (data/scenes/bird.json, evaluated once per level of detail)
+// the same way `pteryla render` does: SceneView on OSMesa, the scene's camera, 1280x720.
 #include <benchmark/benchmark.h>
 
 #include <sys/resource.h>
@@ -11,9 +13,11 @@
 #include <map>
 #include <memory>
 
+#include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/render/osmesa_context.hpp"
 #include "pteryla/render/pattern.hpp"
 #include "pteryla/render/renderer.hpp"
+#include "pteryla/render/scene_view.hpp"
 #include "pteryla/render/scratchboard.hpp"
 #include "pteryla/render/synthetic.hpp"
 
@@ -114,6 +118,37 @@ void BM_Frame(benchmark::State& state) {
 // Args: geometry percent, BRDF per fragment (0: per vertex, the default), occlusion culling (1: on,
 // the default).
 BENCHMARK(BM_Frame)->Args({100, 0, 1})->Args({60, 0, 1})->Args({100, 1, 1})->Args({100, 0, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+
+void BM_SceneFrame(benchmark::State& state) {
+  static std::map<int, std::unique_ptr<pteryla::pipeline::Pipeline>> cache;
+  const int lod = static_cast<int>(state.range(0));
+  auto& p = cache[lod];
+  if (!p) {
+    p = std::make_unique<pteryla::pipeline::Pipeline>(
+        pteryla::pipeline::loadScene(std::string(PTERYLA_DATA_DIR) + "/scenes/bird.json"));
+    p->setLod(static_cast<double>(lod) / 100.0);
+    p->coatMesh();  // evaluate every stage once
+  }
+  static OsMesaContext context{64, 64};
+  SceneView view(context);
+  view.render(*p, 1280, 720);  // warm-up: shaders, textures, uploads
+  const double p0 = processCpu(), t0 = threadCpu();
+  for (auto _ : state) {
+    Image img = view.render(*p, 1280, 720);
+    benchmark::DoNotOptimize(img.rgba.data());
+  }
+  const double frames = static_cast<double>(state.iterations());
+  state.counters["cpu_s"] = (processCpu() - p0) / frames;
+  state.counters["main_thread_s"] = (threadCpu() - t0) / frames;
+  const RenderStats& st = view.renderer().lastStats();
+  state.counters["triangles"] = static_cast<double>(p->coatMesh().mesh.triangleCount());
+  state.counters["feathers"] = static_cast<double>(p->coatMesh().ranges.size());
+  state.counters["drawn_tris"] = static_cast<double>(st.triangles);
+  state.counters["draw_calls"] = static_cast<double>(st.drawCalls);
+  state.counters["peak_rss_MB"] = peakRssMb();
+}
+// Arg: geometry percent.
+BENCHMARK(BM_SceneFrame)->Arg(100)->Arg(60)->Arg(20)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 void BM_SetCoat(benchmark::State& state) {
   const SyntheticCoat& c = bird(100);
