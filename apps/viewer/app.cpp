@@ -435,6 +435,8 @@ void App::captureScreenshot(int fbw, int fbh, bool afterUi) {
     return;
   }
   if (framesDrawn_ + 1 < options_.frames && !options_.screenshot.empty() && script_.empty()) return;
+  // A view drawn while the camera moved has a reduced resolution: wait for the full one.
+  if (!afterUi && viewImage_.width != viewPixels_.x && doc_.scene().render.style != "scratchboard") return;
   shotWanted_ = false;
   try {
     render::Image img;
