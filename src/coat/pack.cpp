@@ -96,6 +96,15 @@ struct LocalFeather {
     if (k < 0 || k >= kOutlineBins) return false;
     return r >= rLo[k] && r <= rHi[k];
   }
+  // Does the ball of radius rho around (b, r) meet the outline?
+  bool nearOutline(double b, double r, double rho) const {
+    const double w = (yMax - yMin) / kOutlineBins;
+    const int k0 = std::max(0, static_cast<int>(std::floor((b - rho - yMin) / w)));
+    const int k1 = std::min(kOutlineBins - 1, static_cast<int>(std::floor((b + rho - yMin) / w)));
+    for (int k = k0; k <= k1; ++k)
+      if (r + rho >= rLo[k] && r - rho <= rHi[k]) return true;
+    return false;
+  }
 };
 
 // Fills the vane outline from the shaft polyline and the key barbs, with barbs interpolated between
@@ -292,6 +301,16 @@ struct Candidate {
   double rad;       // thickness radius of the point
   bool skin;
   uint32_t src;     // feather the point belongs to (UINT32_MAX: skin)
+  // Skin samples stand for a patch of the surface (below): its radius, the unit normal (follicle frame)
+  // and the sine bound on how far the patch's faces turn away from that normal.
+  double rho = 0, cone = 0;
+  dvec3 normal{0};
+  // Largest rise of the patch over its centre along unit direction a (follicle frame): rho times the sine
+  // of the angle between a and the patch's faces' normals (a face tilted toward a rises along it).
+  double rise(const dvec3& a) const {
+    const double c = glm::dot(a, normal);
+    return rho * std::min(1.0, std::sqrt(std::max(0.0, 1 - c * c)) + cone);
+  }
 };
 
 struct Scratch {
@@ -336,8 +355,13 @@ struct Context {
       rc.grid.query(centre - dvec3(q), centre + dvec3(q), [&](uint32_t item) { f(rc.members[item]); });
     }
   }
-  // skin samples
-  std::vector<glm::dvec3> skinPts;
+  // Skin samples. Each stands for the patch of the skin around it: the points of the faces holding the
+  // sample within skinRho of it (every skin point lies in some sample's patch), with the faces' normals
+  // within skinCone (a sine bound) of skinNormal. Packing against the patches instead of the points keeps
+  // feathers off the skin between the samples, at any sample spacing.
+  std::vector<glm::dvec3> skinPts, skinNormal;
+  std::vector<float> skinRho, skinCone;
+  double skinRhoMax = 0;
   detail::PointGrid skinGrid;
   std::vector<double> fixed;
   std::vector<double> minElevation;  // per feather from styling (NaN = none); empty = none
@@ -560,6 +584,41 @@ BarbFit fitBarb(const dvec3* cvs, size_t n, double len, double sExt, const doubl
   return fit;
 }
 
+// Rise of a skin patch along a key barb: the patch's points on the line through the sample along the
+// barb (in the patch's tangent plane: q + x w / |w|, |x| <= rho; w = the barb direction in that plane)
+// rise over the sample by g.w x / |w| (g = the barb's up direction in the plane). Returns the largest rise
+// over the points whose position along the barb falls in [lo, hi] relative to the sample and that lie
+// outside the base ball (radius baseR around the follicle, the origin of q) and in front of the follicle
+// (t = q.x >= 0), or -inf when there are none.
+// Across the barb, the samples between the neighbouring key barbs' planes stand in.
+double lineMax(const dvec3& q, const dvec3& g, const dvec3& w, double wl, double rho, double lo, double hi,
+               double baseR) {
+  if (wl < 1e-12) return (lo <= 0 && hi >= 0) ? 0.0 : -kInf;
+  double xa = std::max(-rho, lo / wl), xb = std::min(rho, hi / wl);
+  // Only the footprint counts (t >= 0: skin behind the follicle is not under the feather).
+  const double wt = w.x / wl;
+  if (wt > 1e-12) xa = std::max(xa, -q.x / wt);
+  else if (wt < -1e-12) xb = std::min(xb, -q.x / wt);
+  if (xa > xb) return -kInf;
+  const double gw = glm::dot(g, w) / wl;
+  // |q + x w/|w||^2 = baseR^2 at x1 <= x2: the points in (x1, x2) are in the base ball.
+  const double qw = glm::dot(q, w) / wl, qq = glm::dot(q, q);
+  const double disc = qw * qw - (qq - baseR * baseR);
+  double best = -kInf;
+  auto take = [&](double a, double b) {
+    if (a > b) return;
+    best = std::max(best, gw >= 0 ? gw * b : gw * a);
+  };
+  if (disc <= 0) {
+    take(xa, xb);
+  } else {
+    const double sq = std::sqrt(disc);
+    take(xa, std::min(xb, -qw - sq));
+    take(std::max(xa, -qw + sq), xb);
+  }
+  return best;
+}
+
 struct Output {
   std::vector<double>& elevation;
   std::vector<feather::FeatherParams>& params;
@@ -586,7 +645,6 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
   // Candidate points in the follicle frame (6.3.2: "the data points of the surrounding feathers").
   S.cand.clear();
   const dvec3 T = F.tangent, B = F.binormal, N = F.normal, O = F.origin;
-  const double R2 = L.reach * L.reach;
   // Sphere (centre c in the follicle frame, radius r) can touch the footprint?
   auto sphereIn = [&](const dvec3& c, double r) {
     return c.x + r >= 0 && c.x - r <= L.reach && c.y + r >= L.yMin && c.y - r <= L.yMax &&
@@ -629,21 +687,32 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     }
     box.lo = glm::max(box.lo, O - dvec3(L.reach));
     box.hi = glm::min(box.hi, O + dvec3(L.reach));
+    const double pad = ctx.skinRhoMax;
+    box.lo -= dvec3(pad);
+    box.hi += dvec3(pad);
     ctx.skinGrid.query(
-        box.lo, box.hi, [&](const dvec3& centre, double half) { return sphereIn(frame(centre), half); },
+        box.lo, box.hi, [&](const dvec3& centre, double half) { return sphereIn(frame(centre), half + pad); },
         [&](uint32_t k) {
+          // The patch around the sample (radius rho) may reach into the footprint.
+          const double rho = ctx.skinRho[k];
           const dvec3 r = ctx.skinPts[k] - O;
           const double t = glm::dot(r, T);
-          if (t < 0 || t > L.reach) return;
+          if (t < 0 || t > L.reach + rho) return;  // patches centred behind the follicle lie at its base
           const double b = glm::dot(r, B);
-          if (b < L.yMin || b > L.yMax) return;
+          if (b < L.yMin - rho || b > L.yMax + rho) return;
           const double n = glm::dot(r, N);
           const double d2 = t * t + b * b + n * n;
+          if (d2 > (L.reach + rho) * (L.reach + rho)) return;
           // The calamus sits in its follicle: skin within the base allowance is not an obstacle (the
           // checker exempts the same zone).
-          if (d2 > R2 || d2 < base2) return;
-          if (!L.inOutline(b, std::sqrt(t * t + n * n))) return;
-          S.cand.push_back({t, b, n, 0.0, true, UINT32_MAX});
+          if (d2 < base2) return;
+          if (!L.nearOutline(b, std::sqrt(t * t + n * n), rho)) return;
+          Candidate c{t, b, n, 0.0, true, UINT32_MAX};
+          c.rho = rho;
+          c.cone = ctx.skinCone[k];
+          const dvec3& nw = ctx.skinNormal[k];
+          c.normal = dvec3(glm::dot(nw, T), glm::dot(nw, B), glm::dot(nw, N));
+          S.cand.push_back(c);
         });
   }
   st.candidatePoints += S.cand.size();
@@ -664,23 +733,47 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     std::vector<double>& bestKey = S.plane;  // pseudo-angle of S.best per bin
     bestKey.assign(bins, -1.0);
     const double band = o.shaftBand * L.vaneHalf;
-    const double r2Min = 1e-24 * rMax * rMax, r2Max = rMax * rMax;
+    const double r2Min = 1e-24 * rMax * rMax;
     for (const Candidate& c : S.cand) {
       const double r2 = c.t * c.t + c.n * c.n;
-      if (!(r2 > r2Min) || r2 > r2Max) continue;
+      if (!(r2 > r2Min) || r2 > (rMax + c.rho) * (rMax + c.rho)) continue;
       const double r = std::sqrt(r2);
-      const int b = std::min(bins - 1, static_cast<int>(r / cell));
-      if (S.psiMin[b] == kInf) continue;  // beyond the shaft's reach
-      if (c.b < S.yLo[b] - band - c.rad || c.b > S.yHi[b] + band + c.rad) continue;
-      const double gap = c.skin ? (S.shaftRadBin[b] + ctx.skinClearance) * std::min(1.0, r / ramp)
-                                : c.rad + S.shaftRadBin[b] + ctx.clearance;
+      // A skin patch covers the radii r +- rho: every bin it reaches gets its highest angle.
+      const int b0 = std::min(bins - 1, static_cast<int>(std::max(0.0, r - c.rho) / cell));
+      const int b1 = std::min(bins - 1, static_cast<int>((r + c.rho) / cell));
+      double radMax = 0;
+      for (int b = b0; b <= b1; ++b) radMax = std::max(radMax, S.shaftRadBin[b]);
+      double gap;
+      if (c.skin) {
+        // Clearance ramps up over the base zone (the calamus sits in its follicle; the checker exempts it).
+        const double rampF = std::min(1.0, std::max(0.0, r - c.rho) / ramp);
+        gap = (radMax + ctx.skinClearance) * rampF;
+        if (c.rho > 0) {
+          // The tangent from the follicle to the patch (grown by gap), turned by delta from the ray to its
+          // centre, touches it where r sin(delta) = gap + the patch's extent along the tangent's normal
+          // a(delta) (rise): two fixed-point steps from delta = 0, keeping the largest extent seen.
+          const double ct = c.t / r, cn = c.n / r;
+          double extra = c.rise(dvec3(-cn, 0.0, ct)) * rampF;
+          for (int it = 0; it < 2; ++it) {
+            const double sd0 = std::min(1.0, (gap + extra) / r), cd0 = std::sqrt(1 - sd0 * sd0);
+            extra = std::max(extra, c.rise(dvec3(-(cn * cd0 + ct * sd0), 0.0, ct * cd0 - cn * sd0)) * rampF);
+          }
+          gap += extra;
+        }
+      } else {
+        gap = c.rad + radMax + ctx.clearance;
+      }
       const double sd = std::min(1.0, gap / r), cd = std::sqrt(1 - sd * sd);
       // (t, n) turned up by the clearance angle delta = asin(gap / r).
       const double vx = c.t * cd - c.n * sd, vy = c.t * sd + c.n * cd;
       const double pa = pseudoAngle(vx, vy);
-      if (pa > bestKey[b]) {
-        bestKey[b] = pa;
-        S.best[b] = {vx, vy};
+      for (int b = b0; b <= b1; ++b) {
+        if (S.psiMin[b] == kInf) continue;  // beyond the shaft's reach
+        if (c.b < S.yLo[b] - band - c.rad - c.rho || c.b > S.yHi[b] + band + c.rad + c.rho) continue;
+        if (pa > bestKey[b]) {
+          bestKey[b] = pa;
+          S.best[b] = {vx, vy};
+        }
       }
     }
     // A bin that asks for more than conflictElevation comes from a layer-order conflict (a neighbour
@@ -739,6 +832,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     const double sideTol = 0.5 * ctx.coat.params[i].rachisWidth;
     for (const Candidate& c : S.cand) {
       const dvec3 q(c.t, c.b, c.n);
+      const double rho = c.rho;  // a skin patch reaches rho beyond its sample in every direction
       for (int v = 0; v < 2; ++v) {
         const size_t first = v == 0 ? 0 : L.leftKeys, last = v == 0 ? std::min<size_t>(L.leftKeys, nk) : nk;
         if (first >= last) continue;
@@ -753,13 +847,32 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
           const dvec3 rq = q - pk[kk].root;
           if (side * glm::dot(rq, pk[kk].left) < -sideTol) continue;
           const double s = glm::dot(rq, pk[kk].u);
-          if (s < 0 || s > k.sExt) continue;
+          if (s < -rho || s > k.sExt + rho) continue;
           const double h = glm::dot(rq, pk[kk].d);
-          const double gap = c.skin ? ctx.skinClearance * std::min(1.0, (k.rootDist + s) / ramp) : c.rad + ctx.clearance;
-          const int b = std::min(fb - 1, static_cast<int>(s * fb / k.sExt));
-          double& slot = S.bh[kk * fb + b];
-          slot = std::max(slot, h + gap);
-          if (o.captureFields) S.bhRaw[kk * fb + b] = std::max(S.bhRaw[kk * fb + b], h);
+          if (!c.skin) {
+            const int b = std::max(0, std::min(fb - 1, static_cast<int>(s * fb / k.sExt)));
+            double& slot = S.bh[kk * fb + b];
+            slot = std::max(slot, h + c.rad + ctx.clearance);
+            if (o.captureFields) S.bhRaw[kk * fb + b] = std::max(S.bhRaw[kk * fb + b], h);
+            continue;
+          }
+          // A skin patch: per bin, the highest point of the patch along the barb whose position falls in the
+          // bin (lineMax), plus rho x cone for faces turned away from the mean normal.
+          const double bcell = k.sExt / fb;
+          const double baseR = o.baseAllowance * L.totalLength;
+          const double rampF = std::min(1.0, (k.rootDist + std::max(0.0, s - rho)) / ramp);
+          const dvec3 g = pk[kk].d - glm::dot(pk[kk].d, c.normal) * c.normal;
+          const dvec3 wv = pk[kk].u - glm::dot(pk[kk].u, c.normal) * c.normal;
+          const double wl = glm::length(wv);
+          const int b0 = std::max(0, std::min(fb - 1, static_cast<int>(std::floor((s - rho * wl) / bcell))));
+          const int b1 = std::max(0, std::min(fb - 1, static_cast<int>(std::floor((s + rho * wl) / bcell))));
+          for (int b = b0; b <= b1; ++b) {
+            const double top = lineMax(q, g, wv, wl, rho, b * bcell - s, (b + 1) * bcell - s, baseR);
+            if (top == -kInf) continue;
+            double& slot = S.bh[kk * fb + b];
+            slot = std::max(slot, h + top + (ctx.skinClearance + rho * c.cone) * rampF);
+            if (o.captureFields) S.bhRaw[kk * fb + b] = std::max(S.bhRaw[kk * fb + b], h + top);
+          }
         }
       }
     }
@@ -1052,6 +1165,72 @@ void setup(Context& ctx) {
         PTERYLA_CHECK(q == base + faceOff[f + 1], "skin sample count mismatch");
       }
     });
+    // Patches. A point of face f lies in the sub-triangle of f's m-subdivision (longest edge le / m,
+    // covering radius <= le / (m sqrt 3)); a corner of that sub-triangle on an edge of f may be replaced by
+    // the nearest sample of that edge, at most half an edge step away.
+    std::vector<double> faceRho(nf);
+    for (size_t f = 0; f < nf; ++f) {
+      const auto& t = sk.faces[f];
+      double le = 0, edgeHalf = 0;
+      for (int c = 0; c < 3; ++c) {
+        const double l = glm::length(sk.positions[t[(c + 1) % 3]] - sk.positions[t[c]]);
+        le = std::max(le, l);
+        edgeHalf = std::max(edgeHalf, 0.5 * l / segs(l));
+      }
+      faceRho[f] = (le / faceN[f] / std::sqrt(3.0) + edgeHalf) * (1 + 1e-9);
+    }
+    ctx.skinNormal.assign(ctx.skinPts.size(), dvec3(0));
+    ctx.skinRho.assign(ctx.skinPts.size(), 0.0f);
+    ctx.skinCone.assign(ctx.skinPts.size(), 0.0f);
+    auto setPatch = [&](size_t q, const uint32_t* faces, size_t count) {
+      dvec3 nsum(0);
+      double rho = 0;
+      for (size_t k = 0; k < count; ++k) {
+        nsum += sk.faceNormals[faces[k]];
+        rho = std::max(rho, faceRho[faces[k]]);
+      }
+      const double l = glm::length(nsum);
+      const dvec3 nrm = l > 1e-12 ? nsum / l : sk.faceNormals[faces[0]];
+      double cone = 0;
+      for (size_t k = 0; k < count; ++k) {
+        const dvec3 x = glm::cross(nrm, sk.faceNormals[faces[k]]);
+        // sine of the angle (or 1 past 90 degrees)
+        cone = std::max(cone, glm::dot(nrm, sk.faceNormals[faces[k]]) < 0 ? 1.0 : glm::length(x));
+      }
+      ctx.skinNormal[q] = nrm;
+      ctx.skinRho[q] = static_cast<float>(rho * (1 + 1e-6));
+      ctx.skinCone[q] = static_cast<float>(std::min(1.0, cone * (1 + 1e-6) + 1e-9));
+    };
+    {
+      size_t q = 0;
+      std::vector<uint32_t> inc;
+      for (size_t v = 0; v < sk.positions.size(); ++v) {
+        if (!used[v]) continue;
+        inc.clear();
+        if (!sk.vertexFaceOffsets.empty()) {
+          for (uint32_t k = sk.vertexFaceOffsets[v]; k < sk.vertexFaceOffsets[v + 1]; ++k) inc.push_back(sk.vertexFaces[k]);
+        } else {
+          for (uint32_t f = 0; f < nf; ++f)
+            if (sk.faces[f][0] == v || sk.faces[f][1] == v || sk.faces[f][2] == v) inc.push_back(f);
+        }
+        setPatch(q++, inc.data(), inc.size());
+      }
+    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nf, 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t f = r.begin(); f < r.end(); ++f) {
+        size_t q = base + faceOff[f];
+        const uint32_t self = static_cast<uint32_t>(f);
+        for (int c = 0; c < 3; ++c) {
+          const int32_t nb = sk.faceNeighbors.empty() ? -1 : sk.faceNeighbors[f][c];
+          if (!(nb < 0 || static_cast<size_t>(nb) > f)) continue;
+          const int m = segs(glm::length(sk.positions[sk.faces[f][(c + 1) % 3]] - sk.positions[sk.faces[f][c]]));
+          const uint32_t two[2] = {self, static_cast<uint32_t>(nb < 0 ? self : static_cast<uint32_t>(nb))};
+          for (int k = 1; k < m; ++k) setPatch(q++, two, 2);
+        }
+        for (; q < base + faceOff[f + 1]; ++q) setPatch(q, &self, 1);
+      }
+    });
+    for (float r : ctx.skinRho) ctx.skinRhoMax = std::max(ctx.skinRhoMax, static_cast<double>(r));
     ctx.skinGrid.build(ctx.skinPts, std::max(0.2 * medReach, 2 * h));
   }
 }

@@ -144,6 +144,7 @@ TEST(FlowOrder, TwoTractBorderPacksWithFewerIntersectionsThanTractOrder) {
   // Measured: 390 packed vs 2371 unpacked pairs. Not yet met here: issue #8's 95% and 0 skin penetrations
   // (drooping barb tips of feathers lying almost flat dip between the skin samples: 31 vertices).
   EXPECT_EQ(before.skinPenetrations, 0u);
+  EXPECT_EQ(after.skinPenetrations, 0u) << "packed vertices below the flat skin";
   EXPECT_GT(before.intersectingPairs, 1000u);
   EXPECT_LE(after.intersectingPairs * 5, before.intersectingPairs)  // >= 80% fewer
       << after.intersectingPairs << " vs " << before.intersectingPairs;
@@ -188,4 +189,53 @@ TEST(StyleMinElevation, SelectedFeathersPackAtOrAboveTheBoundOthersUnchangedBelo
   ASSERT_TRUE(p.minElevation.has_value());
   EXPECT_NEAR(*p.minElevation, 30 * 3.14159265358979323846 / 180, 1e-12);
   EXPECT_NEAR(styleSelectionToJson(p)["min_elevation_deg"].get<double>(), 30.0, 1e-9);
+}
+
+// Property: on a curved skin (a torus: convex outside, saddle-shaped inside), no packed vertex lies below
+// the skin outside the exempt base zone, whatever the skin sample spacing: the packer keeps feathers off
+// the skin between its samples (each sample stands for the patch of skin around it), so coarse samples
+// cost tightness, never penetrations. The unpacked coat (lying flat) does go through the skin.
+TEST(PackSkin, NoVertexBelowACurvedSkinAtAnySampleSpacing) {
+  const double R = 1.0, r = 0.4;
+  const SkinMesh skin = makeTorus(40, 20, R, r);
+  CoatFeathers coat;
+  const feather::FeatherParams p = packtest::contourFeather(0.3 / 0.42);
+  const int nu = 36, nv = 14;
+  std::vector<double> key;
+  for (int a = 0; a < nu; ++a)
+    for (int b = 0; b < nv; ++b) {
+      const uint32_t id = static_cast<uint32_t>(coat.size());
+      const double u = 2 * 3.14159265358979323846 * (a + 0.5 * (b % 2) + 0.2 * hashUniform(11, id, 0)) / nu;
+      const double v = 2 * 3.14159265358979323846 * (b + 0.2 * hashUniform(11, id, 1)) / nv;
+      const dvec3 q((R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v));
+      const SurfacePoint sp = closestSurfacePoint(skin, q);
+      FeatherFrame f;
+      f.origin = pointAt(skin, sp);
+      f.normal = normalAt(skin, sp.face, sp.bary);
+      const dvec3 along(-std::sin(u), std::cos(u), 0.0);  // around the ring
+      f.tangent = glm::normalize(along - glm::dot(along, f.normal) * f.normal);
+      f.binormal = glm::cross(f.normal, f.tangent);
+      coat.follicle.push_back(id);
+      coat.tract.push_back(0);
+      coat.params.push_back(p);
+      coat.frames.push_back(f);
+      coat.age.push_back(1.0);
+      coat.present.push_back(1);
+      key.push_back(-u);  // upstream first: feathers point toward growing u
+    }
+  coat.layerOrder = orderByKey(key);
+  CheckOptions co;
+  co.coverage = false;
+  setFeatherBases(co, coat, PackOptions{}.baseAllowance);
+  const TriMesh flat = proxyCoatMesh(coat, std::vector<double>(coat.size(), 0.0), coat.params);
+  EXPECT_GT(check(skin, {}, flat, co).skinPenetrations, 100u);
+  for (double spacing : {0.0, 0.03, 0.1}) {
+    PackOptions o;
+    o.skinSampleSpacing = spacing;
+    const PackResult res = pack(skin, coat, o);
+    const TriMesh packed = proxyCoatMesh(coat, res.elevation, res.packedParams);
+    const CheckResult c = check(skin, {}, packed, co);
+    EXPECT_EQ(c.skinPenetrations, 0u) << "skin sample spacing " << spacing;
+    EXPECT_GT(c.samplePoints, 10000u);
+  }
 }
