@@ -202,7 +202,11 @@ body = [  # tract, feather types for its key feathers (cycled), key count
 # long rests on the next rows at a low angle; 3.6 stood them up to ~55 deg), longer on the wing coverts
 # (flat, wide surfaces) and short on the leg stubs, whose feathers otherwise reach the other leg.
 SPACINGS = {'body': float(os.environ.get('BIRD_SPACINGS', 2.4)), 'alar': float(os.environ.get('BIRD_ALAR_SPACINGS', 2.8)),
-            'crural': float(os.environ.get('BIRD_CRURAL_SPACINGS', 1.6))}
+            'crural': float(os.environ.get('BIRD_CRURAL_SPACINGS', 1.6)),
+            'capital': float(os.environ.get('BIRD_CAPITAL_SPACINGS', 3.0)), 'humeral': float(os.environ.get('BIRD_HUMERAL_SPACINGS', 3.0))}
+SPACINGS.update(femoral=2.8, ventral=2.7)  # a little longer on the flanks and belly: fewer bare gaps between rows
+for k in ('femoral', 'ventral'):
+    if os.environ.get('BIRD_%s_SPACINGS' % k.upper()): SPACINGS[k] = float(os.environ['BIRD_%s_SPACINGS' % k.upper()])
 ALAR_REMIGES = os.environ.get('BIRD_ALAR_REMIGES', '0') == '1'
 tracts = []
 for name, kinds, n in body:
