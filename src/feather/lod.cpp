@@ -1,6 +1,8 @@
-// Barb collapse order for feather level of detail, Streit 2003, 5.3 (Fig. 5.8): key barbs kept to the
-// end, barbs between them collapsed in a dispersed, divide-and-conquer order, those nearest key barbs
-// last.
+// Barb collapse order for feather level of detail, Streit 2003, 5.3 (Fig. 5.8): vane ends and split
+// borders kept at every level, key barbs kept to the end after them, barbs between them collapsed in a
+// dispersed, divide-and-conquer order, those nearest key barbs last. Key barbs rank among themselves by
+// the same divide and conquer, so a feather with many key barbs (e.g. the packer's refined ones) still
+// reaches low levels with a dispersed subset of them.
 #include "pteryla/feather/lod.hpp"
 
 #include <algorithm>
@@ -37,7 +39,30 @@ struct Scratch {
   std::vector<uint32_t> keyDist;
   std::vector<uint8_t> pinned;
   std::vector<Interval> heap;
+  std::vector<uint32_t> seq;  // per vane: anchors and key barbs in barb order (global barb indices)
 };
+
+// Pops the widest interval first and ranks its middle element, pushing both halves, until the heap is
+// empty. `at(i)` maps an interval position to the barb index it ranks.
+template <class At>
+void divideAndConquer(std::vector<Interval>& heap, std::vector<uint32_t>& rank, uint32_t& next, const At& at,
+                      const std::vector<uint32_t>& keyDist) {
+  std::make_heap(heap.begin(), heap.end(), HeapLess());
+  while (!heap.empty()) {
+    std::pop_heap(heap.begin(), heap.end(), HeapLess());
+    const Interval iv = heap.back();
+    heap.pop_back();
+    const uint32_t m = iv.mid();
+    rank[at(m)] = next++;
+    for (const auto& [a, b] : {std::pair<uint32_t, uint32_t>{iv.a, m}, std::pair<uint32_t, uint32_t>{m, iv.b}}) {
+      if (b - a < 2) continue;
+      Interval sub{b - a, 0, a, b};
+      sub.keyDist = keyDist.empty() ? 0 : keyDist[at(sub.mid())];
+      heap.push_back(sub);
+      std::push_heap(heap.begin(), heap.end(), HeapLess());
+    }
+  }
+}
 
 }  // namespace
 
@@ -50,6 +75,7 @@ void computeLodOrder(const FeatherCurves& c, LodOrder& out) {
   s.keyDist.assign(n, std::numeric_limits<uint32_t>::max());
   s.pinned.assign(n, 0);
   s.heap.clear();
+  s.seq.clear();
 
   // Vane runs: maximal ranges of barbs with the same part and vane (parts are contiguous, vanes too).
   auto sameVane = [&](size_t i, size_t j) {
@@ -69,44 +95,42 @@ void computeLodOrder(const FeatherCurves& c, LodOrder& out) {
       d = c.barbs[i].isKey ? 0 : (d == std::numeric_limits<uint32_t>::max() ? d : d + 1);
       s.keyDist[i] = std::min(s.keyDist[i], d);
     }
+    // Anchors (vane ends, split borders) are pinned; key barbs are kept before every other barb.
     for (size_t i = begin; i < end; ++i) {
       const BarbCurve& b = c.barbs[i];
       const bool before = i > begin && c.barbs[i - 1].splitAfter;
-      if (i == begin || i + 1 == end || b.isKey || b.isSplitEdge || b.splitAfter || before) s.pinned[i] = 1;
-    }
-    size_t prev = begin;
-    for (size_t i = begin + 1; i < end; ++i) {
-      if (!s.pinned[i]) continue;
-      if (i - prev >= 2) {
-        Interval iv{static_cast<uint32_t>(i - prev), 0, static_cast<uint32_t>(prev), static_cast<uint32_t>(i)};
-        iv.keyDist = s.keyDist[iv.mid()];
-        s.heap.push_back(iv);
-      }
-      prev = i;
+      if (i == begin || i + 1 == end || b.isSplitEdge || b.splitAfter || before) s.pinned[i] = 1;
+      else if (b.isKey) s.pinned[i] = 2;
+      if (s.pinned[i]) s.seq.push_back(static_cast<uint32_t>(i));
     }
     begin = end;
   }
 
   uint32_t next = 0;
   for (size_t i = 0; i < n; ++i)
-    if (s.pinned[i]) out.rank[i] = next++;
+    if (s.pinned[i] == 1) out.rank[i] = next++;
   out.pinned = next;
 
-  std::make_heap(s.heap.begin(), s.heap.end(), HeapLess());
-  while (!s.heap.empty()) {
-    std::pop_heap(s.heap.begin(), s.heap.end(), HeapLess());
-    const Interval iv = s.heap.back();
-    s.heap.pop_back();
-    const uint32_t m = iv.mid();
-    out.rank[m] = next++;
-    for (const auto& [a, b] : {std::pair<uint32_t, uint32_t>{iv.a, m}, std::pair<uint32_t, uint32_t>{m, iv.b}}) {
-      if (b - a < 2) continue;
-      Interval sub{b - a, 0, a, b};
-      sub.keyDist = s.keyDist[sub.mid()];
-      s.heap.push_back(sub);
-      std::push_heap(s.heap.begin(), s.heap.end(), HeapLess());
-    }
+  // Key barbs: intervals (in key-barb count) between consecutive anchors of the same vane.
+  size_t prev = 0;
+  for (size_t j = 1; j < s.seq.size(); ++j) {
+    if (s.pinned[s.seq[j]] != 1) continue;
+    if (j - prev >= 2) s.heap.push_back(Interval{static_cast<uint32_t>(j - prev), 0, static_cast<uint32_t>(prev),
+                                                 static_cast<uint32_t>(j)});
+    prev = j;
   }
+  static const std::vector<uint32_t> kNoKeyDist;
+  divideAndConquer(s.heap, out.rank, next, [&](uint32_t j) { return s.seq[j]; }, kNoKeyDist);
+
+  // The other barbs: intervals (in barbs) between consecutive anchors or key barbs of the same vane.
+  for (size_t j = 1; j < s.seq.size(); ++j) {
+    const uint32_t a = s.seq[j - 1], b = s.seq[j];
+    if (b - a < 2 || !sameVane(a, b)) continue;
+    Interval iv{b - a, 0, a, b};
+    iv.keyDist = s.keyDist[iv.mid()];
+    s.heap.push_back(iv);
+  }
+  divideAndConquer(s.heap, out.rank, next, [](uint32_t i) { return i; }, s.keyDist);
   PTERYLA_CHECK(next == n, "every barb gets a collapse rank");
 }
 

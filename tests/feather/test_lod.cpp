@@ -55,8 +55,11 @@ TEST(FeatherLod, OrderIsPermutationWithPinnedBarbsFirst) {
     const bool last = i + 1 == c.barbs.size() || c.barbs[i + 1].vane != b.vane || c.barbs[i + 1].part != b.part;
     keys += b.isKey;
     splitEdges += b.isSplitEdge;
-    if (b.isKey || b.isSplitEdge || first || last) { EXPECT_LT(o.rank[i], o.pinned) << "barb " << i; }
+    if (b.isSplitEdge || first || last) { EXPECT_LT(o.rank[i], o.pinned) << "barb " << i; }
   }
+  // Key barbs come right after the pinned ones: kept at every level that keeps more than the pinned.
+  for (size_t i = 0; i < c.barbs.size(); ++i)
+    if (c.barbs[i].isKey && o.rank[i] >= o.pinned) { EXPECT_LT(o.rank[i], o.pinned + keys) << "barb " << i; }
   EXPECT_EQ(keys, 3u);
   EXPECT_GE(splitEdges, 4u);
   EXPECT_LT(o.pinned, c.barbs.size() / 4);
@@ -98,15 +101,40 @@ TEST(FeatherLod, WidestGapFirstThenNearestKeyBarb) {
   c.barbBegin = {0};
   c.barbEnd = {42};
   const LodOrder o = computeLodOrder(c);
-  ASSERT_EQ(o.pinned, 5u);  // L0, L10 (key), L20, R0, R20
+  ASSERT_EQ(o.pinned, 4u);  // L0, L20, R0, R20; then the key barb L10
   std::vector<uint32_t> byRank(c.barbs.size());
   for (size_t i = 0; i < c.barbs.size(); ++i) byRank[o.rank[i]] = static_cast<uint32_t>(i);
+  EXPECT_EQ(byRank[4], 10u);
   EXPECT_EQ(byRank[5], 21u + 10u);  // widest interval: the whole right vane
   // Now four intervals of 10: the left ones (middles 5 from the key barb) before the right ones.
   EXPECT_EQ(byRank[6], 5u);
   EXPECT_EQ(byRank[7], 15u);
   EXPECT_EQ(byRank[8], 21u + 5u);
   EXPECT_EQ(byRank[9], 21u + 15u);
+}
+
+TEST(FeatherLod, ManyKeyBarbsStillReachLowLevelsDispersed) {
+  // A vane of 31 barbs whose every barb but the ends is a key barb (the packer refines key barbs, so
+  // packed feathers can have nearly as many key barbs as barbs): level f keeps about f x barbs, and the
+  // key barbs kept at a low level are spread over the vane, not bunched at its base.
+  FeatherCurves c;
+  for (int i = 0; i <= 30; ++i) {
+    BarbCurve b;
+    b.rp = static_cast<float>(i / 30.0);
+    b.isKey = true;
+    c.barbs.push_back(b);
+  }
+  c.barbBegin = {0};
+  c.barbEnd = {31};
+  const LodOrder o = computeLodOrder(c);
+  EXPECT_EQ(o.pinned, 2u);
+  EXPECT_EQ(keptBarbCount(o, 0.2), 6u);
+  EXPECT_EQ(keptBarbCount(o, 0.6), 19u);
+  std::vector<uint32_t> kept;
+  for (size_t i = 0; i < c.barbs.size(); ++i)
+    if (o.rank[i] < keptBarbCount(o, 0.2)) kept.push_back(static_cast<uint32_t>(i));
+  ASSERT_EQ(kept.size(), 6u);
+  for (size_t i = 1; i < kept.size(); ++i) EXPECT_GE(kept[i] - kept[i - 1], 3u) << "kept barbs bunched";
 }
 
 TEST(FeatherLod, KeptCountAndSegmentsAreMonotone) {
@@ -185,7 +213,12 @@ TEST(FeatherLod, KeyBarbVerticesPresentAtEveryLevel) {
   const LodOrder order = computeLodOrder(c);
   const MeshOptions opt;
   std::vector<glm::vec3> line;
-  for (double f : {1.0, 0.7, 0.5, 0.3, 0.2, 0.1, 0.05, 0.01}) {
+  size_t keys = 0;
+  for (const BarbCurve& b : c.barbs) keys += b.isKey && !b.isSplitEdge;
+  // Key barbs rank right after the pinned barbs: present at every level that keeps at least that many.
+  const double floorLevel = double(order.pinned + keys) / double(c.barbs.size());
+  ASSERT_LT(floorLevel, 0.1);
+  for (double f : {1.0, 0.7, 0.5, 0.3, 0.2, 0.1, floorLevel}) {
     const TriMesh m = meshAt(c, order, f, opt);
     std::set<std::tuple<float, float, float>> verts;
     for (const auto& v : m.positions) verts.insert({v.x, v.y, v.z});

@@ -4,10 +4,14 @@
 // the order is fixed once per feather definition so picking a level is a comparison per barb.
 //
 // Collapse order (computed by computeLodOrder, "rank" 0 = kept longest):
-//  1. pinned, kept at every level: key barbs (BarbCurve::isKey), the first and last barb of every vane
-//     and the barbs bordering a split (so split boundaries and the vane ends never move);
+//  1. pinned, kept at every level: the first and last barb of every vane and the barbs bordering a split
+//     (so split boundaries and the vane ends never move);
+//  1b. then the key barbs (BarbCurve::isKey), ranked among themselves by the divide and conquer of step 2
+//     over the key barbs between consecutive pinned ones: every level that keeps more barbs than pinned
+//     + key barbs keeps all key barbs (the thesis' rule), and a feather with many key barbs (the packer
+//     refines them, packing.md) still reaches low levels, keeping a dispersed subset of them;
 //  2. then, across all vanes of all parts at once, divide and conquer: the interval (in barb count)
-//     between consecutive kept barbs that is widest is split at its middle barb. Equal widths go to
+//     between consecutive pinned or key barbs that is widest is split at its middle barb. Equal widths go to
 //     the interval whose middle barb is nearest a key barb, so barbs near key barbs are collapsed last;
 //     remaining ties go base to tip, left vane first, main feather first. The result is a dispersed
 //     order: removing barbs never opens a local hole and the silhouette (barb tips at vane ends, key
