@@ -35,7 +35,7 @@ SECTIONS = [
      "centre), right `random`. The window holds 30% of each strip's feathers; the first 30% of a feather's "
      "window is a gap (bare skin), then it regrows. The scene packs regrowing feathers with their barbs "
      "(`packing.opening_age` 0): with the default 0.8, unopened pin feathers are packed as bare shafts but "
-     "meshed with barbs that reach into the skin (40,781 penetrating vertices at t = 4).",
+     "meshed with barbs that reach into the skin (40,781 penetrating vertices at t = 4 when measured).",
      "moult.json", [("moult_t3", 3, "t = 3"), ("moult_t6", 6, "t = 6")], [3, 6], 3),
     ("moult_radial", "Radial moult with and without randomness (Fig 8.5)",
      "`moult_radial.json`: two halves of the patch moult radially from their centres at constant wave speed. "

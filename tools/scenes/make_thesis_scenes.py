@@ -206,7 +206,8 @@ def moult_scene():
         # Regrowing feathers pack with their barbs: unopened pin feathers (age < opening_age, packed as
         # bare shafts) are meshed with barbs that reach into the skin (skin_penetrations > 0), see
         # docs/gallery.md.
-        "packing": {"opening_age": 0.0},
+        # Dense skin samples keep flat-lying barbs above the dome between samples.
+        "packing": {"opening_age": 0.0, "skin_sample_spacing": 0.005},
         "camera": {"eye": [0, 3.3, 2.0], "target": [0, 0, 0.25], "up": [0, 1, 0], "fov": 37},
         "render": {"size": [640, 360], "lod": 1.0},
     }
@@ -318,7 +319,8 @@ def patch_scene(name, tract_extra, note):
         "ordering": {"method": "axis", "axis": [[-1.5, 0, 0], [1.5, 0, 0]]},
         # Side by side in a grid column the vanes overlap; with the whole vane in the shaft's height field
         # (shaft_band 1) a column stacks up sideways, so lateral overlaps are left to the barbs.
-        "packing": {"shaft_band": 0.5},
+        # Dense skin samples: with the automatic spacing a few barb vertices dip into the dome between them.
+        "packing": {"shaft_band": 0.5, "skin_sample_spacing": 0.005},
         "camera": {"view_direction": [-0.3, -0.8, -0.5], "fov": 35},
         "render": {"size": [640, 360], "lod": 1.0},
     }, note
