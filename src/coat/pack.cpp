@@ -96,15 +96,6 @@ struct LocalFeather {
     if (k < 0 || k >= kOutlineBins) return false;
     return r >= rLo[k] && r <= rHi[k];
   }
-  // Does the ball of radius rho around (b, r) meet the outline?
-  bool nearOutline(double b, double r, double rho) const {
-    const double w = (yMax - yMin) / kOutlineBins;
-    const int k0 = std::max(0, static_cast<int>(std::floor((b - rho - yMin) / w)));
-    const int k1 = std::min(kOutlineBins - 1, static_cast<int>(std::floor((b + rho - yMin) / w)));
-    for (int k = k0; k <= k1; ++k)
-      if (r + rho >= rLo[k] && r - rho <= rHi[k]) return true;
-    return false;
-  }
 };
 
 // Fills the vane outline from the shaft polyline and the key barbs, with barbs interpolated between
@@ -361,7 +352,6 @@ struct Context {
   // feathers off the skin between the samples, at any sample spacing.
   std::vector<glm::dvec3> skinPts, skinNormal;
   std::vector<float> skinRho, skinCone;
-  double skinRhoMax = 0;
   detail::PointGrid skinGrid;
   std::vector<double> fixed;
   std::vector<double> minElevation;  // per feather from styling (NaN = none); empty = none
@@ -687,26 +677,22 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     }
     box.lo = glm::max(box.lo, O - dvec3(L.reach));
     box.hi = glm::min(box.hi, O + dvec3(L.reach));
-    const double pad = ctx.skinRhoMax;
-    box.lo -= dvec3(pad);
-    box.hi += dvec3(pad);
     ctx.skinGrid.query(
-        box.lo, box.hi, [&](const dvec3& centre, double half) { return sphereIn(frame(centre), half + pad); },
+        box.lo, box.hi, [&](const dvec3& centre, double half) { return sphereIn(frame(centre), half); },
         [&](uint32_t k) {
-          // The patch around the sample (radius rho) may reach into the footprint.
-          const double rho = ctx.skinRho[k];
+          // Samples inside the footprint; each carries its patch (radius, normal, cone) into the fields.
           const dvec3 r = ctx.skinPts[k] - O;
           const double t = glm::dot(r, T);
-          if (t < 0 || t > L.reach + rho) return;  // patches centred behind the follicle lie at its base
+          if (t < 0 || t > L.reach) return;
           const double b = glm::dot(r, B);
-          if (b < L.yMin - rho || b > L.yMax + rho) return;
+          if (b < L.yMin || b > L.yMax) return;
           const double n = glm::dot(r, N);
           const double d2 = t * t + b * b + n * n;
-          if (d2 > (L.reach + rho) * (L.reach + rho)) return;
           // The calamus sits in its follicle: skin within the base allowance is not an obstacle (the
           // checker exempts the same zone).
-          if (d2 < base2) return;
-          if (!L.nearOutline(b, std::sqrt(t * t + n * n), rho)) return;
+          if (d2 > L.reach * L.reach || d2 < base2) return;
+          if (!L.inOutline(b, std::sqrt(t * t + n * n))) return;
+          const double rho = ctx.skinRho[k];
           Candidate c{t, b, n, 0.0, true, UINT32_MAX};
           c.rho = rho;
           c.cone = ctx.skinCone[k];
@@ -1230,7 +1216,6 @@ void setup(Context& ctx) {
         for (; q < base + faceOff[f + 1]; ++q) setPatch(q, &self, 1);
       }
     });
-    for (float r : ctx.skinRho) ctx.skinRhoMax = std::max(ctx.skinRhoMax, static_cast<double>(r));
     ctx.skinGrid.build(ctx.skinPts, std::max(0.2 * medReach, 2 * h));
   }
 }
