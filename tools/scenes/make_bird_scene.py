@@ -231,6 +231,46 @@ for name, kinds, n in body:
         t['parameterization'] = {'method': 'projection', 'view_direction': [0, 1, 0]}
     tracts.append(t)
 
+# Mirror symmetry: the mesh and its tracts are symmetric in z, but each tract scatters and relaxes its
+# follicles with its own seed, so left and right got different follicle layouts (0.01 units apart, a
+# third of a spacing), packed differently and covered differently (right side of the head 0.76 vs 0.88
+# on the left). The right-side body tracts are instead pinned at the mirror images of the left tracts'
+# relaxed follicles, with the left tracts' automatic feather scale, so both halves carry the same coat.
+# The left follicles come from BIRD_FOLLICLES (lines "tract x y z length", one per feather, dumped from
+# the pipeline's follicles and feather lengths); without it the pinned lists and scales already in
+# data/scenes/bird.json are kept, so re-running the script reproduces the committed scene.
+MIRROR = os.environ.get('BIRD_MIRROR', '1') == '1'
+MIRRORED = ('capital', 'humeral', 'alar', 'femoral', 'crural')
+def mirror_tracts(tracts):
+    dump = os.environ.get('BIRD_FOLLICLES')
+    old = {}
+    if dump:
+        for line in open(dump):
+            t = line.split()
+            old.setdefault(t[0], []).append((list(map(float, t[1:4])), float(t[4])))
+    else:
+        prev = json.load(open(os.path.join(DATA, 'scenes', 'bird.json')))
+        prev = {t['name']: t for t in prev['tracts']}
+    for t in tracts:
+        base, _, side = t['name'].partition('_')
+        if side != 'right' or base not in MIRRORED: continue
+        if dump:
+            left = old[base + '_left']
+            pins = [[round(p[0], 6), round(p[1], 6), round(-p[2], 6)] for p, _ in left]
+            # Scale: the left tract's mean feather length over this tract's unscaled one (BIRD_UNSCALED,
+            # the same dump of a scene with this tract at feather_scale 1).
+            fs = 1.0  # without BIRD_UNSCALED: a first pass, to measure the unscaled feather lengths
+            if os.environ.get('BIRD_UNSCALED'):
+                ul = [float(u.split()[4]) for u in open(os.environ['BIRD_UNSCALED']) if u.split()[0] == t['name']]
+                fs = round((sum(l for _, l in left) / len(left)) / (sum(ul) / len(ul)), 6)
+        else:
+            pins = [q['at'] for q in prev[t['name']]['pinned']]
+            fs = prev[t['name']]['feather_scale']
+        t.pop('density', None); t.pop('relax', None)
+        t.update(count=0, pinned=[{'at': q} for q in pins], feather_scale=fs)
+        t.pop('feather_spacings', None)
+if MIRROR: mirror_tracts(tracts)
+
 REMEX_SHIFT = float(os.environ.get('BIRD_REMEX_SHIFT', 0.0))
 _vo, _fo = load_obj(os.path.join(DATA, 'meshes', 'bird.obj'))
 def remex_pins(side):
@@ -315,11 +355,12 @@ def edge_vectors(group, sgn, zs, back, wrap, out_z, inner):
     return out
 
 LEG_DOWN = float(os.environ.get('BIRD_LEG_DOWN', 0))
+LEG_OUT = float(os.environ.get('BIRD_LEG_OUT', 0))  # and out, away from the other leg
 def leg_directions():
     """Leg (crural) feathers point down the leg toward the foot, as on real birds, instead of back along
     the body axis (around the leg), so they overhang the leg's end."""
     if LEG_DOWN <= 0: return {}
-    return {'crural_' + side: {'vectors': [{'at': [-0.45, -0.22, 0.08 * sgn], 'direction': [-0.3, -LEG_DOWN, 0.0]}]}
+    return {'crural_' + side: {'vectors': [{'at': [-0.45, -0.22, 0.08 * sgn], 'direction': [-0.3, -LEG_DOWN, LEG_OUT * sgn]}]}
             for side, sgn in (('left', 1), ('right', -1))}
 
 vert_groups = []
