@@ -104,6 +104,8 @@ struct Pipeline::Impl {
   coat::OrderOptions orderOptions;
   coat::PackOptions packOptions;
   coat::CoatFeathers coatNow;     // at the current time: posed frames, ages, presence
+  coat::CoatFeathers packCoat;    // coatNow with growing feathers as grown (the pack input when any grows)
+  std::vector<double> packGrownAge;  // per feather, the age packCoat's parameters are grown to (empty = none)
   TimeState timeState;
   std::vector<double> fixedElevation;
   const coat::PackResult* packed = nullptr;  // timeState.frame.result once packed
@@ -119,6 +121,7 @@ struct Pipeline::Impl {
   std::vector<feather::FeatherParams> meshParams;
   std::vector<uint8_t> matureValid;
   std::vector<double> grownAge;     // NaN = no grown curves
+  std::vector<feather::FeatherParams> grownParams;  // packed grown parameters the grown curves are from
   std::vector<feather::FeatherCurves> matureCurves, grownCurves;
   std::vector<feather::LodOrder> lodOrders, grownOrders;
   size_t meshRegenerated = 0;       // feathers whose curves the last mesh evaluation generated
@@ -436,12 +439,45 @@ void Pipeline::Impl::computeControls() {
   applyControls(scene, time, posed, posedFollicles, timeState, coatNow, fixedElevation);
 }
 
+namespace {
+// computePack: a growing feather whose shaft is full grown is packed (and meshed) as grown.
+bool packedAsGrown(double age, const feather::GrowthSchedule& schedule) {
+  return age < 1.0 && feather::growthStateAt(age, schedule)[feather::GrowthParam::ShaftLength] >= 1.0;
+}
+}  // namespace
+
 void Pipeline::Impl::computePack() {
   report(progress, "pack", 0);
   coat::PackOptions o = packOptions;
   o.fixedElevation = fixedElevation;
+  // A growing feather is packed with its barbs (age 1 for the packer) as it will be meshed: once its
+  // shaft is full grown, as grown at its age (the packer sees its barb lengths, angles and opening, and
+  // computeMesh meshes the packed grown parameters as they are); while its shaft still grows, as the
+  // mature feather, grown afterwards (a prefix of the packed shaft, barbs closed and short). Straight
+  // shafts of the mature feather (the packer's age < opening_age rule) let opening barbs reach into
+  // the skin, and a short grown shaft's thin footprint finds no skin to pack against.
+  bool anyGrowing = false;
+  for (size_t i = 0; i < coatNow.size() && !anyGrowing; ++i) anyGrowing = coatNow.present[i] && coatNow.age[i] < 1.0;
+  const coat::CoatFeathers* packInput = &coatNow;
+  packGrownAge.clear();
+  if (anyGrowing) {
+    packGrownAge.assign(coatNow.size(), 1.0);
+    packCoat = coatNow;
+    const feather::GrowthSchedule& schedule = feather::defaultGrowthSchedule();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, packCoat.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t i = range.begin(); i < range.end(); ++i)
+        if (packCoat.present[i] && packCoat.age[i] < 1.0) {
+          if (packedAsGrown(packCoat.age[i], schedule)) {
+            packCoat.params[i] = feather::featherAtAge(coatNow.params[i], coatNow.age[i], schedule);
+            packGrownAge[i] = coatNow.age[i];
+          }
+          packCoat.age[i] = 1.0;
+        }
+    });
+    packInput = &packCoat;
+  }
   // Repacks incrementally from the last frame's pack or this frame's natural pack when it can.
-  packed = &packFrame(scene, posed, coatNow, o, timeState);
+  packed = &packFrame(scene, posed, *packInput, o, timeState, packGrownAge);
   report(progress, "pack", 1);
 }
 
@@ -648,6 +684,7 @@ void Pipeline::Impl::computeMesh() {
     meshParams.assign(n, feather::FeatherParams{});
     matureValid.assign(n, 0);
     grownAge.assign(n, std::nan(""));
+    grownParams.assign(n, feather::FeatherParams{});
     matureCurves.assign(n, {});
     grownCurves.assign(n, {});
     lodOrders.assign(n, {});
@@ -666,7 +703,13 @@ void Pipeline::Impl::computeMesh() {
     for (size_t i = range.begin(); i < range.end(); ++i) {
       if (!coatNow.present[i]) continue;
       const double age = coatNow.age[i];
-      const feather::FeatherParams& p = packed->packedParams.empty() ? coatNow.params[i] : packed->packedParams[i];
+      const bool growing = age < 1.0;
+      // A feather packed as grown (computePack) is meshed from its packed parameters as they are; the
+      // mature feather (unpacked) gives its texture coordinates and LOD order. Any other growing feather
+      // was packed mature and grows from its packed parameters.
+      const bool asGrown = growing && !packed->packedParams.empty() && packedAsGrown(age, schedule);
+      const feather::FeatherParams& packedP = packed->packedParams.empty() ? coatNow.params[i] : packed->packedParams[i];
+      const feather::FeatherParams& p = asGrown ? coatNow.params[i] : packedP;
       if (!matureValid[i] || !(meshParams[i] == p)) {
         meshParams[i] = p;
         feather::generateBarbs(p, matureCurves[i]);
@@ -675,10 +718,12 @@ void Pipeline::Impl::computeMesh() {
         grownAge[i] = std::nan("");
         regenerated[i] = 1;
       }
-      if (age < 1.0) {
+      if (growing) {
         const feather::GrowthState st = feather::growthStateAt(age, schedule);
-        if (std::memcmp(&grownAge[i], &age, sizeof(double)) != 0) {
-          feather::generateBarbs(feather::featherAtState(p, st, schedule), grownCurves[i]);
+        // Whether a feather is packed as grown depends on its age only, so equal ages mean the same path.
+        if (std::memcmp(&grownAge[i], &age, sizeof(double)) != 0 || (asGrown && !(grownParams[i] == packedP))) {
+          if (asGrown) grownParams[i] = packedP;
+          feather::generateBarbs(asGrown ? packedP : feather::featherAtState(p, st, schedule), grownCurves[i]);
           // Same barbs as the mature feather (the usual case): its LOD order (as buildFeatherMesh does).
           if (grownCurves[i].barbs.size() != matureCurves[i].barbs.size())
             feather::computeLodOrder(grownCurves[i], grownOrders[i]);

@@ -99,6 +99,7 @@ void parseControls(const Scene& scene, TimeState& state) {
   state.controlsParsed = true;
 }
 
+constexpr double kMature = 1.0;
 bool sameBits(const void* a, const void* b, size_t bytes) { return bytes == 0 || std::memcmp(a, b, bytes) == 0; }
 
 bool sameFixed(double a, double b) { return (std::isnan(a) && std::isnan(b)) || sameBits(&a, &b, sizeof(double)); }
@@ -119,11 +120,11 @@ uint8_t presentAt(const coat::CoatFeathers& c, size_t i) { return c.present.empt
 const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative, const coat::SkinMesh& skin,
                                      const coat::CoatFeathers& coat, const coat::PackOptions& options,
                                      uint64_t generation, const Json& packing, bool& incremental, size_t& changedCount,
-                                     size_t& recomputed) {
-  std::optional<std::vector<uint32_t>> changed = memo.changes(skin, coat, options, generation, packing);
+                                     size_t& recomputed, const std::vector<double>& grownAge = {}) {
+  std::optional<std::vector<uint32_t>> changed = memo.changes(skin, coat, options, generation, packing, grownAge);
   const PackMemo* seed = changed ? &memo : nullptr;
   if (alternative && alternative != &memo) {
-    std::optional<std::vector<uint32_t>> alt = alternative->changes(skin, coat, options, generation, packing);
+    std::optional<std::vector<uint32_t>> alt = alternative->changes(skin, coat, options, generation, packing, grownAge);
     if (alt && (!changed || alt->size() < changed->size())) {
       changed = std::move(alt);
       seed = alternative;
@@ -138,7 +139,7 @@ const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative
   coat::PackResult result = seed ? (changed->empty() ? seed->result : coat::repack(skin, coat, seed->result, *changed, options))
                                  : coat::pack(skin, coat, options);
   recomputed = result.stats.recomputed;
-  memo.remember(skin, coat, options, generation, packing, std::move(result));
+  memo.remember(skin, coat, options, generation, packing, std::move(result), grownAge);
   return memo.result;
 }
 
@@ -146,7 +147,8 @@ const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative
 
 std::optional<std::vector<uint32_t>> PackMemo::changes(const coat::SkinMesh& skinNow, const coat::CoatFeathers& coat,
                                                        const coat::PackOptions& options, uint64_t gen,
-                                                       const Json& packingNow) const {
+                                                       const Json& packingNow,
+                                                       const std::vector<double>& grownAgeNow) const {
   const size_t n = coat.size();
   if (!valid || gen != generation || frames.size() != n || coat.frames.size() != n || packingNow != packing)
     return std::nullopt;
@@ -158,14 +160,17 @@ std::optional<std::vector<uint32_t>> PackMemo::changes(const coat::SkinMesh& ski
   for (size_t i = 0; i < n; ++i) {
     const bool same = sameBits(&coat.frames[i], &frames[i], sizeof(coat::FeatherFrame)) &&
                       presentAt(coat, i) == present[i] && unopenedAt(coat, i, options) == unopened[i] &&
-                      sameFixed(fixedAt(options, i), fixed[i]);
+                      sameFixed(fixedAt(options, i), fixed[i]) &&
+                      sameBits(&(grownAgeNow.empty() ? kMature : grownAgeNow[i]), &(grownAge.empty() ? kMature : grownAge[i]),
+                               sizeof(double));
     if (!same) out.push_back(static_cast<uint32_t>(i));
   }
   return out;
 }
 
 void PackMemo::remember(const coat::SkinMesh& skinNow, const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                        uint64_t gen, const Json& packingNow, coat::PackResult&& r) {
+                        uint64_t gen, const Json& packingNow, coat::PackResult&& r,
+                        const std::vector<double>& grownAgeNow) {
   const size_t n = coat.size();
   valid = true;
   generation = gen;
@@ -180,6 +185,7 @@ void PackMemo::remember(const coat::SkinMesh& skinNow, const coat::CoatFeathers&
     unopened[i] = unopenedAt(coat, i, options);
     fixed[i] = fixedAt(options, i);
   }
+  grownAge = grownAgeNow;
   result = std::move(r);
 }
 
@@ -233,13 +239,13 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
 }
 
 const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
-                                  const coat::PackOptions& options, TimeState& state) {
+                                  const coat::PackOptions& options, TimeState& state, const std::vector<double>& grownAge) {
   PackReport& r = state.packReport;
   // Controls that ran a natural pack this frame make it a candidate seed: it differs from this frame's
   // pack in the raised feathers only.
   const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
   return packWithMemo(state.frame, alternative, posed, coat, options, state.generation, scene.packing,
-                      r.finalIncremental, r.finalChanged, r.finalRecomputed);
+                      r.finalIncremental, r.finalChanged, r.finalRecomputed, grownAge);
 }
 
 }  // namespace pteryla::pipeline

@@ -32,6 +32,9 @@ struct PackMemo {
   std::vector<coat::FeatherFrame> frames;
   std::vector<uint8_t> present, unopened;
   std::vector<double> fixed;             // per feather, NaN = free
+  // Per feather, the age its packing parameters were grown to (1 = the rest parameters); empty = all 1.
+  // Within a rest state a feather's packing parameters are a function of this age.
+  std::vector<double> grownAge;
   coat::PackResult result;
 
   void clear() { *this = PackMemo{}; }
@@ -39,10 +42,11 @@ struct PackMemo {
   // (empty, other rest state, options, skin or feather count).
   std::optional<std::vector<uint32_t>> changes(const coat::SkinMesh& skin, const coat::CoatFeathers& coat,
                                                const coat::PackOptions& options, uint64_t generation,
-                                               const Json& packing) const;
+                                               const Json& packing, const std::vector<double>& grownAge = {}) const;
   // Stores `result` with the inputs it was packed from.
   void remember(const coat::SkinMesh& skin, const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                uint64_t generation, const Json& packing, coat::PackResult&& result);
+                uint64_t generation, const Json& packing, coat::PackResult&& result,
+                const std::vector<double>& grownAge = {});
 };
 
 // How the last frame's packs were made (diagnostics for tests and benchmarks).
@@ -100,7 +104,9 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
 // The frame's pack (state.frame.result): an incremental repack (bit-identical to a full pack,
 // coat/pack.hpp) from whichever remembered pack differs in fewer feathers, the previous frame's pack or
 // this frame's natural pack (which differs in the raised feathers only); a full pack when neither fits.
+// grownAge: per feather, the age `coat`'s parameters were grown to (PackMemo::grownAge; empty = all 1).
 const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
-                                  const coat::PackOptions& options, TimeState& state);
+                                  const coat::PackOptions& options, TimeState& state,
+                                  const std::vector<double>& grownAge = {});
 
 }  // namespace pteryla::pipeline
