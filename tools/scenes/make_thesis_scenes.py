@@ -203,11 +203,10 @@ def moult_scene():
         "directions": {"vectors": [{"at": [0, 0, 0], "direction": [0, 0, 1]}]},
         # Feathers point +Z: the +Z-most are the bottom layer.
         "ordering": {"method": "axis", "axis": [[0, 0, -1.5], [0, 0, 1.5]]},
-        # Regrowing feathers pack with their barbs: unopened pin feathers (age < opening_age, packed as
-        # bare shafts) are meshed with barbs that reach into the skin (skin_penetrations > 0), see
-        # docs/gallery.md.
+        # Regrowing feathers pack with their barbs as they are meshed (the pipeline packs them as grown),
+        # so the default opening_age keeps them above the skin.
         # Dense skin samples keep flat-lying barbs above the dome between samples.
-        "packing": {"opening_age": 0.0, "skin_sample_spacing": 0.005},
+        "packing": {"skin_sample_spacing": 0.005},
         "camera": {"eye": [0, 3.3, 2.0], "target": [0, 0, 0.25], "up": [0, 1, 0], "fov": 37},
         "render": {"size": [640, 360], "lod": 1.0},
     }
