@@ -202,7 +202,11 @@ body = [  # tract, feather types for its key feathers (cycled), key count
 # Feather length in follicle spacings: short enough that the layers lie flat (a feather 2-2.5 spacings
 # long rests on the next rows at a low angle; 3.6 stood them up to ~55 deg), longer on the wing coverts
 # (flat, wide surfaces) and short on the leg stubs, whose feathers otherwise reach the other leg.
-SPACINGS = {'body': float(os.environ.get('BIRD_SPACINGS', 2.4)), 'alar': float(os.environ.get('BIRD_ALAR_SPACINGS', 2.8)),
+# Wing coverts 3.05 (was 2.8): alar coverage 0.86 -> 0.87-0.89, total 0.899 -> 0.905 for ~220 more pairs
+# (3.3 gave 0.909 but stood the outer primaries up over them: +900 pairs). Leg feathers 2.1 covered
+# the legs 0.70 -> 0.85 but crossed the other leg (+1900 pairs); pointing them down the leg
+# (BIRD_LEG_DOWN=1, with or without BIRD_LEG_OUT) covered less for more pairs.
+SPACINGS = {'body': float(os.environ.get('BIRD_SPACINGS', 2.4)), 'alar': float(os.environ.get('BIRD_ALAR_SPACINGS', 3.05)),
             'crural': float(os.environ.get('BIRD_CRURAL_SPACINGS', 1.6)),
             'capital': float(os.environ.get('BIRD_CAPITAL_SPACINGS', 3.0)), 'humeral': float(os.environ.get('BIRD_HUMERAL_SPACINGS', 3.0))}
 SPACINGS.update(femoral=2.8, ventral=2.7)  # a little longer on the flanks and belly: fewer bare gaps between rows
