@@ -318,6 +318,12 @@ if TAIL_LIFT > 0:
 # Rectrices fan out from the tail's end, the outer ones up to 30 degrees from the body axis.
 rdirs = [[-math.cos(a), 0.0, math.sin(a)] for a in (math.radians(30 - 60 * k / 11) for k in range(12))]
 styling += flight_styling(verts, faces, rect, rdirs, 'caudal', TAIL_MODE)
+# Styled head (thesis Fig. 9.20): the crown feathers combed straight back and raised into a low crest;
+# the other head feathers pack against them.
+CREST_DEG = float(os.environ.get('BIRD_CREST_DEG', 28))
+if CREST_DEG > 0:
+    styling.append({'select': 'sphere', 'center': [0.72, 0.46, 0.0], 'radius': 0.075,
+                    'min_elevation_deg': CREST_DEG, 'direction': [-1.0, 0.0, 0.0]})
 tracts.append({'name': 'rectrices', 'groups': ['caudal'], 'count': 0, 'feather_scale': 0.055,
                'pinned': [{'at': p} for p in rect], 'feather': 'rectrix',
                'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
