@@ -33,9 +33,8 @@ SECTIONS = [
      "`moult.json`: three strips of one patch, each with its own moult sequence (docs/moult.md): left "
      "`increasing_v` (a sequential band), middle `radial` at constant wave speed (a ring moving out from the "
      "centre), right `random`. The window holds 30% of each strip's feathers; the first 30% of a feather's "
-     "window is a gap (bare skin), then it regrows. The scene packs regrowing feathers with their barbs "
-     "(`packing.opening_age` 0): with the default 0.8, unopened pin feathers are packed as bare shafts but "
-     "meshed with barbs that reach into the skin (40,781 penetrating vertices at t = 4 when measured).",
+     "window is a gap (bare skin), then it regrows. Regrowing feathers are packed as they are grown at "
+     "their age (docs/moult.md), so pin feathers and opening feathers stay above the skin.",
      "moult.json", [("moult_t3", 3, "t = 3"), ("moult_t6", 6, "t = 6")], [3, 6], 3),
     ("moult_radial", "Radial moult with and without randomness (Fig 8.5)",
      "`moult_radial.json`: two halves of the patch moult radially from their centres at constant wave speed. "
