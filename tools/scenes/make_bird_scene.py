@@ -330,12 +330,14 @@ tracts.append({'name': 'rectrices', 'groups': ['caudal'], 'count': 0, 'feather_s
 
 # Denser obstacle samples than the packer's defaults: with 16 points per key barb and 12 key barbs per
 # vane handed to later feathers (and finer barb height fields), feathers see the barbs of the ones under
-# them instead of slipping between samples (full-geometry pairs 3608 -> ~2000); skin samples every
-# 0.004 units (a twentieth of a body feather) keep the small head and wing feathers above the skin.
+# them instead of slipping between samples (full-geometry pairs 3608 -> ~2000).
 # shaft_band 0.8: the shaft clears what lies under the inner 80% of the vane and the barbs lift over the
 # rest, so feathers lie a little flatter (coverage 0.926 -> 0.930 for ~70 more pairs; 0.6 doubles pairs).
 PACKING = {'shaft_band': float(os.environ.get('BIRD_SHAFT_BAND', 0.8)), 'conflict_elevation_deg': float(os.environ.get('BIRD_CONFLICT', 88)), 'barb_samples': 16, 'key_barbs_per_vane': 12, 'shaft_samples': 24, 'barb_field_bins': 32,
-           'skin_sample_spacing': 0.004, 'styling': styling}
+           'styling': styling}
+# Skin samples at the packer's automatic spacing: since each sample stands for its patch of skin (packing.md)
+# the coat stays above the skin without the old 0.004 spacing (measured: 0 penetrations, pairs 1622 of
+# 33603 unpacked, coverage 0.9286 vs 0.931), and the bird packs a third faster (pteryla bench 1.43 -> 0.96 s).
 for kv in os.environ.get('BIRD_PACK', '').split(','):
     if kv: PACKING[kv.split('=')[0]] = json.loads(kv.split('=')[1])
 body_axis = [[round(c, 5) for c in p] for p in axes['body_axis']]
