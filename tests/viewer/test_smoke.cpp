@@ -28,9 +28,23 @@ struct ViewerRun {
   std::string out;
 };
 
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+// Runs the viewer under xvfb-run. The viewer's own exit status is written to `<errFile>.status` by a
+// shell inside xvfb-run and read from there: xvfb-run's status is not the program's when its own
+// clean-up of the temporary Xauthority directory races a program that ends within a second or two
+// (it then exits 5 even though the viewer exited 0 or 2).
 ViewerRun runViewer(const std::string& args, const std::string& errFile) {
-  const std::string cmd = "xvfb-run -a -s \"-screen 0 1024x768x24\" \"" + std::string(PTERYLA_VIEWER_EXE) + "\" " + args +
-                          " 2>\"" + errFile + "\"";
+  const std::string statusFile = errFile + ".status";
+  std::remove(statusFile.c_str());
+  const std::string inner = "\"" + std::string(PTERYLA_VIEWER_EXE) + "\" " + args + " 2>\"" + errFile +
+                            "\"; echo $? >\"" + statusFile + "\"";
+  std::string quoted;  // `inner` inside single quotes for sh -c
+  for (char c : inner) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  const std::string cmd = "xvfb-run -a -s \"-screen 0 1024x768x24\" sh -c '" + quoted + "'";
   ViewerRun r;
   FILE* p = popen(cmd.c_str(), "r");
   if (!p) return r;
@@ -38,13 +52,10 @@ ViewerRun runViewer(const std::string& args, const std::string& errFile) {
   size_t n;
   while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
   const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  const std::string recorded = slurp(statusFile);
+  if (!recorded.empty()) r.code = std::atoi(recorded.c_str());  // the viewer ran: its own status
+  else r.code = WIFEXITED(status) ? 1000 + WEXITSTATUS(status) : 2000 + WTERMSIG(status);  // it never ran
   return r;
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
 }
 
 }  // namespace
