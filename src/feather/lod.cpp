@@ -101,8 +101,22 @@ void computeLodOrder(const FeatherCurves& c, LodOrder& out) {
       const bool before = i > begin && c.barbs[i - 1].splitAfter;
       if (i == begin || i + 1 == end || b.isSplitEdge || b.splitAfter || before) s.pinned[i] = 1;
       else if (b.isKey) s.pinned[i] = 2;
-      if (s.pinned[i]) s.seq.push_back(static_cast<uint32_t>(i));
     }
+    // The widest barb between consecutive anchors is pinned too when it is longer than both: with the
+    // vane ends alone, the lowest levels of a feather whose end barbs are short (any contour feather)
+    // collapse its vane into a sliver between them, and a body coat seen from afar shows bare skin.
+    for (size_t a = begin; a < end;) {
+      size_t b = a + 1;
+      while (b < end && s.pinned[b] != 1) ++b;
+      if (b >= end) break;
+      size_t widest = a;
+      for (size_t i = a + 1; i < b; ++i)
+        if (c.barbs[i].length > c.barbs[widest].length) widest = i;
+      if (widest != a && c.barbs[widest].length > c.barbs[b].length) s.pinned[widest] = 1;
+      a = b;
+    }
+    for (size_t i = begin; i < end; ++i)
+      if (s.pinned[i]) s.seq.push_back(static_cast<uint32_t>(i));
     begin = end;
   }
 

@@ -66,8 +66,9 @@ TEST(FeatherLod, OrderIsPermutationWithPinnedBarbsFirst) {
 }
 
 TEST(FeatherLod, DividesAndConquersBetweenPinnedBarbs) {
-  // No key barbs, no splits: each vane is one interval from its first to its last barb; the first
-  // barb to be added after the pinned ones sits in the middle of a vane, the next ones at the quarters.
+  // No key barbs, no splits: each vane's ends and its widest barb are pinned (the widest keeps the
+  // vane's width at the lowest levels); the barbs added next split the two halves of each vane, and
+  // they are dispersed, never adjacent to each other.
   FeatherParams p = geomtest::contour();
   p.left.keyBarbs.clear();
   p.right.keyBarbs.clear();
@@ -77,14 +78,32 @@ TEST(FeatherLod, DividesAndConquersBetweenPinnedBarbs) {
   uint32_t leftEnd = left;
   while (leftEnd < c.barbs.size() && c.barbs[leftEnd].vane == 0) ++leftEnd;
   const uint32_t n = leftEnd - left;
-  ASSERT_EQ(o.pinned, 4u);  // both ends of both vanes
+  ASSERT_EQ(o.pinned, 6u);  // both ends and the widest barb of both vanes
+  uint32_t widest = left;
+  for (uint32_t i = left; i < leftEnd; ++i)
+    if (c.barbs[i].length > c.barbs[widest].length) widest = i;
+  EXPECT_LT(o.rank[widest], o.pinned);
+  EXPECT_GT(widest, left + n / 8);  // a contour feather is widest inside its vane, not at an end
+  EXPECT_LT(widest, leftEnd - 1 - n / 8);
   std::vector<uint32_t> byRank(c.barbs.size());
   for (size_t i = 0; i < c.barbs.size(); ++i) byRank[o.rank[i]] = static_cast<uint32_t>(i);
-  EXPECT_EQ(byRank[4], left + (n - 1) / 2);
-  // Next four (two per vane) split the halves: dispersed, never adjacent to each other.
   std::vector<uint32_t> next(byRank.begin() + 6, byRank.begin() + 10);
   std::sort(next.begin(), next.end());
-  for (size_t i = 1; i < next.size(); ++i) EXPECT_GT(next[i] - next[i - 1], 10u);
+  for (size_t i = 1; i < next.size(); ++i) EXPECT_GT(next[i] - next[i - 1], 5u);
+}
+
+TEST(FeatherLod, LowestLevelKeepsTheVaneWidth) {
+  // At the lowest level a contour feather keeps its widest barbs, so its vane does not collapse into a
+  // sliver between the short barbs at its ends (the coat of a bird seen from afar stays closed).
+  FeatherParams p = geomtest::contour();
+  const FeatherCurves c = generateBarbs(p);
+  const LodOrder o = computeLodOrder(c);
+  float widestAll = 0, widestKept = 0;
+  for (size_t i = 0; i < c.barbs.size(); ++i) {
+    widestAll = std::max(widestAll, c.barbs[i].length);
+    if (o.rank[i] < keptBarbCount(o, 0.01)) widestKept = std::max(widestKept, c.barbs[i].length);
+  }
+  EXPECT_EQ(widestKept, widestAll);
 }
 
 TEST(FeatherLod, WidestGapFirstThenNearestKeyBarb) {
