@@ -86,6 +86,7 @@ struct Pipeline::Impl {
   Scene scene;
   ProgressFn progress;
   double time = 0, lod = 1;
+  std::vector<double> featherLods;  // per feather, multiplies lod (empty: 1 for all)
   StageGraph graph;
   StageGraph::Id ids[10];
 
@@ -548,7 +549,7 @@ void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& 
     const uint32_t i = which[k];
     const MeshSlice& sl = slices[i];
     const bool growing = inputs[k].reference != nullptr;
-    const bool same = sl.valid && sl.version == curvesVersion[i] && sl.growing == growing && sl.lod == lod &&
+    const bool same = sl.valid && sl.version == curvesVersion[i] && sl.growing == growing && sl.lod == inputs[k].lod &&
                       std::memcmp(&sl.shed, &shed[i], sizeof(double)) == 0 &&
                       sl.in > 0;  // empty feathers are re-meshed (nothing to copy; keeps range offsets exact)
     reuse[k] = same ? 1 : 0;
@@ -672,7 +673,7 @@ void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& 
     sl.valid = true;
     sl.version = curvesVersion[which[k]];
     sl.growing = inputs[k].reference != nullptr;
-    sl.lod = lod;
+    sl.lod = inputs[k].lod;
     sl.shed = shed[which[k]];
   }
 }
@@ -753,7 +754,7 @@ void Pipeline::Impl::computeMesh() {
     const coat::FeatherFrame& fr = coatNow.frames[i];
     in.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, packed->elevation[i]);
     in.featherId = i;
-    in.lod = lod;
+    in.lod = featherLods.size() == n ? lod * featherLods[i] : lod;
     in.sheathShed = shed[i];
     inputs.push_back(in);
     which.push_back(i);
@@ -835,6 +836,17 @@ void Pipeline::setLod(double f) {
   impl_->graph.invalidate(impl_->id(Stage::Mesh));
 }
 double Pipeline::lod() const { return impl_->lod; }
+
+void Pipeline::setFeatherLods(std::vector<double> fractions) {
+  for (size_t i = 0; i < fractions.size(); ++i)
+    if (!(fractions[i] > 0 && fractions[i] <= 1))
+      throw Error("per-feather level of detail must be in (0, 1], got " + std::to_string(fractions[i]), "",
+                  "feather " + std::to_string(i));
+  if (fractions == impl_->featherLods) return;
+  impl_->featherLods = std::move(fractions);
+  impl_->graph.invalidate(impl_->id(Stage::Mesh));
+}
+const std::vector<double>& Pipeline::featherLods() const { return impl_->featherLods; }
 
 const coat::SkinMesh& Pipeline::restSkin() {
   impl_->graph.pull(impl_->id(Stage::Skin));

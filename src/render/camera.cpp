@@ -41,8 +41,10 @@ void Camera::frameBounds(const glm::vec3& lo, const glm::vec3& hi, float aspect,
 }
 
 float screenSizeOf(const glm::vec3& lo, const glm::vec3& hi, const Camera& camera, const glm::ivec2& viewport) {
-  const glm::vec3 centre = 0.5f * (lo + hi);
-  const float radius = 0.5f * glm::length(hi - lo);
+  return screenSizeOfSphere(0.5f * (lo + hi), 0.5f * glm::length(hi - lo), camera, viewport);
+}
+
+float screenSizeOfSphere(const glm::vec3& centre, float radius, const Camera& camera, const glm::ivec2& viewport) {
   const float dist = glm::length(centre - camera.eye);
   const float h = static_cast<float>(std::max(viewport.y, 1));
   if (dist <= radius) return h;

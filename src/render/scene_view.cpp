@@ -1,10 +1,14 @@
 #include "pteryla/render/scene_view.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
 
+#include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/core/paths.hpp"
+#include "pteryla/feather/mesh.hpp"
+#include "pteryla/feather/params.hpp"
 #include "pteryla/render/pattern.hpp"
 #include "pteryla/render/scratchboard.hpp"
 
@@ -127,6 +131,23 @@ std::vector<FeatherDrawRange> drawRanges(const pipeline::CoatMesh& coat) {
   return out;
 }
 
+std::vector<double> screenSizeLods(pipeline::Pipeline& p, const Camera& camera, int width, int height,
+                                   float fullDetailPixels, float minFraction) {
+  const coat::CoatFeathers& f = p.feathers();
+  const std::vector<double>& elevation = p.elevations();
+  std::vector<double> out(f.size(), 1.0);
+  for (size_t i = 0; i < f.size(); ++i) {
+    if (!f.present[i] || i >= elevation.size()) continue;
+    const coat::FeatherFrame& fr = f.frames[i];
+    const auto pl = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, elevation[i]);
+    const double half = 0.5 * f.params[i].rachisLength;
+    const glm::vec3 centre(fr.origin + pl.x * half);
+    const float px = screenSizeOfSphere(centre, static_cast<float>(half), camera, {width, height});
+    out[i] = std::clamp(static_cast<double>(lodFraction(px, fullDetailPixels, minFraction)), 1e-3, 1.0);
+  }
+  return out;
+}
+
 struct SceneView::Impl {
   explicit Impl(RenderContext& c) : renderer(c) {}
   Renderer renderer;
@@ -174,8 +195,15 @@ Image SceneView::render(pipeline::Pipeline& p, int width, int height, const std:
     return renderScratchboard(coat.mesh, skin, sceneCamera(p.scene(), skin, coat.mesh, width, height),
                               sceneLights(p.scene()), s);
   }
+  // Screen-size LOD: an auto-framed camera frames the coat meshed at the uniform level (so a frame is
+  // the same whatever was meshed before it: `render --time T` equals that frame of `frames`), then each
+  // feather is meshed at its own level.
+  const bool bySize = p.scene().render.lodByScreenSize;
+  if (bySize && p.scene().camera.autoFrame) p.setFeatherLods({});
+  const TriMesh skin = p.skinTriMesh();
+  const Camera cam = sceneCamera(p.scene(), skin, p.coatMesh().mesh, width, height);
+  p.setFeatherLods(bySize ? screenSizeLods(p, cam, width, height) : std::vector<double>{});
   impl_->sync(p);
-  const Camera cam = sceneCamera(p.scene(), impl_->skin, coat.mesh, width, height);
   return impl_->renderer.renderImage(cam, sceneLights(p.scene()), sceneSettings(p.scene(), width, height));
 }
 

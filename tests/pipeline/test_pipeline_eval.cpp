@@ -107,3 +107,49 @@ TEST(PipelineEval, CoatOfHelicalFeathers) {
   EXPECT_GT(m.mesh.triangleCount(), 100u * m.ranges.size());
   for (double e : p.elevations()) EXPECT_TRUE(std::isfinite(e));
 }
+
+TEST(PipelineEval, PerFeatherLodsLowerOnlyTheirFeathers) {
+  // Screen-size LOD hands the pipeline one level per feather (multiplying the scene's lod): a feather
+  // given a lower level loses triangles, every other feather is meshed exactly as before, and clearing
+  // the levels gives back the uniform mesh bit for bit.
+  Pipeline p(smallScene());
+  p.setLod(1.0);
+  const CoatMesh uniform = p.coatMesh();
+  const size_t n = p.feathers().size();
+  ASSERT_GT(n, 10u);
+  auto trianglesOf = [](const CoatMesh& m) {
+    std::vector<uint32_t> t;
+    for (const auto& r : m.ranges) t.push_back(r.indexCount / 3);
+    return t;
+  };
+  // Ranges are in layer order: find the range of feather `lowered` through the mesh's featherId.
+  const uint32_t lowered = p.feathers().layerOrder[n / 2];
+  std::vector<double> lods(n, 1.0);
+  lods[lowered] = 0.2;
+  auto& g = p.graph();
+  const auto pack = g.find("pack");
+  const size_t packs = g.evaluations(pack);
+  p.setFeatherLods(lods);
+  const CoatMesh mixed = p.coatMesh();
+  EXPECT_EQ(g.evaluations(pack), packs);  // only the mesh stage re-evaluates
+  const auto a = trianglesOf(uniform), b = trianglesOf(mixed);
+  ASSERT_EQ(a.size(), b.size());
+  size_t lower = 0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    const uint32_t id = uniform.mesh.featherId[uniform.mesh.indices[uniform.ranges[k].firstIndex]];
+    if (id == lowered) {
+      EXPECT_LT(b[k], a[k] * 0.6) << "feather " << id;
+      ++lower;
+    } else {
+      EXPECT_EQ(b[k], a[k]) << "feather " << id;
+    }
+  }
+  EXPECT_EQ(lower, 1u);
+  p.setFeatherLods({});
+  EXPECT_EQ(p.coatMesh().mesh.positions, uniform.mesh.positions);
+  EXPECT_EQ(p.coatMesh().mesh.indices, uniform.mesh.indices);
+  lods[0] = 0.0;
+  EXPECT_THROW(p.setFeatherLods(lods), Error);
+  lods[0] = std::nan("");
+  EXPECT_THROW(p.setFeatherLods(lods), Error);
+}

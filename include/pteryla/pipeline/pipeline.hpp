@@ -93,6 +93,12 @@ class Pipeline {
   double time() const;
   void setLod(double fraction);  // (0,1]
   double lod() const;
+  // Per-feather levels of detail (indexed like feathers()), each in (0,1], multiplying lod(): feather i
+  // is meshed at lod() * fractions[i] (screen-size LOD, render::screenSizeLods). Empty, or a size other
+  // than the feather count (the coat changed since), meshes every feather at lod(). Throws
+  // pteryla::Error naming the feather for a value outside (0,1]. Dirties only the mesh stage.
+  void setFeatherLods(std::vector<double> fractions);
+  const std::vector<double>& featherLods() const;
 
   // Results (each pulls its stage and everything upstream).
   const coat::SkinMesh& restSkin();

@@ -36,6 +36,8 @@ struct Light {
 // viewport of `viewport` pixels (perspective, vertical field of view). Returns the viewport height
 // when the eye is inside the sphere.
 float screenSizeOf(const glm::vec3& lo, const glm::vec3& hi, const Camera& camera, const glm::ivec2& viewport);
+// The same for the sphere of `radius` about `centre`.
+float screenSizeOfSphere(const glm::vec3& centre, float radius, const Camera& camera, const glm::ivec2& viewport);
 
 // Continuous level of detail from screen size: 1 at or above `fullDetailPixels`, falling linearly
 // with the projected size down to `minFraction`. The thesis shows 60% geometry plus the alpha and

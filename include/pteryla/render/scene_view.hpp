@@ -22,12 +22,21 @@ RenderSettings sceneSettings(const pipeline::Scene& scene, int width, int height
 std::vector<FeatherMaterial> sceneMaterials(const pipeline::Scene& scene, const pipeline::CoatMesh& coat);
 std::vector<FeatherDrawRange> drawRanges(const pipeline::CoatMesh& coat);
 
+// Screen-size level of detail (Streit 2003, 7.1.3; scene render.lod_by_screen_size): per feather of
+// p.feathers(), lodFraction(projected length in pixels, fullDetailPixels, minFraction), where the
+// projected length is the screen diameter of the sphere around the packed rachis (follicle to tip).
+// Hand the result to Pipeline::setFeatherLods, which multiplies it with the scene's lod; the alpha and
+// BRDF textures keep the look of the barbs a feather loses. Absent feathers get 1.
+std::vector<double> screenSizeLods(pipeline::Pipeline& p, const Camera& camera, int width, int height,
+                                   float fullDetailPixels = 400.0f, float minFraction = 0.1f);
+
 class SceneView {
  public:
   explicit SceneView(RenderContext& context);
   ~SceneView();
   // Uploads the pipeline's current skin and coat (when they changed) and renders an image.
-  // style: "" (the scene's), "shaded" or "scratchboard".
+  // style: "" (the scene's), "shaded" or "scratchboard". With the scene's render.lod_by_screen_size,
+  // first sets the pipeline's per-feather levels of detail from the scene camera (screenSizeLods).
   Image render(pipeline::Pipeline& p, int width, int height, const std::string& style = "");
   // Draws into the current framebuffer (viewer); `camera` overrides the scene camera.
   void draw(pipeline::Pipeline& p, const Camera& camera, int width, int height);
