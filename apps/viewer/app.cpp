@@ -380,6 +380,7 @@ void App::renderView() {
       render::sceneSettings(scene, std::max(1, viewPixels_.x / scale), std::max(1, viewPixels_.y / scale));
   settings.drawSkin = view_.showSkin;
   settings.drawCoat = view_.showCoat;
+  settings.subpixelCulling = !view_.wireframe;  // a wireframe draws the edges of triangles that cover no centre
   // The navigation coat shows every k-th feather: colour the skin like the coat looked (the mean of
   // the last full view) so the body reads as feathered rather than bare while the camera moves.
   if (nav && navSkinColor_.x >= 0.0f) settings.skinColor = navSkinColor_;

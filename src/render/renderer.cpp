@@ -87,7 +87,7 @@ struct Renderer::Impl {
     State state = kEmpty;
     bool backward = false;
     int8_t order[4] = {0, 1, 2, 3};  // parts: shaft, left, right, afterfeather
-    uint32_t triangles = 0, occludedTriangles = 0;
+    uint32_t triangles = 0, occludedTriangles = 0, subpixelTriangles = 0;
   };
   std::vector<Plan> plans;
   struct Run {
@@ -315,11 +315,14 @@ struct Renderer::Impl {
   // nearest vertex is behind the farthest skin depth over every tile its bounds touch (window depth
   // is affine over a triangle, so its nearest point is a vertex). Returns the indices written.
   // `projected` is scratch space. Thread-safe (reads shared state only).
-  uint32_t emitChunk(const Chunk& ch, bool backward, bool test, const glm::mat4& viewProj, int w, int h,
-                     uint32_t* out, std::vector<glm::vec3>& projected) const {
+  // With `subpixel`, triangles that cover no pixel centre are dropped as well (they produce no fragment
+  // without multisampling, but llvmpipe still shades their vertices and sets them up).
+  // `tiny` counts the triangles dropped only for covering no pixel centre.
+  uint32_t emitChunk(const Chunk& ch, bool backward, bool test, bool subpixel, const glm::mat4& viewProj, int w, int h,
+                     uint32_t* out, std::vector<glm::vec3>& projected, uint32_t& tiny) const {
     const uint32_t* idx = coatIndices.data() + ch.first;
     const uint32_t tris = ch.count / 3;
-    if (!test) {
+    if (!test && !subpixel) {
       if (!backward) {
         std::copy(idx, idx + ch.count, out);
       } else {
@@ -352,8 +355,14 @@ struct Renderer::Impl {
         if (x1 < -1.0f || y1 < -1.0f || x0 > float(w) + 1.0f || y0 > float(h) + 1.0f) {
           keep = false;
         } else {
-          const float nearest = std::min({a.z, b.z, c.z});
-          keep = !(nearest > 0.0f) || !hiddenRect(x0, y0, x1, y1, nearest);
+          if (test) {
+            const float nearest = std::min({a.z, b.z, c.z});
+            keep = !(nearest > 0.0f) || !hiddenRect(x0, y0, x1, y1, nearest);
+          }
+          if (keep && subpixel && !mayCoverPixelCentre(a, b, c, x0, y0, x1, y1)) {
+            keep = false;
+            ++tiny;
+          }
         }
       }
       if (keep) {
@@ -362,6 +371,39 @@ struct Renderer::Impl {
       }
     }
     return written;
+  }
+
+  // False only when the window-space triangle abc (bounds x0..y1) certainly covers no pixel centre
+  // (x + 0.5, y + 0.5): no centre in its bounds, or none of the few centres in its bounds inside all
+  // three edges. Everything is widened by kSubpixelSlack pixels, far more than the rounding between
+  // this projection and the rasterizer's (fixed point, 1/256 px), so a dropped triangle never had a
+  // fragment. Larger triangles (more than 16 centres in their bounds) are kept untested.
+  static constexpr float kSubpixelSlack = 0.05f;
+  static bool mayCoverPixelCentre(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, float x0, float y0,
+                                  float x1, float y1) {
+    const float e = kSubpixelSlack;
+    const float cx0 = std::ceil(x0 - 0.5f - e), cx1 = std::floor(x1 - 0.5f + e);
+    const float cy0 = std::ceil(y0 - 0.5f - e), cy1 = std::floor(y1 - 0.5f + e);
+    if (cx0 > cx1 || cy0 > cy1) return false;
+    if ((cx1 - cx0 + 1.0f) * (cy1 - cy0 + 1.0f) > 16.0f) return true;
+    const float area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    if (!(std::abs(area) > 1e-6f)) return true;  // (nearly) degenerate: leave it to the rasterizer
+    const float sign = area > 0.0f ? 1.0f : -1.0f;
+    const glm::vec2 v[3] = {{a.x, a.y}, {b.x, b.y}, {c.x, c.y}};
+    float len[3];
+    for (int k = 0; k < 3; ++k) len[k] = glm::length(v[(k + 1) % 3] - v[k]);
+    for (float py = cy0 + 0.5f; py <= cy1 + 0.5f; py += 1.0f)
+      for (float px = cx0 + 0.5f; px <= cx1 + 0.5f; px += 1.0f) {
+        bool inside = true;
+        for (int k = 0; k < 3 && inside; ++k) {
+          const glm::vec2& p0 = v[k];
+          const glm::vec2& p1 = v[(k + 1) % 3];
+          const float edge = sign * ((p1.x - p0.x) * (py - p0.y) - (p1.y - p0.y) * (px - p0.x));
+          inside = edge >= -e * len[k];
+        }
+        if (inside) return true;
+      }
+    return false;
   }
 
   // True when every depth tile over the pixel rectangle is nearer than windowDepth.
@@ -705,9 +747,11 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   // body skip rasterisation (conservative: a feather is dropped only if its bounding sphere's nearest
   // point lies behind the farthest skin depth over its screen rectangle).
   bool occlusion = false;
+  GLint sampleBuffers = 0;
+  gl.GetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
+  // Sub-pixel culling relies on single-sample rasterization (fragments only at pixel centres).
+  const bool subpixel = s.subpixelCulling && sampleBuffers == 0;
   if (s.occlusionCulling && s.drawSkin && r.skin.indexCount > 0 && s.drawCoat) {
-    GLint sampleBuffers = 0;
-    gl.GetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
     if (sampleBuffers == 0) {
       r.depth.resize(static_cast<size_t>(s.width) * s.height);
       gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
@@ -793,14 +837,17 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
         const uint32_t c0 = r.partChunks[5 * i], c1 = r.partChunks[5 * i + 4];
         for (uint32_t c = c0; c < c1; ++c) {
           const Impl::Chunk& ch = r.chunks[c];
+          uint32_t tiny = 0;
           Depth d = depth;
           if (d == Depth::Mixed && c1 - c0 > 1) d = r.classify(ch.lo, ch.hi, viewProj, view, proj, s.width, s.height);
           const uint32_t n = d == Depth::Hidden ? 0
-                                                : r.emitChunk(ch, pl.backward, d == Depth::Mixed, viewProj, s.width,
-                                                              s.height, r.scratch.data() + ch.first, projected);
+                                                : r.emitChunk(ch, pl.backward, d == Depth::Mixed, subpixel, viewProj,
+                                                              s.width, s.height, r.scratch.data() + ch.first, projected,
+                                                              tiny);
           r.kept[c] = n;
           pl.triangles += n / 3;
-          pl.occludedTriangles += (ch.count - n) / 3;
+          pl.occludedTriangles += (ch.count - n) / 3 - tiny;
+          pl.subpixelTriangles += tiny;
         }
       }
     });
@@ -817,6 +864,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       if (pl.state != Impl::Plan::kDrawn) continue;
       stats_.triangles += pl.triangles;
       stats_.occludedTriangles += pl.occludedTriangles;
+      stats_.subpixelTriangles += pl.subpixelTriangles;
       const uint32_t material = r.ranges[i].material;
       if (r.runs.empty() || r.runs.back().material != material) r.runs.push_back({material, used, 0});
       for (int8_t k : pl.order) {

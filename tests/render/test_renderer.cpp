@@ -550,3 +550,35 @@ TEST(RendererState, RenderImageRestoresTheCallersFramebuffer) {
   EXPECT_EQ(before, 0);
   EXPECT_EQ(after, before);
 }
+
+TEST(Renderer, SubpixelCullingDropsTrianglesThatCoverNoPixelCentreWithoutChangingTheImage) {
+  // A coat seen from afar: many barb triangles are thinner than a pixel and cover no pixel centre.
+  // Dropping them before the rasterizer leaves the image bit-identical.
+  Renderer r(context());
+  SyntheticCoatParams cp;
+  cp.featherCount = 300;
+  cp.featherLength = 0.4f;
+  cp.featherWidth = 0.12f;
+  const SyntheticCoat coat = makeSyntheticCoat(cp);
+  r.setSkin(coat.skin);
+  r.setCoat(coat.coat, coat.ranges);
+  Camera cam;
+  cam.eye = {0.5f, 1.0f, 3.0f};
+  glm::vec3 lo, hi;
+  coat.coat.bounds(lo, hi);
+  cam.frameBounds(lo, hi, 1.0f, 0.8f);
+  for (const int size : {96, 200}) {
+    RenderSettings s;
+    s.width = s.height = size;
+    const Image culled = r.renderImage(cam, {Light{}}, s);
+    const RenderStats on = r.lastStats();
+    s.subpixelCulling = false;
+    const Image all = r.renderImage(cam, {Light{}}, s);
+    const RenderStats off = r.lastStats();
+    EXPECT_EQ(off.subpixelTriangles, 0u);
+    EXPECT_GT(on.subpixelTriangles, off.triangles / 10) << size << " px";
+    EXPECT_EQ(on.triangles + on.subpixelTriangles, off.triangles) << size << " px";
+    EXPECT_EQ(on.occludedTriangles, off.occludedTriangles);
+    EXPECT_EQ(meanAbsoluteError(culled, all), 0.0) << size << " px";
+  }
+}

@@ -111,6 +111,10 @@ struct RenderSettings {
   // read back once per frame) or outside the view. Exact for opaque skin; turn off to measure raw
   // throughput.
   bool occlusionCulling = true;
+  // Skip feather triangles that cover no pixel centre (within 0.05 px): without multisampling they
+  // produce no fragment, but llvmpipe still shades their vertices and sets them up. The image is
+  // unchanged; off automatically with multisampling. Turn off for wireframe (glPolygonMode) views.
+  bool subpixelCulling = true;
   // Minified colour and alpha textures: true samples the nearest texel of the nearest mip level
   // (about 20% faster on llvmpipe); false filters bilinearly within it. Magnification is bilinear.
   bool fastTextureFiltering = true;
@@ -125,6 +129,7 @@ struct RenderStats {
   size_t occludedFeathers = 0;  // feathers hidden behind the skin, skipped
   size_t occludedTriangles = 0;  // triangles of drawn feathers skipped: behind the skin (runs of a few
                                  // barbs, then single triangles) or outside the view
+  size_t subpixelTriangles = 0;  // triangles of drawn feathers skipped for covering no pixel centre
 };
 
 class Renderer {
