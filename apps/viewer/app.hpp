@@ -124,6 +124,10 @@ class App {
   unsigned int viewTexture_ = 0;
   int viewTexW_ = 0, viewTexH_ = 0;
   double lastRenderSeconds_ = 0;
+  // Adaptive navigation: smoothed full-coat render time while moving (< 0: not measured since the
+  // last upload or view resize) and what it was measured for.
+  double movingFullMs_ = -1.0;
+  float movingFullKey_[3] = {-1.0f, -1.0f, -1.0f};  // upload version, view width, height
   bool cameraReady_ = false, cameraFramedCoat_ = false, cameraMoved_ = false;
   bool materialsStale_ = true;
   double lastBrdfD_ = -1, lastBrdfH_ = -1;

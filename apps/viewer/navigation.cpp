@@ -78,4 +78,14 @@ NavigationCoat makeNavigationCoat(const pipeline::CoatMesh& coat, size_t budget)
   return out;
 }
 
+bool useNavigationCoat(bool forced, bool adaptive, double movingFullCoatMs, double budgetMs) {
+  if (forced || !adaptive) return true;
+  if (movingFullCoatMs < 0.0) return false;  // measure the full coat first
+  return movingFullCoatMs > budgetMs;
+}
+
+double smoothFrameMs(double previousMs, double sampleMs) {
+  return previousMs < 0.0 ? sampleMs : 0.7 * previousMs + 0.3 * sampleMs;
+}
+
 }  // namespace pteryla::viewer

@@ -24,4 +24,13 @@ struct NavigationCoat {
 // vertex range shared with another feather are copied with that range (correct, if not minimal).
 NavigationCoat makeNavigationCoat(const pipeline::CoatMesh& coat, size_t triangleBudget);
 
+// Adaptive navigation: whether a moving view draws the navigation coat rather than every feather.
+// `movingFullCoatMs` is the smoothed render time of the full coat while moving (< 0: not measured yet
+// since the last upload or resize, so the full coat is tried first). `forced` (show navigation on)
+// always draws the navigation coat; without `adaptive` the navigation coat is always drawn.
+bool useNavigationCoat(bool forced, bool adaptive, double movingFullCoatMs, double budgetMs);
+
+// Exponential smoothing of the measured moving full-coat time (the first sample is taken as it is).
+double smoothFrameMs(double previousMs, double sampleMs);
+
 }  // namespace pteryla::viewer

@@ -56,6 +56,10 @@ struct ViewState {
   int navigationScale = 2;
   bool navigationChanged = false;
   bool forceNavigation = false;  // draw the navigation coat even at rest (script: show navigation on)
+  // Adaptive navigation: while the camera moves, keep drawing every feather (at 1/navigationScale) as
+  // long as such a frame renders within fullCoatBudgetMs; the navigation coat only when slower.
+  bool adaptiveNavigation = true;
+  float fullCoatBudgetMs = 85.0f;
   // Measured frame rate (frames per second over the last half second).
   float fps = 0.0f;
   // The 3D view's rectangle in window coordinates (right of the panel column, between the menu bar

@@ -65,3 +65,22 @@ TEST(Navigation, LongFeathersFirstThenEveryKthWithinTheBudget) {
   }
   EXPECT_TRUE(nav.mesh.normals.empty());  // absent attributes stay absent
 }
+
+TEST(AdaptiveNavigation, FullCoatWhileItIsFastEnough) {
+  // Not measured yet (after an upload or resize): try the full coat first.
+  EXPECT_FALSE(useNavigationCoat(false, true, -1.0, 85.0));
+  // Fast enough: keep every feather while moving; too slow: the navigation coat.
+  EXPECT_FALSE(useNavigationCoat(false, true, 60.0, 85.0));
+  EXPECT_FALSE(useNavigationCoat(false, true, 85.0, 85.0));
+  EXPECT_TRUE(useNavigationCoat(false, true, 90.0, 85.0));
+  // Forced (show navigation on) or adaptive off: always the navigation coat.
+  EXPECT_TRUE(useNavigationCoat(true, true, 10.0, 85.0));
+  EXPECT_TRUE(useNavigationCoat(false, false, 10.0, 85.0));
+  // Smoothing: the first sample as it is, then a running blend that follows a slowdown.
+  EXPECT_DOUBLE_EQ(smoothFrameMs(-1.0, 70.0), 70.0);
+  double ms = 70.0;
+  for (int i = 0; i < 10; ++i) ms = smoothFrameMs(ms, 120.0);
+  EXPECT_GT(ms, 115.0);
+  EXPECT_LT(ms, 120.0);
+  EXPECT_TRUE(useNavigationCoat(false, true, ms, 85.0));
+}
