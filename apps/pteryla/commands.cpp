@@ -167,35 +167,8 @@ int cmdFeather(const Common& c, const FeatherArgs& a) {
   }
   int w = 0, h = 0;
   parseSize(a.size, "--size", w, h);
-  // One feather lying in the view plane, dorsal side to the camera, shaft up the image.
-  pipeline::CoatMesh coat;
-  coat.mesh = mesh;
-  pipeline::CoatMaterial m;
-  m.name = p.name;
-  m.pattern = p.material.pattern;
-  if (!p.material.texture.empty()) m.texture = resolveRelative(p.sourceFile, p.material.texture);
-  if (!p.material.alphaTexture.empty()) m.alphaTexture = resolveRelative(p.sourceFile, p.material.alphaTexture);
-  if (p.material.baseColor) m.baseColor = glm::vec3(*p.material.baseColor);
-  coat.materials.push_back(m);
-  pipeline::Scene scene;
-  scene.render.background = {0.92, 0.92, 0.9};
-  scene.lights.push_back({{-0.3, -0.4, -1.0}, {1, 1, 1}, 1.0});
   render::OsMesaContext ctx(w, h);
-  render::Renderer r(ctx);
-  r.setMaterials(render::sceneMaterials(scene, coat));
-  r.setCoat(coat.mesh, {});
-  glm::vec3 lo, hi;
-  render::Camera cam;
-  if (mesh.bounds(lo, hi)) {
-    const glm::vec3 centre = 0.5f * (lo + hi);
-    cam.up = glm::vec3(1, 0, 0);  // shaft (+x) up the image
-    cam.target = centre;
-    cam.eye = centre + glm::vec3(0, 0, 1);
-    cam.frameBounds(lo, hi, float(w) / float(h), 1.05f);
-  }
-  render::RenderSettings s = render::sceneSettings(scene, w, h);
-  s.drawSkin = false;
-  render::saveImage(a.out, r.renderImage(cam, render::sceneLights(scene), s));
+  render::saveImage(a.out, render::renderFeatherImage(ctx, p, mesh, w, h));
   info(c, "wrote " + a.out + " (" + std::to_string(mesh.triangleCount()) + " triangles)");
   return 0;
 }

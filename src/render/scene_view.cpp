@@ -148,6 +148,36 @@ std::vector<double> screenSizeLods(pipeline::Pipeline& p, const Camera& camera, 
   return out;
 }
 
+Image renderFeatherImage(RenderContext& context, const feather::FeatherParams& p, const TriMesh& mesh, int w, int h) {
+  pipeline::CoatMesh coat;
+  coat.mesh = mesh;
+  pipeline::CoatMaterial m;
+  m.name = p.name;
+  m.pattern = p.material.pattern;
+  if (!p.material.texture.empty()) m.texture = resolveRelative(p.sourceFile, p.material.texture);
+  if (!p.material.alphaTexture.empty()) m.alphaTexture = resolveRelative(p.sourceFile, p.material.alphaTexture);
+  if (p.material.baseColor) m.baseColor = glm::vec3(*p.material.baseColor);
+  coat.materials.push_back(m);
+  pipeline::Scene scene;
+  scene.render.background = {0.92, 0.92, 0.9};
+  scene.lights.push_back({{-0.3, -0.4, -1.0}, {1, 1, 1}, 1.0});
+  Renderer r(context);
+  r.setMaterials(sceneMaterials(scene, coat));
+  r.setCoat(coat.mesh, {});
+  glm::vec3 lo, hi;
+  Camera cam;
+  if (mesh.bounds(lo, hi)) {
+    const glm::vec3 centre = 0.5f * (lo + hi);
+    cam.up = glm::vec3(1, 0, 0);  // shaft (+x) up the image
+    cam.target = centre;
+    cam.eye = centre + glm::vec3(0, 0, 1);
+    cam.frameBounds(lo, hi, float(w) / float(h), 1.05f);
+  }
+  RenderSettings s = sceneSettings(scene, w, h);
+  s.drawSkin = false;
+  return r.renderImage(cam, sceneLights(scene), s);
+}
+
 struct SceneView::Impl {
   explicit Impl(RenderContext& c) : renderer(c) {}
   Renderer renderer;

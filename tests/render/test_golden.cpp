@@ -4,6 +4,10 @@
 #include <gtest/gtest.h>
 
 #include "golden.hpp"
+#include "pteryla/feather/io.hpp"
+#include "pteryla/feather/mesh.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/render/scene_view.hpp"
 #include "pteryla/render/osmesa_context.hpp"
 #include "pteryla/render/pattern.hpp"
 #include "pteryla/render/renderer.hpp"
@@ -105,4 +109,26 @@ TEST(ScratchboardGolden, SmallCoat) {
   s.width = s.height = 256;
   const Image img = renderScratchboard(coat.coat, coat.skin, cam, {Light{}}, s);
   EXPECT_TRUE(golden::matchesGolden(img, "scratchboard_coat"));
+}
+
+// Bundled feather types at full detail and at 30% (the alpha mask repeated over merged barbs keeps
+// the look, 7.1.3), as `pteryla feather F.json --out F.png` draws them.
+TEST(FeatherGolden, BundledTypesAtTwoLevels) {
+  for (const char* type : {"contour", "primary", "down"}) {
+    const feather::FeatherParams p = feather::loadFeather(std::string(PTERYLA_DATA_DIR) + "/feathers/" + type + ".json");
+    for (const double lod : {1.0, 0.3}) {
+      const std::string name = std::string("feather_") + type + (lod == 1.0 ? "_100" : "_30");
+      const Image img = renderFeatherImage(context(), p, feather::buildFeatherMesh(p, 1.0, lod), 96, 160);
+      EXPECT_TRUE(golden::matchesGolden(img, name)) << name;
+    }
+  }
+}
+
+// A packed patch through the scene path the CLI renders (Pipeline + SceneView): relaxed follicles,
+// interpolated key feathers, height-field packing, meshing, textures, layer and octant order.
+TEST(SceneGolden, PackedPatch) {
+  pipeline::Pipeline p(pipeline::loadScene(std::string(PTERYLA_DATA_DIR) + "/scenes/patch.json"));
+  p.setLod(0.5);
+  SceneView view(context());
+  EXPECT_TRUE(golden::matchesGolden(view.render(p, 224, 128), "packed_patch"));
 }

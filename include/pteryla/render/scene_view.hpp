@@ -11,6 +11,8 @@
 #include "pteryla/render/image.hpp"
 #include "pteryla/render/renderer.hpp"
 
+namespace pteryla::feather { struct FeatherParams; }
+
 namespace pteryla::render {
 
 // Camera for the scene: explicit eye/target, or framing the posed skin's bounds (auto_frame).
@@ -29,6 +31,12 @@ std::vector<FeatherDrawRange> drawRanges(const pipeline::CoatMesh& coat);
 // BRDF textures keep the look of the barbs a feather loses. Absent feathers get 1.
 std::vector<double> screenSizeLods(pipeline::Pipeline& p, const Camera& camera, int width, int height,
                                    float fullDetailPixels = 400.0f, float minFraction = 0.1f);
+
+// One feather (its mesh built from `params`, e.g. feather::buildFeatherMesh) lying in the view plane,
+// dorsal side to the camera, shaft up the image, with the material of its feather file (texture or
+// pattern, alpha mask, base colour) on a light grey background: `pteryla feather F.json --out F.png`.
+Image renderFeatherImage(RenderContext& context, const feather::FeatherParams& params, const TriMesh& mesh, int width,
+                         int height);
 
 class SceneView {
  public:
