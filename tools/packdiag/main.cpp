@@ -3,7 +3,7 @@
 // elevations, pack statistics, intersecting triangle pairs at full geometry (and the unpacked proxy's),
 // the tract pairs they fall between, skin penetrations and coverage.
 //
-//   pteryla_packdiag SCENE.json [--set /json/pointer=JSON ...] [--no-full] [--lod F] [--top N]
+//   pteryla_packdiag SCENE.json [--set /json/pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME]
 //
 // --set edits the scene JSON before loading (e.g. --set /packing/shaft_band=0.5), so parameter
 // experiments need no scratch scene files. --no-full skips the slow full-geometry checks (the proxy
@@ -49,11 +49,12 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 int main(int argc, char** argv) {
   try {
     if (argc < 2) {
-      std::fprintf(stderr, "usage: %s SCENE.json [--set /pointer=JSON ...] [--no-full] [--lod F] [--top N]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s SCENE.json [--set /pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME]\n", argv[0]);
       return 2;
     }
     const std::string path = argv[1];
     bool full = true, cover = false;
+    std::string listTract;  // --tract NAME: one line per feather of that tract (follicle, frame, elevations)
     double lod = 1.0;
     int top = 15;
     std::vector<std::pair<std::string, std::string>> sets;
@@ -63,6 +64,7 @@ int main(int argc, char** argv) {
       else if (s == "--cover") cover = true;
       else if (s == "--lod" && a + 1 < argc) lod = std::stod(argv[++a]);
       else if (s == "--top" && a + 1 < argc) top = std::stoi(argv[++a]);
+      else if (s == "--tract" && a + 1 < argc) listTract = argv[++a];
       else if (s == "--set" && a + 1 < argc) {
         const std::string kv = argv[++a];
         const size_t eq = kv.find('=');
@@ -102,6 +104,19 @@ int main(int argc, char** argv) {
                 "unopened %zu fixed %zu barbs elevated %zu lifted %zu unresolved %zu\n",
                 secondsSince(t0), same, n, st.free, st.shaftClamped, st.conflicts, st.unopened, st.fixed,
                 st.barbsElevated, st.barbsLifted, st.barbsUnresolved);
+    if (!listTract.empty()) {
+      std::vector<uint32_t> layerPos(n, 0);
+      for (size_t k = 0; k < coat.layerOrder.size(); ++k) layerPos[coat.layerOrder[k]] = static_cast<uint32_t>(k);
+      for (size_t i = 0; i < n; ++i) {
+        if (tracts[coat.tract[i]].name != listTract) continue;
+        const auto& f = coat.frames[i];
+        const double fixed = i < po.fixedElevation.size() ? po.fixedElevation[i] : NAN;
+        std::printf("  feather %zu layer %u at (%.4f %.4f %.4f) T (%.3f %.3f %.3f) N (%.3f %.3f %.3f) elevation %.2f deg "
+                    "fixed %.2f len %.3f\n",
+                    i, layerPos[i], f.origin.x, f.origin.y, f.origin.z, f.tangent.x, f.tangent.y, f.tangent.z, f.normal.x,
+                    f.normal.y, f.normal.z, elev[i] * 57.29578, fixed * 57.29578, coat.params[i].rachisLength);
+      }
+    }
 
     // Checks.
     coat::CheckOptions co;

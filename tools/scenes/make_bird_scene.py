@@ -136,7 +136,21 @@ def resample(poly, n):
 
 FTAG = os.environ.get('BIRD_FTAG', '')  # experiments: write feather variants under another name
 
-def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeather=True, barb_length=None, size=None, **over):
+def mirrored(f):
+    """The mirror image of a feather across its shaft plane: vanes, silhouette and lateral curvature
+    swapped (key barbs are given in a vane-symmetric barb frame, docs/feather-format.md, so each vane's
+    curves move with it)."""
+    f = dict(f)
+    f['left_vane'], f['right_vane'] = f['right_vane'], f['left_vane']
+    if 'silhouette' in f:
+        f['silhouette'] = {'left': f['silhouette']['right'], 'right': f['silhouette']['left']}
+    r = dict(f['rachis'])
+    for k in ('lateral_curvature_deg', 'lateral_curvature'):
+        if k in r: r[k] = -r[k]
+    f['rachis'] = r
+    return f
+
+def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeather=True, barb_length=None, size=None, mirror=False, **over):
     """A bird feather from a library feather. barbs_per_vane sets the barb spacing so each vane has about
     that many barbs (full-geometry triangles ~ 16 per barb plus the shaft): the bird's ~3,150 feathers
     come to ~2.2M triangles at full detail, like the thesis' bird (issues #10, #12)."""
@@ -164,6 +178,7 @@ def variant(base, name, pattern=None, color=None, barbs_per_vane=None, afterfeat
     if color: mat['base_color'] = color
     f['material'] = mat
     for k, v in over.items(): f[k] = v
+    if mirror: f = mirrored(f)
     os.makedirs(os.path.join(DATA, 'feathers', 'bird'), exist_ok=True)
     json.dump(f, open(os.path.join(DATA, 'feathers', 'bird', name + FTAG + '.json'), 'w'), indent=2)
     return '../feathers/bird/' + name + FTAG + '.json'
@@ -182,6 +197,26 @@ feathers = {  # body feathers without afterfeathers (hidden under the vanes; the
     'secondary': variant('secondary', 'secondary', 'flight_dark', barbs_per_vane=FLIGHT_BARBS, barb_length=3.8 * FLIGHT_W),
     'rectrix': variant('rectrix', 'rectrix', 'barred_brown', barbs_per_vane=FLIGHT_BARBS, barb_length=2.0 * FLIGHT_W),
 }
+
+# BIRD_MIRROR_FEATHERS=1: asymmetric feathers (flight feathers and coverts have a narrow and a wide vane
+# and a curved rachis) are mirrored on the right side of the body, so the right wing is the exact mirror
+# image of the left. Measured (packdiag, full geometry): pairs 1622 -> 2076 of ~33,600 unpacked, coverage
+# 0.9285 -> 0.9287. The right wing's pairs are not a handedness effect: they come from one pair of
+# neighbouring secondaries (3125 under 3124, follicles 0.055 apart) whose styled minimum elevations put
+# the upper one at the 88-degree conflict limit (it would need more than 90 to clear; left wing: 87.6,
+# just clear). Mirrored: 1169 pairs for that pair (495 unmirrored); conflict limit 89 / 90: 2225 / 1339
+# pairs overall. Off until the secondaries' pins or styling leave room at the wing's trailing edge.
+MIRROR_FEATHERS = os.environ.get('BIRD_MIRROR_FEATHERS', '0') == '1'
+ASYMMETRIC = ('covert', 'primary', 'secondary') if MIRROR_FEATHERS else ()
+if MIRROR_FEATHERS:
+    feathers['covert_right'] = variant('covert', 'covert_right', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False,
+                                       barb_length=float(os.environ.get('BIRD_COVERT_W', 1.7)), mirror=True)
+    feathers['primary_right'] = variant('primary', 'primary_right', 'flight_dark', barbs_per_vane=FLIGHT_BARBS,
+                                        barb_length=4.0 * FLIGHT_W, mirror=True)
+    feathers['secondary_right'] = variant('secondary', 'secondary_right', 'flight_dark', barbs_per_vane=FLIGHT_BARBS,
+                                          barb_length=3.8 * FLIGHT_W, mirror=True)
+def sided(kind, tract):
+    return kind + '_right' if tract.endswith('_right') and kind in ASYMMETRIC else kind
 
 if GREATER:
     feathers['greater_covert'] = variant('covert', 'greater_covert', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False,
@@ -216,7 +251,7 @@ ALAR_REMIGES = os.environ.get('BIRD_ALAR_REMIGES', '0') == '1'
 tracts = []
 for name, kinds, n in body:
     pts = farthest_points(groups[name], n)
-    keys = [{'feather': kinds[i % len(kinds)], 'at': [round(c, 5) for c in p]} for i, p in enumerate(pts)]
+    keys = [{'feather': sided(kinds[i % len(kinds)], name), 'at': [round(c, 5) for c in p]} for i, p in enumerate(pts)]
     if GREATER and name.startswith('alar'):
         # Greater coverts: larger key feathers along the wing's trailing border, over the band where the
         # flight feathers root (real wings have rows of coverts growing larger toward the remiges).
@@ -292,8 +327,8 @@ for side, sgn in (('left', 1), ('right', -1)):
     prim, sec = remex_pins(side)
     tracts.append({'name': 'remiges_' + side, 'groups': ['remiges_' + side], 'count': 0, 'feather_scale': 0.05,
                    'pinned': [{'at': p} for p in sec + prim],
-                   'key_feathers': [{'feather': 'secondary', 'at': sec[0]}, {'feather': 'secondary', 'at': sec[-1]},
-                                    {'feather': 'primary', 'at': prim[0]}, {'feather': 'primary', 'at': prim[-1]}],
+                   'key_feathers': [{'feather': sided('secondary', side), 'at': sec[0]}, {'feather': sided('secondary', side), 'at': sec[-1]},
+                                    {'feather': sided('primary', side), 'at': prim[0]}, {'feather': sided('primary', side), 'at': prim[-1]}],
                    'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
 verts, faces = load_obj(os.path.join(DATA, 'meshes', 'bird.obj'))
 # 'min': flight feathers pack freely above the wing/tail plane; 'fixed': they lie in it (others pack
