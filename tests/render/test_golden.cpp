@@ -3,6 +3,7 @@
 // Update with PTERYLA_UPDATE_GOLDEN=1 ctest -L golden; see golden/README.md for the Mesa version.
 #include <gtest/gtest.h>
 
+#include "gl_fixture.hpp"
 #include "golden.hpp"
 #include "pteryla/feather/io.hpp"
 #include "pteryla/feather/mesh.hpp"
@@ -18,10 +19,7 @@ using namespace pteryla;
 using namespace pteryla::render;
 
 namespace {
-OsMesaContext& context() {
-  static OsMesaContext ctx(64, 64);
-  return ctx;
-}
+using gltest::context;
 }  // namespace
 
 TEST(RendererGolden, SkinSphere) {

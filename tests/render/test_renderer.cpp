@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "gl_fixture.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/render/osmesa_context.hpp"
 #include "pteryla/render/pattern.hpp"
@@ -17,10 +18,7 @@ using namespace pteryla::render;
 
 namespace {
 
-OsMesaContext& context() {
-  static OsMesaContext ctx(64, 64);
-  return ctx;
-}
+using gltest::context;
 
 // Quad centred at c spanning c +- a +- b, normal n, tangent t; uv (0,0) at c - a - b, (1,1) at c + a + b.
 TriMesh quad(glm::vec3 c, glm::vec3 a, glm::vec3 b, float alpha = 1.0f, glm::vec3 t = {1, 0, 0}, float barbCount = 1.0f) {
@@ -359,14 +357,7 @@ TEST(Renderer, OcclusionCullingSkipsHiddenFeathersWithoutChangingTheImage) {
   cp.featherLength = 0.5f;
   cp.featherWidth = 0.15f;
   cp.feather.barbsPerVane = 6;
-  const SyntheticCoat coat = makeSyntheticCoat(cp);
-  r.setSkin(coat.skin);
-  r.setCoat(coat.coat, coat.ranges);
-  Camera cam;
-  cam.eye = {0.5f, 1.0f, 3.0f};
-  glm::vec3 lo, hi;
-  coat.coat.bounds(lo, hi);
-  cam.frameBounds(lo, hi, 1.0f, 0.8f);
+  const Camera cam = gltest::showCoat(r, makeSyntheticCoat(cp));
   RenderSettings s;
   s.width = s.height = 128;
   const Image culled = r.renderImage(cam, {Light{}}, s);
@@ -559,14 +550,7 @@ TEST(Renderer, SubpixelCullingDropsTrianglesThatCoverNoPixelCentreWithoutChangin
   cp.featherCount = 300;
   cp.featherLength = 0.4f;
   cp.featherWidth = 0.12f;
-  const SyntheticCoat coat = makeSyntheticCoat(cp);
-  r.setSkin(coat.skin);
-  r.setCoat(coat.coat, coat.ranges);
-  Camera cam;
-  cam.eye = {0.5f, 1.0f, 3.0f};
-  glm::vec3 lo, hi;
-  coat.coat.bounds(lo, hi);
-  cam.frameBounds(lo, hi, 1.0f, 0.8f);
+  const Camera cam = gltest::showCoat(r, makeSyntheticCoat(cp));
   for (const int size : {96, 200}) {
     RenderSettings s;
     s.width = s.height = size;

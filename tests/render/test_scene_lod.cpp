@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "gl_fixture.hpp"
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/render/osmesa_context.hpp"
@@ -17,10 +18,7 @@ using namespace pteryla::render;
 
 namespace {
 
-OsMesaContext& context() {
-  static OsMesaContext ctx(64, 64);
-  return ctx;
-}
+using gltest::context;
 
 pipeline::Scene coatScene(bool bySize, double lod = 0.6) {
   Json j = Json::parse(R"({"pteryla": 1, "seed": 5, "mesh": "meshes/sphere_250.obj",
