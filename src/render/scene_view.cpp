@@ -132,18 +132,23 @@ std::vector<FeatherDrawRange> drawRanges(const pipeline::CoatMesh& coat) {
 }
 
 std::vector<double> screenSizeLods(pipeline::Pipeline& p, const Camera& camera, int width, int height,
-                                   float fullDetailPixels, float minFraction) {
+                                   double pixelsPerBarb, double minFraction) {
   const coat::CoatFeathers& f = p.feathers();
   const std::vector<double>& elevation = p.elevations();
   std::vector<double> out(f.size(), 1.0);
+  const double lo = std::clamp(minFraction, 1e-3, 1.0);
   for (size_t i = 0; i < f.size(); ++i) {
     if (!f.present[i] || i >= elevation.size()) continue;
+    const feather::FeatherParams& params = f.params[i];
     const coat::FeatherFrame& fr = f.frames[i];
     const auto pl = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, elevation[i]);
-    const double half = 0.5 * f.params[i].rachisLength;
+    const double half = 0.5 * params.rachisLength;
     const glm::vec3 centre(fr.origin + pl.x * half);
-    const float px = screenSizeOfSphere(centre, static_cast<float>(half), camera, {width, height});
-    out[i] = std::clamp(static_cast<double>(lodFraction(px, fullDetailPixels, minFraction)), 1e-3, 1.0);
+    const double px = screenSizeOfSphere(centre, static_cast<float>(half), camera, {width, height});
+    const double spacing = 0.5 * (params.spacingBase + params.spacingTip);
+    const double barbs = spacing > 0 ? params.rachisLength / spacing : 1.0;
+    const double f1 = px / (std::max(pixelsPerBarb, 1e-6) * std::max(barbs, 1.0));
+    out[i] = std::clamp(std::isfinite(f1) ? f1 : 1.0, lo, 1.0);
   }
   return out;
 }

@@ -25,16 +25,15 @@ std::vector<FeatherMaterial> sceneMaterials(const pipeline::Scene& scene, const 
 std::vector<FeatherDrawRange> drawRanges(const pipeline::CoatMesh& coat);
 
 // Screen-size level of detail (Streit 2003, 7.1.3; scene render.lod_by_screen_size): per feather of
-// p.feathers(), lodFraction(projected length in pixels, fullDetailPixels, minFraction), where the
-// projected length is the screen diameter of the sphere around the packed rachis (follicle to tip).
-// Hand the result to Pipeline::setFeatherLods, which multiplies it with the scene's lod; the alpha and
-// BRDF textures keep the look of the barbs a feather loses. Absent feathers get 1.
+// p.feathers(), the fraction of its barbs that keeps the kept barbs about `pixelsPerBarb` apart on
+// screen: clamp(L / (pixelsPerBarb x n), minFraction, 1), where L is the projected length in pixels of
+// the packed rachis (the screen diameter of the sphere around it) and n = rachis length / mean barb
+// spacing is the number of barbs along one vane. Barbs closer than that merge into polygons whose
+// alpha mask repeats the barbs they stand for, so the look is kept. Hand the result to
+// Pipeline::setFeatherLods, which multiplies it with the scene's lod. Absent feathers get 1.
 std::vector<double> screenSizeLods(pipeline::Pipeline& p, const Camera& camera, int width, int height,
-                                   float fullDetailPixels = 400.0f, float minFraction = 0.1f);
+                                   double pixelsPerBarb = 2.0, double minFraction = 0.1);
 
-// One feather (its mesh built from `params`, e.g. feather::buildFeatherMesh) lying in the view plane,
-// dorsal side to the camera, shaft up the image, with the material of its feather file (texture or
-// pattern, alpha mask, base colour) on a light grey background: `pteryla feather F.json --out F.png`.
 Image renderFeatherImage(RenderContext& context, const feather::FeatherParams& params, const TriMesh& mesh, int width,
                          int height);
 
