@@ -60,16 +60,16 @@ void drawViewPanel(PanelContext& ctx) {
   ImGui::SetNextItemWidth(140);
   if (ImGui::SliderInt("triangles", &v.navigationBudget, 20000, 1000000, "%d", ImGuiSliderFlags_Logarithmic))
     v.navigationChanged = true;
-  ImGui::SameLine();
-  ImGui::SetNextItemWidth(80);
-  ImGui::SliderInt("1/res", &v.navigationScale, 1, 4);
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("while the camera moves, render the view at 1/N of its resolution");
   ImGui::Checkbox("Full coat when fast", &v.adaptiveNavigation);
   if (ImGui::IsItemHovered())
     ImGui::SetTooltip("while the camera moves, keep every feather as long as a frame renders within the budget");
   ImGui::SameLine();
-  ImGui::SetNextItemWidth(100);
+  ImGui::SetNextItemWidth(70);
   ImGui::SliderFloat("ms", &v.fullCoatBudgetMs, 20.0f, 500.0f, "%.0f", ImGuiSliderFlags_Logarithmic);
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(60);
+  ImGui::SliderInt("1/res", &v.navigationScale, 1, 4);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("while the camera moves, render the view at 1/N of its resolution");
   if (ImGui::Button("Frame all (F)")) ctx.app.frameAll();
   ImGui::SameLine();
   static std::string shot = "screenshot.png";
