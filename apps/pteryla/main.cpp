@@ -16,7 +16,7 @@ void addSceneOptions(CLI::App* sub, SceneArgs& a, bool withSize) {
   sub->add_option("scene", a.scene, "Scene file (.json) or a bare mesh (.obj/.ply/.off/.stl) to feather with defaults")
       ->required();
   sub->add_option("--time,-t", a.time, "Time on the scene's timeline (moult, skinning, controls); default: scene time");
-  sub->add_option("--lod", a.lod, "Fraction of feather geometry in (0,1]; default: the scene's render.lod");
+  sub->add_option("--lod", a.lod, "Fraction of feather geometry in (0,1]; default: the scene's render.lod (with render.lod_by_screen_size, the level of the largest feathers on screen)");
   sub->add_option("--seed", a.seed, "Override the scene's master seed");
   if (withSize) sub->add_option("--size", a.size, "Image size WxH; default: the scene's render.size");
 }
