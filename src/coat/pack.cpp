@@ -22,6 +22,9 @@
 #include <cstring>
 
 #include <glm/geometric.hpp>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_for_each.h>
@@ -287,15 +290,19 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
 
 // ------------------------------------------------------------------ context
 
-struct Candidate {
-  double t, b, n;   // follicle frame: along T, B, N
-  double rad;       // thickness radius of the point
-  bool skin;
-  uint32_t src;     // feather the point belongs to (UINT32_MAX: skin)
-  // Skin samples stand for a patch of the surface (below): its radius, the unit normal (follicle frame)
-  // and the sine bound on how far the patch's faces turn away from that normal.
-  double rho = 0, cone = 0;
-  dvec3 normal{0};
+// Candidate points in the follicle frame (t along T, b along B, n along N). Points of packed feathers carry
+// their thickness radius; skin samples stand for a patch of the surface (below): its radius, the unit
+// normal (follicle frame) and the sine bound on how far the patch's faces turn away from that normal.
+// The two kinds are kept apart (feather points first, then skin, as they are gathered).
+struct FeatherCandidate {
+  double t, b, n;
+  double rad;  // thickness radius of the point
+};
+
+struct SkinCandidate {
+  double t, b, n;
+  double rho, cone;
+  dvec3 normal;
   // Largest rise of the patch over its centre along unit direction a (follicle frame): rho times the sine
   // of the angle between a and the patch's faces' normals (a face tilted toward a rises along it).
   double rise(const dvec3& a) const {
@@ -305,11 +312,13 @@ struct Candidate {
 };
 
 struct Scratch {
-  std::vector<Candidate> cand;
+  std::vector<FeatherCandidate> cand;
+  std::vector<SkinCandidate> skinCand;
   std::vector<double> psiMin, shaftRadBin, yLo, yHi;
   std::vector<glm::dvec2> best;           // per shaft bin: direction of the largest angle so far
   std::vector<double> bh, bhRaw;          // barb fields, keys x bins
   std::vector<double> plane;              // per key: signed distance of the current candidate
+  std::vector<double> keyRoot[3], keyW[3];  // per key: placed root and slicing-plane normal (arrays)
   std::vector<glm::dvec3> curve, tmp;     // barb samples and transformed control vertices
   std::vector<double> bern;               // Bernstein weights: samples x cvs
   size_t bernCvs = 0, bernSamples = 0;
@@ -609,6 +618,47 @@ double lineMax(const dvec3& q, const dvec3& g, const dvec3& w, double wl, double
   return best;
 }
 
+// lineMax() for one patch and barb over many intervals: everything but the interval [lo, hi] / wl is
+// computed once (the same operations, so the same bits; wl >= 1e-12).
+struct LineRise {
+  LineRise(const dvec3& q, const dvec3& g, const dvec3& w, double wl, double rho, double baseR) : rho(rho) {
+    const double wt = w.x / wl;
+    if (wt > 1e-12) {
+      clipLo = true;
+      clip = -q.x / wt;
+    } else if (wt < -1e-12) {
+      clipHi = true;
+      clip = -q.x / wt;
+    }
+    gw = glm::dot(g, w) / wl;
+    qw = glm::dot(q, w) / wl;
+    const double qq = glm::dot(q, q);
+    disc = qw * qw - (qq - baseR * baseR);
+    if (disc > 0) sq = std::sqrt(disc);
+  }
+  // lineMax(q, g, w, wl, rho, lo, hi, baseR) for loW = lo / wl, hiW = hi / wl.
+  double top(double loW, double hiW) const {
+    double xa = std::max(-rho, loW), xb = std::min(rho, hiW);
+    if (clipLo) xa = std::max(xa, clip);
+    else if (clipHi) xb = std::min(xb, clip);
+    if (xa > xb) return -kInf;
+    double best = -kInf;
+    auto take = [&](double a, double b) {
+      if (a > b) return;
+      best = std::max(best, gw >= 0 ? gw * b : gw * a);
+    };
+    if (disc <= 0) {
+      take(xa, xb);
+    } else {
+      take(xa, std::min(xb, -qw - sq));
+      take(std::max(xa, -qw + sq), xb);
+    }
+    return best;
+  }
+  double rho, clip = 0, gw = 0, qw = 0, disc = 0, sq = 0;
+  bool clipLo = false, clipHi = false;
+};
+
 struct Output {
   std::vector<double>& elevation;
   std::vector<feather::FeatherParams>& params;
@@ -625,15 +675,15 @@ struct PlacedKey {
   dvec3 root, u, w, d, left;
 };
 
-// Packs feather i against its dependencies' packed points (already in `out`) and the skin.
-void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
+// Candidate points in the follicle frame (6.3.2: "the data points of the surrounding feathers"): packed
+// points of the dependencies and skin samples inside the footprint and the vane outline.
+[[gnu::noinline]] void gatherCandidates(const Context& ctx, uint32_t i, Scratch& S, const Output& out) {
   const LocalFeather& L = ctx.local[i];
   const FeatherFrame& F = ctx.coat.frames[i];
   const PackOptions& o = ctx.opt;
   PackStats& st = S.stats;
-  ++st.recomputed;
-  // Candidate points in the follicle frame (6.3.2: "the data points of the surrounding feathers").
   S.cand.clear();
+  S.skinCand.clear();
   const dvec3 T = F.tangent, B = F.binormal, N = F.normal, O = F.origin;
   // Sphere (centre c in the follicle frame, radius r) can touch the footprint?
   auto sphereIn = [&](const dvec3& c, double r) {
@@ -662,7 +712,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
         const double n = glm::dot(r, N);
         if (t * t + b * b + n * n > m * m) continue;
         if (!L.inOutline(b, std::sqrt(t * t + n * n))) continue;
-        S.cand.push_back({t, b, n, pq.w, false, j});
+        S.cand.push_back({t, b, n, pq.w});
       }
     }
   }
@@ -693,16 +743,18 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
           if (d2 > L.reach * L.reach || d2 < base2) return;
           if (!L.inOutline(b, std::sqrt(t * t + n * n))) return;
           const double rho = ctx.skinRho[k];
-          Candidate c{t, b, n, 0.0, true, UINT32_MAX};
-          c.rho = rho;
-          c.cone = ctx.skinCone[k];
           const dvec3& nw = ctx.skinNormal[k];
-          c.normal = dvec3(glm::dot(nw, T), glm::dot(nw, B), glm::dot(nw, N));
-          S.cand.push_back(c);
+          S.skinCand.push_back({t, b, n, rho, ctx.skinCone[k], dvec3(glm::dot(nw, T), glm::dot(nw, B), glm::dot(nw, N))});
         });
   }
-  st.candidatePoints += S.cand.size();
+  st.candidatePoints += S.cand.size() + S.skinCand.size();
+}
 
+// 6.3.2 shaft rotation against the candidates; returns the elevation.
+[[gnu::noinline]] double shaftElevation(const Context& ctx, uint32_t i, Scratch& S) {
+  const LocalFeather& L = ctx.local[i];
+  const PackOptions& o = ctx.opt;
+  PackStats& st = S.stats;
   // ---- 6.3.2 shaft rotation: polar height field in the shaft slicing plane.
   const double rMax = L.reach;
   const int bins = std::max(4, o.heightFieldBins);
@@ -720,47 +772,64 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     bestKey.assign(bins, -1.0);
     const double band = o.shaftBand * L.vaneHalf;
     const double r2Min = 1e-24 * rMax * rMax;
-    for (const Candidate& c : S.cand) {
+    // The candidates in gathering order (feather points, then skin): a bin keeps the first of equal angles.
+    // Bins within reach of the shaft whose lateral band holds lateral offset y (widened by `pad`)?
+    auto anyBin = [&](int b0, int b1, double y, double padLo, double padHi) {
+      for (int b = b0; b <= b1; ++b)
+        if (S.psiMin[b] != kInf && !(y < S.yLo[b] - band - padLo) && !(y > S.yHi[b] + band + padHi)) return true;
+      return false;
+    };
+    auto offer = [&](int b0, int b1, double y, double padLo, double padHi, double vx, double vy) {
+      const double pa = pseudoAngle(vx, vy);
+      for (int b = b0; b <= b1; ++b) {
+        if (S.psiMin[b] == kInf) continue;  // beyond the shaft's reach
+        if (y < S.yLo[b] - band - padLo || y > S.yHi[b] + band + padHi) continue;
+        if (pa > bestKey[b]) {
+          bestKey[b] = pa;
+          S.best[b] = {vx, vy};
+        }
+      }
+    };
+    const double rMax2 = rMax * rMax;
+    for (const FeatherCandidate& c : S.cand) {
+      const double r2 = c.t * c.t + c.n * c.n;
+      if (!(r2 > r2Min) || r2 > rMax2) continue;
+      const double r = std::sqrt(r2);
+      const int b0 = std::min(bins - 1, static_cast<int>(r / cell));
+      // (y - band - rad) per bin: the test below is that of a skin patch with rho = 0.
+      if (!anyBin(b0, b0, c.b, c.rad, c.rad)) continue;
+      const double gap = c.rad + S.shaftRadBin[b0] + ctx.clearance;
+      const double sd = std::min(1.0, gap / r), cd = std::sqrt(1 - sd * sd);
+      // (t, n) turned up by the clearance angle delta = asin(gap / r).
+      offer(b0, b0, c.b, c.rad, c.rad, c.t * cd - c.n * sd, c.t * sd + c.n * cd);
+    }
+    for (const SkinCandidate& c : S.skinCand) {
       const double r2 = c.t * c.t + c.n * c.n;
       if (!(r2 > r2Min) || r2 > (rMax + c.rho) * (rMax + c.rho)) continue;
       const double r = std::sqrt(r2);
       // A skin patch covers the radii r +- rho: every bin it reaches gets its highest angle.
       const int b0 = std::min(bins - 1, static_cast<int>(std::max(0.0, r - c.rho) / cell));
       const int b1 = std::min(bins - 1, static_cast<int>((r + c.rho) / cell));
+      if (!anyBin(b0, b1, c.b, c.rho, c.rho)) continue;
       double radMax = 0;
       for (int b = b0; b <= b1; ++b) radMax = std::max(radMax, S.shaftRadBin[b]);
-      double gap;
-      if (c.skin) {
-        // Clearance ramps up over the base zone (the calamus sits in its follicle; the checker exempts it).
-        const double rampF = std::min(1.0, std::max(0.0, r - c.rho) / ramp);
-        gap = (radMax + ctx.skinClearance) * rampF;
-        if (c.rho > 0) {
-          // The tangent from the follicle to the patch (grown by gap), turned by delta from the ray to its
-          // centre, touches it where r sin(delta) = gap + the patch's extent along the tangent's normal
-          // a(delta) (rise): two fixed-point steps from delta = 0, keeping the largest extent seen.
-          const double ct = c.t / r, cn = c.n / r;
-          double extra = c.rise(dvec3(-cn, 0.0, ct)) * rampF;
-          for (int it = 0; it < 2; ++it) {
-            const double sd0 = std::min(1.0, (gap + extra) / r), cd0 = std::sqrt(1 - sd0 * sd0);
-            extra = std::max(extra, c.rise(dvec3(-(cn * cd0 + ct * sd0), 0.0, ct * cd0 - cn * sd0)) * rampF);
-          }
-          gap += extra;
+      // Clearance ramps up over the base zone (the calamus sits in its follicle; the checker exempts it).
+      const double rampF = std::min(1.0, std::max(0.0, r - c.rho) / ramp);
+      double gap = (radMax + ctx.skinClearance) * rampF;
+      if (c.rho > 0) {
+        // The tangent from the follicle to the patch (grown by gap), turned by delta from the ray to its
+        // centre, touches it where r sin(delta) = gap + the patch's extent along the tangent's normal
+        // a(delta) (rise): two fixed-point steps from delta = 0, keeping the largest extent seen.
+        const double ct = c.t / r, cn = c.n / r;
+        double extra = c.rise(dvec3(-cn, 0.0, ct)) * rampF;
+        for (int it = 0; it < 2; ++it) {
+          const double sd0 = std::min(1.0, (gap + extra) / r), cd0 = std::sqrt(1 - sd0 * sd0);
+          extra = std::max(extra, c.rise(dvec3(-(cn * cd0 + ct * sd0), 0.0, ct * cd0 - cn * sd0)) * rampF);
         }
-      } else {
-        gap = c.rad + radMax + ctx.clearance;
+        gap += extra;
       }
       const double sd = std::min(1.0, gap / r), cd = std::sqrt(1 - sd * sd);
-      // (t, n) turned up by the clearance angle delta = asin(gap / r).
-      const double vx = c.t * cd - c.n * sd, vy = c.t * sd + c.n * cd;
-      const double pa = pseudoAngle(vx, vy);
-      for (int b = b0; b <= b1; ++b) {
-        if (S.psiMin[b] == kInf) continue;  // beyond the shaft's reach
-        if (c.b < S.yLo[b] - band - c.rad - c.rho || c.b > S.yHi[b] + band + c.rad + c.rho) continue;
-        if (pa > bestKey[b]) {
-          bestKey[b] = pa;
-          S.best[b] = {vx, vy};
-        }
-      }
+      offer(b0, b1, c.b, c.rho, c.rho, c.t * cd - c.n * sd, c.t * sd + c.n * cd);
     }
     // A bin that asks for more than conflictElevation comes from a layer-order conflict (a neighbour
     // packed earlier whose material sits right over this follicle, e.g. at a tract border): standing up
@@ -785,6 +854,157 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
       e = o.maxElevation;
     }
   }
+  return e;
+}
+
+// Signs of the plane distances glm::dot(q - root[j], w[j]) of n <= 64 key barbs (arrays per coordinate):
+// bit j of lt / gt is set when distance j is negative / positive. The same operations as glm::dot, two
+// keys at a time with SSE2.
+inline void planeSigns(const dvec3& q, const double* rx, const double* ry, const double* rz, const double* wx,
+                       const double* wy, const double* wz, size_t n, uint64_t& lt, uint64_t& gt) {
+  lt = 0;
+  gt = 0;
+  size_t j = 0;
+#if defined(__SSE2__)
+  const __m128d qx = _mm_set1_pd(q.x), qy = _mm_set1_pd(q.y), qz = _mm_set1_pd(q.z), zero = _mm_setzero_pd();
+  for (; j + 2 <= n; j += 2) {
+    const __m128d a = _mm_mul_pd(_mm_sub_pd(qx, _mm_loadu_pd(rx + j)), _mm_loadu_pd(wx + j));
+    const __m128d b = _mm_mul_pd(_mm_sub_pd(qy, _mm_loadu_pd(ry + j)), _mm_loadu_pd(wy + j));
+    const __m128d c = _mm_mul_pd(_mm_sub_pd(qz, _mm_loadu_pd(rz + j)), _mm_loadu_pd(wz + j));
+    const __m128d d = _mm_add_pd(_mm_add_pd(a, b), c);
+    lt |= static_cast<uint64_t>(_mm_movemask_pd(_mm_cmplt_pd(d, zero))) << j;
+    gt |= static_cast<uint64_t>(_mm_movemask_pd(_mm_cmpgt_pd(d, zero))) << j;
+  }
+#endif
+  for (; j < n; ++j) {
+    const double d = (q.x - rx[j]) * wx[j] + (q.y - ry[j]) * wy[j] + (q.z - rz[j]) * wz[j];
+    lt |= static_cast<uint64_t>(d < 0) << j;
+    gt |= static_cast<uint64_t>(d > 0) << j;
+  }
+}
+
+// 6.3.3 barb height fields: per key barb (placed at the feather's elevation: pk), the candidates on its
+// side of the shaft between the neighbouring key barbs' slicing planes, binned along the barb (S.bh).
+[[gnu::noinline]] void barbFields(const Context& ctx, uint32_t i, Scratch& S, const PlacedKey* pk, size_t nk) {
+  const LocalFeather& L = ctx.local[i];
+  const PackOptions& o = ctx.opt;
+  const int fb = std::max(2, o.barbFieldBins);
+  const double ramp = std::max(1e-12, o.baseAllowance * L.totalLength);
+  const double sideTol = 0.5 * ctx.coat.params[i].rachisWidth;
+  // Key barb roots and slicing-plane normals as arrays: the plane distances of a candidate to every key
+  // barb of a vane are one vectorisable loop (the same operations as glm::dot(q - root, w)).
+  S.keyRoot[0].resize(nk);
+  S.keyRoot[1].resize(nk);
+  S.keyRoot[2].resize(nk);
+  S.keyW[0].resize(nk);
+  S.keyW[1].resize(nk);
+  S.keyW[2].resize(nk);
+  for (size_t kk = 0; kk < nk; ++kk)
+    for (int a = 0; a < 3; ++a) {
+      S.keyRoot[a][kk] = pk[kk].root[a];
+      S.keyW[a][kk] = pk[kk].w[a];
+    }
+  const double* rx = S.keyRoot[0].data();
+  const double* ry = S.keyRoot[1].data();
+  const double* rz = S.keyRoot[2].data();
+  const double* wx = S.keyW[0].data();
+  const double* wy = S.keyW[1].data();
+  const double* wz = S.keyW[2].data();
+  double* plane = S.plane.data();
+  const double baseR = o.baseAllowance * L.totalLength;
+  auto each = [&](const auto& c, auto skinTag) {
+    constexpr bool kSkin = decltype(skinTag)::value;
+    const dvec3 q(c.t, c.b, c.n);
+    double rho = 0;  // a skin patch reaches rho beyond its sample in every direction
+    if constexpr (kSkin) rho = c.rho;
+    for (int v = 0; v < 2; ++v) {
+      const size_t first = v == 0 ? 0 : L.leftKeys, last = v == 0 ? std::min<size_t>(L.leftKeys, nk) : nk;
+      if (first >= last) continue;
+      // Far on the other side of the shaft: not this vane's.
+      if (v == 0 ? c.b < L.shaftYMin - sideTol : c.b > L.shaftYMax + sideTol) continue;
+      const double side = v == 0 ? 1.0 : -1.0;
+      // Key barb kk takes the candidate when it lies between the neighbouring key barbs' planes.
+      auto visit = [&](size_t kk) {
+        const LocalKey& k = L.keys[kk];
+        const dvec3 rq = q - pk[kk].root;
+        if (side * glm::dot(rq, pk[kk].left) < -sideTol) return;
+        const double s = glm::dot(rq, pk[kk].u);
+        if (s < -rho || s > k.sExt + rho) return;
+        const double h = glm::dot(rq, pk[kk].d);
+        if constexpr (!kSkin) {
+          const int b = std::max(0, std::min(fb - 1, static_cast<int>(s * fb / k.sExt)));
+          double& slot = S.bh[kk * fb + b];
+          slot = std::max(slot, h + c.rad + ctx.clearance);
+          if (o.captureFields) S.bhRaw[kk * fb + b] = std::max(S.bhRaw[kk * fb + b], h);
+        } else {
+          // A skin patch: per bin, the highest point of the patch along the barb whose position falls in
+          // the bin (lineMax), plus rho x cone for faces turned away from the mean normal.
+          const double bcell = k.sExt / fb;
+          const double rampF = std::min(1.0, (k.rootDist + std::max(0.0, s - rho)) / ramp);
+          const dvec3 g = pk[kk].d - glm::dot(pk[kk].d, c.normal) * c.normal;
+          const dvec3 wv = pk[kk].u - glm::dot(pk[kk].u, c.normal) * c.normal;
+          const double wl = glm::length(wv);
+          const int b0 = std::max(0, std::min(fb - 1, static_cast<int>(std::floor((s - rho * wl) / bcell))));
+          const int b1 = std::max(0, std::min(fb - 1, static_cast<int>(std::floor((s + rho * wl) / bcell))));
+          const double lift = (ctx.skinClearance + rho * c.cone) * rampF;
+          auto put = [&](int b, double top) {
+            if (top == -kInf) return;
+            double& slot = S.bh[kk * fb + b];
+            slot = std::max(slot, h + top + lift);
+            if (o.captureFields) S.bhRaw[kk * fb + b] = std::max(S.bhRaw[kk * fb + b], h + top);
+          };
+          if (wl < 1e-12) {
+            for (int b = b0; b <= b1; ++b) put(b, lineMax(q, g, wv, wl, rho, b * bcell - s, (b + 1) * bcell - s, baseR));
+          } else {
+            // lineMax per bin with its bin-independent part computed once; a bin's upper end is the next
+            // bin's lower end.
+            const LineRise line(q, g, wv, wl, rho, baseR);
+            double loW = (b0 * bcell - s) / wl;
+            for (int b = b0; b <= b1; ++b) {
+              const double hiW = ((b + 1) * bcell - s) / wl;
+              put(b, line.top(loW, hiW));
+              loW = hiW;
+            }
+          }
+        }
+      };
+      const size_t n = last - first;
+      if (n <= 64) {
+        // Bit j: plane of key first + j negative (lt) / positive (gt). Key j is skipped when key j - 1's
+        // plane is negative or key j + 1's is positive.
+        uint64_t lt = 0, gt = 0;
+        planeSigns(q, rx + first, ry + first, rz + first, wx + first, wy + first, wz + first, n, lt, gt);
+        uint64_t take = ~((lt << 1) | (gt >> 1));
+        if (n < 64) take &= (uint64_t(1) << n) - 1;
+        while (take) {
+          const size_t j = static_cast<size_t>(__builtin_ctzll(take));
+          take &= take - 1;
+          visit(first + j);
+        }
+      } else {
+        for (size_t kk = first; kk < last; ++kk)
+          plane[kk] = (q.x - rx[kk]) * wx[kk] + (q.y - ry[kk]) * wy[kk] + (q.z - rz[kk]) * wz[kk];
+        for (size_t kk = first; kk < last; ++kk) {
+          if (kk > first && plane[kk - 1] < 0) continue;
+          if (kk + 1 < last && plane[kk + 1] > 0) continue;
+          visit(kk);
+        }
+      }
+    }
+  };
+  for (const FeatherCandidate& c : S.cand) each(c, std::false_type());
+  for (const SkinCandidate& c : S.skinCand) each(c, std::true_type());
+}
+
+// Packs feather i against its dependencies' packed points (already in `out`) and the skin.
+void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
+  const LocalFeather& L = ctx.local[i];
+  const FeatherFrame& F = ctx.coat.frames[i];
+  const PackOptions& o = ctx.opt;
+  PackStats& st = S.stats;
+  ++st.recomputed;
+  gatherCandidates(ctx, i, S, out);
+  const double e = shaftElevation(ctx, i, S);
   if (L.unopened) ++st.unopened;
   out.elevation[i] = e;
   const Rot R{std::cos(e), std::sin(e)};
@@ -815,53 +1035,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     S.bh.assign(nk * fb, -kInf);
     if (o.captureFields) S.bhRaw.assign(nk * fb, -kInf);
     S.plane.resize(nk);
-    const double sideTol = 0.5 * ctx.coat.params[i].rachisWidth;
-    for (const Candidate& c : S.cand) {
-      const dvec3 q(c.t, c.b, c.n);
-      const double rho = c.rho;  // a skin patch reaches rho beyond its sample in every direction
-      for (int v = 0; v < 2; ++v) {
-        const size_t first = v == 0 ? 0 : L.leftKeys, last = v == 0 ? std::min<size_t>(L.leftKeys, nk) : nk;
-        if (first >= last) continue;
-        // Far on the other side of the shaft: not this vane's.
-        if (v == 0 ? c.b < L.shaftYMin - sideTol : c.b > L.shaftYMax + sideTol) continue;
-        for (size_t kk = first; kk < last; ++kk) S.plane[kk] = glm::dot(q - pk[kk].root, pk[kk].w);
-        const double side = v == 0 ? 1.0 : -1.0;
-        for (size_t kk = first; kk < last; ++kk) {
-          if (kk > first && S.plane[kk - 1] < 0) continue;
-          if (kk + 1 < last && S.plane[kk + 1] > 0) continue;
-          const LocalKey& k = L.keys[kk];
-          const dvec3 rq = q - pk[kk].root;
-          if (side * glm::dot(rq, pk[kk].left) < -sideTol) continue;
-          const double s = glm::dot(rq, pk[kk].u);
-          if (s < -rho || s > k.sExt + rho) continue;
-          const double h = glm::dot(rq, pk[kk].d);
-          if (!c.skin) {
-            const int b = std::max(0, std::min(fb - 1, static_cast<int>(s * fb / k.sExt)));
-            double& slot = S.bh[kk * fb + b];
-            slot = std::max(slot, h + c.rad + ctx.clearance);
-            if (o.captureFields) S.bhRaw[kk * fb + b] = std::max(S.bhRaw[kk * fb + b], h);
-            continue;
-          }
-          // A skin patch: per bin, the highest point of the patch along the barb whose position falls in the
-          // bin (lineMax), plus rho x cone for faces turned away from the mean normal.
-          const double bcell = k.sExt / fb;
-          const double baseR = o.baseAllowance * L.totalLength;
-          const double rampF = std::min(1.0, (k.rootDist + std::max(0.0, s - rho)) / ramp);
-          const dvec3 g = pk[kk].d - glm::dot(pk[kk].d, c.normal) * c.normal;
-          const dvec3 wv = pk[kk].u - glm::dot(pk[kk].u, c.normal) * c.normal;
-          const double wl = glm::length(wv);
-          const int b0 = std::max(0, std::min(fb - 1, static_cast<int>(std::floor((s - rho * wl) / bcell))));
-          const int b1 = std::max(0, std::min(fb - 1, static_cast<int>(std::floor((s + rho * wl) / bcell))));
-          for (int b = b0; b <= b1; ++b) {
-            const double top = lineMax(q, g, wv, wl, rho, b * bcell - s, (b + 1) * bcell - s, baseR);
-            if (top == -kInf) continue;
-            double& slot = S.bh[kk * fb + b];
-            slot = std::max(slot, h + top + (ctx.skinClearance + rho * c.cone) * rampF);
-            if (o.captureFields) S.bhRaw[kk * fb + b] = std::max(S.bhRaw[kk * fb + b], h + top);
-          }
-        }
-      }
-    }
+    barbFields(ctx, i, S, pk, nk);
     for (size_t kk = 0; kk < nk; ++kk) {
       const LocalKey& k = L.keys[kk];
       if (k.sExt <= 0) continue;
