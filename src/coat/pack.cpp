@@ -669,7 +669,46 @@ struct Output {
   const std::vector<uint32_t>& groupOffset;
   const std::vector<uint32_t>& groupPoint;
   std::vector<glm::vec4>& groupBounds;
+  // Internal culling level above the groups: chunk c of feather i (chunkOffset[i] <= c < [i+1]) holds
+  // groups groupOffset[i] + kChunk (c - chunkOffset[i]) .. + kChunk, with a sphere around their spheres.
+  const std::vector<uint32_t>& chunkOffset;
+  std::vector<glm::dvec4>& chunkBounds;
 };
+
+constexpr uint32_t kChunk = 4;
+
+std::vector<uint32_t> chunkOffsets(const std::vector<uint32_t>& groupOffset) {
+  std::vector<uint32_t> off(groupOffset.size(), 0);
+  for (size_t i = 0; i + 1 < groupOffset.size(); ++i)
+    off[i + 1] = off[i] + (groupOffset[i + 1] - groupOffset[i] + kChunk - 1) / kChunk;
+  return off;
+}
+
+// Chunk spheres of feather i from its stored group spheres. Each chunk sphere holds its groups' spheres
+// with a margin far above the rounding of the footprint tests, so a group can only pass a test its chunk
+// passes: skipping the groups of a failed chunk leaves the candidates unchanged.
+void closeChunks(Output& out, uint32_t i) {
+  const uint32_t g0 = out.groupOffset[i], g1 = out.groupOffset[i + 1];
+  uint32_t c = out.chunkOffset[i];
+  for (uint32_t a = g0; a < g1; a += kChunk, ++c) {
+    const uint32_t b = std::min(g1, a + kChunk);
+    dvec3 lo(kInf), hi(-kInf);
+    for (uint32_t g = a; g < b; ++g) {
+      const glm::vec4& s = out.groupBounds[g];
+      const dvec3 p(s.x, s.y, s.z);
+      lo = glm::min(lo, p - dvec3(s.w));
+      hi = glm::max(hi, p + dvec3(s.w));
+    }
+    const dvec3 centre = 0.5 * (lo + hi);
+    double r = 0;
+    for (uint32_t g = a; g < b; ++g) {
+      const glm::vec4& s = out.groupBounds[g];
+      r = std::max(r, glm::length(dvec3(s.x, s.y, s.z) - centre) + s.w);
+    }
+    out.chunkBounds[c] = glm::dvec4(centre, r * (1 + 1e-9) + 1e-9 * (glm::length(centre) + r) + 1e-12);
+  }
+  PTERYLA_CHECK(c == out.chunkOffset[i + 1], "chunk count mismatch");
+}
 
 struct PlacedKey {
   dvec3 root, u, w, d, left;
@@ -698,7 +737,11 @@ struct PlacedKey {
     const uint32_t j = ctx.deps[k];
     const glm::dvec4& bj = out.bounds[j];
     if (!sphereIn(frame(dvec3(bj)), bj.w)) continue;
-    for (uint32_t g = out.groupOffset[j]; g < out.groupOffset[j + 1]; ++g) {
+    const uint32_t gEnd = out.groupOffset[j + 1];
+    for (uint32_t c = out.chunkOffset[j], g0 = out.groupOffset[j]; g0 < gEnd; ++c, g0 += kChunk) {
+      const glm::dvec4& cb = out.chunkBounds[c];
+      if (!sphereIn(frame(dvec3(cb)), cb.w)) continue;
+    for (uint32_t g = g0; g < std::min(gEnd, g0 + kChunk); ++g) {
       const glm::vec4& gb = out.groupBounds[g];
       if (!sphereIn(frame(dvec3(gb.x, gb.y, gb.z)), gb.w)) continue;
       for (uint32_t q = out.groupPoint[g]; q < out.groupPoint[g + 1]; ++q) {
@@ -714,6 +757,7 @@ struct PlacedKey {
         if (!L.inOutline(b, std::sqrt(t * t + n * n))) continue;
         S.cand.push_back({t, b, n, pq.w});
       }
+    }
     }
   }
   const double base2 = std::pow(o.baseAllowance * L.totalLength, 2);
@@ -1128,6 +1172,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     closeGroup();
   }
   PTERYLA_CHECK(q == out.pointOffset[i + 1] && g == out.groupOffset[i + 1], "packed point count mismatch");
+  closeChunks(out, i);
   // Pad the sphere for the float rounding of the stored points.
   out.bounds[i] = glm::dvec4(F.origin, rad * (1 + 1e-6) + 1e-9);
 }
@@ -1501,7 +1546,9 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
     setup(ctx);
     initResult(ctx, res);
     tbb::enumerable_thread_specific<Scratch> scratch;
-    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds};
+    const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
+    std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
+    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
     schedule(ctx, options.threads, [&](uint32_t i) {
       packFeather(ctx, i, scratch.local(), out);
       res.recomputed[i] = 1;
@@ -1560,7 +1607,9 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
     }
     std::vector<uint8_t> outChanged(n, 0);
     tbb::enumerable_thread_specific<Scratch> scratch;
-    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds};
+    const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
+    std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
+    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
     schedule(ctx, options.threads, [&](uint32_t i) {
       bool dirty = isChanged[i] || touched[i];
       for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !dirty; ++k) dirty = outChanged[ctx.deps[k]] != 0;
@@ -1577,6 +1626,7 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
                       "unchanged feather with a different point structure");
         std::copy(prev.groupBounds.begin() + prev.groupOffset[i], prev.groupBounds.begin() + prev.groupOffset[i + 1],
                   res.groupBounds.begin() + res.groupOffset[i]);
+        closeChunks(out, i);
         return;
       }
       packFeather(ctx, i, scratch.local(), out);
