@@ -101,6 +101,37 @@ struct LocalFeather {
   }
 };
 
+// feather::bezierPoint at two parameters at once: de Casteljau with the two curves in the two SSE2 lanes
+// (the same operations per lane as bezierPoint, so the same bits). count <= 16.
+inline void bezierPair(const dvec3* cvs, size_t count, double u0, double u1, dvec3& p0, dvec3& p1) {
+#if defined(__SSE2__)
+  if (count >= 1 && count <= 16) {
+    __m128d x[16], y[16], z[16];
+    for (size_t i = 0; i < count; ++i) {
+      x[i] = _mm_set1_pd(cvs[i].x);
+      y[i] = _mm_set1_pd(cvs[i].y);
+      z[i] = _mm_set1_pd(cvs[i].z);
+    }
+    const __m128d a = _mm_set_pd(1.0 - u1, 1.0 - u0), b = _mm_set_pd(u1, u0);
+    for (size_t level = count - 1; level > 0; --level)
+      for (size_t i = 0; i < level; ++i) {
+        x[i] = _mm_add_pd(_mm_mul_pd(a, x[i]), _mm_mul_pd(b, x[i + 1]));
+        y[i] = _mm_add_pd(_mm_mul_pd(a, y[i]), _mm_mul_pd(b, y[i + 1]));
+        z[i] = _mm_add_pd(_mm_mul_pd(a, z[i]), _mm_mul_pd(b, z[i + 1]));
+      }
+    double xs[2], ys[2], zs[2];
+    _mm_storeu_pd(xs, x[0]);
+    _mm_storeu_pd(ys, y[0]);
+    _mm_storeu_pd(zs, z[0]);
+    p0 = dvec3(xs[0], ys[0], zs[0]);
+    p1 = dvec3(xs[1], ys[1], zs[1]);
+    return;
+  }
+#endif
+  p0 = feather::bezierPoint(cvs, count, u0);
+  p1 = feather::bezierPoint(cvs, count, u1);
+}
+
 // Fills the vane outline from the shaft polyline and the key barbs, with barbs interpolated between
 // consecutive key barbs, dilated by one lateral bin and by `margin` in radius.
 void buildOutline(LocalFeather& L, const PackOptions& o) {
@@ -129,10 +160,12 @@ void buildOutline(LocalFeather& L, const PackOptions& o) {
   std::vector<dvec3> samples(L.keys.size() * (kAlong + 1));
   for (size_t kk = 0; kk < L.keys.size(); ++kk) {
     const LocalKey& a = L.keys[kk];
-    for (int s = 0; s <= kAlong; ++s) {
-      const dvec3 c = feather::bezierPoint(&L.cvs[a.cvOff], a.cvCount, static_cast<double>(s) / kAlong);
-      samples[kk * (kAlong + 1) + s] = a.root + a.len * (c.x * a.u + c.y * a.w + c.z * a.d);
-    }
+    dvec3 c[kAlong + 2];
+    for (int s = 0; s <= kAlong; s += 2)
+      bezierPair(&L.cvs[a.cvOff], a.cvCount, static_cast<double>(s) / kAlong, static_cast<double>(s + 1) / kAlong, c[s],
+                 c[s + 1]);
+    for (int s = 0; s <= kAlong; ++s)
+      samples[kk * (kAlong + 1) + s] = a.root + a.len * (c[s].x * a.u + c[s].y * a.w + c[s].z * a.d);
   }
   for (size_t kk = 0; kk < L.keys.size(); ++kk) {
     const bool hasNext = kk + 1 < L.keys.size() && L.keys[kk + 1].vane == L.keys[kk].vane;
@@ -1122,13 +1155,16 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
 
   // ---- packed points handed to later feathers: shaft polyline and samples along every key barb.
   uint32_t q = out.pointOffset[i];
-  double rad = 0;
+  // rad = the largest |f| + r; for r = 0 the largest |f|^2 is kept and its root taken once (sqrt is
+  // monotone, so the same value).
+  double rad = 0, rad2 = 0;
   auto emit = [&](const dvec3& local, double r) {
     const dvec3 f = R(local);
     const dvec3 w = F.origin + f.x * F.tangent + f.y * F.binormal + f.z * F.normal;
     out.points[q++] = glm::vec4(static_cast<float>(w.x), static_cast<float>(w.y), static_cast<float>(w.z),
                                 static_cast<float>(r));
-    rad = std::max(rad, glm::length(f) + r);
+    if (r == 0) rad2 = std::max(rad2, glm::dot(f, f));
+    else rad = std::max(rad, glm::length(f) + r);
   };
   uint32_t g = out.groupOffset[i];
   auto closeGroup = [&] {
@@ -1142,8 +1178,13 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
       hi = glm::max(hi, p);
     }
     const dvec3 c = 0.5 * (lo + hi);
-    double r = 0;
-    for (uint32_t k = a; k < b; ++k) r = std::max(r, glm::length(dvec3(out.points[k]) - c) + out.points[k].w);
+    double r = 0, r2 = 0;
+    for (uint32_t k = a; k < b; ++k) {
+      const dvec3 d = dvec3(out.points[k]) - c;
+      if (out.points[k].w == 0) r2 = std::max(r2, glm::dot(d, d));
+      else r = std::max(r, glm::length(d) + out.points[k].w);
+    }
+    r = std::max(r, std::sqrt(r2));
     out.groupBounds[g] = glm::vec4(static_cast<float>(c.x), static_cast<float>(c.y), static_cast<float>(c.z),
                                    static_cast<float>(r * (1 + 1e-5) + 1e-6 * (glm::length(c) + r)));
     ++g;
@@ -1165,14 +1206,16 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
       cv = c.data();
       cn = c.size();
     }
-    for (int s = 1; s <= bs; ++s) {
-      const glm::dvec3 c = feather::bezierPoint(cv, cn, static_cast<double>(s) / bs);
-      emit(k.root + k.len * (c.x * k.u + c.y * k.w + c.z * k.d), 0.0);
+    for (int s = 1; s <= bs; s += 2) {
+      glm::dvec3 c[2];
+      bezierPair(cv, cn, static_cast<double>(s) / bs, static_cast<double>(s + 1) / bs, c[0], c[1]);
+      for (int m = 0; m < 2 && s + m <= bs; ++m) emit(k.root + k.len * (c[m].x * k.u + c[m].y * k.w + c[m].z * k.d), 0.0);
     }
     closeGroup();
   }
   PTERYLA_CHECK(q == out.pointOffset[i + 1] && g == out.groupOffset[i + 1], "packed point count mismatch");
   closeChunks(out, i);
+  rad = std::max(rad, std::sqrt(rad2));
   // Pad the sphere for the float rounding of the stored points.
   out.bounds[i] = glm::dvec4(F.origin, rad * (1 + 1e-6) + 1e-9);
 }
