@@ -22,6 +22,9 @@
 #include <cstring>
 
 #include <glm/geometric.hpp>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -1515,6 +1518,19 @@ void schedule(const Context& ctx, int threads, Task&& task) {
   tbb::parallel_for_each(ready.begin(), ready.end(), body);
 }
 
+// Reserves a large result buffer and asks Linux for transparent huge pages on it before it is first
+// written: the bird's ~30 MB of packed points otherwise cost ~7,500 page faults, serial, in every pack.
+template <class T>
+void reserveHuge(std::vector<T>& v, size_t count) {
+  v.reserve(count);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+  const uintptr_t a = reinterpret_cast<uintptr_t>(v.data()), b = a + count * sizeof(T);
+  const uintptr_t lo = (a + kHuge - 1) & ~(kHuge - 1), hi = b & ~(kHuge - 1);
+  if (count * sizeof(T) >= 4 * kHuge && hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
+#endif
+}
+
 void initResult(const Context& ctx, PackResult& res) {
   const size_t n = ctx.coat.size();
   res.order = ctx.order;
@@ -1523,6 +1539,7 @@ void initResult(const Context& ctx, PackResult& res) {
   res.barbsChanged.assign(n, 0);
   res.recomputed.assign(n, 0);
   res.pointOffset = pointOffsets(ctx);
+  reserveHuge(res.points, res.pointOffset.back());
   res.points.assign(res.pointOffset.back(), glm::vec4(0));
   res.bounds.assign(n, glm::dvec4(0));
   res.groupOffset.assign(n + 1, 0);
