@@ -153,6 +153,14 @@ void buildOutline(LocalFeather& L, const PackOptions& o) {
       hi[k] = std::max(hi[k], static_cast<float>(r + rad));
     }
   };
+  // add(p, 0): one lateral bin, the radius itself (p.y -+ 0 and r -+ 0 are p.y and r).
+  auto add0 = [&](const dvec3& p) {
+    const double r = std::sqrt(p.x * p.x + p.z * p.z);
+    const int k = static_cast<int>(std::floor((p.y - L.yMin) / w));
+    if (k < 0 || k >= nb) return;
+    lo[k] = std::min(lo[k], static_cast<float>(r));
+    hi[k] = std::max(hi[k], static_cast<float>(r));
+  };
   for (size_t k = 0; k < L.after.size(); ++k) add(L.after[k], L.afterRad[k]);
   for (size_t k = 0; k < L.shaft.size(); ++k) {
     add(L.shaft[k], L.shaftRad[k]);
@@ -176,7 +184,7 @@ void buildOutline(LocalFeather& L, const PackOptions& o) {
     const dvec3* pb = hasNext ? &samples[(kk + 1) * (kAlong + 1)] : pa;
     for (int m = 0; m < (hasNext ? kBetween : 1); ++m) {
       const double f = static_cast<double>(m) / kBetween;
-      for (int s = 0; s <= kAlong; ++s) add((1 - f) * pa[s] + f * pb[s], 0.0);
+      for (int s = 0; s <= kAlong; ++s) add0((1 - f) * pa[s] + f * pb[s]);
     }
   }
   // Dilate: one bin sideways, and in radius by the sampling gap plus the largest clearance anyone needs.
@@ -228,27 +236,61 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
     // vane at a finer resolution without changing its shape). Breakpoints of a silhouette (barb length
     // profile) become key barbs too, so barb lengths between key barbs are linear as the generator's are.
     std::vector<glm::dvec3> shape;
+    // Key barbs of one vane without a vector per key barb: the effective key barbs and the inserted shapes
+    // (one flat buffer) are referenced by (rp, source) entries, sorted stably by rp as the key barbs
+    // themselves were.
+    struct Entry {
+      double rp;
+      bool inserted;
+      uint32_t index;  // effective key barb, or offset into `shapes`
+      uint32_t count;
+    };
+    thread_local std::vector<feather::KeyBarb> eff;
+    thread_local std::vector<glm::dvec3> shapes;
+    thread_local std::vector<Entry> entries;
+    thread_local std::vector<double> rps;
     auto addKeys = [&](const feather::FeatherParams& fp, const dvec3& offset, int refine, bool silhouette) {
       for (int v = 0; v < 2; ++v) {
-        const std::vector<feather::KeyBarb> eff = feather::effectiveKeyBarbs(fp, v);
-        std::vector<feather::KeyBarb> keys = eff;
-        std::vector<double> rps;
+        eff = feather::effectiveKeyBarbs(fp, v);
+        PTERYLA_CHECK(!eff.empty(), "barbShapeAt needs key barbs");
+        entries.clear();
+        shapes.clear();
+        for (size_t e = 0; e < eff.size(); ++e)
+          entries.push_back({eff[e].rp, false, static_cast<uint32_t>(e), static_cast<uint32_t>(eff[e].cvs.size())});
+        rps.clear();
         for (int k = 0; k < refine; ++k) rps.push_back(static_cast<double>(k) / (refine - 1));
         const feather::LengthProfile& prof = v == 0 ? fp.silhouette.left : fp.silhouette.right;
         if (silhouette && prof.points.size() <= 16)
           for (const auto& pt : prof.points)
             if (pt.x > 0 && pt.x < 1) rps.push_back(pt.x);
-        for (double rp : rps) {
+        for (const double rp : rps) {
           bool present = false;
-          for (const auto& e : keys) present = present || std::abs(e.rp - rp) < 1e-6;
+          for (const Entry& e : entries) present = present || std::abs(e.rp - rp) < 1e-6;
           if (present) continue;
-          feather::barbShapeAt(eff, rp, shape);
-          keys.push_back({rp, shape});
+          // feather::barbShapeAt(eff, rp, .): effective key barbs all have the same count.
+          const auto it = std::upper_bound(eff.begin(), eff.end(), rp,
+                                           [](double x, const feather::KeyBarb& k) { return x < k.rp; });
+          const uint32_t off = static_cast<uint32_t>(shapes.size());
+          if (it == eff.begin() || it == eff.end()) {
+            const std::vector<glm::dvec3>& c = it == eff.begin() ? eff.front().cvs : eff.back().cvs;
+            shapes.insert(shapes.end(), c.begin(), c.end());
+          } else {
+            const feather::KeyBarb& above = *it;
+            const feather::KeyBarb& below = *(it - 1);
+            const double t = (rp - below.rp) / (above.rp - below.rp);
+            if (above.cvs.size() == below.cvs.size()) {
+              for (size_t c = 0; c < above.cvs.size(); ++c) shapes.push_back((1 - t) * below.cvs[c] + t * above.cvs[c]);
+            } else {
+              feather::barbShapeAt(eff, rp, shape);
+              shapes.insert(shapes.end(), shape.begin(), shape.end());
+            }
+          }
+          entries.push_back({rp, true, off, static_cast<uint32_t>(shapes.size() - off)});
         }
-        std::stable_sort(keys.begin(), keys.end(), [](const feather::KeyBarb& a, const feather::KeyBarb& b) { return a.rp < b.rp; });
+        std::stable_sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.rp < b.rp; });
         const feather::VaneParams& vp = fp.vane(v);
         const double side = v == 0 ? 1.0 : -1.0;
-        for (const auto& kb : keys) {
+        for (const Entry& kb : entries) {
           LocalKey k;
           k.rp = kb.rp;
           k.vane = static_cast<uint8_t>(v);
@@ -262,11 +304,12 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
           k.root = offset + f.point + (side * 0.5 * f.width) * f.left;
           k.len = fp.barbLengthAt(v, kb.rp);
           k.cvOff = static_cast<uint32_t>(L.cvs.size());
-          k.cvCount = static_cast<uint16_t>(kb.cvs.size());
+          k.cvCount = static_cast<uint16_t>(kb.count);
+          const glm::dvec3* src = kb.inserted ? &shapes[kb.index] : eff[kb.index].cvs.data();
           double xmax = 0;
-          for (const auto& c : kb.cvs) {
-            L.cvs.push_back(c);
-            xmax = std::max(xmax, c.x);
+          for (uint32_t c = 0; c < kb.count; ++c) {
+            L.cvs.push_back(src[c]);
+            xmax = std::max(xmax, src[c].x);
           }
           k.sExt = k.len * xmax;
           k.rootDist = glm::length(k.root);
