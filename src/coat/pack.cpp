@@ -820,23 +820,23 @@ struct PlacedKey {
     for (uint32_t c = out.chunkOffset[j], g0 = out.groupOffset[j]; g0 < gEnd; ++c, g0 += kChunk) {
       const glm::dvec4& cb = out.chunkBounds[c];
       if (!sphereIn(frame(dvec3(cb)), cb.w)) continue;
-    for (uint32_t g = g0; g < std::min(gEnd, g0 + kChunk); ++g) {
-      const glm::vec4& gb = out.groupBounds[g];
-      if (!sphereIn(frame(dvec3(gb.x, gb.y, gb.z)), gb.w)) continue;
-      for (uint32_t q = out.groupPoint[g]; q < out.groupPoint[g + 1]; ++q) {
-        const glm::vec4& pq = out.points[q];
-        const dvec3 r(pq.x - O.x, pq.y - O.y, pq.z - O.z);
-        const double t = glm::dot(r, T);
-        const double m = L.reach + pq.w;
-        if (t < 0 || t > m) continue;
-        const double b = glm::dot(r, B);
-        if (b < L.yMin - pq.w || b > L.yMax + pq.w) continue;
-        const double n = glm::dot(r, N);
-        if (t * t + b * b + n * n > m * m) continue;
-        if (!L.inOutline(b, std::sqrt(t * t + n * n))) continue;
-        S.cand.push_back({t, b, n, pq.w});
+      for (uint32_t g = g0; g < std::min(gEnd, g0 + kChunk); ++g) {
+        const glm::vec4& gb = out.groupBounds[g];
+        if (!sphereIn(frame(dvec3(gb.x, gb.y, gb.z)), gb.w)) continue;
+        for (uint32_t q = out.groupPoint[g]; q < out.groupPoint[g + 1]; ++q) {
+          const glm::vec4& pq = out.points[q];
+          const dvec3 r(pq.x - O.x, pq.y - O.y, pq.z - O.z);
+          const double t = glm::dot(r, T);
+          const double m = L.reach + pq.w;
+          if (t < 0 || t > m) continue;
+          const double b = glm::dot(r, B);
+          if (b < L.yMin - pq.w || b > L.yMax + pq.w) continue;
+          const double n = glm::dot(r, N);
+          if (t * t + b * b + n * n > m * m) continue;
+          if (!L.inOutline(b, std::sqrt(t * t + n * n))) continue;
+          S.cand.push_back({t, b, n, pq.w});
+        }
       }
-    }
     }
   }
   const double base2 = std::pow(o.baseAllowance * L.totalLength, 2);
