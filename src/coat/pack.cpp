@@ -400,6 +400,7 @@ struct Scratch {
   std::vector<double> keyRoot[3], keyW[3];  // per key: placed root and slicing-plane normal (arrays)
   std::vector<glm::dvec3> curve, tmp;     // barb samples and transformed control vertices
   std::vector<double> bern;               // Bernstein weights: samples x cvs
+  std::vector<double> bernT, cx, cz;      // the weights cvs x samples; curve x and z being summed
   size_t bernCvs = 0, bernSamples = 0;
   PackStats stats;
   std::vector<BarbField> fields;
@@ -551,6 +552,9 @@ void bernsteinTable(size_t cvs, size_t samples, Scratch& S) {
       binom = binom * static_cast<double>(n - j) / static_cast<double>(j + 1);
     }
   }
+  S.bernT.resize(cvs * samples);
+  for (size_t k = 0; k < samples; ++k)
+    for (size_t j = 0; j < cvs; ++j) S.bernT[j * samples + k] = S.bern[k * cvs + j];
 }
 
 // Samples (s, z) of the key barb in its slicing plane (x = along from the root, z = up, scene units) after
@@ -562,17 +566,22 @@ void barbSamples(const dvec3* cvs, size_t n, double len, double mu, double alpha
     const double z = cvs[j].z + mu * std::max(0.0, -cvs[j].z);
     S.tmp[j] = {cvs[j].x * ca - z * sa, cvs[j].y, cvs[j].x * sa + z * ca};
   }
+  // Each sample sums its terms in control-vertex order; the samples run in the inner loop (vectorised).
   const size_t m = S.bernSamples;
-  S.curve.resize(m);
-  for (size_t k = 0; k < m; ++k) {
-    const double* w = &S.bern[k * n];
-    double x = 0, z = 0;
-    for (size_t j = 0; j < n; ++j) {
-      x += w[j] * S.tmp[j].x;
-      z += w[j] * S.tmp[j].z;
+  S.cx.assign(m, 0.0);
+  S.cz.assign(m, 0.0);
+  double* cx = S.cx.data();
+  double* cz = S.cz.data();
+  for (size_t j = 0; j < n; ++j) {
+    const double* w = &S.bernT[j * m];
+    const double tx = S.tmp[j].x, tz = S.tmp[j].z;
+    for (size_t k = 0; k < m; ++k) {
+      cx[k] += w[k] * tx;
+      cz[k] += w[k] * tz;
     }
-    S.curve[k] = {len * x, 0.0, len * z};
   }
+  S.curve.resize(m);
+  for (size_t k = 0; k < m; ++k) S.curve[k] = {len * cx[k], 0.0, len * cz[k]};
 }
 
 double fieldMax(const double* bh, int nb, double cell, double s0, double s1) {
@@ -586,12 +595,25 @@ double fieldMax(const double* bh, int nb, double cell, double s0, double s1) {
 
 // Does the sampled curve clear the field beyond the root zone? Each curve segment must be above the
 // largest bin it overlaps, at both ends.
+// (fieldMax over [max(s0, 0), s1] with floor(x / cell) computed once per sample: a segment's ends are
+// its neighbours' ends.)
 bool clears(const Scratch& S, const double* bh, int nb, double cell, double sRoot) {
   const auto& c = S.curve;
+  if (c.size() < 2) return true;
+  double fPrev = std::floor(c[0].x / cell);
   for (size_t k = 0; k + 1 < c.size(); ++k) {
-    const double s0 = std::min(c[k].x, c[k + 1].x), s1 = std::max(c[k].x, c[k + 1].x);
+    const double fNext = std::floor(c[k + 1].x / cell), fThis = fPrev;
+    fPrev = fNext;
+    const bool nextLow = c[k + 1].x < c[k].x;  // std::min / std::max pick
+    const double s0 = nextLow ? c[k + 1].x : c[k].x, s1 = nextLow ? c[k].x : c[k + 1].x;
     if (s1 < sRoot) continue;
-    const double H = fieldMax(bh, nb, cell, std::max(s0, 0.0), s1);
+    if (s1 < 0) continue;  // fieldMax: -inf
+    const double f0 = s0 < 0.0 ? std::floor(0.0 / cell) : (nextLow ? fNext : fThis);
+    const double f1 = nextLow ? fThis : fNext;
+    const int b0 = std::max(0, static_cast<int>(f0));
+    const int b1 = std::min(nb - 1, static_cast<int>(f1));
+    double H = -kInf;
+    for (int b = b0; b <= b1; ++b) H = std::max(H, bh[b]);
     if (H == -kInf) continue;
     if (c[k].z < H || c[k + 1].z < H) return false;
   }
