@@ -684,43 +684,8 @@ BarbFit fitBarb(const dvec3* cvs, size_t n, double len, double sExt, const doubl
   return fit;
 }
 
-// Rise of a skin patch along a key barb: the patch's points on the line through the sample along the
-// barb (in the patch's tangent plane: q + x w / |w|, |x| <= rho; w = the barb direction in that plane)
-// rise over the sample by g.w x / |w| (g = the barb's up direction in the plane). Returns the largest rise
-// over the points whose position along the barb falls in [lo, hi] relative to the sample and that lie
-// outside the base ball (radius baseR around the follicle, the origin of q) and in front of the follicle
-// (t = q.x >= 0), or -inf when there are none.
-// Across the barb, the samples between the neighbouring key barbs' planes stand in.
-double lineMax(const dvec3& q, const dvec3& g, const dvec3& w, double wl, double rho, double lo, double hi,
-               double baseR) {
-  if (wl < 1e-12) return (lo <= 0 && hi >= 0) ? 0.0 : -kInf;
-  double xa = std::max(-rho, lo / wl), xb = std::min(rho, hi / wl);
-  // Only the footprint counts (t >= 0: skin behind the follicle is not under the feather).
-  const double wt = w.x / wl;
-  if (wt > 1e-12) xa = std::max(xa, -q.x / wt);
-  else if (wt < -1e-12) xb = std::min(xb, -q.x / wt);
-  if (xa > xb) return -kInf;
-  const double gw = glm::dot(g, w) / wl;
-  // |q + x w/|w||^2 = baseR^2 at x1 <= x2: the points in (x1, x2) are in the base ball.
-  const double qw = glm::dot(q, w) / wl, qq = glm::dot(q, q);
-  const double disc = qw * qw - (qq - baseR * baseR);
-  double best = -kInf;
-  auto take = [&](double a, double b) {
-    if (a > b) return;
-    best = std::max(best, gw >= 0 ? gw * b : gw * a);
-  };
-  if (disc <= 0) {
-    take(xa, xb);
-  } else {
-    const double sq = std::sqrt(disc);
-    take(xa, std::min(xb, -qw - sq));
-    take(std::max(xa, -qw + sq), xb);
-  }
-  return best;
-}
-
-// lineMax() for one patch and barb over many intervals: everything but the interval [lo, hi] / wl is
-// computed once (the same operations, so the same bits; wl >= 1e-12).
+// lineMax() below for one patch and barb over many intervals: everything but the interval [lo, hi] / wl
+// is computed once (wl >= 1e-12).
 struct LineRise {
   LineRise(const dvec3& q, const dvec3& g, const dvec3& w, double wl, double rho, double baseR) : rho(rho) {
     const double wt = w.x / wl;
@@ -759,6 +724,20 @@ struct LineRise {
   double rho, clip = 0, gw = 0, qw = 0, disc = 0, sq = 0;
   bool clipLo = false, clipHi = false;
 };
+
+// Rise of a skin patch along a key barb: the patch's points on the line through the sample along the
+// barb (in the patch's tangent plane: q + x w / |w|, |x| <= rho; w = the barb direction in that plane)
+// rise over the sample by g.w x / |w| (g = the barb's up direction in the plane). Returns the largest rise
+// over the points whose position along the barb falls in [lo, hi] relative to the sample and that lie
+// outside the base ball (radius baseR around the follicle, the origin of q) and in front of the follicle
+// (t = q.x >= 0), or -inf when there are none.
+// Across the barb, the samples between the neighbouring key barbs' planes stand in.
+double lineMax(const dvec3& q, const dvec3& g, const dvec3& w, double wl, double rho, double lo, double hi,
+               double baseR) {
+  if (wl < 1e-12) return (lo <= 0 && hi >= 0) ? 0.0 : -kInf;
+  return LineRise(q, g, w, wl, rho, baseR).top(lo / wl, hi / wl);
+}
+
 
 struct Output {
   std::vector<double>& elevation;
