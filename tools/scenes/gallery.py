@@ -160,7 +160,7 @@ def write_markdown(results):
         "tract area under feathers; `check s` the check's wall time. `t` - is the scene's own time. Bench "
         "(`pteryla bench --size 640x360`): first-evaluation seconds per stage, `frame` a timeline step "
         "(pose, ages, controls, pack, mesh at the scene's level of detail), `triangles` the rendered coat. "
-        "Times are wall seconds on the shared 2-core build machine while other builds ran.",
+        "Times are wall seconds on the project's 2-core machine (this run: nothing else running; single runs vary by about 30%).",
         "",
     ]
     # The bird first on the page (it is processed last: it is the slowest and changes most).
