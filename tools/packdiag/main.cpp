@@ -105,6 +105,8 @@ int main(int argc, char** argv) {
                 secondsSince(t0), same, n, st.free, st.shaftClamped, st.conflicts, st.unopened, st.fixed,
                 st.barbsElevated, st.barbsLifted, st.barbsUnresolved);
     if (!listTract.empty()) {
+      if (std::none_of(tracts.begin(), tracts.end(), [&](const auto& t) { return t.name == listTract; }))
+        throw Error("no tract of that name in the scene", path, "--tract " + listTract);
       std::vector<uint32_t> layerPos(n, 0);
       for (size_t k = 0; k < coat.layerOrder.size(); ++k) layerPos[coat.layerOrder[k]] = static_cast<uint32_t>(k);
       for (size_t i = 0; i < n; ++i) {
@@ -259,6 +261,9 @@ int main(int argc, char** argv) {
                   elev[i] * 180 / M_PI, coat.params[i].totalLength(), coat.age[i], pens[k].first);
     }
     return 0;
+  } catch (const Error& e) {  // bad input: the scene, an argument (the project's exit code 2)
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
