@@ -127,14 +127,7 @@ BENCHMARK(BM_PackBird)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTi
 // The bird with the packer's default sampling (key barbs, barb/shaft samples, field bins, skin sample
 // spacing) and the scene's styling: what the scene's denser sampling costs.
 void BM_PackBirdDefaultSampling(benchmark::State& state) {
-  const PackOptions d;
-  PackOptions o = birdScene().options;
-  o.keyBarbsPerVane = d.keyBarbsPerVane;
-  o.barbSamples = d.barbSamples;
-  o.shaftSamples = d.shaftSamples;
-  o.barbFieldBins = d.barbFieldBins;
-  o.heightFieldBins = d.heightFieldBins;
-  o.skinSampleSpacing = d.skinSampleSpacing;
+  PackOptions o = withDefaultSampling(birdScene().options);
   o.threads = static_cast<int>(state.range(0));
   runBird(state, o);
 }

@@ -123,14 +123,7 @@ int main(int argc, char** argv) {
   }
   o.fixedElevation = resolveStyling(coat, o.styling);
   o.captureFields = fields;
-  PackOptions d = o;
-  const PackOptions def;
-  d.keyBarbsPerVane = def.keyBarbsPerVane;
-  d.barbSamples = def.barbSamples;
-  d.shaftSamples = def.shaftSamples;
-  d.barbFieldBins = def.barbFieldBins;
-  d.heightFieldBins = def.heightFieldBins;
-  d.skinSampleSpacing = def.skinSampleSpacing;
+  PackOptions d = withDefaultSampling(o);
   if (timing) {
     const int reps = std::stoi(argv[2]);
     PackOptions& to = argc > 4 && std::string(argv[4]) == "default" ? d : o;

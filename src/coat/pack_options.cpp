@@ -72,4 +72,15 @@ Json packOptionsToJson(const PackOptions& o) {
   return j;
 }
 
+PackOptions withDefaultSampling(PackOptions o) {
+  const PackOptions d;
+  o.keyBarbsPerVane = d.keyBarbsPerVane;
+  o.barbSamples = d.barbSamples;
+  o.shaftSamples = d.shaftSamples;
+  o.barbFieldBins = d.barbFieldBins;
+  o.heightFieldBins = d.heightFieldBins;
+  o.skinSampleSpacing = d.skinSampleSpacing;
+  return o;
+}
+
 }  // namespace pteryla::coat

@@ -504,3 +504,24 @@ TEST(Pack, LayerOrderConflictsDoNotStandFeathersUp) {
   const PackResult s = pack(patch, c, strict);
   EXPECT_GT(s.elevation[1], r.elevation[1]);
 }
+
+TEST(PackOptions, WithDefaultSamplingResetsOnlyTheSampling) {
+  PackOptions o;
+  o.keyBarbsPerVane = 12;
+  o.barbSamples = 16;
+  o.shaftSamples = 24;
+  o.barbFieldBins = 32;
+  o.heightFieldBins = 64;
+  o.skinSampleSpacing = 0.004;
+  o.clearance = 0.003;
+  o.threads = 2;
+  const PackOptions d = withDefaultSampling(o), def;
+  EXPECT_EQ(d.keyBarbsPerVane, def.keyBarbsPerVane);
+  EXPECT_EQ(d.barbSamples, def.barbSamples);
+  EXPECT_EQ(d.shaftSamples, def.shaftSamples);
+  EXPECT_EQ(d.barbFieldBins, def.barbFieldBins);
+  EXPECT_EQ(d.heightFieldBins, def.heightFieldBins);
+  EXPECT_EQ(d.skinSampleSpacing, def.skinSampleSpacing);
+  EXPECT_EQ(d.clearance, 0.003);
+  EXPECT_EQ(d.threads, 2);
+}

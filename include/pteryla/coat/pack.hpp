@@ -165,5 +165,9 @@ std::vector<PlacedKeyBarb> placedKeyBarbs(const CoatFeathers& coat, const PackRe
 // Reads a scene's "packing" object (docs/packing.md). Unknown keys are errors.
 PackOptions parsePackOptions(JsonReader& r);
 Json packOptionsToJson(const PackOptions& o);
+// `o` with the packer's default sampling (key barbs per vane, barb and shaft samples, field bins, skin
+// sample spacing) and everything else (clearances, styling, threads...) kept: what a scene's denser
+// sampling costs (bench_pack, pack_digest).
+PackOptions withDefaultSampling(PackOptions o);
 
 }  // namespace pteryla::coat
