@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <memory>
 
 #include <glm/geometric.hpp>
 #if defined(__linux__)
@@ -57,6 +58,19 @@ glm::dvec3 placeDirection(const FeatherFrame& f, double e, const glm::dvec3& d) 
 }
 
 glm::dvec3 placePoint(const FeatherFrame& f, double e, const glm::dvec3& p) { return f.origin + placeDirection(f, e, p); }
+
+namespace detail {
+// Skin samples. Each stands for the patch of the skin around it: the points of the faces holding the
+// sample within rho of it (every skin point lies in some sample's patch), with the faces' normals within
+// cone (a sine bound) of normal. Packing against the patches instead of the points keeps feathers off
+// the skin between the samples, at any sample spacing.
+struct PackSkinSamples {
+  std::vector<glm::dvec3> pts, normal;
+  std::vector<float> rho, cone;
+  PointGrid grid;
+  std::vector<glm::dvec3> skinPositions;  // the skin they were sampled from (packOver checks it)
+};
+}  // namespace detail
 
 namespace {
 
@@ -411,7 +425,7 @@ struct Context {
   const SkinMesh& skin;
   const CoatFeathers& coat;
   const PackOptions& opt;
-  double clearance = 0, skinClearance = 0;
+  double clearance = 0, skinClearance = 0, medianReach = 0;
   std::vector<LocalFeather> local;
   std::vector<uint32_t> order, pos;  // pos[i] = position in order, UINT32_MAX if not packed
   // dependency graph (CSR)
@@ -435,13 +449,8 @@ struct Context {
       rc.grid.query(centre - dvec3(q), centre + dvec3(q), [&](uint32_t item) { f(rc.members[item]); });
     }
   }
-  // Skin samples. Each stands for the patch of the skin around it: the points of the faces holding the
-  // sample within skinRho of it (every skin point lies in some sample's patch), with the faces' normals
-  // within skinCone (a sine bound) of skinNormal. Packing against the patches instead of the points keeps
-  // feathers off the skin between the samples, at any sample spacing.
-  std::vector<glm::dvec3> skinPts, skinNormal;
-  std::vector<float> skinRho, skinCone;
-  detail::PointGrid skinGrid;
+  // Skin samples (built by setup, or a base pack's for packOver); null without skin.
+  std::shared_ptr<const detail::PackSkinSamples> skinData;
   std::vector<double> fixed;
   std::vector<double> minElevation;  // per feather from styling (NaN = none); empty = none
 };
@@ -841,7 +850,8 @@ struct PlacedKey {
     }
   }
   const double base2 = std::pow(o.baseAllowance * L.totalLength, 2);
-  if (o.skin && !ctx.skinPts.empty()) {
+  if (o.skin && ctx.skinData && !ctx.skinData->pts.empty()) {
+    const detail::PackSkinSamples& sd = *ctx.skinData;
     // World bounds of the footprint box (t in [0, R], b in [yMin, yMax], n in [-R, R]) clipped to the ball;
     // grid cells are culled against the footprint before their points are read.
     detail::Box box;
@@ -851,11 +861,11 @@ struct PlacedKey {
     }
     box.lo = glm::max(box.lo, O - dvec3(L.reach));
     box.hi = glm::min(box.hi, O + dvec3(L.reach));
-    ctx.skinGrid.query(
+    sd.grid.query(
         box.lo, box.hi, [&](const dvec3& centre, double half) { return sphereIn(frame(centre), half); },
         [&](uint32_t k) {
           // Samples inside the footprint; each carries its patch (radius, normal, cone) into the fields.
-          const dvec3 r = ctx.skinPts[k] - O;
+          const dvec3 r = sd.pts[k] - O;
           const double t = glm::dot(r, T);
           if (t < 0 || t > L.reach) return;
           const double b = glm::dot(r, B);
@@ -866,9 +876,9 @@ struct PlacedKey {
           // checker exempts the same zone).
           if (d2 > L.reach * L.reach || d2 < base2) return;
           if (!L.inOutline(b, std::sqrt(t * t + n * n))) return;
-          const double rho = ctx.skinRho[k];
-          const dvec3& nw = ctx.skinNormal[k];
-          S.skinCand.push_back({t, b, n, rho, ctx.skinCone[k], dvec3(glm::dot(nw, T), glm::dot(nw, B), glm::dot(nw, N))});
+          const double rho = sd.rho[k];
+          const dvec3& nw = sd.normal[k];
+          S.skinCand.push_back({t, b, n, rho, sd.cone[k], dvec3(glm::dot(nw, T), glm::dot(nw, B), glm::dot(nw, N))});
         });
   }
   st.candidatePoints += S.cand.size() + S.skinCand.size();
@@ -1346,6 +1356,7 @@ void setup(Context& ctx) {
   ctx.clearance = o.clearance > 0 ? o.clearance : 0.25 * median(widths);
   ctx.skinClearance = o.skinClearance > 0 ? o.skinClearance : ctx.clearance;
   const double medReach = std::max(1e-12, median(reaches));
+  ctx.medianReach = medReach;
   double maxReach = 0;
   for (double r : reaches) maxReach = std::max(maxReach, r);
   ctx.maxReach = maxReach;
@@ -1408,8 +1419,11 @@ void setup(Context& ctx) {
     for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k) ctx.succ[fill[ctx.deps[k]]++] = i;
 
   // Skin samples (9.1.2: the surface under the feather, including neighbouring polygons).
-  ctx.skinPts.clear();
+  ctx.skinData.reset();
   if (o.skin && !ctx.skin.faces.empty()) {
+    auto data = std::make_shared<detail::PackSkinSamples>();
+    detail::PackSkinSamples& sd = *data;
+    sd.skinPositions = ctx.skin.positions;
     const double h = o.skinSampleSpacing > 0 ? o.skinSampleSpacing : 0.1 * medReach;
     // Every used vertex once, points along each edge once (the face with the lower index, or the only
     // face, owns it), and interior points of each face; counts from the edge/face size and spacing h.
@@ -1419,7 +1433,7 @@ void setup(Context& ctx) {
     std::vector<uint8_t> used(sk.positions.size(), 0);
     for (const auto& t : sk.faces) used[t[0]] = used[t[1]] = used[t[2]] = 1;
     for (size_t v = 0; v < sk.positions.size(); ++v)
-      if (used[v]) ctx.skinPts.push_back(sk.positions[v]);
+      if (used[v]) sd.pts.push_back(sk.positions[v]);
     std::vector<uint32_t> faceOff(nf + 1, 0);
     std::vector<int> faceN(nf);
     for (size_t f = 0; f < nf; ++f) {
@@ -1437,8 +1451,8 @@ void setup(Context& ctx) {
       cnt += static_cast<uint32_t>(m >= 3 ? (m - 1) * (m - 2) / 2 : 0);
       faceOff[f + 1] = faceOff[f] + cnt;
     }
-    const size_t base = ctx.skinPts.size();
-    ctx.skinPts.resize(base + faceOff.back());
+    const size_t base = sd.pts.size();
+    sd.pts.resize(base + faceOff.back());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nf, 64), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t f = r.begin(); f < r.end(); ++f) {
         const auto& t = sk.faces[f];
@@ -1449,13 +1463,13 @@ void setup(Context& ctx) {
           if (!(nb < 0 || static_cast<size_t>(nb) > f)) continue;
           const dvec3 a = P[c], b = P[(c + 1) % 3];
           const int m = segs(glm::length(b - a));
-          for (int k = 1; k < m; ++k) ctx.skinPts[q++] = a + (static_cast<double>(k) / m) * (b - a);
+          for (int k = 1; k < m; ++k) sd.pts[q++] = a + (static_cast<double>(k) / m) * (b - a);
         }
         const int m = faceN[f];
         for (int x = 1; x < m; ++x)
           for (int y = 1; x + y < m; ++y) {
             const double u = static_cast<double>(x) / m, v = static_cast<double>(y) / m;
-            ctx.skinPts[q++] = P[0] + u * (P[1] - P[0]) + v * (P[2] - P[0]);
+            sd.pts[q++] = P[0] + u * (P[1] - P[0]) + v * (P[2] - P[0]);
           }
         PTERYLA_CHECK(q == base + faceOff[f + 1], "skin sample count mismatch");
       }
@@ -1474,9 +1488,9 @@ void setup(Context& ctx) {
       }
       faceRho[f] = (le / faceN[f] / std::sqrt(3.0) + edgeHalf) * (1 + 1e-9);
     }
-    ctx.skinNormal.assign(ctx.skinPts.size(), dvec3(0));
-    ctx.skinRho.assign(ctx.skinPts.size(), 0.0f);
-    ctx.skinCone.assign(ctx.skinPts.size(), 0.0f);
+    sd.normal.assign(sd.pts.size(), dvec3(0));
+    sd.rho.assign(sd.pts.size(), 0.0f);
+    sd.cone.assign(sd.pts.size(), 0.0f);
     auto setPatch = [&](size_t q, const uint32_t* faces, size_t count) {
       dvec3 nsum(0);
       double rho = 0;
@@ -1492,9 +1506,9 @@ void setup(Context& ctx) {
         // sine of the angle (or 1 past 90 degrees)
         cone = std::max(cone, glm::dot(nrm, sk.faceNormals[faces[k]]) < 0 ? 1.0 : glm::length(x));
       }
-      ctx.skinNormal[q] = nrm;
-      ctx.skinRho[q] = static_cast<float>(rho * (1 + 1e-6));
-      ctx.skinCone[q] = static_cast<float>(std::min(1.0, cone * (1 + 1e-6) + 1e-9));
+      sd.normal[q] = nrm;
+      sd.rho[q] = static_cast<float>(rho * (1 + 1e-6));
+      sd.cone[q] = static_cast<float>(std::min(1.0, cone * (1 + 1e-6) + 1e-9));
     };
     {
       size_t q = 0;
@@ -1525,7 +1539,8 @@ void setup(Context& ctx) {
         for (; q < base + faceOff[f + 1]; ++q) setPatch(q, &self, 1);
       }
     });
-    ctx.skinGrid.build(ctx.skinPts, std::max(0.2 * medReach, 2 * h));
+    sd.grid.build(sd.pts, std::max(0.2 * medReach, 2 * h));
+    ctx.skinData = std::move(data);
   }
 }
 
@@ -1633,10 +1648,14 @@ void finish(const Context& ctx, tbb::enumerable_thread_specific<Scratch>& scratc
   });
   st.packed = ctx.order.size();
   st.dependencies = ctx.deps.size();
-  st.skinSamples = ctx.skinPts.size();
+  st.skinSamples = ctx.skinData ? ctx.skinData->pts.size() : 0;
   // Feathers that are not packed keep their input parameters.
   for (size_t i = 0; i < ctx.coat.size(); ++i)
     if (!ctx.local[i].packable) res.packedParams[i] = ctx.coat.params[i];
+  res.clearance = ctx.clearance;
+  res.skinClearance = ctx.skinClearance;
+  res.medianReach = ctx.medianReach;
+  res.skinSamples = ctx.skinData;
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -1743,6 +1762,202 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
       outChanged[i] = diff ? 1 : 0;
     });
     finish(ctx, scratch, res, t0);
+  };
+  if (options.threads >= 1) {
+    tbb::task_arena arena(options.threads);
+    arena.execute(run);
+  } else {
+    run();
+  }
+  return res;
+}
+
+PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& base,
+                    const std::vector<uint32_t>& changed, const PackOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  checkInput(coat, options);
+  const size_t n = coat.size();
+  auto present = [&](uint32_t i) { return coat.present.empty() || coat.present[i] != 0; };
+  if (base.elevation.size() != n || base.pointOffset.size() != n + 1 || base.groupOffset.size() != n + 1 ||
+      base.packedParams.size() != n || base.bounds.size() != n)
+    throw Error("packOver: the base pack is for " + std::to_string(base.elevation.size()) + " feathers, the coat has " +
+                    std::to_string(n),
+                {}, "base");
+  // Every present feather must be packed in base, in the same relative order.
+  std::vector<uint32_t> order;
+  order.reserve(base.order.size());
+  for (uint32_t i : base.order)
+    if (i < n && present(i)) order.push_back(i);
+  {
+    std::vector<uint32_t> want = coat.layerOrder;
+    if (want.empty())
+      for (uint32_t i = 0; i < n; ++i) want.push_back(i);
+    want.erase(std::remove_if(want.begin(), want.end(), [&](uint32_t i) { return !present(i); }), want.end());
+    if (want != order)
+      throw Error("packOver: the coat's present feathers are not packed in the base pack in the same layer order", {},
+                  "base");
+  }
+  std::vector<uint8_t> isChanged(n, 0);
+  for (uint32_t c : changed) {
+    if (c >= n) throw Error("changed feather " + std::to_string(c) + " out of range", {}, "changed");
+    isChanged[c] = 1;
+  }
+  if (options.skin && !skin.faces.empty()) {
+    const auto& sd = base.skinSamples;
+    if (!sd || sd->skinPositions.size() != skin.positions.size() ||
+        std::memcmp(sd->skinPositions.data(), skin.positions.data(), skin.positions.size() * sizeof(dvec3)) != 0)
+      throw Error("packOver: the skin differs from the one the base pack was packed on", {}, "base");
+  }
+
+  Context ctx(skin, coat, options);
+  PackResult res;
+  auto run = [&] {
+    ctx.fixed = options.fixedElevation;
+    ctx.minElevation = resolveMinElevation(coat, options.styling);
+    ctx.order = order;
+    ctx.pos.assign(n, UINT32_MAX);
+    for (size_t k = 0; k < order.size(); ++k) ctx.pos[order[k]] = static_cast<uint32_t>(k);
+    ctx.clearance = base.clearance;
+    ctx.skinClearance = base.skinClearance;
+    ctx.medianReach = base.medianReach;
+    ctx.skinData = base.skinSamples;
+    // The feathers to pack, in layer order; only they get their feather-local data.
+    std::vector<uint32_t> work;
+    for (uint32_t i : order)
+      if (isChanged[i]) work.push_back(i);
+    ctx.local.resize(n);
+    for (uint32_t i : order) ctx.local[i].packable = true;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, work.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) buildLocal(coat, work[k], options, ctx.local[work[k]]);
+    });
+    // Dependencies of the packed feathers: feathers before them whose points can touch their footprint
+    // (a kept feather's packed bounds, a packed one's reach).
+    std::vector<std::vector<uint32_t>> depLists(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, work.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t w = r.begin(); w < r.end(); ++w) {
+        const uint32_t i = work[w];
+        const LocalFeather& L = ctx.local[i];
+        const FeatherFrame& F = coat.frames[i];
+        std::vector<uint32_t>& d = depLists[i];
+        for (uint32_t kj = 0; kj < ctx.pos[i]; ++kj) {
+          const uint32_t j = order[kj];
+          const double Rj = isChanged[j] ? ctx.local[j].reach : base.bounds[j].w;
+          const dvec3 c = toFrame(F, coat.frames[j].origin);
+          if (glm::length(c) > L.reach + Rj) continue;
+          if (c.x < -Rj || c.y < L.yMin - Rj || c.y > L.yMax + Rj) continue;
+          d.push_back(j);
+        }
+        std::sort(d.begin(), d.end());
+      }
+    });
+    ctx.depOff.assign(n + 1, 0);
+    for (size_t i = 0; i < n; ++i) ctx.depOff[i + 1] = ctx.depOff[i] + static_cast<uint32_t>(depLists[i].size());
+    ctx.deps.resize(ctx.depOff[n]);
+    for (size_t i = 0; i < n; ++i) std::copy(depLists[i].begin(), depLists[i].end(), ctx.deps.begin() + ctx.depOff[i]);
+
+    // Result layout: kept feathers take base's point groups, packed ones their own, absent ones none.
+    res.order = order;
+    res.elevation.assign(n, 0.0);
+    res.packedParams.resize(n);
+    res.barbsChanged.assign(n, 0);
+    res.recomputed.assign(n, 0);
+    res.bounds.assign(n, glm::dvec4(0));
+    res.pointOffset.assign(n + 1, 0);
+    res.groupOffset.assign(n + 1, 0);
+    res.groupPoint.clear();
+    res.groupPoint.reserve(base.groupPoint.size());
+    for (uint32_t i = 0; i < n; ++i) {
+      uint32_t p = res.pointOffset[i];
+      if (ctx.pos[i] != UINT32_MAX && isChanged[i]) {
+        const LocalFeather& L = ctx.local[i];
+        res.groupPoint.push_back(p);
+        p += static_cast<uint32_t>(L.shaft.size());
+        if (!L.after.empty()) {
+          res.groupPoint.push_back(p);
+          p += static_cast<uint32_t>(L.after.size());
+        }
+        for (size_t k = 0; k < L.keys.size(); ++k) {
+          res.groupPoint.push_back(p);
+          p += static_cast<uint32_t>(std::max(1, options.barbSamples));
+        }
+        PTERYLA_CHECK(p - res.pointOffset[i] == L.pointCount, "point groups do not cover the points");
+      } else if (ctx.pos[i] != UINT32_MAX) {
+        for (uint32_t g = base.groupOffset[i]; g < base.groupOffset[i + 1]; ++g) {
+          res.groupPoint.push_back(p);
+          p += base.groupPoint[g + 1] - base.groupPoint[g];
+        }
+        PTERYLA_CHECK(p - res.pointOffset[i] == base.pointOffset[i + 1] - base.pointOffset[i],
+                      "base point groups do not cover its points");
+      }
+      res.pointOffset[i + 1] = p;
+      res.groupOffset[i + 1] = static_cast<uint32_t>(res.groupPoint.size());
+    }
+    res.groupPoint.push_back(res.pointOffset[n]);
+    reserveHuge(res.points, res.pointOffset[n]);
+    res.points.resize(res.pointOffset[n]);
+    res.groupBounds.assign(res.groupOffset[n], glm::vec4(0));
+    res.barbFields.clear();
+    res.stats = {};
+    const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
+    std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
+    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
+    // Kept feathers: base's results as they are.
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, static_cast<uint32_t>(n), 32), [&](const tbb::blocked_range<uint32_t>& r) {
+      for (uint32_t i = r.begin(); i < r.end(); ++i) {
+        if (ctx.pos[i] == UINT32_MAX) {
+          res.packedParams[i] = coat.params[i];
+          continue;
+        }
+        if (isChanged[i]) continue;
+        res.elevation[i] = base.elevation[i];
+        res.packedParams[i] = base.packedParams[i];
+        res.barbsChanged[i] = base.barbsChanged[i];
+        res.bounds[i] = base.bounds[i];
+        std::copy(base.points.begin() + base.pointOffset[i], base.points.begin() + base.pointOffset[i + 1],
+                  res.points.begin() + res.pointOffset[i]);
+        std::copy(base.groupBounds.begin() + base.groupOffset[i], base.groupBounds.begin() + base.groupOffset[i + 1],
+                  res.groupBounds.begin() + res.groupOffset[i]);
+        closeChunks(out, i);
+      }
+    });
+    // The packed feathers, each after the packed feathers it depends on.
+    std::vector<std::atomic<uint32_t>> pending(n);
+    std::vector<std::vector<uint32_t>> succ(n);
+    std::vector<uint32_t> ready;
+    for (uint32_t i : work) {
+      uint32_t c = 0;
+      for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k)
+        if (isChanged[ctx.deps[k]]) {
+          ++c;
+          succ[ctx.deps[k]].push_back(i);
+        }
+      pending[i].store(c, std::memory_order_relaxed);
+      if (c == 0) ready.push_back(i);
+    }
+    tbb::enumerable_thread_specific<Scratch> scratch;
+    auto body = [&](uint32_t i, tbb::feeder<uint32_t>& feeder) {
+      packFeather(ctx, i, scratch.local(), out);
+      res.recomputed[i] = 1;
+      for (uint32_t s : succ[i])
+        if (pending[s].fetch_sub(1, std::memory_order_acq_rel) == 1) feeder.add(s);
+    };
+    if (options.threads == 1) {
+      for (uint32_t i : work) {
+        packFeather(ctx, i, scratch.local(), out);
+        res.recomputed[i] = 1;
+      }
+    } else {
+      tbb::parallel_for_each(ready.begin(), ready.end(), body);
+    }
+    finish(ctx, scratch, res, t0);
+    if (options.captureFields) {
+      for (const BarbField& f : base.barbFields)
+        if (f.feather < n && ctx.pos[f.feather] != UINT32_MAX && !isChanged[f.feather]) res.barbFields.push_back(f);
+      std::sort(res.barbFields.begin(), res.barbFields.end(), [](const BarbField& a, const BarbField& b) {
+        return a.feather != b.feather ? a.feather < b.feather : (a.vane != b.vane ? a.vane < b.vane : a.key < b.key);
+      });
+    }
+    res.stats.skinSamples = ctx.skinData ? ctx.skinData->pts.size() : 0;
   };
   if (options.threads >= 1) {
     tbb::task_arena arena(options.threads);

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <numeric>
 #include <limits>
 
 #include "pack_fixtures.hpp"
@@ -267,6 +268,73 @@ TEST(Pack, IncrementalRepackEqualsFullPack) {
   const PackResult same = repack(s.skin, edited, full, {}, o2);
   EXPECT_EQ(same.stats.recomputed, 0u);
   expectIdentical(full, same);
+}
+
+TEST(Pack, PackOverPacksOnlyTheChangedFeathers) {
+  const SphereScene& s = scene();
+  PackOptions o;
+  o.threads = 2;
+  const PackResult base = pack(s.skin, s.coat, o);
+  // Listing every feather repacks each against the others' new results in layer order: a full pack.
+  std::vector<uint32_t> all(s.coat.size());
+  std::iota(all.begin(), all.end(), 0u);
+  expectIdentical(base, packOver(s.skin, s.coat, base, all, o));
+  // One unchanged feather listed: packed against the same neighbours, the same bits as in the full pack.
+  const PackResult one = packOver(s.skin, s.coat, base, {s.coat.layerOrder[150]}, o);
+  expectIdentical(base, one);
+  EXPECT_EQ(one.stats.recomputed, 1u);
+
+  // A moult: every 7th feather lost, every 5th shorter (growing).
+  CoatFeathers moulted = s.coat;
+  std::vector<uint32_t> changed;
+  for (uint32_t i = 0; i < moulted.size(); ++i) {
+    if (i % 7 == 3) {
+      moulted.present[i] = 0;
+      changed.push_back(i);
+    } else if (i % 5 == 1) {
+      moulted.params[i] = packtest::contourFeather(0.6);
+      changed.push_back(i);
+    }
+  }
+  const PackResult over = packOver(s.skin, moulted, base, changed, o);
+  o.threads = 1;
+  expectIdentical(over, packOver(s.skin, moulted, base, changed, o));
+  size_t growing = 0, repacked = 0;
+  for (uint32_t i = 0; i < moulted.size(); ++i) {
+    const uint32_t cnt = over.pointOffset[i + 1] - over.pointOffset[i];
+    if (!moulted.present[i]) {
+      EXPECT_EQ(cnt, 0u) << "a lost feather leaves no points to pack against";
+      EXPECT_EQ(over.recomputed[i], 0);
+      continue;
+    }
+    if (i % 5 == 1) {
+      ++growing;
+      EXPECT_EQ(over.recomputed[i], 1);
+      repacked += sameBits(over.elevation[i], base.elevation[i]) ? 0 : 1;
+      // Packed, so its shaft stays out of the sphere beyond the calamus zone.
+      for (uint32_t q = over.pointOffset[i] + 2; q < over.pointOffset[i] + o.shaftSamples + 1; ++q)
+        EXPECT_FALSE(insideConvex(s.skin, dvec3(over.points[q]), 1e-4)) << "feather " << i;
+      continue;
+    }
+    // Everything else keeps its pose from the base pack exactly.
+    EXPECT_EQ(over.recomputed[i], 0);
+    ASSERT_TRUE(sameBits(over.elevation[i], base.elevation[i])) << i;
+    ASSERT_TRUE(over.packedParams[i] == base.packedParams[i]) << i;
+    ASSERT_EQ(cnt, base.pointOffset[i + 1] - base.pointOffset[i]);
+    EXPECT_EQ(0, std::memcmp(over.points.data() + over.pointOffset[i], base.points.data() + base.pointOffset[i],
+                             cnt * sizeof(glm::vec4)));
+  }
+  EXPECT_EQ(over.stats.recomputed, growing);
+  // The growing feathers were packed with their own shape (a shorter shaft needs another angle).
+  EXPECT_GT(repacked, growing / 2);
+
+  // Bad bases are rejected: wrong size, another skin, a present feather the base did not pack.
+  EXPECT_THROW(packOver(s.skin, moulted, pack(s.skin, SphereScene(120).coat), changed), Error);
+  SkinMesh moved = s.skin;
+  moved.positions[0].x += 1e-3;
+  EXPECT_THROW(packOver(moved, moulted, base, changed), Error);
+  const PackResult gap = packOver(s.skin, moulted, base, changed);
+  EXPECT_THROW(packOver(s.skin, s.coat, gap, {}), Error);
 }
 
 TEST(Pack, UnopenedFeathersPackAsStraightShafts) {

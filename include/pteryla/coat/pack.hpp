@@ -30,6 +30,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "pteryla/coat/coat_feathers.hpp"
@@ -39,6 +40,10 @@
 #include "pteryla/feather/params.hpp"
 
 namespace pteryla::coat {
+
+namespace detail {
+struct PackSkinSamples;  // the skin samples of a pack (pack.cpp), shared with packOver
+}
 
 struct PackOptions {
   double clearance = 0;        // scene units kept between a feather and what is under it; 0 = auto (0.25 x median rachis width)
@@ -125,6 +130,11 @@ struct PackResult {
   std::vector<glm::vec4> groupBounds;
   std::vector<BarbField> barbFields;             // captureFields only
   PackStats stats;
+  // The automatic values this pack resolved (the options' own values when they were given): scene-unit
+  // clearances and the median feather reach that sizes the skin sample spacing. packOver packs with them.
+  double clearance = 0, skinClearance = 0, medianReach = 0;
+  // The skin samples (and their patches) this pack used, for packOver on the same skin.
+  std::shared_ptr<const detail::PackSkinSamples> skinSamples;
 };
 
 // Packs every present feather of `coat` (in coat.layerOrder, or index order when it is empty) against
@@ -139,6 +149,19 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
 // deformation every frame changes: call pack().
 PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& previous,
                   const std::vector<uint32_t>& changed, const PackOptions& options = {});
+
+// Packs only the feathers in `changed` over `base`: every other present feather keeps its pose, barbs and
+// points from `base` exactly, and the changed ones are packed in layer order against what lies under them
+// (base's feathers, and the changed feathers packed before them), with base's clearances and skin
+// samples. Absent feathers (coat.present) are left out: nothing packs against them. This is the moult's
+// pack (docs/moult.md): `base` is the pack of the coat with every feather mature, `changed` the lost and
+// growing feathers, so a lost feather leaves a gap and a growing one fills in under the feathers over it.
+// Unlike repack(), feathers over a changed one are not repacked, so the result is not a full pack's; it
+// is a function of (skin, coat, base, changed set, options) only. `base` must come from pack()/repack()
+// on the same skin with the same options and feather count, and every present feather of `coat` must be
+// packed in `base` in the same relative layer order; else Error.
+PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& base,
+                    const std::vector<uint32_t>& changed, const PackOptions& options = {});
 
 // Feathers whose packing input differs between two coats of equal size (frame, params, age, presence),
 // plus those whose fixed elevation differs between two option sets.
