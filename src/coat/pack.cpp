@@ -68,6 +68,7 @@ struct PackSkinSamples {
   std::vector<glm::dvec3> pts, normal;
   std::vector<float> rho, cone;
   PointGrid grid;
+  double maxRho = 0;                      // largest patch radius
   std::vector<glm::dvec3> skinPositions;  // the skin they were sampled from (packOver checks it)
 };
 }  // namespace detail
@@ -115,6 +116,15 @@ struct LocalFeather {
     const int k = static_cast<int>((b - yMin) * kOutlineBins / (yMax - yMin));
     if (k < 0 || k >= kOutlineBins) return false;
     return r >= rLo[k] && r <= rHi[k];
+  }
+  // Whether a disc of radius pad around (b, r) can touch the outline.
+  bool nearOutline(double b, double r, double pad) const {
+    const double w = (yMax - yMin) / kOutlineBins;
+    const int k0 = std::max(0, static_cast<int>(std::floor((b - pad - yMin) / w)));
+    const int k1 = std::min(kOutlineBins - 1, static_cast<int>(std::floor((b + pad - yMin) / w)));
+    for (int k = k0; k <= k1; ++k)
+      if (r + pad >= rLo[k] && r - pad <= rHi[k]) return true;
+    return false;
   }
 };
 
@@ -859,24 +869,30 @@ struct PlacedKey {
       const dvec3 lp((k & 1) ? L.reach : 0.0, (k & 2) ? L.yMax : L.yMin, (k & 4) ? L.reach : -L.reach);
       box.add(O + lp.x * T + lp.y * B + lp.z * N);
     }
-    box.lo = glm::max(box.lo, O - dvec3(L.reach));
-    box.hi = glm::min(box.hi, O + dvec3(L.reach));
+    // A footprint narrower than a skin patch (a pin feather's shaft, its barbs still closed) can fall
+    // between the samples: for it, patches reaching sideways into the footprint count too. Wider
+    // footprints take the samples inside them.
+    const double halfWidth = 0.5 * (L.yMax - L.yMin);
+    const double sidePad = std::max(0.0, sd.maxRho - halfWidth);
+    box.lo = glm::max(box.lo - dvec3(sidePad), O - dvec3(L.reach + sidePad));
+    box.hi = glm::min(box.hi + dvec3(sidePad), O + dvec3(L.reach + sidePad));
     sd.grid.query(
-        box.lo, box.hi, [&](const dvec3& centre, double half) { return sphereIn(frame(centre), half); },
+        box.lo, box.hi, [&](const dvec3& centre, double half) { return sphereIn(frame(centre), half + sidePad); },
         [&](uint32_t k) {
           // Samples inside the footprint; each carries its patch (radius, normal, cone) into the fields.
+          const double rho = sd.rho[k];
+          const double pad = std::max(0.0, rho - halfWidth);
           const dvec3 r = sd.pts[k] - O;
           const double t = glm::dot(r, T);
           if (t < 0 || t > L.reach) return;
           const double b = glm::dot(r, B);
-          if (b < L.yMin || b > L.yMax) return;
+          if (b < L.yMin - pad || b > L.yMax + pad) return;
           const double n = glm::dot(r, N);
           const double d2 = t * t + b * b + n * n;
           // The calamus sits in its follicle: skin within the base allowance is not an obstacle (the
           // checker exempts the same zone).
-          if (d2 > L.reach * L.reach || d2 < base2) return;
-          if (!L.inOutline(b, std::sqrt(t * t + n * n))) return;
-          const double rho = sd.rho[k];
+          if (d2 > (L.reach + pad) * (L.reach + pad) || d2 < base2) return;
+          if (pad > 0 ? !L.nearOutline(b, std::sqrt(t * t + n * n), pad) : !L.inOutline(b, std::sqrt(t * t + n * n))) return;
           const dvec3& nw = sd.normal[k];
           S.skinCand.push_back({t, b, n, rho, sd.cone[k], dvec3(glm::dot(nw, T), glm::dot(nw, B), glm::dot(nw, N))});
         });
@@ -1539,6 +1555,7 @@ void setup(Context& ctx) {
         for (; q < base + faceOff[f + 1]; ++q) setPatch(q, &self, 1);
       }
     });
+    for (float r : sd.rho) sd.maxRho = std::max(sd.maxRho, static_cast<double>(r));
     sd.grid.build(sd.pts, std::max(0.2 * medReach, 2 * h));
     ctx.skinData = std::move(data);
   }
