@@ -55,7 +55,8 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   }
   const double times[] = {3.0, 5.5, 4.25, 6.0, 2.5, 7.75, 5.0, 3.5};
   size_t k = 0;
-  double packChanged = 0, packRecomputed = 0, naturalRecomputed = 0, meshRegenerated = 0, meshReused = 0, incremental = 0;
+  double packChanged = 0, packRecomputed = 0, naturalRecomputed = 0, meshRegenerated = 0, meshReused = 0, incremental = 0,
+         moultChanged = 0, moultRecomputed = 0;
   p->resetTimings();
   for (auto _ : state) {
     p->setTime(consecutive ? 4.0 + double(++k) / 24.0 : times[k++ % 8]);
@@ -67,6 +68,8 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
     meshRegenerated += double(r.meshRegenerated);
     meshReused += double(r.meshReused);
     incremental += r.packIncremental ? 1 : 0;
+    moultChanged += double(r.moultChanged);
+    moultRecomputed += double(r.moultRecomputed);
   }
   const auto& c = p->feathers();
   size_t absent = 0, growing = 0;
@@ -94,6 +97,9 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   state.counters["incremental"] = incremental / n;
   state.counters["mesh_regen"] = meshRegenerated / n;
   state.counters["mesh_reused"] = meshReused / n;
+  // Moult frames: lost and growing feathers, and those packed over the mature coat's pack.
+  state.counters["moult_changed"] = moultChanged / n;
+  state.counters["moult_recomputed"] = moultRecomputed / n;
 }
 
 void BM_FrameBirdScene(benchmark::State& state) {

@@ -107,6 +107,8 @@ struct Pipeline::Impl {
   coat::CoatFeathers coatNow;     // at the current time: posed frames, ages, presence
   coat::CoatFeathers packCoat;    // coatNow with growing feathers as grown (the pack input when any grows)
   std::vector<double> packGrownAge;  // per feather, the age packCoat's parameters are grown to (empty = none)
+  coat::CoatFeathers matureCoat;  // coatNow with every feather present and mature (a moult frame's base)
+  uint64_t matureCoatGeneration = 0;
   TimeState timeState;
   std::vector<double> fixedElevation;
   const coat::PackResult* packed = nullptr;  // timeState.frame.result once packed
@@ -477,8 +479,23 @@ void Pipeline::Impl::computePack() {
     });
     packInput = &packCoat;
   }
-  // Repacks incrementally from the last frame's pack or this frame's natural pack when it can.
-  packed = &packFrame(scene, posed, *packInput, o, timeState, packGrownAge);
+  bool anyLost = false;
+  for (size_t i = 0; i < coatNow.size() && !anyLost; ++i) anyLost = !coatNow.present[i];
+  if (anyGrowing || anyLost) {
+    // A moult frame: the mature coat is packed as a frame without a moult would be, and the lost and
+    // growing feathers are packed over it (docs/moult.md).
+    if (matureCoatGeneration != restGeneration) {
+      matureCoat = coatRest;
+      matureCoat.age.assign(matureCoat.size(), 1.0);
+      matureCoat.present.assign(matureCoat.size(), 1);
+      matureCoatGeneration = restGeneration;
+    }
+    matureCoat.frames = coatNow.frames;
+    packed = &packMoultFrame(scene, posed, matureCoat, *packInput, o, timeState, packGrownAge);
+  } else {
+    // Repacks incrementally from the last frame's pack or this frame's natural pack when it can.
+    packed = &packFrame(scene, posed, *packInput, o, timeState, packGrownAge);
+  }
   report(progress, "pack", 1);
 }
 
@@ -943,6 +960,9 @@ FrameReuse Pipeline::frameReuse() const {
   r.packIncremental = p.finalIncremental;
   r.packChanged = p.finalChanged;
   r.packRecomputed = p.finalRecomputed;
+  r.moult = p.moult;
+  r.moultChanged = p.moultChanged;
+  r.moultRecomputed = p.moultRecomputed;
   r.meshRegenerated = impl_->meshRegenerated;
   r.meshReused = impl_->meshReused;
   return r;

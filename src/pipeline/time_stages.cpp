@@ -2,6 +2,7 @@
 // (AnimFur, Grier 2019) read from the scene and evaluated by src/moult.
 #include "time_stages.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -187,6 +188,8 @@ void PackMemo::remember(const coat::SkinMesh& skinNow, const coat::CoatFeathers&
   }
   grownAge = grownAgeNow;
   result = std::move(r);
+  static std::atomic<uint64_t> versions{0};
+  version = ++versions;
 }
 
 void poseSkin(const Scene& scene, double t, const coat::SkinMesh& rest, coat::SkinMesh& posed, TimeState& state) {
@@ -246,6 +249,35 @@ const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& pose
   const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
   return packWithMemo(state.frame, alternative, posed, coat, options, state.generation, scene.packing,
                       r.finalIncremental, r.finalChanged, r.finalRecomputed, grownAge);
+}
+
+const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& mature,
+                                       const coat::CoatFeathers& coat, const coat::PackOptions& options,
+                                       TimeState& state, const std::vector<double>& grownAge) {
+  PackReport& r = state.packReport;
+  r.moult = true;
+  const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
+  const coat::PackResult& base = packWithMemo(state.frame, alternative, posed, mature, options, state.generation,
+                                              scene.packing, r.finalIncremental, r.finalChanged, r.finalRecomputed);
+  // What differs from the mature coat: lost feathers, and growing ones (grown packing parameters, or the
+  // packer's unopened class).
+  std::vector<uint32_t> changed;
+  for (uint32_t i = 0; i < coat.size(); ++i) {
+    const bool grown = !grownAge.empty() && !sameBits(&grownAge[i], &kMature, sizeof(double));
+    if (!presentAt(coat, i) || grown || unopenedAt(coat, i, options)) changed.push_back(i);
+  }
+  r.moultChanged = changed.size();
+  const std::optional<std::vector<uint32_t>> diff =
+      state.moultFrame.changes(posed, coat, options, state.generation, scene.packing, grownAge);
+  if (diff && diff->empty() && state.moultBaseVersion == state.frame.version) {
+    r.moultRecomputed = 0;
+    return state.moultFrame.result;
+  }
+  coat::PackResult result = coat::packOver(posed, coat, base, changed, options);
+  r.moultRecomputed = result.stats.recomputed;
+  state.moultBaseVersion = state.frame.version;
+  state.moultFrame.remember(posed, coat, options, state.generation, scene.packing, std::move(result), grownAge);
+  return state.moultFrame.result;
 }
 
 }  // namespace pteryla::pipeline

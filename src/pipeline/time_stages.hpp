@@ -36,6 +36,7 @@ struct PackMemo {
   // Within a rest state a feather's packing parameters are a function of this age.
   std::vector<double> grownAge;
   coat::PackResult result;
+  uint64_t version = 0;                  // changes whenever `result` is replaced (remember)
 
   void clear() { *this = PackMemo{}; }
   // Feathers whose packing input differs from the memo's, or nullopt when the memo cannot seed a repack
@@ -54,6 +55,10 @@ struct PackReport {
   bool naturalIncremental = false, finalIncremental = false;
   size_t naturalChanged = 0, finalChanged = 0;  // feathers handed to repack as changed
   size_t naturalRecomputed = 0, finalRecomputed = 0;
+  // Moult frames (packMoultFrame): the final* fields describe the mature coat's pack, these the lost and
+  // growing feathers packed over it.
+  bool moult = false;
+  size_t moultChanged = 0, moultRecomputed = 0;
 };
 
 // Parsed time settings, cached across frames. Each cache remembers the JSON it was parsed from and is
@@ -87,6 +92,10 @@ struct TimeState {
   // Packs remembered across frames (see PackMemo): the controls' natural pack and the frame's pack.
   uint64_t generation = 0;                // set by the pipeline: changes whenever the rest state changes
   PackMemo natural, frame;
+  // Moult frames: the lost and growing feathers packed over `frame` (which then holds the mature coat's
+  // pack) and the version of `frame` it was packed over.
+  PackMemo moultFrame;
+  uint64_t moultBaseVersion = 0;
   bool naturalThisFrame = false;          // `natural` holds the pack of the current frame without raises
   PackReport packReport;
 };
@@ -108,5 +117,14 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
 const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
                                   const coat::PackOptions& options, TimeState& state,
                                   const std::vector<double>& grownAge = {});
+
+// A moult frame's pack (state.moultFrame.result): the mature coat (every feather present, with its rest
+// parameters, same frames and fixed elevations) is packed as packFrame packs a frame without a moult
+// (into state.frame), then the lost and growing feathers of `coat` are packed over it (coat::packOver):
+// mature feathers keep their pose, so a lost feather leaves a gap and a growing one fills in under the
+// feathers over it. Reused when neither the mature pack nor this frame's lost/growing feathers changed.
+const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& mature,
+                                       const coat::CoatFeathers& coat, const coat::PackOptions& options,
+                                       TimeState& state, const std::vector<double>& grownAge);
 
 }  // namespace pteryla::pipeline

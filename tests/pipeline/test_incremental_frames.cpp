@@ -99,9 +99,9 @@ Frame fresh(const pipeline::Scene& scene, double t, double lod) {
 
 }  // namespace
 
-// A moult without gaps: between nearby frames only the feathers crossing the opening age change their
-// packing input, so the pack is repacked incrementally and most feathers' triangles are copied; growing
-// feathers get new curves every frame. Forward, backward and repeated times all equal fresh evaluations.
+// A moult without gaps: the mature coat's pack is the same in every frame and reused; only the growing
+// feathers are packed over it, and most feathers' triangles are copied; growing feathers get new curves
+// every frame. Forward, backward and repeated times all equal fresh evaluations.
 TEST(IncrementalFrames, MoultScrubEqualsFreshEvaluation) {
   Json j = patchScene();
   j["moult"] = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "sequence": "centre_out", "gap": 0,
@@ -116,19 +116,21 @@ TEST(IncrementalFrames, MoultScrubEqualsFreshEvaluation) {
     const Frame f = grab(scrub);
     const pipeline::FrameReuse r = scrub.frameReuse();
     const size_t n = scrub.feathers().size();
+    EXPECT_TRUE(r.moult) << t;
+    EXPECT_LE(r.moultRecomputed, r.moultChanged) << t;
     incremental += r.packIncremental ? 1 : 0;
-    partial += r.packIncremental && r.packRecomputed < n ? 1 : 0;
+    partial += r.packIncremental && r.packRecomputed < n && r.moultRecomputed < n ? 1 : 0;
     reused += r.meshReused;
     keptCurves += r.meshRegenerated < n ? 1 : 0;
     expectIdentical(f, fresh(scene, t, 0.2), t);
   }
   EXPECT_GE(incremental, 4u);
-  EXPECT_GE(partial, 2u);  // repacks that recomputed only part of the coat
+  EXPECT_GE(partial, 2u);  // frames that packed only part of the coat
   EXPECT_GT(reused, 0u);   // mesh slices copied from the last frame
   EXPECT_GE(keptCurves, 4u);
 }
 
-// A moult with gaps (feathers leave and return, the full pack path) and a level-of-detail change.
+// A moult with gaps (feathers leave and return) and a level-of-detail change.
 TEST(IncrementalFrames, GapsAndLodChangesEqualFreshEvaluation) {
   Json j = patchScene();
   j["moult"] = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "sequence": "radial", "gap": 0.3,
@@ -148,6 +150,44 @@ TEST(IncrementalFrames, GapsAndLodChangesEqualFreshEvaluation) {
   size_t absent = 0;
   for (uint8_t p : at6.present) absent += p ? 0 : 1;
   EXPECT_GT(absent, 0u);
+}
+
+// A moult frame packs the lost and growing feathers over the mature coat: every mature feather keeps
+// the pose it has without the moult, bit for bit (a lost feather leaves a gap), growing ones are packed
+// with their own shape.
+TEST(IncrementalFrames, MoultFramesKeepTheMatureCoat) {
+  Json j = patchScene();
+  const pipeline::Scene still = pipeline::sceneFromJson(j, kSceneFile);
+  j["moult"] = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "sequence": "radial", "gap": 0.3,
+                               "random": 0.2, "seed": 5})");
+  const pipeline::Scene moulting = pipeline::sceneFromJson(j, kSceneFile);
+  Pipeline a(still), b(moulting);
+  a.setTime(5.0);
+  b.setTime(5.0);
+  const std::vector<double> ea = a.elevations(), eb = b.elevations();
+  const coat::CoatFeathers& c = b.feathers();
+  ASSERT_EQ(ea.size(), eb.size());
+  size_t mature = 0, absent = 0, growing = 0, growingMoved = 0;
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (!c.present[i]) {
+      ++absent;
+    } else if (c.age[i] >= 1.0) {
+      ++mature;
+      EXPECT_EQ(0, std::memcmp(&ea[i], &eb[i], sizeof(double))) << "feather " << i;
+    } else {
+      ++growing;
+      growingMoved += std::memcmp(&ea[i], &eb[i], sizeof(double)) != 0 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(mature, 50u);
+  EXPECT_GT(absent, 0u);
+  EXPECT_GT(growing, 10u);
+  EXPECT_GT(growingMoved, 0u);
+  const pipeline::FrameReuse r = b.frameReuse();
+  EXPECT_TRUE(r.moult);
+  EXPECT_GE(r.moultChanged, absent);
+  EXPECT_LE(r.moultRecomputed, r.moultChanged - absent);
+  EXPECT_FALSE(a.frameReuse().moult);
 }
 
 // Animated lift without a moult: the natural pack (the frame without its raises) does not change between

@@ -72,6 +72,11 @@ struct FrameReuse {
   bool packIncremental = false;     // the frame's pack repacked (or reused) an earlier pack
   size_t packChanged = 0;           // feathers whose packing input differed from the seed pack's
   size_t packRecomputed = 0;        // feathers whose packing was computed (0: the earlier pack was reused)
+  // Moult frames: the pack* fields describe the mature coat's pack; the lost and growing feathers are
+  // packed over it (coat::packOver).
+  bool moult = false;
+  size_t moultChanged = 0;          // lost and growing feathers
+  size_t moultRecomputed = 0;       // feathers packed over the mature pack (0: the last one was reused)
   size_t meshRegenerated = 0;       // present feathers whose barb curves the mesh stage generated
   size_t meshReused = 0;            // present feathers whose triangles were copied from the last mesh
 };
