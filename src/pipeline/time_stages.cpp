@@ -232,10 +232,28 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
   const coat::SkinMesh& rest = state.rest ? *state.rest : posed;
   const moult::ControlBinding binding = moult::bindControls(rest, follicles, state.controls, state.controlTracts);
   // The natural pack (the frame without its raises) repacks from the last natural pack when it can.
+  // In a moult frame the natural pack is the mature coat's (every feather present and mature): the moult
+  // packs its lost and growing feathers over the mature coat (packMoultFrame), so raises start from the
+  // mature coat's elevations, and that pack changes only with the pose and the controls' turns.
   const moult::NaturalPackFn natural = [&](const coat::SkinMesh& skin, const coat::CoatFeathers& c,
                                            const coat::PackOptions& o) -> const coat::PackResult& {
-    return packWithMemo(state.natural, {}, skin, c, o, state.generation, scene.packing, state.packReport.naturalIncremental,
-                        state.packReport.naturalChanged, state.packReport.naturalRecomputed);
+    bool moulting = false;
+    for (size_t i = 0; i < c.size() && !moulting; ++i)
+      moulting = presentAt(c, i) == 0 || (!c.age.empty() && c.age[i] < kMature);
+    const coat::CoatFeathers* input = &c;
+    if (moulting) {
+      if (state.naturalMatureGeneration != state.generation || state.naturalMature.size() != c.size()) {
+        state.naturalMature = c;
+        state.naturalMature.age.assign(c.size(), kMature);
+        state.naturalMature.present.assign(c.size(), 1);
+        state.naturalMatureGeneration = state.generation;
+      }
+      state.naturalMature.frames = c.frames;
+      input = &state.naturalMature;
+    }
+    return packWithMemo(state.natural, {}, skin, *input, o, state.generation, scene.packing,
+                        state.packReport.naturalIncremental, state.packReport.naturalChanged,
+                        state.packReport.naturalRecomputed);
   };
   state.controlResult = moult::evaluateControls(state.controls, binding, posed, follicles, t, state.packOptions, coat,
                                                 fixedElevation, natural);

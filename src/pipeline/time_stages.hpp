@@ -96,6 +96,10 @@ struct TimeState {
   // pack) and the version of `frame` it was packed over.
   PackMemo moultFrame;
   uint64_t moultBaseVersion = 0;
+  // Moult frames with controls: the coat the natural pack packs (every feather present and mature; its
+  // rest parameters copied once per rest state, frames every frame).
+  coat::CoatFeathers naturalMature;
+  uint64_t naturalMatureGeneration = 0;
   bool naturalThisFrame = false;          // `natural` holds the pack of the current frame without raises
   PackReport packReport;
 };
