@@ -46,8 +46,9 @@ int main(int argc, char** argv) {
 
   SceneArgs bench;
   auto* cBench = app.add_subcommand(
-      "bench", "Print one JSON object of per-stage seconds (load, distribute, interpolate, pack, mesh, render),\n"
-               "triangles and peak_rss_mb on stdout");
+      "bench", "Print one JSON object of per-stage seconds of the first evaluation (load, distribute,\n"
+               "interpolate, pack, mesh, render), pack_repeat (best of 3 more full packs, warm memory), frame\n"
+               "(a timeline step), triangles and peak_rss_mb on stdout");
   addSceneOptions(cBench, bench, true);
 
   ExportArgs exportArgs;

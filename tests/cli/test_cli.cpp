@@ -113,7 +113,7 @@ TEST(Cli, BenchPrintsEveryStageWithRealTimings) {
   auto r = runPteryla("bench " + std::string(PTERYLA_DATA_DIR) + "/scenes/patch.json --size 64x64 -q");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
-  for (const char* k : {"load", "distribute", "interpolate", "pack", "mesh", "render"}) {
+  for (const char* k : {"load", "distribute", "interpolate", "pack", "pack_repeat", "mesh", "render"}) {
     ASSERT_TRUE(j.contains(k)) << k;
     EXPECT_GT(j[k].get<double>(), 0.0) << k << " was not timed";  // every stage ran once
   }

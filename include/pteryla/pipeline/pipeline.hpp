@@ -120,6 +120,12 @@ class Pipeline {
 
   FrameReuse frameReuse() const;
 
+  // Packs the current frame's coat from scratch `repeats` times (coat::pack with the frame's options,
+  // results discarded) and returns the fastest wall time in seconds: what a full pack costs once memory
+  // is warm, without the first evaluation's page faults (pteryla bench "pack_repeat"). In a moult frame
+  // it packs the mature coat (the frame's full pack; the moulting feathers are packed over it).
+  double timeFullPack(int repeats);
+
   StageGraph& graph();
   double stageSeconds(Stage s) const;  // summed since the last resetTimings()
   void resetTimings();
