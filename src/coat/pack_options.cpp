@@ -36,6 +36,7 @@ PackOptions parsePackOptions(JsonReader& r) {
   o.skin = r.boolean("skin", o.skin);
   o.skinSampleSpacing = r.number("skin_sample_spacing", 0.0, 0.0, kInf);
   o.threads = static_cast<int>(r.integer("threads", 0, 0, 1024));
+  o.moultOver = r.oneOf("moult_pack", "over", {"over", "full"}) == "over";
   for (JsonReader& s : r.objects("styling")) o.styling.push_back(parseStyleSelection(s));
   r.finish();
   return o;
@@ -64,6 +65,7 @@ Json packOptionsToJson(const PackOptions& o) {
   if (o.skin != d.skin) j["skin"] = o.skin;
   if (o.skinSampleSpacing != d.skinSampleSpacing) j["skin_sample_spacing"] = o.skinSampleSpacing;
   if (o.threads != d.threads) j["threads"] = o.threads;
+  if (o.moultOver != d.moultOver) j["moult_pack"] = o.moultOver ? "over" : "full";
   if (!o.styling.empty()) {
     Json a = Json::array();
     for (const auto& s : o.styling) a.push_back(styleSelectionToJson(s));

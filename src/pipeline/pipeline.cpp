@@ -483,9 +483,10 @@ void Pipeline::Impl::computePack() {
   }
   bool anyLost = false;
   for (size_t i = 0; i < coatNow.size() && !anyLost; ++i) anyLost = !coatNow.present[i];
-  if (anyGrowing || anyLost) {
+  if ((anyGrowing || anyLost) && o.moultOver) {
     // A moult frame: the mature coat is packed as a frame without a moult would be, and the lost and
-    // growing feathers are packed over it (docs/moult.md).
+    // growing feathers are packed over it (docs/moult.md). With "moult_pack": "full" the frame is
+    // repacked like any other (below).
     if (matureCoatGeneration != restGeneration) {
       matureCoat = coatRest;
       matureCoat.age.assign(matureCoat.size(), 1.0);

@@ -241,7 +241,7 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
     for (size_t i = 0; i < c.size() && !moulting; ++i)
       moulting = presentAt(c, i) == 0 || (!c.age.empty() && c.age[i] < kMature);
     const coat::CoatFeathers* input = &c;
-    if (moulting) {
+    if (moulting && o.moultOver) {
       if (state.naturalMatureGeneration != state.generation || state.naturalMature.size() != c.size()) {
         state.naturalMature = c;
         state.naturalMature.age.assign(c.size(), kMature);

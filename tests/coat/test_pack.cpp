@@ -434,7 +434,7 @@ TEST(Pack, FlatPatchFeathersRestJustAboveTheSkin) {
 
 TEST(PackOptionsJson, ParsesAndRejects) {
   const Json j = Json::parse(R"({
-    "clearance": 0.002, "max_elevation_deg": 80, "key_barbs_per_vane": 7, "threads": 2,
+    "clearance": 0.002, "max_elevation_deg": 80, "key_barbs_per_vane": 7, "threads": 2, "moult_pack": "full",
     "styling": [
       {"select": "ids", "ids": [1, 2, 3], "elevation_deg": 40},
       {"select": "sphere", "center": [1, 0, 0], "radius": 0.3, "elevation_deg": 30},
@@ -445,6 +445,7 @@ TEST(PackOptionsJson, ParsesAndRejects) {
   EXPECT_DOUBLE_EQ(o.clearance, 0.002);
   EXPECT_NEAR(o.maxElevation, 80 * feather::kPi / 180, 1e-12);
   EXPECT_EQ(o.keyBarbsPerVane, 7);
+  EXPECT_FALSE(o.moultOver);
   ASSERT_EQ(o.styling.size(), 3u);
   EXPECT_EQ(o.styling[0].ids, (std::vector<uint32_t>{1, 2, 3}));
   EXPECT_EQ(o.styling[1].kind, StyleKind::Sphere);
@@ -469,6 +470,7 @@ TEST(PackOptionsJson, ParsesAndRejects) {
   };
   fails(R"({"clearence": 1})", "clearence");
   fails(R"({"key_barbs_per_vane": 1})", "key_barbs_per_vane");
+  fails(R"({"moult_pack": "partial"})", "moult_pack");
   fails(R"({"styling": [{"select": "ids", "ids": [1.5], "elevation_deg": 3}]})", "ids");
   fails(R"({"styling": [{"select": "blob", "elevation_deg": 3}]})", "select");
   fails(R"({"styling": [{"select": "sphere", "center": [0,0,0], "radius": 1}]})", "elevation_deg");

@@ -188,6 +188,17 @@ TEST(IncrementalFrames, MoultFramesKeepTheMatureCoat) {
   EXPECT_GE(r.moultChanged, absent);
   EXPECT_LE(r.moultRecomputed, r.moultChanged - absent);
   EXPECT_FALSE(a.frameReuse().moult);
+
+  // "moult_pack": "full" repacks every feather: mature feathers settle into the gaps.
+  j["packing"]["moult_pack"] = "full";
+  Pipeline full(pipeline::sceneFromJson(j, kSceneFile));
+  full.setTime(5.0);
+  const std::vector<double> ef = full.elevations();
+  EXPECT_FALSE(full.frameReuse().moult);
+  size_t matureMoved = 0;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (c.present[i] && c.age[i] >= 1.0) matureMoved += std::memcmp(&ea[i], &ef[i], sizeof(double)) != 0 ? 1 : 0;
+  EXPECT_GT(matureMoved, 0u);
 }
 
 // Animated lift without a moult: the natural pack (the frame without its raises) does not change between

@@ -74,6 +74,9 @@ struct PackOptions {
   std::vector<double> fixedElevation;
   std::vector<StyleSelection> styling;  // parsed selections (kept for the pipeline; pack() ignores them)
   bool captureFields = false;  // keep every key barb height field in PackResult::barbFields (tests, debugging)
+  // How the pipeline packs a moult frame (docs/moult.md; pack() ignores it): true = the lost and growing
+  // feathers over the mature coat (packOver, fast), false = a full repack of every feather (tighter).
+  bool moultOver = true;
 };
 
 // One binned height field along an axis: h[b] is the largest height seen in [origin + b cell,
