@@ -313,6 +313,12 @@ void drawPackingPanel(PanelContext& ctx) {
   bool skin = p.value("skin", true);
   ImGui::SameLine();
   if (ImGui::Checkbox("Pack against skin", &skin)) guarded(ctx, [&] { actions::setPackingValue(doc, "skin", skin); });
+  bool moultFull = p.value("moult_pack", std::string("over")) == "full";
+  if (ImGui::Checkbox("Moult frames: repack every feather", &moultFull))
+    guarded(ctx, [&] { actions::setPackingValue(doc, "moult_pack", moultFull ? "full" : "over"); });
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("Off: lost and growing feathers are packed over the mature coat (fast scrubbing).\n"
+                      "On: every feather is repacked (tighter, a full pack per frame; for final renders).");
 
   sectionTitle("Fixed-angle brush (8.3)");
   ImGui::SliderFloat("Radius", &ctx.view.brushRadius, 0.001f, 2.0f, "%.3f", ImGuiSliderFlags_Logarithmic);
