@@ -1848,7 +1848,34 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
       for (size_t k = r.begin(); k < r.end(); ++k) buildLocal(coat, work[k], options, ctx.local[work[k]]);
     });
     // Dependencies of the packed feathers: feathers before them whose points can touch their footprint
-    // (a kept feather's packed bounds, a packed one's reach).
+    // (a kept feather's packed bounds, a packed one's reach), found in reach classes as setup() does.
+    std::vector<double> radius(n, 0.0);
+    for (uint32_t j : order) radius[j] = isChanged[j] ? ctx.local[j].reach : base.bounds[j].w;
+    {
+      std::vector<double> rs;
+      rs.reserve(order.size());
+      for (uint32_t j : order) rs.push_back(radius[j]);
+      const double med = std::max(1e-12, median(rs));
+      std::vector<std::vector<uint32_t>> members;
+      for (size_t k = 0; k < order.size(); ++k) {
+        const double ratio = radius[order[k]] / (2 * med);
+        const size_t c = ratio <= 1 ? 0 : std::min<size_t>(16, static_cast<size_t>(std::ceil(std::log2(ratio))));
+        if (members.size() <= c) members.resize(c + 1);
+        members[c].push_back(static_cast<uint32_t>(k));
+      }
+      for (auto& m : members) {
+        if (m.empty()) continue;
+        Context::ReachClass rc;
+        std::vector<glm::dvec3> origins(m.size());
+        for (size_t q = 0; q < m.size(); ++q) {
+          origins[q] = coat.frames[order[m[q]]].origin;
+          rc.maxReach = std::max(rc.maxReach, radius[order[m[q]]]);
+        }
+        rc.grid.build(origins, std::max(rc.maxReach, 1e-9));
+        rc.members = std::move(m);
+        ctx.reachClasses.push_back(std::move(rc));
+      }
+    }
     std::vector<std::vector<uint32_t>> depLists(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, work.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t w = r.begin(); w < r.end(); ++w) {
@@ -1856,14 +1883,15 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
         const LocalFeather& L = ctx.local[i];
         const FeatherFrame& F = coat.frames[i];
         std::vector<uint32_t>& d = depLists[i];
-        for (uint32_t kj = 0; kj < ctx.pos[i]; ++kj) {
+        ctx.forNearOrigins(F.origin, L.reach, [&](uint32_t kj) {
+          if (kj >= ctx.pos[i]) return;
           const uint32_t j = order[kj];
-          const double Rj = isChanged[j] ? ctx.local[j].reach : base.bounds[j].w;
+          const double Rj = radius[j];
           const dvec3 c = toFrame(F, coat.frames[j].origin);
-          if (glm::length(c) > L.reach + Rj) continue;
-          if (c.x < -Rj || c.y < L.yMin - Rj || c.y > L.yMax + Rj) continue;
+          if (glm::length(c) > L.reach + Rj) return;
+          if (c.x < -Rj || c.y < L.yMin - Rj || c.y > L.yMax + Rj) return;
           d.push_back(j);
-        }
+        });
         std::sort(d.begin(), d.end());
       }
     });
