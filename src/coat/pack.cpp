@@ -1336,6 +1336,61 @@ void checkInput(const CoatFeathers& c, const PackOptions& o) {
   if (!(o.maxFlatten >= 0 && o.maxFlatten <= 2)) throw Error("maxFlatten must be in [0, 2]", {}, "maxFlatten");
 }
 
+// Reach classes over the packed feathers' origins (Context::reachClasses): class c holds the feathers
+// whose radius is up to 2^(c+1) x `med`; radius[i] bounds feather i's points around its origin.
+void buildReachClasses(Context& ctx, const std::vector<double>& radius, double med) {
+  std::vector<std::vector<uint32_t>> members;
+  for (size_t k = 0; k < ctx.order.size(); ++k) {
+    const double ratio = radius[ctx.order[k]] / (2 * med);
+    const size_t c = ratio <= 1 ? 0 : std::min<size_t>(16, static_cast<size_t>(std::ceil(std::log2(ratio))));
+    if (members.size() <= c) members.resize(c + 1);
+    members[c].push_back(static_cast<uint32_t>(k));
+  }
+  ctx.reachClasses.clear();
+  for (auto& m : members) {
+    if (m.empty()) continue;
+    Context::ReachClass rc;
+    std::vector<glm::dvec3> origins(m.size());
+    for (size_t q = 0; q < m.size(); ++q) {
+      origins[q] = ctx.coat.frames[ctx.order[m[q]]].origin;
+      rc.maxReach = std::max(rc.maxReach, radius[ctx.order[m[q]]]);
+    }
+    rc.grid.build(origins, std::max(rc.maxReach, 1e-9));
+    rc.members = std::move(m);
+    ctx.reachClasses.push_back(std::move(rc));
+  }
+}
+
+// Dependencies (ctx.depOff / ctx.deps, CSR over every feather; empty but for `items`): for each feather
+// in `items`, the feathers before it in layer order whose radius ball can touch its footprint, in index
+// order. Needs the reach classes and the items' feather-local data.
+void buildDependencies(Context& ctx, const std::vector<uint32_t>& items, const std::vector<double>& radius, size_t grain) {
+  const size_t n = ctx.coat.size();
+  std::vector<std::vector<uint32_t>> depLists(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, items.size(), grain), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t w = r.begin(); w < r.end(); ++w) {
+      const uint32_t i = items[w];
+      const LocalFeather& L = ctx.local[i];
+      const FeatherFrame& F = ctx.coat.frames[i];
+      std::vector<uint32_t>& d = depLists[i];
+      ctx.forNearOrigins(F.origin, L.reach, [&](uint32_t kj) {
+        if (kj >= ctx.pos[i]) return;
+        const uint32_t j = ctx.order[kj];
+        const double Rj = radius[j];
+        const dvec3 c = toFrame(F, ctx.coat.frames[j].origin);
+        if (glm::length(c) > L.reach + Rj) return;
+        if (c.x < -Rj || c.y < L.yMin - Rj || c.y > L.yMax + Rj) return;
+        d.push_back(j);
+      });
+      std::sort(d.begin(), d.end());
+    }
+  });
+  ctx.depOff.assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) ctx.depOff[i + 1] = ctx.depOff[i] + static_cast<uint32_t>(depLists[i].size());
+  ctx.deps.resize(ctx.depOff[n]);
+  for (size_t i = 0; i < n; ++i) std::copy(depLists[i].begin(), depLists[i].end(), ctx.deps.begin() + ctx.depOff[i]);
+}
+
 void setup(Context& ctx) {
   const CoatFeathers& coat = ctx.coat;
   const PackOptions& o = ctx.opt;
@@ -1378,55 +1433,12 @@ void setup(Context& ctx) {
   ctx.maxReach = maxReach;
 
   // Dependency graph: j before i whose reach ball can touch i's footprint.
-  {
-    std::vector<std::vector<uint32_t>> members;
-    for (size_t k = 0; k < ctx.order.size(); ++k) {
-      const double ratio = ctx.local[ctx.order[k]].reach / (2 * medReach);
-      const size_t c = ratio <= 1 ? 0 : std::min<size_t>(16, static_cast<size_t>(std::ceil(std::log2(ratio))));
-      if (members.size() <= c) members.resize(c + 1);
-      members[c].push_back(static_cast<uint32_t>(k));
-    }
-    ctx.reachClasses.clear();
-    for (auto& m : members) {
-      if (m.empty()) continue;
-      Context::ReachClass rc;
-      std::vector<glm::dvec3> origins(m.size());
-      for (size_t q = 0; q < m.size(); ++q) {
-        origins[q] = coat.frames[ctx.order[m[q]]].origin;
-        rc.maxReach = std::max(rc.maxReach, ctx.local[ctx.order[m[q]]].reach);
-      }
-      rc.grid.build(origins, std::max(rc.maxReach, 1e-9));
-      rc.members = std::move(m);
-      ctx.reachClasses.push_back(std::move(rc));
-    }
-  }
-  std::vector<std::vector<uint32_t>> depLists(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, ctx.order.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k < r.end(); ++k) {
-      const uint32_t i = ctx.order[k];
-      const LocalFeather& L = ctx.local[i];
-      const FeatherFrame& F = coat.frames[i];
-      std::vector<uint32_t>& d = depLists[i];
-      ctx.forNearOrigins(F.origin, L.reach, [&](uint32_t kj) {
-        if (kj >= k) return;
-        const uint32_t j = ctx.order[kj];
-        const double Rj = ctx.local[j].reach;
-        const dvec3 c = toFrame(F, coat.frames[j].origin);
-        if (glm::length(c) > L.reach + Rj) return;
-        if (c.x < -Rj || c.y < L.yMin - Rj || c.y > L.yMax + Rj) return;
-        d.push_back(j);
-      });
-      std::sort(d.begin(), d.end());
-    }
-  });
-  ctx.depOff.assign(n + 1, 0);
-  for (size_t i = 0; i < n; ++i) ctx.depOff[i + 1] = ctx.depOff[i] + static_cast<uint32_t>(depLists[i].size());
-  ctx.deps.resize(ctx.depOff[n]);
+  std::vector<double> radius(n, 0.0);
+  for (uint32_t i : ctx.order) radius[i] = ctx.local[i].reach;
+  buildReachClasses(ctx, radius, medReach);
+  buildDependencies(ctx, ctx.order, radius, 16);
   std::vector<uint32_t> succCount(n + 1, 0);
-  for (size_t i = 0; i < n; ++i) {
-    std::copy(depLists[i].begin(), depLists[i].end(), ctx.deps.begin() + ctx.depOff[i]);
-    for (uint32_t j : depLists[i]) ++succCount[j + 1];
-  }
+  for (uint32_t j : ctx.deps) ++succCount[j + 1];
   ctx.succOff.assign(n + 1, 0);
   for (size_t i = 0; i < n; ++i) ctx.succOff[i + 1] = ctx.succOff[i] + succCount[i + 1];
   ctx.succ.resize(ctx.succOff[n]);
@@ -1848,57 +1860,16 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
       for (size_t k = r.begin(); k < r.end(); ++k) buildLocal(coat, work[k], options, ctx.local[work[k]]);
     });
     // Dependencies of the packed feathers: feathers before them whose points can touch their footprint
-    // (a kept feather's packed bounds, a packed one's reach), found in reach classes as setup() does.
+    // (a kept feather's packed bounds, a packed one's reach).
     std::vector<double> radius(n, 0.0);
     for (uint32_t j : order) radius[j] = isChanged[j] ? ctx.local[j].reach : base.bounds[j].w;
     {
       std::vector<double> rs;
       rs.reserve(order.size());
       for (uint32_t j : order) rs.push_back(radius[j]);
-      const double med = std::max(1e-12, median(rs));
-      std::vector<std::vector<uint32_t>> members;
-      for (size_t k = 0; k < order.size(); ++k) {
-        const double ratio = radius[order[k]] / (2 * med);
-        const size_t c = ratio <= 1 ? 0 : std::min<size_t>(16, static_cast<size_t>(std::ceil(std::log2(ratio))));
-        if (members.size() <= c) members.resize(c + 1);
-        members[c].push_back(static_cast<uint32_t>(k));
-      }
-      for (auto& m : members) {
-        if (m.empty()) continue;
-        Context::ReachClass rc;
-        std::vector<glm::dvec3> origins(m.size());
-        for (size_t q = 0; q < m.size(); ++q) {
-          origins[q] = coat.frames[order[m[q]]].origin;
-          rc.maxReach = std::max(rc.maxReach, radius[order[m[q]]]);
-        }
-        rc.grid.build(origins, std::max(rc.maxReach, 1e-9));
-        rc.members = std::move(m);
-        ctx.reachClasses.push_back(std::move(rc));
-      }
+      buildReachClasses(ctx, radius, std::max(1e-12, median(rs)));
     }
-    std::vector<std::vector<uint32_t>> depLists(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, work.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t w = r.begin(); w < r.end(); ++w) {
-        const uint32_t i = work[w];
-        const LocalFeather& L = ctx.local[i];
-        const FeatherFrame& F = coat.frames[i];
-        std::vector<uint32_t>& d = depLists[i];
-        ctx.forNearOrigins(F.origin, L.reach, [&](uint32_t kj) {
-          if (kj >= ctx.pos[i]) return;
-          const uint32_t j = order[kj];
-          const double Rj = radius[j];
-          const dvec3 c = toFrame(F, coat.frames[j].origin);
-          if (glm::length(c) > L.reach + Rj) return;
-          if (c.x < -Rj || c.y < L.yMin - Rj || c.y > L.yMax + Rj) return;
-          d.push_back(j);
-        });
-        std::sort(d.begin(), d.end());
-      }
-    });
-    ctx.depOff.assign(n + 1, 0);
-    for (size_t i = 0; i < n; ++i) ctx.depOff[i + 1] = ctx.depOff[i] + static_cast<uint32_t>(depLists[i].size());
-    ctx.deps.resize(ctx.depOff[n]);
-    for (size_t i = 0; i < n; ++i) std::copy(depLists[i].begin(), depLists[i].end(), ctx.deps.begin() + ctx.depOff[i]);
+    buildDependencies(ctx, work, radius, 4);
 
     // Result layout: kept feathers take base's point groups, packed ones their own, absent ones none.
     res.order = order;
