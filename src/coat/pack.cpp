@@ -1619,6 +1619,22 @@ void reserveHuge(std::vector<T>& v, size_t count) {
 #endif
 }
 
+// Appends the point groups of a packed feather (its shaft, afterfeather shaft, then each key barb's
+// samples) starting at point p to groupPoint; returns the point after its last group.
+uint32_t appendGroups(const LocalFeather& L, int barbSamples, uint32_t p, std::vector<uint32_t>& groupPoint) {
+  groupPoint.push_back(p);
+  p += static_cast<uint32_t>(L.shaft.size());
+  if (!L.after.empty()) {
+    groupPoint.push_back(p);
+    p += static_cast<uint32_t>(L.after.size());
+  }
+  for (size_t k = 0; k < L.keys.size(); ++k) {
+    groupPoint.push_back(p);
+    p += static_cast<uint32_t>(std::max(1, barbSamples));
+  }
+  return p;
+}
+
 void initResult(const Context& ctx, PackResult& res) {
   const size_t n = ctx.coat.size();
   res.order = ctx.order;
@@ -1635,18 +1651,7 @@ void initResult(const Context& ctx, PackResult& res) {
   for (size_t i = 0; i < n; ++i) {
     const LocalFeather& L = ctx.local[i];
     uint32_t p = res.pointOffset[i];
-    if (L.packable) {
-      res.groupPoint.push_back(p);
-      p += static_cast<uint32_t>(L.shaft.size());
-      if (!L.after.empty()) {
-        res.groupPoint.push_back(p);
-        p += static_cast<uint32_t>(L.after.size());
-      }
-      for (size_t k = 0; k < L.keys.size(); ++k) {
-        res.groupPoint.push_back(p);
-        p += static_cast<uint32_t>(std::max(1, ctx.opt.barbSamples));
-      }
-    }
+    if (L.packable) p = appendGroups(L, ctx.opt.barbSamples, p, res.groupPoint);
     PTERYLA_CHECK(p == res.pointOffset[i + 1], "point groups do not cover the points");
     res.groupOffset[i + 1] = static_cast<uint32_t>(res.groupPoint.size());
   }
@@ -1654,6 +1659,21 @@ void initResult(const Context& ctx, PackResult& res) {
   res.groupBounds.assign(res.groupOffset[n], glm::vec4(0));
   res.barbFields.clear();
   res.stats = {};
+}
+
+// Runs f in a task arena of `threads` threads (0 = TBB's default arena, all cores).
+template <class F>
+void inArena(int threads, F&& f) {
+  if (threads >= 1) {
+    tbb::task_arena arena(threads);
+    arena.execute(f);
+  } else {
+    f();
+  }
+}
+
+bool fieldBefore(const BarbField& a, const BarbField& b) {
+  return a.feather != b.feather ? a.feather < b.feather : (a.vane != b.vane ? a.vane < b.vane : a.key < b.key);
 }
 
 void finish(const Context& ctx, tbb::enumerable_thread_specific<Scratch>& scratch, PackResult& res,
@@ -1672,9 +1692,7 @@ void finish(const Context& ctx, tbb::enumerable_thread_specific<Scratch>& scratc
     st.candidatePoints += s.stats.candidatePoints;
     for (auto& f : s.fields) res.barbFields.push_back(std::move(f));
   }
-  std::sort(res.barbFields.begin(), res.barbFields.end(), [](const BarbField& a, const BarbField& b) {
-    return a.feather != b.feather ? a.feather < b.feather : (a.vane != b.vane ? a.vane < b.vane : a.key < b.key);
-  });
+  std::sort(res.barbFields.begin(), res.barbFields.end(), fieldBefore);
   st.packed = ctx.order.size();
   st.dependencies = ctx.deps.size();
   st.skinSamples = ctx.skinData ? ctx.skinData->pts.size() : 0;
@@ -1708,12 +1726,7 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
     finish(ctx, scratch, res, t0);
   };
   PackResult res;
-  if (options.threads >= 1) {
-    tbb::task_arena arena(options.threads);
-    arena.execute([&] { run(res); });
-  } else {
-    run(res);
-  }
+  inArena(options.threads, [&] { run(res); });
   return res;
 }
 
@@ -1792,12 +1805,7 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
     });
     finish(ctx, scratch, res, t0);
   };
-  if (options.threads >= 1) {
-    tbb::task_arena arena(options.threads);
-    arena.execute(run);
-  } else {
-    run();
-  }
+  inArena(options.threads, run);
   return res;
 }
 
@@ -1886,16 +1894,7 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
       uint32_t p = res.pointOffset[i];
       if (ctx.pos[i] != UINT32_MAX && isChanged[i]) {
         const LocalFeather& L = ctx.local[i];
-        res.groupPoint.push_back(p);
-        p += static_cast<uint32_t>(L.shaft.size());
-        if (!L.after.empty()) {
-          res.groupPoint.push_back(p);
-          p += static_cast<uint32_t>(L.after.size());
-        }
-        for (size_t k = 0; k < L.keys.size(); ++k) {
-          res.groupPoint.push_back(p);
-          p += static_cast<uint32_t>(std::max(1, options.barbSamples));
-        }
+        p = appendGroups(L, options.barbSamples, p, res.groupPoint);
         PTERYLA_CHECK(p - res.pointOffset[i] == L.pointCount, "point groups do not cover the points");
       } else if (ctx.pos[i] != UINT32_MAX) {
         for (uint32_t g = base.groupOffset[i]; g < base.groupOffset[i + 1]; ++g) {
@@ -1969,18 +1968,10 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
     if (options.captureFields) {
       for (const BarbField& f : base.barbFields)
         if (f.feather < n && ctx.pos[f.feather] != UINT32_MAX && !isChanged[f.feather]) res.barbFields.push_back(f);
-      std::sort(res.barbFields.begin(), res.barbFields.end(), [](const BarbField& a, const BarbField& b) {
-        return a.feather != b.feather ? a.feather < b.feather : (a.vane != b.vane ? a.vane < b.vane : a.key < b.key);
-      });
+      std::sort(res.barbFields.begin(), res.barbFields.end(), fieldBefore);
     }
-    res.stats.skinSamples = ctx.skinData ? ctx.skinData->pts.size() : 0;
   };
-  if (options.threads >= 1) {
-    tbb::task_arena arena(options.threads);
-    arena.execute(run);
-  } else {
-    run();
-  }
+  inArena(options.threads, run);
   return res;
 }
 
