@@ -109,8 +109,6 @@ struct Pipeline::Impl {
   coat::CoatFeathers coatNow;     // at the current time: posed frames, ages, presence
   coat::CoatFeathers packCoat;    // coatNow with growing feathers as grown (the pack input when any grows)
   std::vector<double> packGrownAge;  // per feather, the age packCoat's parameters are grown to (empty = none)
-  coat::CoatFeathers matureCoat;  // coatNow with every feather present and mature (a moult frame's base)
-  uint64_t matureCoatGeneration = 0;
   TimeState timeState;
   std::vector<double> fixedElevation;
   const coat::PackResult* packed = nullptr;  // timeState.frame.result once packed
@@ -481,20 +479,11 @@ void Pipeline::Impl::computePack() {
     });
     packInput = &packCoat;
   }
-  bool anyLost = false;
-  for (size_t i = 0; i < coatNow.size() && !anyLost; ++i) anyLost = !coatNow.present[i];
-  if ((anyGrowing || anyLost) && o.moultOver) {
+  if (o.moultOver && moulting(coatNow)) {
     // A moult frame: the mature coat is packed as a frame without a moult would be, and the lost and
     // growing feathers are packed over it (docs/moult.md). With "moult_pack": "full" the frame is
     // repacked like any other (below).
-    if (matureCoatGeneration != restGeneration) {
-      matureCoat = coatRest;
-      matureCoat.age.assign(matureCoat.size(), 1.0);
-      matureCoat.present.assign(matureCoat.size(), 1);
-      matureCoatGeneration = restGeneration;
-    }
-    matureCoat.frames = coatNow.frames;
-    packed = &packMoultFrame(scene, posed, matureCoat, *packInput, o, timeState, packGrownAge);
+    packed = &packMoultFrame(scene, posed, matureCoat(coatNow, timeState), *packInput, o, timeState, packGrownAge);
   } else {
     // Repacks incrementally from the last frame's pack or this frame's natural pack when it can.
     packed = &packFrame(scene, posed, *packInput, o, timeState, packGrownAge);
@@ -958,7 +947,7 @@ double Pipeline::timeFullPack(int repeats) {
   Impl& m = *impl_;
   coat::PackOptions o = m.packOptions;
   o.fixedElevation = m.fixedElevation;
-  const coat::CoatFeathers& c = m.timeState.packReport.moult ? m.matureCoat : (m.packGrownAge.empty() ? m.coatNow : m.packCoat);
+  const coat::CoatFeathers& c = m.timeState.packReport.moult ? m.timeState.mature : (m.packGrownAge.empty() ? m.coatNow : m.packCoat);
   double best = std::numeric_limits<double>::infinity();
   for (int r = 0; r < std::max(1, repeats); ++r) {
     const auto t0 = std::chrono::steady_clock::now();

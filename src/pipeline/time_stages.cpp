@@ -237,21 +237,8 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
   // mature coat's elevations, and that pack changes only with the pose and the controls' turns.
   const moult::NaturalPackFn natural = [&](const coat::SkinMesh& skin, const coat::CoatFeathers& c,
                                            const coat::PackOptions& o) -> const coat::PackResult& {
-    bool moulting = false;
-    for (size_t i = 0; i < c.size() && !moulting; ++i)
-      moulting = presentAt(c, i) == 0 || (!c.age.empty() && c.age[i] < kMature);
-    const coat::CoatFeathers* input = &c;
-    if (moulting && o.moultOver) {
-      if (state.naturalMatureGeneration != state.generation || state.naturalMature.size() != c.size()) {
-        state.naturalMature = c;
-        state.naturalMature.age.assign(c.size(), kMature);
-        state.naturalMature.present.assign(c.size(), 1);
-        state.naturalMatureGeneration = state.generation;
-      }
-      state.naturalMature.frames = c.frames;
-      input = &state.naturalMature;
-    }
-    return packWithMemo(state.natural, {}, skin, *input, o, state.generation, scene.packing,
+    const coat::CoatFeathers& input = o.moultOver && moulting(c) ? matureCoat(c, state) : c;
+    return packWithMemo(state.natural, {}, skin, input, o, state.generation, scene.packing,
                         state.packReport.naturalIncremental, state.packReport.naturalChanged,
                         state.packReport.naturalRecomputed);
   };
@@ -267,6 +254,23 @@ const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& pose
   const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
   return packWithMemo(state.frame, alternative, posed, coat, options, state.generation, scene.packing,
                       r.finalIncremental, r.finalChanged, r.finalRecomputed, grownAge);
+}
+
+bool moulting(const coat::CoatFeathers& coat) {
+  for (size_t i = 0; i < coat.size(); ++i)
+    if (presentAt(coat, i) == 0 || (!coat.age.empty() && coat.age[i] < kMature)) return true;
+  return false;
+}
+
+const coat::CoatFeathers& matureCoat(const coat::CoatFeathers& coat, TimeState& state) {
+  if (state.matureGeneration != state.generation || state.mature.size() != coat.size()) {
+    state.mature = coat;
+    state.mature.age.assign(coat.size(), kMature);
+    state.mature.present.assign(coat.size(), 1);
+    state.matureGeneration = state.generation;
+  }
+  state.mature.frames = coat.frames;
+  return state.mature;
 }
 
 const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& mature,

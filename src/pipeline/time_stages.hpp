@@ -96,10 +96,10 @@ struct TimeState {
   // pack) and the version of `frame` it was packed over.
   PackMemo moultFrame;
   uint64_t moultBaseVersion = 0;
-  // Moult frames with controls: the coat the natural pack packs (every feather present and mature; its
-  // rest parameters copied once per rest state, frames every frame).
-  coat::CoatFeathers naturalMature;
-  uint64_t naturalMatureGeneration = 0;
+  // The coat as it would be without the moult (matureCoat): what a moult frame's pack and the controls'
+  // natural pack in a moult frame pack. Its rest parameters are copied once per rest state.
+  coat::CoatFeathers mature;
+  uint64_t matureGeneration = 0;
   bool naturalThisFrame = false;          // `natural` holds the pack of the current frame without raises
   PackReport packReport;
 };
@@ -121,6 +121,12 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
 const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
                                   const coat::PackOptions& options, TimeState& state,
                                   const std::vector<double>& grownAge = {});
+
+// True when some feather of `coat` is lost or growing at this time.
+bool moulting(const coat::CoatFeathers& coat);
+// `coat` with every feather present and mature (age 1), in its current frames: state.mature, its rest
+// parameters copied from `coat` once per rest state (coat's parameters must be the rest ones).
+const coat::CoatFeathers& matureCoat(const coat::CoatFeathers& coat, TimeState& state);
 
 // A moult frame's pack (state.moultFrame.result): the mature coat (every feather present, with its rest
 // parameters, same frames and fixed elevations) is packed as packFrame packs a frame without a moult
