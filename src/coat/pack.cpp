@@ -439,7 +439,7 @@ struct Context {
   std::vector<LocalFeather> local;
   std::vector<uint32_t> order, pos;  // pos[i] = position in order, UINT32_MAX if not packed
   // dependency graph (CSR)
-  std::vector<uint32_t> depOff, deps, succOff, succ;
+  std::vector<uint32_t> depOff, deps;
   // Origins of packed feathers in reach classes (class c holds reaches up to 2^(c+1) x the median), one
   // grid each with its own largest reach, so a small feather's neighbour search is not sized by the
   // longest flight feather. members[c][item] = position in `order`.
@@ -1437,14 +1437,6 @@ void setup(Context& ctx) {
   for (uint32_t i : ctx.order) radius[i] = ctx.local[i].reach;
   buildReachClasses(ctx, radius, medReach);
   buildDependencies(ctx, ctx.order, radius, 16);
-  std::vector<uint32_t> succCount(n + 1, 0);
-  for (uint32_t j : ctx.deps) ++succCount[j + 1];
-  ctx.succOff.assign(n + 1, 0);
-  for (size_t i = 0; i < n; ++i) ctx.succOff[i + 1] = ctx.succOff[i] + succCount[i + 1];
-  ctx.succ.resize(ctx.succOff[n]);
-  std::vector<uint32_t> fill(ctx.succOff.begin(), ctx.succOff.end() - 1);
-  for (uint32_t i = 0; i < n; ++i)
-    for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k) ctx.succ[fill[ctx.deps[k]]++] = i;
 
   // Skin samples (9.1.2: the surface under the feather, including neighbouring polygons).
   ctx.skinData.reset();
@@ -1580,28 +1572,40 @@ std::vector<uint32_t> pointOffsets(const Context& ctx) {
   return off;
 }
 
-// Runs task(i) for every packed feather after all of its dependencies; deterministic results because
-// each task reads only its dependencies' outputs.
+// Runs task(i) for every feather of `items` (in layer order) after those of its dependencies that are
+// items too (`member[j]` != 0; null = every feather is); deterministic results because each task reads
+// only its dependencies' outputs.
 template <class Task>
-void schedule(const Context& ctx, int threads, Task&& task) {
-  if (threads == 1 || ctx.order.size() < 64) {
-    for (uint32_t i : ctx.order) task(i);
+void schedule(const Context& ctx, const std::vector<uint32_t>& items, const uint8_t* member, int threads, Task&& task) {
+  if (threads == 1 || items.size() < 64) {
+    for (uint32_t i : items) task(i);
     return;
   }
   const size_t n = ctx.coat.size();
+  auto in = [&](uint32_t j) { return member == nullptr || member[j] != 0; };
+  // Successors (CSR) and pending dependency counts within the items.
+  std::vector<uint32_t> succOff(n + 1, 0);
   std::vector<std::atomic<uint32_t>> pending(n);
   std::vector<uint32_t> ready;
-  for (uint32_t i : ctx.order) {
-    const uint32_t c = ctx.depOff[i + 1] - ctx.depOff[i];
+  for (uint32_t i : items) {
+    uint32_t c = 0;
+    for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k)
+      if (in(ctx.deps[k])) {
+        ++c;
+        ++succOff[ctx.deps[k] + 1];
+      }
     pending[i].store(c, std::memory_order_relaxed);
     if (c == 0) ready.push_back(i);
   }
+  for (size_t i = 0; i < n; ++i) succOff[i + 1] += succOff[i];
+  std::vector<uint32_t> succ(succOff[n]), fill(succOff.begin(), succOff.end() - 1);
+  for (uint32_t i : items)
+    for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k)
+      if (in(ctx.deps[k])) succ[fill[ctx.deps[k]]++] = i;
   auto body = [&](uint32_t i, tbb::feeder<uint32_t>& feeder) {
     task(i);
-    for (uint32_t k = ctx.succOff[i]; k < ctx.succOff[i + 1]; ++k) {
-      const uint32_t s = ctx.succ[k];
-      if (pending[s].fetch_sub(1, std::memory_order_acq_rel) == 1) feeder.add(s);
-    }
+    for (uint32_t k = succOff[i]; k < succOff[i + 1]; ++k)
+      if (pending[succ[k]].fetch_sub(1, std::memory_order_acq_rel) == 1) feeder.add(succ[k]);
   };
   tbb::parallel_for_each(ready.begin(), ready.end(), body);
 }
@@ -1719,7 +1723,7 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
     const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
     std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
     Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
-    schedule(ctx, options.threads, [&](uint32_t i) {
+    schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) {
       packFeather(ctx, i, scratch.local(), out);
       res.recomputed[i] = 1;
     });
@@ -1775,7 +1779,7 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
     const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
     std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
     Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
-    schedule(ctx, options.threads, [&](uint32_t i) {
+    schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) {
       bool dirty = isChanged[i] || touched[i];
       for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !dirty; ++k) dirty = outChanged[ctx.deps[k]] != 0;
       const uint32_t cnt = res.pointOffset[i + 1] - res.pointOffset[i];
@@ -1936,34 +1940,11 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
       }
     });
     // The packed feathers, each after the packed feathers it depends on.
-    std::vector<std::atomic<uint32_t>> pending(n);
-    std::vector<std::vector<uint32_t>> succ(n);
-    std::vector<uint32_t> ready;
-    for (uint32_t i : work) {
-      uint32_t c = 0;
-      for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k)
-        if (isChanged[ctx.deps[k]]) {
-          ++c;
-          succ[ctx.deps[k]].push_back(i);
-        }
-      pending[i].store(c, std::memory_order_relaxed);
-      if (c == 0) ready.push_back(i);
-    }
     tbb::enumerable_thread_specific<Scratch> scratch;
-    auto body = [&](uint32_t i, tbb::feeder<uint32_t>& feeder) {
+    schedule(ctx, work, isChanged.data(), options.threads, [&](uint32_t i) {
       packFeather(ctx, i, scratch.local(), out);
       res.recomputed[i] = 1;
-      for (uint32_t s : succ[i])
-        if (pending[s].fetch_sub(1, std::memory_order_acq_rel) == 1) feeder.add(s);
-    };
-    if (options.threads == 1) {
-      for (uint32_t i : work) {
-        packFeather(ctx, i, scratch.local(), out);
-        res.recomputed[i] = 1;
-      }
-    } else {
-      tbb::parallel_for_each(ready.begin(), ready.end(), body);
-    }
+    });
     finish(ctx, scratch, res, t0);
     if (options.captureFields) {
       for (const BarbField& f : base.barbFields)
