@@ -131,7 +131,29 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
   const size_t n = coat.size();
   OrderResult res;
   res.key.assign(n, 0.0);
+  // Tract ranks: the listed tracts first (bottom), in the listed order. Tracts: each unlisted tract follows
+  // in index order. Axis and Flow: the unlisted tracts share one rank, ordered by the global key.
+  res.tractRank.assign(tracts.size(), UINT32_MAX);
+  uint32_t rank = 0;
+  for (size_t k = 0; k < options.tractOrder.size(); ++k) {
+    const std::string& name = options.tractOrder[k];
+    bool found = false;
+    for (size_t t = 0; t < tracts.size(); ++t)
+      if (tracts[t].name == name) {
+        found = true;
+        if (res.tractRank[t] != UINT32_MAX)
+          throw Error("tract '" + name + "' is listed twice", {}, "ordering.tracts[" + std::to_string(k) + "]");
+        res.tractRank[t] = rank++;
+      }
+    if (!found) throw Error("no tract named '" + name + "'", {}, "ordering.tracts[" + std::to_string(k) + "]");
+  }
+  for (auto& r : res.tractRank)
+    if (r == UINT32_MAX) r = options.method == OrderMethod::Tracts ? rank++ : rank;
   std::vector<uint32_t> group(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    PTERYLA_CHECK(coat.tract[i] < tracts.size(), "feather of an unknown tract");
+    group[i] = res.tractRank[coat.tract[i]];
+  }
   if (options.method == OrderMethod::Axis) {
     if (options.axis.size() < 2) throw Error("ordering by axis needs an \"axis\" polyline (head to tail)", {}, "ordering.axis");
     for (size_t i = 0; i < n; ++i) res.key[i] = axisArcLength(options.axis, follicles.position[coat.follicle[i]]);
@@ -146,22 +168,6 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
   } else {
     PTERYLA_CHECK(params.size() == tracts.size(), "orderLayers: one parameterization per tract");
     PTERYLA_CHECK(directions.faceCoords.size() == follicles.size(), "orderLayers: directions of other follicles");
-    res.tractRank.assign(tracts.size(), UINT32_MAX);
-    uint32_t rank = 0;
-    for (size_t k = 0; k < options.tractOrder.size(); ++k) {
-      const std::string& name = options.tractOrder[k];
-      bool found = false;
-      for (size_t t = 0; t < tracts.size(); ++t)
-        if (tracts[t].name == name) {
-          found = true;
-          if (res.tractRank[t] != UINT32_MAX)
-            throw Error("tract '" + name + "' is listed twice", {}, "ordering.tracts[" + std::to_string(k) + "]");
-          res.tractRank[t] = rank++;
-        }
-      if (!found) throw Error("no tract named '" + name + "'", {}, "ordering.tracts[" + std::to_string(k) + "]");
-    }
-    for (auto& r : res.tractRank)
-      if (r == UINT32_MAX) r = rank++;
 
     // Per feather: (u,v) position and direction; per tract: the mean direction.
     std::vector<glm::dvec2> uv(n), duv(n);
@@ -181,7 +187,6 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
       const double len = glm::length(d);
       duv[i] = len > 0 ? d / len : glm::dvec2(0.0);
       res.tractFlow[t] += duv[i];
-      group[i] = res.tractRank[t];
     }
     for (auto& fl : res.tractFlow) {
       const double len = glm::length(fl);

@@ -287,6 +287,20 @@ TEST(Coat2Ordering, TractOrderAndBodyAxis) {
   for (size_t k = 0; k + 1 < coat.size(); ++k)
     EXPECT_LE(fol.position[coat.follicle[coat.layerOrder[k]]].z, fol.position[coat.follicle[coat.layerOrder[k + 1]]].z + 1e-12);
 
+  // Body axis with a listed tract: "front" is packed first (the bottom layer, e.g. flight feathers under
+  // their coverts), each group in the axis order; without the list the order is the global axis order.
+  const std::vector<uint32_t> global = coat.layerOrder;
+  o.tractOrder = {"front"};
+  orderLayers(sphere, tracts, params, fol, dirs, o, coat);
+  std::vector<uint32_t> expect;
+  for (uint32_t t : {0u, 1u})
+    for (uint32_t i : global)
+      if (coat.tract[i] == t) expect.push_back(i);
+  EXPECT_EQ(coat.layerOrder, expect);
+  o.tractOrder = {"nope"};
+  EXPECT_THROW(orderLayers(sphere, tracts, params, fol, dirs, o, coat), Error);
+  o.tractOrder.clear();
+
   const Json j = Json::parse(R"({"method": "axis", "axis": [[0,0,1],[0,0,-1]], "tracts": ["a", "b"]})");
   JsonReader r(j, "scene.json", "ordering");
   const OrderOptions parsed = parseOrdering(r);

@@ -10,12 +10,15 @@
 //    direction in (u,v) (each follicle's direction mapped through its face's parameterization; a
 //    hand-made parameterization without corner (u,v) gives flow (1,0)).
 //  - Axis: one global order by the arc length of the follicle's closest point on a body-axis polyline
-//    (head to tail), tail-most first; tracts are ignored.
+//    (head to tail), tail-most first.
 //  - Flow: one global order by a potential phi over all follicles whose gradient follows the feather
 //    directions (least squares over each follicle's nearest neighbours: phi_j - phi_i ~ (x_j - x_i) . T),
 //    largest phi (furthest downstream) first. Unlike Axis it follows directions that leave the body axis
 //    (wings, legs, flanks), and unlike Tracts it is one order across tract borders, so two neighbouring
 //    feathers of different tracts are layered like two of the same tract.
+// With Axis or Flow, OrderOptions::tractOrder lists tracts packed first, as bottom layers, in that order
+// (e.g. the flight feathers, which the coverts overlap); each is ordered by the key and all other tracts
+// follow as one group in the global order.
 // Ties are broken by follicle id (Follicles::id), then by feather index, so the order is total and
 // deterministic.
 #include <glm/vec2.hpp>
@@ -38,7 +41,7 @@ enum class OrderMethod { Tracts, Axis, Flow };
 
 struct OrderOptions {
   OrderMethod method = OrderMethod::Tracts;
-  std::vector<std::string> tractOrder;  // Tracts: names, bottom layer first
+  std::vector<std::string> tractOrder;  // names, bottom layer first (Axis, Flow: only these go first)
   std::vector<glm::dvec3> axis;         // Axis: polyline head to tail, >= 2 distinct points
   int neighbours = 8;                   // Flow: nearest follicles each follicle is compared with
 };
@@ -46,7 +49,7 @@ struct OrderOptions {
 struct OrderResult {
   std::vector<double> key;              // per feather: s (Tracts), axis arc length (Axis) or phi (Flow); larger = lower
   std::vector<glm::dvec2> tractFlow;    // per tract: unit mean direction in (u,v) (Tracts)
-  std::vector<uint32_t> tractRank;      // per tract: position in the tract order (Tracts)
+  std::vector<uint32_t> tractRank;      // per tract: its group in the order (unlisted tracts share one with Axis, Flow)
 };
 
 // Arc length along `axis` of the point of the polyline closest to p (ties: the earliest segment).
