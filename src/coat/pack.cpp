@@ -463,6 +463,7 @@ struct Context {
   std::shared_ptr<const detail::PackSkinSamples> skinData;
   std::vector<double> fixed;
   std::vector<double> minElevation;  // per feather from styling (NaN = none); empty = none
+  std::vector<double> shaftBand;     // per feather from styling (NaN = PackOptions::shaftBand); empty = none
 };
 
 dvec3 toFrame(const FeatherFrame& F, const dvec3& q) {
@@ -920,7 +921,8 @@ struct PlacedKey {
     S.best.assign(bins, glm::dvec2(0));
     std::vector<double>& bestKey = S.plane;  // pseudo-angle of S.best per bin
     bestKey.assign(bins, -1.0);
-    const double band = o.shaftBand * L.vaneHalf;
+    const double bandOf = ctx.shaftBand.empty() || std::isnan(ctx.shaftBand[i]) ? o.shaftBand : ctx.shaftBand[i];
+    const double band = bandOf * L.vaneHalf;
     const double r2Min = 1e-24 * rMax * rMax;
     // The candidates in gathering order (feather points, then skin): a bin keeps the first of equal angles.
     // Bins within reach of the shaft whose lateral band holds lateral offset y (widened by `pad`)?
@@ -1397,6 +1399,7 @@ void setup(Context& ctx) {
   const size_t n = coat.size();
   ctx.fixed = o.fixedElevation;
   ctx.minElevation = resolveMinElevation(coat, o.styling);
+  ctx.shaftBand = resolveShaftBand(coat, o.styling);
   ctx.order.clear();
   if (coat.layerOrder.empty()) {
     for (uint32_t i = 0; i < n; ++i) ctx.order.push_back(i);
@@ -1855,6 +1858,7 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
   auto run = [&] {
     ctx.fixed = options.fixedElevation;
     ctx.minElevation = resolveMinElevation(coat, options.styling);
+    ctx.shaftBand = resolveShaftBand(coat, options.styling);
     ctx.order = order;
     ctx.pos.assign(n, UINT32_MAX);
     for (size_t k = 0; k < order.size(); ++k) ctx.pos[order[k]] = static_cast<uint32_t>(k);

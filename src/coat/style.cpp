@@ -96,15 +96,30 @@ std::vector<double> resolveStyling(const CoatFeathers& coat, const std::vector<S
   return fixed;
 }
 
-std::vector<double> resolveMinElevation(const CoatFeathers& coat, const std::vector<StyleSelection>& selections) {
-  std::vector<double> lo;
+namespace {
+
+// Per feather the value of one optional field of the selections (later ones win; NaN = none); empty when
+// no selection sets it.
+std::vector<double> resolvePerFeather(const CoatFeathers& coat, const std::vector<StyleSelection>& selections,
+                                      std::optional<double> StyleSelection::*field) {
+  std::vector<double> v;
   for (size_t k = 0; k < selections.size(); ++k) {
     const StyleSelection& s = selections[k];
-    if (!s.minElevation) continue;
-    if (lo.empty()) lo.assign(coat.size(), std::numeric_limits<double>::quiet_NaN());
-    for (uint32_t i : selectFeathers(coat, s, "styling[" + std::to_string(k) + "]")) lo[i] = *s.minElevation;
+    if (!(s.*field)) continue;
+    if (v.empty()) v.assign(coat.size(), std::numeric_limits<double>::quiet_NaN());
+    for (uint32_t i : selectFeathers(coat, s, "styling[" + std::to_string(k) + "]")) v[i] = *(s.*field);
   }
-  return lo;
+  return v;
+}
+
+}  // namespace
+
+std::vector<double> resolveMinElevation(const CoatFeathers& coat, const std::vector<StyleSelection>& selections) {
+  return resolvePerFeather(coat, selections, &StyleSelection::minElevation);
+}
+
+std::vector<double> resolveShaftBand(const CoatFeathers& coat, const std::vector<StyleSelection>& selections) {
+  return resolvePerFeather(coat, selections, &StyleSelection::shaftBand);
 }
 
 StyleSelection parseStyleSelection(JsonReader& r) {
@@ -138,8 +153,9 @@ StyleSelection parseStyleSelection(JsonReader& r) {
   }
   if (r.has("min_elevation_deg"))
     s.minElevation = r.number("min_elevation_deg", -90.0, 180.0) * 3.14159265358979323846 / 180.0;
-  if (!s.elevation && !s.direction && !s.minElevation)
-    r.fail("elevation_deg", "a styling selection needs elevation_deg, min_elevation_deg and/or direction");
+  if (r.has("shaft_band")) s.shaftBand = r.number("shaft_band", 0.0, 1.0);
+  if (!s.elevation && !s.direction && !s.minElevation && !s.shaftBand)
+    r.fail("elevation_deg", "a styling selection needs elevation_deg, min_elevation_deg, direction and/or shaft_band");
   r.finish();
   return s;
 }
@@ -166,6 +182,7 @@ Json styleSelectionToJson(const StyleSelection& s) {
   if (s.elevation) j["elevation_deg"] = *s.elevation * 180.0 / 3.14159265358979323846;
   if (s.minElevation) j["min_elevation_deg"] = *s.minElevation * 180.0 / 3.14159265358979323846;
   if (s.direction) j["direction"] = {s.direction->x, s.direction->y, s.direction->z};
+  if (s.shaftBand) j["shaft_band"] = *s.shaftBand;
   return j;
 }
 

@@ -191,6 +191,59 @@ TEST(StyleMinElevation, SelectedFeathersPackAtOrAboveTheBoundOthersUnchangedBelo
   EXPECT_NEAR(styleSelectionToJson(p)["min_elevation_deg"].get<double>(), 30.0, 1e-9);
 }
 
+// A styling selection's shaft_band overrides packing.shaft_band for its feathers (flight feathers: the shaft
+// ignores the neighbours' overlapping vanes, the barbs lift over them instead).
+TEST(StyleShaftBand, OverridesTheGlobalBandForTheSelectedFeathersOnly) {
+  BorderScene s = borderScene(0);
+  s.coat.layerOrder = orderByKey(flowKey(s.coat));
+  PackOptions wide;
+  wide.shaftBand = 1.0;
+  PackOptions narrow;
+  narrow.shaftBand = 0.0;
+  const PackResult rWide = pack(s.skin, s.coat, wide), rNarrow = pack(s.skin, s.coat, narrow);
+  // Selecting every feather with band 0 under a global band of 1 is exactly the global band 0.
+  StyleSelection all;
+  all.kind = StyleKind::Sphere;
+  all.center = {kC, kC, 0.0};
+  all.radius = 100;
+  all.shaftBand = 0.0;
+  PackOptions o = wide;
+  o.styling = {all};
+  const PackResult rAll = pack(s.skin, s.coat, o);
+  EXPECT_EQ(rAll.elevation, rNarrow.elevation);
+  ASSERT_NE(rWide.elevation, rNarrow.elevation) << "the band must matter on this scene for the test to mean anything";
+  // A subset: feathers under the first selected one are untouched; the first selected one sees the same
+  // feathers under it with a narrower band, so it can only lie lower or equal.
+  StyleSelection some = all;
+  some.radius = 0.25;
+  o.styling = {some};
+  const PackResult r = pack(s.skin, s.coat, o);
+  const std::vector<uint32_t> chosen = selectFeathers(s.coat, some);
+  ASSERT_GT(chosen.size(), 5u);
+  std::vector<uint8_t> isChosen(s.coat.size(), 0);
+  for (uint32_t i : chosen) isChosen[i] = 1;
+  for (uint32_t i : s.coat.layerOrder) {
+    if (isChosen[i]) {
+      EXPECT_LE(r.elevation[i], rWide.elevation[i]);
+      break;
+    }
+    EXPECT_EQ(r.elevation[i], rWide.elevation[i]);
+  }
+  size_t differ = 0;
+  for (uint32_t i : chosen) differ += r.elevation[i] != rWide.elevation[i] ? 1 : 0;
+  EXPECT_GT(differ, 0u);
+  // JSON: round trip, a selection with only a shaft band is valid, out of range is an error.
+  Json j = Json::parse(R"({"select": "ids", "ids": [1, 2], "shaft_band": 0.3})");
+  JsonReader rd(j, "scene.json", "packing.styling[0]");
+  const StyleSelection p = parseStyleSelection(rd);
+  ASSERT_TRUE(p.shaftBand.has_value());
+  EXPECT_EQ(*p.shaftBand, 0.3);
+  EXPECT_EQ(styleSelectionToJson(p)["shaft_band"].get<double>(), 0.3);
+  Json bad = Json::parse(R"({"select": "ids", "ids": [1], "shaft_band": 1.5})");
+  JsonReader rb(bad, "scene.json", "packing.styling[0]");
+  EXPECT_THROW(parseStyleSelection(rb), Error);
+}
+
 // Property: on a curved skin (a torus: convex outside, saddle-shaped inside), no packed vertex lies below
 // the skin outside the exempt base zone, whatever the skin sample spacing: the packer keeps feathers off
 // the skin between its samples (each sample stands for the patch of skin around it), so coarse samples

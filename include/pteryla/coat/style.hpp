@@ -31,6 +31,9 @@ struct StyleSelection {
   std::optional<double> minElevation;  // radians: the selected feathers pack freely but never below this
                                      // (e.g. flight feathers kept in the wing plane, packing above it)
   std::optional<glm::dvec3> direction;  // world direction: new surface direction (projected to each tangent plane)
+  std::optional<double> shaftBand;   // [0,1]: the selected feathers' shaft packs against candidates within this
+                                     // fraction of the vane half-width (overrides packing.shaft_band; e.g.
+                                     // flight feathers, whose stiff vanes overlap and lift their barbs instead)
 };
 
 struct StyleApplied {
@@ -54,6 +57,9 @@ std::vector<double> resolveStyling(const CoatFeathers& coat, const std::vector<S
 // selection has one. pack() applies these itself from PackOptions::styling.
 std::vector<double> resolveMinElevation(const CoatFeathers& coat, const std::vector<StyleSelection>& selections);
 
+// Per feather the shaft band of the selections (later ones win; NaN = packing.shaft_band); empty when no
+// selection has one. pack() applies these itself from PackOptions::styling.
+std::vector<double> resolveShaftBand(const CoatFeathers& coat, const std::vector<StyleSelection>& selections);
 // One selection object of "packing.styling" (docs/packing.md).
 StyleSelection parseStyleSelection(JsonReader& r);
 Json styleSelectionToJson(const StyleSelection& s);
