@@ -4,6 +4,10 @@
 // the tract pairs they fall between, skin penetrations and coverage.
 //
 //   pteryla_packdiag SCENE.json [--set /json/pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME]
+//                    [--cover] [--face-cover FILE]
+//
+// --face-cover FILE writes one line per skin face, "samples uncovered", from the full check's coverage
+// samples (for a coverage map of the skin, e.g. tools/packdiag/cover_map.py).
 //
 // --set edits the scene JSON before loading (e.g. --set /packing/shaft_band=0.5), so parameter
 // experiments need no scratch scene files. --no-full skips the slow full-geometry checks (the proxy
@@ -48,13 +52,15 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 
 int main(int argc, char** argv) {
   try {
-    if (argc < 2) {
-      std::fprintf(stderr, "usage: %s SCENE.json [--set /pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME]\n", argv[0]);
-      return 2;
+    const char* usage = "usage: %s SCENE.json [--set /pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME] [--cover] "
+                        "[--face-cover FILE]\n";
+    if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
+      std::fprintf(argc < 2 ? stderr : stdout, usage, argv[0]);
+      return argc < 2 ? 2 : 0;
     }
     const std::string path = argv[1];
     bool full = true, cover = false;
-    std::string listTract;  // --tract NAME: one line per feather of that tract (follicle, frame, elevations)
+    std::string listTract, faceCoverPath;  // --tract NAME: one line per feather of that tract (follicle, frame, elevations)
     double lod = 1.0;
     int top = 15;
     std::vector<std::pair<std::string, std::string>> sets;
@@ -65,6 +71,7 @@ int main(int argc, char** argv) {
       else if (s == "--lod" && a + 1 < argc) lod = std::stod(argv[++a]);
       else if (s == "--top" && a + 1 < argc) top = std::stoi(argv[++a]);
       else if (s == "--tract" && a + 1 < argc) listTract = argv[++a];
+      else if (s == "--face-cover" && a + 1 < argc) faceCoverPath = argv[++a];
       else if (s == "--set" && a + 1 < argc) {
         const std::string kv = argv[++a];
         const size_t eq = kv.find('=');
@@ -142,6 +149,13 @@ int main(int argc, char** argv) {
     std::printf("%s check %.1f s: %zu triangles, intersecting_pairs %zu, skin_penetrations %zu, coverage %.4f\n",
                 full ? "full" : "proxy", secondsSince(t0), cr.coatTriangles, cr.intersectingPairs,
                 cr.skinPenetrations, cr.coverage);
+    if (!faceCoverPath.empty()) {
+      std::ofstream fc(faceCoverPath);
+      if (!fc) throw Error("cannot write", faceCoverPath, {});
+      for (size_t f = 0; f < skin.faceAreas.size(); ++f)
+        fc << (f < cr.faceSamples.size() ? cr.faceSamples[f] : 0) << ' ' << (f < cr.faceUncovered.size() ? cr.faceUncovered[f] : 0)
+           << '\n';
+    }
 
     std::vector<double> flatE;
     for (size_t i = 0; i < n; ++i)
