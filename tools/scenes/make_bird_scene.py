@@ -91,7 +91,15 @@ def closest_surface(verts, faces, p, group_prefix):
 def surface_normal(verts, faces, p, group_prefix):
     return closest_surface(verts, faces, p, group_prefix)[1]
 
-def flight_styling(verts, faces, pins, dirs, group_prefix, min_elevation=True):
+# Secondaries pack their shaft against what lies under the inner 30% of the vane (styling shaft_band; the
+# scene's packing.shaft_band 0.8 applies to everything else): their wide vanes overlap the next secondary's,
+# and with 0.8 each shaft cleared its neighbour's vane, so they climbed over one another (inner right-wing
+# secondaries up to 45 degrees above the wing plane, one pair at the conflict limit). Measured 2026-11-25
+# with the marginal coverts above: pairs 2086 -> 1183; on the primaries too (BIRD_PRIM_BAND=0.3) the
+# primaries' vanes crossed instead (1448); 0.5 on the primaries: 1187.
+SEC_BAND = float(os.environ.get('BIRD_SEC_BAND', 0.3)) if os.environ.get('BIRD_SEC_BAND', '0.3') != 'none' else None
+PRIM_BAND = float(os.environ['BIRD_PRIM_BAND']) if os.environ.get('BIRD_PRIM_BAND') else None
+def flight_styling(verts, faces, pins, dirs, group_prefix, min_elevation=True, bands=None):
     """Styling for pinned flight feathers: `dirs` are world directions in the (horizontal) wing and tail
     planes. Each feather's surface direction is set to it and its elevation kept at or above the angle
     that points it along it (min_elevation_deg, from the skin normal at the pin), so the packer only ever
@@ -99,12 +107,14 @@ def flight_styling(verts, faces, pins, dirs, group_prefix, min_elevation=True):
     like a fan."""
     out = []
     gap = min(math.dist(pins[i], pins[i + 1]) for i in range(len(pins) - 1))
-    for p, d in zip(pins, dirs):
+    for k, (p, d) in enumerate(zip(pins, dirs)):
         d = unit(d)
         n_skin = surface_normal(verts, faces, p, group_prefix)
         e = math.degrees(math.asin(max(-1.0, min(1.0, dot(d, n_skin)))))
         sel = {'select': 'sphere', 'center': [round(c, 5) for c in p], 'radius': round(0.3 * gap, 5),
                'direction': [round(c, 4) for c in d]}
+        if bands and bands[k] is not None:
+            sel['shaft_band'] = bands[k]
         if min_elevation == 'fixed':
             sel['elevation_deg'] = round(max(0.0, min(85.0, e)), 2)
         elif min_elevation:
@@ -242,9 +252,14 @@ body = [  # tract, feather types for its key feathers (cycled), key count
 # the legs 0.70 -> 0.85 but crossed the other leg (+1900 pairs); pointing them down the leg
 # (BIRD_LEG_DOWN=1, with or without BIRD_LEG_OUT) covered less for more pairs. With the current packer
 # and sampling (2026-11-25): 1.6 -> 2.0 raises the legs 0.78 -> ~0.87 and the total 0.9288 -> 0.9316 for
-# 3 more pairs (1366 -> 1369); 2.2 crosses the other leg again (1886 pairs).
+# 3 more pairs (1366 -> 1369); 2.2 crosses the other leg again (1886 pairs). Those numbers were one-sided: the
+# right leg is pinned to the mirror of the left with the scale stored in bird.json, which still was the 1.6
+# scale (right leg feathers 0.045 long, left 0.056). With both legs at 2.0 they cross each other (641 pairs
+# between the legs); at 1.8 on both sides (crural_right feather_scale 0.031704 = the left's mean length):
+# 1191 pairs, coverage 0.946. Changing this spacing needs crural_right's feather_scale in bird.json scaled
+# by the same factor.
 SPACINGS = {'body': float(os.environ.get('BIRD_SPACINGS', 2.4)), 'alar': float(os.environ.get('BIRD_ALAR_SPACINGS', 3.05)),
-            'crural': float(os.environ.get('BIRD_CRURAL_SPACINGS', 2.0)),
+            'crural': float(os.environ.get('BIRD_CRURAL_SPACINGS', 1.8)),
             'capital': float(os.environ.get('BIRD_CAPITAL_SPACINGS', 3.0)), 'humeral': float(os.environ.get('BIRD_HUMERAL_SPACINGS', 3.0))}
 SPACINGS.update(femoral=2.8, ventral=2.7)  # a little longer on the flanks and belly: fewer bare gaps between rows
 for k in ('femoral', 'ventral'):
@@ -312,6 +327,28 @@ def mirror_tracts(tracts):
         t.pop('feather_spacings', None)
 if MIRROR: mirror_tracts(tracts)
 
+# Down on the wing rims (experiment, BIRD_DOWN=density): Streit kept "two sets of tracts: one for down
+# feathers and one for contour feathers" (9.2.1). The leading and trailing rims of the thin wing are where
+# the contour feathers' flow parts and ends, so no contour feather lies over them.
+DOWN = float(os.environ.get('BIRD_DOWN', 0))
+DOWN_NY = float(os.environ.get('BIRD_DOWN_NY', 0.5))
+if DOWN > 0:
+    feathers['down'] = variant('down', 'down', color=[0.78, 0.74, 0.68], barbs_per_vane=int(os.environ.get('BIRD_DOWN_BARBS', 10)))
+    _v, _f = load_obj(os.path.join(DATA, 'meshes', 'bird.obj'))
+    down_tracts = []
+    for side in ('left', 'right'):
+        rim = []
+        for k, (idx, g) in enumerate(_f):
+            if g not in ('alar_' + side, 'remiges_' + side): continue
+            a, b, c = (_v[i] for i in idx)
+            n = unit(cross(sub(b, a), sub(c, a)))
+            if abs(n[1]) < DOWN_NY: rim.append(k)
+        down_tracts.append({'name': 'down_' + side, 'faces': rim, 'density': DOWN, 'feather_scale': 'auto',
+                            'feather_spacings': float(os.environ.get('BIRD_DOWN_SPACINGS', 2.0)), 'scale_jitter': 0.08,
+                            'feather': 'down', 'relax': {'iterations': 30},
+                            'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
+    tracts = down_tracts + tracts
+
 REMEX_SHIFT = float(os.environ.get('BIRD_REMEX_SHIFT', 0.0))
 _vo, _fo = load_obj(os.path.join(DATA, 'meshes', 'bird.obj'))
 def remex_pins(side):
@@ -344,7 +381,7 @@ for side, sgn in (('left', 1), ('right', -1)):
     # Secondaries straight back, primaries sweeping out toward the wing tip.
     dirs = [[-1.0, 0.0, sgn * (0.1 + 0.2 * k / 9)] for k in range(10)]
     dirs += [[-1.0 + 0.55 * k / 9, 0.0, sgn * (0.35 + 0.75 * k / 9)] for k in range(10)]
-    styling += flight_styling(verts, faces, sec + prim, dirs, 'remiges_' + side, FLIGHT_MODE)
+    styling += flight_styling(verts, faces, sec + prim, dirs, 'remiges_' + side, FLIGHT_MODE, [SEC_BAND] * len(sec) + [PRIM_BAND] * len(prim))
 rect = resample(axes['tail_edge'], 12)
 # The tail edge runs around the stub's end, where the skin faces straight back: a rectrix pointing back
 # would point along its normal (no tangent direction). Rectrices root on the upper back of the stub
@@ -387,23 +424,34 @@ CAMERA = {'eye': [round(TARGET[k] - DIST * VIEW[k], 4) for k in range(3)], 'targ
 wing_dir = lambda sgn: [-1.0, 0.0, 0.45 * sgn]
 WRAP = float(os.environ.get('BIRD_WRAP', 1.0))
 WRAP_FALLOFF = float(os.environ.get('BIRD_WRAP_FALLOFF', 0.06))
+TRAIL_DIR = [float(c) for c in os.environ['BIRD_TRAIL_DIR'].split(',')] if os.environ.get('BIRD_TRAIL_DIR') else None
+LEAD_HUMERAL = os.environ.get('BIRD_LEAD_HUMERAL', '0') == '1'
+# Marginal coverts: on the wing's leading edge the coverts point out along the edge toward the wing tip, as
+# on a real wing, instead of back and up over it. The edge is where the flow parts (upper coverts go back
+# over the top, lower ones back under the wing), so pointing back left a bare strip along it; along the
+# edge each covert lies over the next one's follicle (measured 2026-11-25: alar cover 0.90 -> 0.95,
+# total 0.932 -> 0.945). BIRD_LEAD_DIR=-1,1,0.45 restores the old wrap; BIRD_LEAD_HUMERAL=1 also turns
+# the shoulders' leading edge (0.950, but 1808 pairs: the inner secondaries stand up under them).
+LEAD_DIR = [float(c) for c in os.environ.get('BIRD_LEAD_DIR', '0.2,0.2,1').split(',')]
 
 def edge_vectors(group, sgn, zs, back, wrap, out_z, inner):
     """Direction vectors for a wing tract: on its leading edge (the most forward vertices at each span
     position) the direction also points up, so feathers rooted on the rounded edge wrap over it onto the
     upper surface (marginal coverts) instead of lying along it; `back` units behind the edge and at the
     trailing edge they point back and out."""
-    vs = [v for v, g in vert_groups if g == group]
+    vs = [v for v, g in vert_groups if g == group or (ALAR_REMIGES and g == group.replace('alar', 'remiges'))]
     out = []
     for z in zs:
         s = [v for v in vs if abs(abs(v[2]) - z) < 0.03]
         if not s: continue
         lead = max(s, key=lambda v: v[0]); trail = min(s, key=lambda v: v[0])
         zz = z * sgn
-        out.append({'at': [round(lead[0], 4), round(lead[1], 4), round(zz, 4)], 'direction': [-1.0, wrap, out_z * sgn]})
+        ld = LEAD_DIR if (LEAD_DIR and (group.startswith('alar') or LEAD_HUMERAL)) else [-1.0, wrap, out_z]
+        out.append({'at': [round(lead[0], 4), round(lead[1], 4), round(zz, 4)], 'direction': [ld[0], ld[1], ld[2] * sgn]})
         for x in (lead[0] - back, trail[0]):
             if x >= trail[0] - 1e-9:
-                out.append({'at': [round(x, 4), round(lead[1], 4), round(zz, 4)], 'direction': [-1.0, 0.0, out_z * sgn]})
+                td = TRAIL_DIR if (TRAIL_DIR and x == trail[0]) else [-1.0, 0.0, out_z]
+                out.append({'at': [round(x, 4), round(trail[1] if (TRAIL_DIR and x == trail[0]) else lead[1], 4), round(zz, 4)], 'direction': [td[0], td[1], td[2] * sgn]})
     return out
 
 LEG_DOWN = float(os.environ.get('BIRD_LEG_DOWN', 0))
@@ -442,7 +490,7 @@ scene = {
                                           {'at': [0.0, 0.2, -1.0], 'direction': [-0.6, 0.0, -1.0]}]},
         },
     },
-    'ordering': {'method': os.environ.get('BIRD_ORDER', 'flow')},
+    'ordering': dict({'method': os.environ.get('BIRD_ORDER', 'flow')}, **({'tracts': [t['name'] for t in tracts if t['name'].startswith('down_')]} if DOWN > 0 else {})),
     'packing': PACKING,
     'camera': CAMERA,
     'lights': [{'direction': [-0.4, -1.0, -0.5], 'intensity': 1.0},
