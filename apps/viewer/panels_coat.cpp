@@ -328,8 +328,16 @@ void drawPackingPanel(PanelContext& ctx) {
     for (size_t k = 0; k < p["styling"].size(); ++k) {
       ImGui::PushID(int(k));
       const Json& st = p["styling"][k];
-      ImGui::Text("%s r=%.3g elev=%s", st.value("select", std::string("ids")).c_str(), st.value("radius", 0.0),
-                  st.contains("elevation_deg") ? st["elevation_deg"].dump().c_str() : "-");
+      // What the selection sets: a fixed elevation, a lower bound, a direction and/or a shaft band.
+      std::string sets;
+      auto num = [&](const char* key, const char* label) {
+        if (st.contains(key) && st[key].is_number()) sets += std::string(" ") + label + "=" + std::to_string(st[key].get<double>()).substr(0, 5);
+      };
+      num("elevation_deg", "elev");
+      num("min_elevation_deg", "min");
+      num("shaft_band", "band");
+      if (st.contains("direction")) sets += " dir";
+      ImGui::Text("%s r=%.3g%s", st.value("select", std::string("ids")).c_str(), st.value("radius", 0.0), sets.c_str());
       ImGui::SameLine();
       if (ImGui::SmallButton("remove")) guarded(ctx, [&] { actions::removeBrush(doc, k); });
       ImGui::PopID();
