@@ -4,8 +4,11 @@
 // the tract pairs they fall between, skin penetrations and coverage.
 //
 //   pteryla_packdiag SCENE.json [--set /json/pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME]
-//                    [--cover] [--face-cover FILE]
+//                    [--cover] [--face-cover FILE] [--blame N]
 //
+// --blame N: which feathers under feather N raise it. For each feather before N in layer order within
+// reach, N is packed again over the pack without that feather (packOver); the ones whose absence lowers N
+// the most are listed.
 // --face-cover FILE writes one line per skin face, "samples uncovered", from the full check's coverage
 // samples (for a coverage map of the skin, e.g. tools/packdiag/cover_map.py).
 //
@@ -53,14 +56,15 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 int main(int argc, char** argv) {
   try {
     const char* usage = "usage: %s SCENE.json [--set /pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME] [--cover] "
-                        "[--face-cover FILE]\n";
+                        "[--face-cover FILE] [--blame N]\n";
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
       std::fprintf(argc < 2 ? stderr : stdout, usage, argv[0]);
       return argc < 2 ? 2 : 0;
     }
     const std::string path = argv[1];
     bool full = true, cover = false;
-    std::string listTract, faceCoverPath;  // --tract NAME: one line per feather of that tract (follicle, frame, elevations)
+    std::string listTract, faceCoverPath;
+    long blame = -1;  // --tract NAME: one line per feather of that tract (follicle, frame, elevations)
     double lod = 1.0;
     int top = 15;
     std::vector<std::pair<std::string, std::string>> sets;
@@ -72,6 +76,7 @@ int main(int argc, char** argv) {
       else if (s == "--top" && a + 1 < argc) top = std::stoi(argv[++a]);
       else if (s == "--tract" && a + 1 < argc) listTract = argv[++a];
       else if (s == "--face-cover" && a + 1 < argc) faceCoverPath = argv[++a];
+      else if (s == "--blame" && a + 1 < argc) blame = std::stol(argv[++a]);
       else if (s == "--set" && a + 1 < argc) {
         const std::string kv = argv[++a];
         const size_t eq = kv.find('=');
@@ -124,6 +129,33 @@ int main(int argc, char** argv) {
                     "fixed %.2f len %.3f\n",
                     i, layerPos[i], f.origin.x, f.origin.y, f.origin.z, f.tangent.x, f.tangent.y, f.tangent.z, f.normal.x,
                     f.normal.y, f.normal.z, elev[i] * 57.29578, fixed * 57.29578, coat.params[i].rachisLength);
+      }
+    }
+
+    if (blame >= 0) {
+      if (static_cast<size_t>(blame) >= n || !coat.present[blame]) throw Error("--blame: no such present feather", path, std::to_string(blame));
+      const uint32_t b = static_cast<uint32_t>(blame);
+      std::vector<uint32_t> pos(n, UINT32_MAX);
+      for (size_t k = 0; k < coat.layerOrder.size(); ++k) pos[coat.layerOrder[k]] = static_cast<uint32_t>(k);
+      std::vector<std::pair<double, uint32_t>> drops;
+      coat::CoatFeathers without = coat;
+      for (uint32_t k = 0; k < n; ++k) {
+        if (!coat.present[k] || pos[k] >= pos[b]) continue;
+        const double reach = coat.params[k].totalLength() + coat.params[b].totalLength();
+        if (glm::length(coat.frames[k].origin - coat.frames[b].origin) > reach) continue;
+        without.present[k] = 0;
+        const coat::PackResult r = coat::packOver(skin, without, pr, {b}, po);
+        without.present[k] = 1;
+        drops.push_back({pr.elevation[b] - r.elevation[b], k});
+      }
+      std::sort(drops.rbegin(), drops.rend());
+      std::printf("feather %u (%s) elevation %.2f deg; %zu feathers under it within reach; without each, it would lie at:\n", b,
+                  tracts[coat.tract[b]].name.c_str(), pr.elevation[b] * 180 / M_PI, drops.size());
+      for (int k = 0; k < top && k < static_cast<int>(drops.size()); ++k) {
+        const uint32_t q = drops[k].second;
+        std::printf("  without %5u (%s, e %.1f, len %.3f, dist %.3f): %.2f deg\n", q, tracts[coat.tract[q]].name.c_str(),
+                    pr.elevation[q] * 180 / M_PI, coat.params[q].totalLength(),
+                    glm::length(coat.frames[q].origin - coat.frames[b].origin), (pr.elevation[b] - drops[k].first) * 180 / M_PI);
       }
     }
 
