@@ -292,3 +292,48 @@ TEST(PackSkin, NoVertexBelowACurvedSkinAtAnySampleSpacing) {
     EXPECT_GT(c.samplePoints, 10000u);
   }
 }
+
+// Property: packing commutes with a mirror. The mirror image of a coat (positions and frames reflected,
+// each feather replaced by its mirror image: vanes swapped, lateral curvature negated) on the mirrored skin
+// packs to the same elevations. A packer that prefers one side of the shaft would lay a bird's right wing
+// differently from its left.
+TEST(PackSymmetry, TheMirrorImageOfACoatPacksToTheSameElevations) {
+  const SkinMesh skin = makeIcosphere(3);
+  feather::FeatherParams p = packtest::contourFeather(0.9);
+  p.left.baseAngle = 1.1;  // an asymmetric feather: a wide left vane, a narrow right one, a bent rachis
+  p.right.baseAngle = 0.5;
+  p.right.keyBarbs = {{0.5, {{0, 0, 0}, {0.3, 0.01, 0.01}, {0.6, 0.02, 0.0}, {0.9, 0.02, -0.05}}}};
+  p.rachisLateralCurvature = 0.3;
+  CoatFeathers coat = packtest::sphereCoat(skin, 260, 0.9);
+  for (auto& q : coat.params) q = p;
+
+  feather::FeatherParams pm = p;
+  std::swap(pm.left, pm.right);
+  std::swap(pm.silhouette.left, pm.silhouette.right);
+  pm.rachisLateralCurvature = -p.rachisLateralCurvature;
+  auto flip = [](glm::dvec3 v) { return glm::dvec3(-v.x, v.y, v.z); };
+  std::vector<glm::dvec3> pos = skin.positions;
+  for (auto& v : pos) v = flip(v);
+  std::vector<std::array<uint32_t, 3>> faces = skin.faces;
+  for (auto& f : faces) std::swap(f[1], f[2]);  // a reflection turns the winding
+  const SkinMesh mirrorSkin = makeSkinMesh(pos, faces);
+  CoatFeathers mirror = coat;
+  for (size_t i = 0; i < coat.size(); ++i) {
+    FeatherFrame& f = mirror.frames[i];
+    f.origin = flip(f.origin);
+    f.normal = flip(f.normal);
+    f.tangent = flip(f.tangent);
+    f.binormal = glm::cross(f.normal, f.tangent);  // = -flip(binormal): the frame stays right-handed
+    mirror.params[i] = pm;
+  }
+  const PackResult a = pack(skin, coat), b = pack(mirrorSkin, mirror);
+  double worst = 0;
+  size_t worstAt = 0;
+  for (size_t i = 0; i < coat.size(); ++i)
+    if (std::abs(a.elevation[i] - b.elevation[i]) > worst) {
+      worst = std::abs(a.elevation[i] - b.elevation[i]);
+      worstAt = i;
+    }
+  EXPECT_LT(worst, 1e-6) << "feather " << worstAt << ": " << a.elevation[worstAt] << " vs its mirror image "
+                         << b.elevation[worstAt];
+}
