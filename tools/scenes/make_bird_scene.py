@@ -208,15 +208,15 @@ feathers = {  # body feathers without afterfeathers (hidden under the vanes; the
     'rectrix': variant('rectrix', 'rectrix', 'barred_brown', barbs_per_vane=FLIGHT_BARBS, barb_length=2.0 * FLIGHT_W),
 }
 
-# BIRD_MIRROR_FEATHERS=1: asymmetric feathers (flight feathers and coverts have a narrow and a wide vane
-# and a curved rachis) are mirrored on the right side of the body, so the right wing is the exact mirror
-# image of the left. Measured (packdiag, full geometry): pairs 1622 -> 2076 of ~33,600 unpacked, coverage
-# 0.9285 -> 0.9287. The right wing's pairs are not a handedness effect: they come from one pair of
-# neighbouring secondaries (3125 under 3124, follicles 0.055 apart) whose styled minimum elevations put
-# the upper one at the 88-degree conflict limit (it would need more than 90 to clear; left wing: 87.6,
-# just clear). Mirrored: 1169 pairs for that pair (495 unmirrored); conflict limit 89 / 90: 2225 / 1339
-# pairs overall. Off until the secondaries' pins or styling leave room at the wing's trailing edge.
-MIRROR_FEATHERS = os.environ.get('BIRD_MIRROR_FEATHERS', '0') == '1'
+# Mirror-image feathers on the right: asymmetric feathers (flight feathers and coverts have a narrow and a
+# wide vane and a curved rachis) are mirrored on the right side of the body, so the right wing is the exact
+# mirror image of the left (BIRD_MIRROR_FEATHERS=0: the same feathers on both sides). Until 2026-11-25 this
+# was off, and its switch never reached the flight feathers (their tract was looked up by side, 'right',
+# not by tract name), so the measurements that kept it off (2076 pairs, "not a handedness effect") had
+# mirrored only the coverts. With the flight feathers mirrored too the two wings pack alike (the right
+# wing's secondaries used to climb over the first primary: 42.7 vs 11.6 degrees at the last secondary):
+# 1197 pairs, coverage 0.9465 (unmirrored 1191, 0.9460).
+MIRROR_FEATHERS = os.environ.get('BIRD_MIRROR_FEATHERS', '1') == '1'
 ASYMMETRIC = ('covert', 'primary', 'secondary') if MIRROR_FEATHERS else ()
 if MIRROR_FEATHERS:
     feathers['covert_right'] = variant('covert', 'covert_right', 'barred_brown', barbs_per_vane=BODY_BARBS, afterfeather=False,
@@ -366,8 +366,8 @@ for side, sgn in (('left', 1), ('right', -1)):
     prim, sec = remex_pins(side)
     tracts.append({'name': 'remiges_' + side, 'groups': ['remiges_' + side], 'count': 0, 'feather_scale': 0.05,
                    'pinned': [{'at': p} for p in sec + prim],
-                   'key_feathers': [{'feather': sided('secondary', side), 'at': sec[0]}, {'feather': sided('secondary', side), 'at': sec[-1]},
-                                    {'feather': sided('primary', side), 'at': prim[0]}, {'feather': sided('primary', side), 'at': prim[-1]}],
+                   'key_feathers': [{'feather': sided('secondary', 'remiges_' + side), 'at': sec[0]}, {'feather': sided('secondary', 'remiges_' + side), 'at': sec[-1]},
+                                    {'feather': sided('primary', 'remiges_' + side), 'at': prim[0]}, {'feather': sided('primary', 'remiges_' + side), 'at': prim[-1]}],
                    'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
 verts, faces = load_obj(os.path.join(DATA, 'meshes', 'bird.obj'))
 # 'min': flight feathers pack freely above the wing/tail plane; 'fixed': they lie in it (others pack
