@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 #include "actions.hpp"
@@ -331,7 +332,10 @@ void drawPackingPanel(PanelContext& ctx) {
       // What the selection sets: a fixed elevation, a lower bound, a direction and/or a shaft band.
       std::string sets;
       auto num = [&](const char* key, const char* label) {
-        if (st.contains(key) && st[key].is_number()) sets += std::string(" ") + label + "=" + std::to_string(st[key].get<double>()).substr(0, 5);
+        if (!st.contains(key) || !st[key].is_number()) return;
+        char buf[48];
+        std::snprintf(buf, sizeof buf, " %s=%.4g", label, st[key].get<double>());
+        sets += buf;
       };
       num("elevation_deg", "elev");
       num("min_elevation_deg", "min");

@@ -149,11 +149,13 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
   }
   for (auto& r : res.tractRank)
     if (r == UINT32_MAX) r = options.method == OrderMethod::Tracts ? rank++ : rank;
+  // Axis and Flow without a tract list need no tracts at all: one group.
   std::vector<uint32_t> group(n, 0);
-  for (size_t i = 0; i < n; ++i) {
-    PTERYLA_CHECK(coat.tract[i] < tracts.size(), "feather of an unknown tract");
-    group[i] = res.tractRank[coat.tract[i]];
-  }
+  if (options.method == OrderMethod::Tracts || !options.tractOrder.empty())
+    for (size_t i = 0; i < n; ++i) {
+      PTERYLA_CHECK(coat.tract[i] < tracts.size(), "feather of an unknown tract");
+      group[i] = res.tractRank[coat.tract[i]];
+    }
   if (options.method == OrderMethod::Axis) {
     if (options.axis.size() < 2) throw Error("ordering by axis needs an \"axis\" polyline (head to tail)", {}, "ordering.axis");
     for (size_t i = 0; i < n; ++i) res.key[i] = axisArcLength(options.axis, follicles.position[coat.follicle[i]]);

@@ -78,10 +78,17 @@ def render(verts, faces, colours, d, w, h, points=()):
 def main():
     obj, fc, out = sys.argv[1:4]
     verts, faces = load_obj(obj)
-    cov = [tuple(map(int, l.split())) for l in open(fc)]
+    try:
+        cov = [tuple(map(int, l.split()))[:2] for l in open(fc)]
+    except ValueError:
+        sys.exit('%s: expected lines "samples uncovered" (two integers), as pteryla_packdiag --face-cover writes' % fc)
     if len(cov) != len(faces): sys.exit('%s: %d faces, %s: %d lines' % (obj, len(faces), fc, len(cov)))
     if len(sys.argv) > 4:  # --box xmin,xmax,ymin,ymax,zmin,zmax: only faces whose centroid lies inside
-        b = list(map(float, sys.argv[4].split(',')))
+        try:
+            b = [float(x) for x in sys.argv[4].split(',')]
+        except ValueError:
+            b = []
+        if len(b) != 6: sys.exit('box %r: expected xmin,xmax,ymin,ymax,zmin,zmax (six numbers)' % sys.argv[4])
         keep = [i for i, f in enumerate(faces) if all(b[2 * k] <= sum(verts[v][k] for v in f) / 3 <= b[2 * k + 1] for k in range(3))]
         faces = [faces[i] for i in keep]; cov = [cov[i] for i in keep]
     colours = []

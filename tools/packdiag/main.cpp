@@ -76,7 +76,12 @@ int main(int argc, char** argv) {
       else if (s == "--top" && a + 1 < argc) top = std::stoi(argv[++a]);
       else if (s == "--tract" && a + 1 < argc) listTract = argv[++a];
       else if (s == "--face-cover" && a + 1 < argc) faceCoverPath = argv[++a];
-      else if (s == "--blame" && a + 1 < argc) blame = std::stol(argv[++a]);
+      else if (s == "--blame" && a + 1 < argc) {
+        const std::string v = argv[++a];
+        char* end = nullptr;
+        blame = std::strtol(v.c_str(), &end, 10);
+        if (v.empty() || *end != '\0' || blame < 0) throw Error("--blame expects a feather index (a non-negative integer)", {}, v);
+      }
       else if (s == "--set" && a + 1 < argc) {
         const std::string kv = argv[++a];
         const size_t eq = kv.find('=');
