@@ -37,6 +37,7 @@
 #include "pteryla/core/error.hpp"
 #include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/bezier.hpp"
+#include "arena.hpp"
 #include "spatial.hpp"
 
 namespace pteryla::coat {
@@ -99,14 +100,15 @@ struct LocalFeather {
   double vaneHalf = 0;         // largest lateral reach of a barb from its root (unpacked)
   double shaftYMin = 0, shaftYMax = 0;
   double totalLength = 0;
-  std::vector<dvec3> shaft;    // polyline from the follicle to the tip, feather-local
-  std::vector<double> shaftRad;
-  std::vector<LocalKey> keys;  // left vane first, ascending rp within a vane; afterfeather keys last
+  // Arrays live in the pack's per-thread arenas (detail::HugeArena).
+  detail::ArenaArray<dvec3> shaft;    // polyline from the follicle to the tip, feather-local
+  detail::ArenaArray<double> shaftRad;
+  detail::ArenaArray<LocalKey> keys;  // left vane first, ascending rp within a vane; afterfeather keys last
   uint32_t leftKeys = 0;
   uint32_t mainKeys = 0;       // keys of the main feather (the packed ones); the rest are the afterfeather's
-  std::vector<dvec3> after;    // afterfeather shaft polyline (not packed, but handed to later feathers)
-  std::vector<double> afterRad;
-  std::vector<dvec3> cvs;      // key barb control vertices, barb-local unit frame
+  detail::ArenaArray<dvec3> after;    // afterfeather shaft polyline (not packed, but handed to later feathers)
+  detail::ArenaArray<double> afterRad;
+  detail::ArenaArray<dvec3> cvs;      // key barb control vertices, barb-local unit frame
   uint32_t pointCount = 0;
   // Vane outline, invariant under elevation (a rotation about B keeps y and the xz radius): per lateral bin
   // of [yMin, yMax], the smallest and largest xz radius of feather points with that lateral offset.
@@ -222,39 +224,46 @@ void buildOutline(LocalFeather& L, const PackOptions& o) {
   }
 }
 
-void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, LocalFeather& L) {
+void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, detail::HugeArena& arena, LocalFeather& L) {
+  // Built in this thread's reusable vectors, then copied to the arena at their final sizes.
+  struct Build {
+    std::vector<dvec3> shaft, after, cvs;
+    std::vector<double> shaftRad, afterRad;
+    std::vector<LocalKey> keys;
+  };
+  thread_local Build B;
   const feather::FeatherParams& p = coat.params[i];
   L.unopened = !coat.age.empty() && coat.age[i] < o.openingAge;
   L.totalLength = p.totalLength();
-  L.shaft.clear();
-  L.shaftRad.clear();
-  L.keys.clear();
-  L.cvs.clear();
+  B.shaft.clear();
+  B.shaftRad.clear();
+  B.keys.clear();
+  B.cvs.clear();
   L.leftKeys = 0;
   L.mainKeys = 0;
-  L.after.clear();
-  L.afterRad.clear();
+  B.after.clear();
+  B.afterRad.clear();
   L.vaneHalf = 0;
   const int segs = std::max(2, o.shaftSamples);
   if (L.unopened) {
     // 8.3: a pin or partly opened feather is straight and stiff.
     const double r = 0.5 * p.rachisWidth;
     for (int k = 0; k <= segs; ++k) {
-      L.shaft.emplace_back(L.totalLength * k / segs, 0, 0);
-      L.shaftRad.push_back(r);
+      B.shaft.emplace_back(L.totalLength * k / segs, 0, 0);
+      B.shaftRad.push_back(r);
     }
   } else {
     const double wBase = p.calamusWidthRatio * p.rachisWidth;
     if (p.calamusLength > 0) {
-      L.shaft.emplace_back(0, 0, 0);
-      L.shaftRad.push_back(0.5 * wBase);
-      L.shaft.emplace_back(0.5 * p.calamusLength, 0, 0);
-      L.shaftRad.push_back(0.25 * (wBase + p.rachisWidth));
+      B.shaft.emplace_back(0, 0, 0);
+      B.shaftRad.push_back(0.5 * wBase);
+      B.shaft.emplace_back(0.5 * p.calamusLength, 0, 0);
+      B.shaftRad.push_back(0.25 * (wBase + p.rachisWidth));
     }
     for (int k = 0; k <= segs; ++k) {
       const feather::RachisFrame f = feather::rachisFrame(p, static_cast<double>(k) / segs);
-      L.shaft.push_back(f.point);
-      L.shaftRad.push_back(0.5 * f.width);
+      B.shaft.push_back(f.point);
+      B.shaftRad.push_back(0.5 * f.width);
     }
     // Refined key barbs (6.3.3: the default tip barb becomes a real key barb; more key barbs pack the
     // vane at a finer resolution without changing its shape). Breakpoints of a silhouette (barb length
@@ -327,24 +336,24 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
           k.left = f.left;
           k.root = offset + f.point + (side * 0.5 * f.width) * f.left;
           k.len = fp.barbLengthAt(v, kb.rp);
-          k.cvOff = static_cast<uint32_t>(L.cvs.size());
+          k.cvOff = static_cast<uint32_t>(B.cvs.size());
           k.cvCount = static_cast<uint16_t>(kb.count);
           const glm::dvec3* src = kb.inserted ? &shapes[kb.index] : eff[kb.index].cvs.data();
           double xmax = 0;
           for (uint32_t c = 0; c < kb.count; ++c) {
-            L.cvs.push_back(src[c]);
+            B.cvs.push_back(src[c]);
             xmax = std::max(xmax, src[c].x);
           }
           k.sExt = k.len * xmax;
           k.rootDist = glm::length(k.root);
           L.vaneHalf = std::max(L.vaneHalf, k.len * xmax * sa);
-          L.keys.push_back(k);
+          B.keys.push_back(k);
         }
       }
     };
     addKeys(p, dvec3(0), std::max(2, o.keyBarbsPerVane), true);
-    L.mainKeys = static_cast<uint32_t>(L.keys.size());
-    for (const LocalKey& k : L.keys) L.leftKeys += k.vane == 0 ? 1 : 0;
+    L.mainKeys = static_cast<uint32_t>(B.keys.size());
+    for (const LocalKey& k : B.keys) L.leftKeys += k.vane == 0 ? 1 : 0;
     if (p.afterfeather) {
       // The afterfeather (5.2, at the superior umbilicus, as feather::generateBarbs places it) rides along
       // unpacked; its points still keep later feathers off it.
@@ -355,11 +364,17 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, Loca
       L.vaneHalf = vh;
       for (int k = 0; k <= 4; ++k) {
         const feather::RachisFrame f = feather::rachisFrame(af, k / 4.0);
-        L.after.push_back(umbilicus + f.point);
-        L.afterRad.push_back(0.5 * f.width);
+        B.after.push_back(umbilicus + f.point);
+        B.afterRad.push_back(0.5 * f.width);
       }
     }
   }
+  L.shaft = arena.copy(B.shaft);
+  L.shaftRad = arena.copy(B.shaftRad);
+  L.keys = arena.copy(B.keys);
+  L.cvs = arena.copy(B.cvs);
+  L.after = arena.copy(B.after);
+  L.afterRad = arena.copy(B.afterRad);
   // Bounds over every packed state: elevation is a rotation about the follicle, flattening moves control
   // vertices toward the barb's plane and the lift rotates a barb about its root, so |p| <= |root| + len |cv|.
   double reach = 0, yMin = 0, yMax = 0;
@@ -436,6 +451,7 @@ struct Context {
   const CoatFeathers& coat;
   const PackOptions& opt;
   double clearance = 0, skinClearance = 0, medianReach = 0;
+  tbb::enumerable_thread_specific<detail::HugeArena> arenas;  // storage of local's arrays
   std::vector<LocalFeather> local;
   std::vector<uint32_t> order, pos;  // pos[i] = position in order, UINT32_MAX if not packed
   // dependency graph (CSR)
@@ -1414,9 +1430,10 @@ void setup(Context& ctx) {
 
   ctx.local.resize(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16), [&](const tbb::blocked_range<size_t>& r) {
+    detail::HugeArena& arena = ctx.arenas.local();
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ctx.local[i].packable = ctx.pos[i] != UINT32_MAX;
-      if (ctx.local[i].packable) buildLocal(coat, static_cast<uint32_t>(i), o, ctx.local[i]);
+      if (ctx.local[i].packable) buildLocal(coat, static_cast<uint32_t>(i), o, arena, ctx.local[i]);
       else ctx.local[i].pointCount = 0;
     }
   });
@@ -1873,7 +1890,8 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
     ctx.local.resize(n);
     for (uint32_t i : order) ctx.local[i].packable = true;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, work.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t k = r.begin(); k < r.end(); ++k) buildLocal(coat, work[k], options, ctx.local[work[k]]);
+      detail::HugeArena& arena = ctx.arenas.local();
+      for (size_t k = r.begin(); k < r.end(); ++k) buildLocal(coat, work[k], options, arena, ctx.local[work[k]]);
     });
     // Dependencies of the packed feathers: feathers before them whose points can touch their footprint
     // (a kept feather's packed bounds, a packed one's reach).
