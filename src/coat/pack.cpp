@@ -780,7 +780,7 @@ struct Output {
   std::vector<feather::FeatherParams>& params;
   std::vector<uint8_t>& barbsChanged;
   std::vector<uint32_t>& pointOffset;
-  std::vector<glm::vec4>& points;
+  PackedPoints& points;
   std::vector<glm::dvec4>& bounds;
   const std::vector<uint32_t>& groupOffset;
   const std::vector<uint32_t>& groupPoint;
@@ -1632,8 +1632,8 @@ void schedule(const Context& ctx, const std::vector<uint32_t>& items, const uint
 
 // Reserves a large result buffer and asks Linux for transparent huge pages on it before it is first
 // written: the bird's ~30 MB of packed points otherwise cost ~7,500 page faults, serial, in every pack.
-template <class T>
-void reserveHuge(std::vector<T>& v, size_t count) {
+template <class T, class A>
+void reserveHuge(std::vector<T, A>& v, size_t count) {
   v.reserve(count);
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
   constexpr uintptr_t kHuge = uintptr_t(2) << 20;
@@ -1668,7 +1668,7 @@ void initResult(const Context& ctx, PackResult& res) {
   res.recomputed.assign(n, 0);
   res.pointOffset = pointOffsets(ctx);
   reserveHuge(res.points, res.pointOffset.back());
-  res.points.assign(res.pointOffset.back(), glm::vec4(0));
+  res.points.resize(res.pointOffset.back());  // uninitialised: every feather writes its own points
   res.bounds.assign(n, glm::dvec4(0));
   res.groupOffset.assign(n + 1, 0);
   res.groupPoint.clear();
