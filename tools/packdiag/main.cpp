@@ -63,8 +63,9 @@ int main(int argc, char** argv) {
     }
     const std::string path = argv[1];
     bool full = true, cover = false;
-    std::string listTract, faceCoverPath;
-    long blame = -1;  // --tract NAME: one line per feather of that tract (follicle, frame, elevations)
+    std::string listTract;      // --tract NAME: one line per feather of that tract (follicle, frame, elevations)
+    std::string faceCoverPath;  // --face-cover FILE
+    long blame = -1;            // --blame N
     double lod = 1.0;
     int top = 15;
     std::vector<std::pair<std::string, std::string>> sets;
