@@ -4,13 +4,19 @@
 // the tract pairs they fall between, skin penetrations and coverage.
 //
 //   pteryla_packdiag SCENE.json [--set /json/pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME]
-//                    [--cover] [--face-cover FILE] [--blame N]
+//                    [--cover] [--face-cover FILE] [--blame N] [--flat DEG] [--scale K]
 //
 // --blame N: which feathers under feather N raise it. For each feather before N in layer order within
 // reach, N is packed again over the pack without that feather (packOver); the ones whose absence lowers N
 // the most are listed.
 // --face-cover FILE writes one line per skin face, "samples uncovered", from the full check's coverage
 // samples (for a coverage map of the skin, e.g. tools/packdiag/cover_map.py).
+//
+// --flat DEG holds every feather at DEG degrees (a styling selection appended to the scene's, so it wins
+// over their elevations; directions and other keys stay): with collisions ignored, the coverage that the
+// follicles, directions and feather sizes allow at that elevation. --scale K multiplies every tract's
+// feather length (feather_scale, or feather_spacings where the scale is "auto"). Together they measure
+// how far the coat's design, not the packer, limits coverage (docs/packing.md).
 //
 // --set edits the scene JSON before loading (e.g. --set /packing/shaft_band=0.5), so parameter
 // experiments need no scratch scene files. --no-full skips the slow full-geometry checks (the proxy
@@ -56,7 +62,7 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 int main(int argc, char** argv) {
   try {
     const char* usage = "usage: %s SCENE.json [--set /pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME] [--cover] "
-                        "[--face-cover FILE] [--blame N]\n";
+                        "[--face-cover FILE] [--blame N] [--flat DEG] [--scale K]\n";
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
       std::fprintf(argc < 2 ? stderr : stdout, usage, argv[0]);
       return argc < 2 ? 2 : 0;
@@ -67,6 +73,8 @@ int main(int argc, char** argv) {
     std::string faceCoverPath;  // --face-cover FILE
     long blame = -1;            // --blame N
     double lod = 1.0;
+    double flatDeg = NAN;   // --flat DEG
+    double lengthScale = 1; // --scale K
     int top = 15;
     std::vector<std::pair<std::string, std::string>> sets;
     for (int a = 2; a < argc; ++a) {
@@ -83,6 +91,16 @@ int main(int argc, char** argv) {
         blame = std::strtol(v.c_str(), &end, 10);
         if (v.empty() || *end != '\0' || blame < 0) throw Error("--blame expects a feather index (a non-negative integer)", {}, v);
       }
+      else if ((s == "--flat" || s == "--scale") && a + 1 < argc) {
+        const std::string v = argv[++a];
+        char* end = nullptr;
+        const double x = std::strtod(v.c_str(), &end);
+        if (s == "--flat" && (v.empty() || *end != '\0' || !(x >= 0 && x <= 90)))
+          throw Error("--flat expects an elevation in degrees in [0, 90]", {}, v);
+        if (s == "--scale" && (v.empty() || *end != '\0' || !(x > 0 && std::isfinite(x))))
+          throw Error("--scale expects a positive length factor", {}, v);
+        (s == "--flat" ? flatDeg : lengthScale) = x;
+      }
       else if (s == "--set" && a + 1 < argc) {
         const std::string kv = argv[++a];
         const size_t eq = kv.find('=');
@@ -96,6 +114,14 @@ int main(int argc, char** argv) {
     if (!in) throw Error("cannot open", path, {});
     nlohmann::json j = nlohmann::json::parse(in);
     for (const auto& [ptr, val] : sets) j[nlohmann::json::json_pointer(ptr)] = nlohmann::json::parse(val);
+    if (!std::isnan(flatDeg))
+      j["packing"]["styling"].push_back({{"select", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1e9}, {"elevation_deg", flatDeg}});
+    if (lengthScale != 1 && j.contains("tracts"))
+      for (auto& t : j["tracts"]) {  // scene-format.md: feather_scale defaults to 1, feather_spacings to 3.5
+        const bool automatic = t.contains("feather_scale") && t["feather_scale"] == "auto";
+        if (automatic) t["feather_spacings"] = t.value("feather_spacings", 3.5) * lengthScale;
+        else t["feather_scale"] = t.value("feather_scale", 1.0) * lengthScale;
+      }
     pipeline::Pipeline p(pipeline::sceneFromJson(j, path));
 
     auto t0 = std::chrono::steady_clock::now();
