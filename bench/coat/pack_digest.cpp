@@ -44,10 +44,10 @@ struct Fnv {
   }
 };
 
-void digest(const char* name, const PackResult& r, bool fields) {
+void digest(const char* name, const CoatFeathers& coat, const PackResult& r, bool fields) {
   Fnv all, elev, params, pts;
   elev.vec(r.elevation);
-  for (const auto& p : r.packedParams)
+  for (const auto& p : allPackedParams(coat, r))
     for (const auto* v : {&p.left, &p.right}) {
       params.pod(v->keyBarbs.size());
       for (const auto& kb : v->keyBarbs) {
@@ -139,8 +139,8 @@ int main(int argc, char** argv) {
   }
   for (int t : {1, 2}) {
     o.threads = d.threads = t;
-    digest(("bird/" + std::to_string(t)).c_str(), pack(skin, coat, o), fields);
-    digest(("bird-default/" + std::to_string(t)).c_str(), pack(skin, coat, d), fields);
+    digest(("bird/" + std::to_string(t)).c_str(), coat, pack(skin, coat, o), fields);
+    digest(("bird-default/" + std::to_string(t)).c_str(), coat, pack(skin, coat, d), fields);
   }
   const SkinMesh sphere = makeIcosphere(4);
   const CoatFeathers sc = packtest::sphereCoat(sphere, static_cast<size_t>(3150 / 0.8 + 0.5), std::sqrt(320.0 / 3150));
@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
   so.captureFields = fields;
   for (int t : {1, 2}) {
     so.threads = t;
-    digest(("sphere3150/" + std::to_string(t)).c_str(), pack(sphere, sc, so), fields);
+    digest(("sphere3150/" + std::to_string(t)).c_str(), sc, pack(sphere, sc, so), fields);
   }
   return 0;
 }

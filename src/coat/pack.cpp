@@ -16,6 +16,7 @@
 #include "pteryla/coat/pack.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -777,7 +778,7 @@ double lineMax(const dvec3& q, const dvec3& g, const dvec3& w, double wl, double
 
 struct Output {
   std::vector<double>& elevation;
-  std::vector<feather::FeatherParams>& params;
+  PackedKeyBarbs& keys;
   std::vector<uint8_t>& barbsChanged;
   std::vector<uint32_t>& pointOffset;
   PackedPoints& points;
@@ -1179,19 +1180,20 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
 
   // ---- 6.3.3 barb elevation: per key barb, a height field in its barb slicing plane from the candidates
   // on its side of the shaft between the neighbouring key barbs' slicing planes.
-  feather::FeatherParams& P = out.params[i];
-  P = ctx.coat.params[i];
   const size_t nKeys = L.mainKeys;
   const int fb = std::max(2, o.barbFieldBins);
   bool anyChanged = false;
-  std::vector<feather::KeyBarb> vaneKeys[2];
-  if (!L.unopened) {
-    vaneKeys[0].reserve(L.leftKeys);
-    vaneKeys[1].reserve(nKeys - L.leftKeys);
-    for (size_t kk = 0; kk < nKeys; ++kk) {
-      const LocalKey& k = L.keys[kk];
-      vaneKeys[k.vane].push_back({k.rp, std::vector<glm::dvec3>(L.cvs.begin() + k.cvOff, L.cvs.begin() + k.cvOff + k.cvCount)});
-    }
+  // The packed key barbs are written to their slots in the flat output (layout: layoutKeys) and elevated
+  // there; an unopened feather keeps its input key barbs (no slots).
+  PackedKeyBarbs& K = out.keys;
+  const uint32_t k0 = K.keyOffset[i];
+  PTERYLA_CHECK((K.replaced[i] != 0) == !L.unopened && K.keyOffset[i + 1] - k0 == (L.unopened ? 0 : nKeys),
+                "packed key barb layout mismatch");
+  for (size_t kk = 0; kk < K.keyOffset[i + 1] - k0; ++kk) {
+    const LocalKey& k = L.keys[kk];
+    PTERYLA_CHECK(K.cvOffset[k0 + kk + 1] - K.cvOffset[k0 + kk] == k.cvCount, "packed key barb layout mismatch");
+    K.rp[k0 + kk] = k.rp;
+    std::copy(L.cvs.begin() + k.cvOff, L.cvs.begin() + k.cvOff + k.cvCount, K.cvs.begin() + K.cvOffset[k0 + kk]);
   }
   if (o.elevateBarbs && !L.unopened && nKeys > 0) {
     PlacedKey pk[256];
@@ -1207,13 +1209,15 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     for (size_t kk = 0; kk < nk; ++kk) {
       const LocalKey& k = L.keys[kk];
       if (k.sExt <= 0) continue;
-      std::vector<glm::dvec3>& cvs = vaneKeys[k.vane][k.vane == 0 ? kk : kk - L.leftKeys].cvs;
-      const BarbFit fit = fitBarb(cvs.data(), cvs.size(), k.len, k.sExt, &S.bh[kk * fb], fb, o, S);
+      glm::dvec3* const cvs = K.cvs.data() + K.cvOffset[k0 + kk];
+      const size_t cvn = K.cvOffset[k0 + kk + 1] - K.cvOffset[k0 + kk];
+      const BarbFit fit = fitBarb(cvs, cvn, k.len, k.sExt, &S.bh[kk * fb], fb, o, S);
       if (fit.mu > 0 || fit.alpha > 0) {
         ++st.barbsElevated;
         anyChanged = true;
         const double ca = std::cos(fit.alpha), sa = std::sin(fit.alpha);
-        for (auto& cv : cvs) {
+        for (size_t c = 0; c < cvn; ++c) {
+          glm::dvec3& cv = cvs[c];
           const double z = cv.z + fit.mu * std::max(0.0, -cv.z);
           cv = {cv.x * ca - z * sa, cv.y, cv.x * sa + z * ca};
         }
@@ -1237,10 +1241,6 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
         S.fields.push_back(std::move(bf));
       }
     }
-  }
-  if (!L.unopened) {
-    P.left.keyBarbs = std::move(vaneKeys[0]);
-    P.right.keyBarbs = std::move(vaneKeys[1]);
   }
   out.barbsChanged[i] = anyChanged ? 1 : 0;
 
@@ -1292,10 +1292,8 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     const glm::dvec3* cv = &L.cvs[k.cvOff];
     size_t cn = k.cvCount;
     if (kk < nKeys && !L.unopened) {
-      const std::vector<feather::KeyBarb>& vk = k.vane == 0 ? P.left.keyBarbs : P.right.keyBarbs;
-      const std::vector<glm::dvec3>& c = vk[k.vane == 0 ? kk : kk - L.leftKeys].cvs;
-      cv = c.data();
-      cn = c.size();
+      cv = K.cvs.data() + K.cvOffset[k0 + kk];
+      cn = K.cvOffset[k0 + kk + 1] - K.cvOffset[k0 + kk];
     }
     for (int s = 1; s <= bs; s += 2) {
       glm::dvec3 c[2];
@@ -1659,11 +1657,66 @@ uint32_t appendGroups(const LocalFeather& L, int barbSamples, uint32_t p, std::v
   return p;
 }
 
+// Sizes the flat packed key barbs: feather i gets `count(i)` = {keys, left keys, replaced} and its key k's
+// control vertex count from cvCount(i, k). rp and cvs are left uninitialised: every slot is written once
+// (packFeather, or a copy from an earlier result).
+template <class Count, class CvCount>
+void layoutKeys(size_t n, PackedKeyBarbs& K, Count&& count, CvCount&& cvCount) {
+  K.keyOffset.assign(n + 1, 0);
+  K.leftKeys.assign(n, 0);
+  K.replaced.assign(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const std::array<uint32_t, 3> c = count(i);
+    K.keyOffset[i + 1] = K.keyOffset[i] + c[0];
+    K.leftKeys[i] = c[1];
+    K.replaced[i] = static_cast<uint8_t>(c[2]);
+  }
+  K.cvOffset.assign(K.keyOffset[n] + 1, 0);
+  for (size_t i = 0; i < n; ++i)
+    for (uint32_t k = K.keyOffset[i]; k < K.keyOffset[i + 1]; ++k)
+      K.cvOffset[k + 1] = K.cvOffset[k] + cvCount(i, k - K.keyOffset[i]);
+  K.rp.clear();
+  K.rp.resize(K.keyOffset[n]);
+  K.cvs.clear();
+  reserveHuge(K.cvs, K.cvOffset.back());
+  K.cvs.resize(K.cvOffset.back());
+}
+
+// The key barb layout of a feather packed from its local data: the main (packed) key barbs of an opened
+// feather, left vane first.
+std::array<uint32_t, 3> localKeyCount(const LocalFeather& L) {
+  if (!L.packable || L.unopened) return {0, 0, 0};
+  for (uint32_t k = 0; k < L.mainKeys; ++k)
+    PTERYLA_CHECK((L.keys[k].vane == 0) == (k < L.leftKeys), "local key barbs are not left vane first");
+  return {L.mainKeys, L.leftKeys, 1};
+}
+
+// Copies feather i's packed key barbs from `from` (the same layout for i).
+void copyKeys(const PackedKeyBarbs& from, PackedKeyBarbs& to, uint32_t i) {
+  const uint32_t a = from.keyOffset[i], b = from.keyOffset[i + 1], t = to.keyOffset[i];
+  PTERYLA_CHECK(b - a == to.keyOffset[i + 1] - t && from.cvOffset[b] - from.cvOffset[a] == to.cvOffset[t + b - a] - to.cvOffset[t],
+                "copied key barbs with a different layout");
+  std::copy(from.rp.begin() + a, from.rp.begin() + b, to.rp.begin() + t);
+  std::copy(from.cvs.begin() + from.cvOffset[a], from.cvs.begin() + from.cvOffset[b], to.cvs.begin() + to.cvOffset[t]);
+}
+
+// Whether feather i has the same key barb layout in two results.
+bool sameKeyLayout(const PackedKeyBarbs& a, const PackedKeyBarbs& b, uint32_t i) {
+  const uint32_t n = a.keyOffset[i + 1] - a.keyOffset[i];
+  if (n != b.keyOffset[i + 1] - b.keyOffset[i] || a.replaced[i] != b.replaced[i] || a.leftKeys[i] != b.leftKeys[i]) return false;
+  for (uint32_t k = 0; k < n; ++k)
+    if (a.cvOffset[a.keyOffset[i] + k + 1] - a.cvOffset[a.keyOffset[i] + k] !=
+        b.cvOffset[b.keyOffset[i] + k + 1] - b.cvOffset[b.keyOffset[i] + k])
+      return false;
+  return true;
+}
+
 void initResult(const Context& ctx, PackResult& res) {
   const size_t n = ctx.coat.size();
   res.order = ctx.order;
   res.elevation.assign(n, 0.0);
-  res.packedParams.resize(n);
+  layoutKeys(n, res.packedKeys, [&](size_t i) { return localKeyCount(ctx.local[i]); },
+             [&](size_t i, uint32_t k) -> uint32_t { return ctx.local[i].keys[k].cvCount; });
   res.barbsChanged.assign(n, 0);
   res.recomputed.assign(n, 0);
   res.pointOffset = pointOffsets(ctx);
@@ -1720,9 +1773,6 @@ void finish(const Context& ctx, tbb::enumerable_thread_specific<Scratch>& scratc
   st.packed = ctx.order.size();
   st.dependencies = ctx.deps.size();
   st.skinSamples = ctx.skinData ? ctx.skinData->pts.size() : 0;
-  // Feathers that are not packed keep their input parameters.
-  for (size_t i = 0; i < ctx.coat.size(); ++i)
-    if (!ctx.local[i].packable) res.packedParams[i] = ctx.coat.params[i];
   res.clearance = ctx.clearance;
   res.skinClearance = ctx.skinClearance;
   res.medianReach = ctx.medianReach;
@@ -1742,7 +1792,7 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
     tbb::enumerable_thread_specific<Scratch> scratch;
     const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
     std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
-    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
+    Output out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
     schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) {
       packFeather(ctx, i, scratch.local(), out);
       res.recomputed[i] = 1;
@@ -1765,7 +1815,8 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
   order.erase(std::remove_if(order.begin(), order.end(), [&](uint32_t i) { return !coat.present.empty() && coat.present[i] == 0; }),
               order.end());
   // The previous result must describe the same feathers in the same order.
-  if (prev.elevation.size() != n || prev.pointOffset.size() != n + 1 || prev.order != order || changed.size() * 2 > n)
+  if (prev.elevation.size() != n || prev.pointOffset.size() != n + 1 || prev.packedKeys.keyOffset.size() != n + 1 ||
+      prev.order != order || changed.size() * 2 > n)
     return pack(skin, coat, options);
   std::vector<uint8_t> isChanged(n, 0);
   for (uint32_t c : changed) {
@@ -1798,15 +1849,15 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
     tbb::enumerable_thread_specific<Scratch> scratch;
     const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
     std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
-    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
+    Output out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
     schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) {
       bool dirty = isChanged[i] || touched[i];
       for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !dirty; ++k) dirty = outChanged[ctx.deps[k]] != 0;
       const uint32_t cnt = res.pointOffset[i + 1] - res.pointOffset[i];
-      const bool sameShape = prev.pointOffset[i + 1] - prev.pointOffset[i] == cnt;
+      const bool sameShape = prev.pointOffset[i + 1] - prev.pointOffset[i] == cnt && sameKeyLayout(prev.packedKeys, res.packedKeys, i);
       if (!dirty && sameShape) {
         res.elevation[i] = prev.elevation[i];
-        res.packedParams[i] = prev.packedParams[i];
+        copyKeys(prev.packedKeys, res.packedKeys, i);
         res.barbsChanged[i] = prev.barbsChanged[i];
         std::copy(prev.points.begin() + prev.pointOffset[i], prev.points.begin() + prev.pointOffset[i + 1],
                   res.points.begin() + res.pointOffset[i]);
@@ -1840,7 +1891,7 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
   const size_t n = coat.size();
   auto present = [&](uint32_t i) { return coat.present.empty() || coat.present[i] != 0; };
   if (base.elevation.size() != n || base.pointOffset.size() != n + 1 || base.groupOffset.size() != n + 1 ||
-      base.packedParams.size() != n || base.bounds.size() != n)
+      base.packedKeys.keyOffset.size() != n + 1 || base.bounds.size() != n)
     throw Error("packOver: the base pack is for " + std::to_string(base.elevation.size()) + " feathers, the coat has " +
                     std::to_string(n),
                 {}, "base");
@@ -1908,7 +1959,19 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
     // Result layout: kept feathers take base's point groups, packed ones their own, absent ones none.
     res.order = order;
     res.elevation.assign(n, 0.0);
-    res.packedParams.resize(n);
+    // Packed feathers' key barbs laid out from their local data, kept ones' from base.
+    const PackedKeyBarbs& BK = base.packedKeys;
+    layoutKeys(
+        n, res.packedKeys,
+        [&](size_t i) -> std::array<uint32_t, 3> {
+          if (ctx.pos[i] == UINT32_MAX) return {0, 0, 0};
+          if (isChanged[i]) return localKeyCount(ctx.local[i]);
+          return {BK.keyOffset[i + 1] - BK.keyOffset[i], BK.leftKeys[i], BK.replaced[i]};
+        },
+        [&](size_t i, uint32_t k) -> uint32_t {
+          if (isChanged[i]) return ctx.local[i].keys[k].cvCount;
+          return BK.cvOffset[BK.keyOffset[i] + k + 1] - BK.cvOffset[BK.keyOffset[i] + k];
+        });
     res.barbsChanged.assign(n, 0);
     res.recomputed.assign(n, 0);
     res.bounds.assign(n, glm::dvec4(0));
@@ -1941,17 +2004,13 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
     res.stats = {};
     const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
     std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
-    Output out{res.elevation, res.packedParams, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
+    Output out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
     // Kept feathers: base's results as they are.
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, static_cast<uint32_t>(n), 32), [&](const tbb::blocked_range<uint32_t>& r) {
       for (uint32_t i = r.begin(); i < r.end(); ++i) {
-        if (ctx.pos[i] == UINT32_MAX) {
-          res.packedParams[i] = coat.params[i];
-          continue;
-        }
-        if (isChanged[i]) continue;
+        if (ctx.pos[i] == UINT32_MAX || isChanged[i]) continue;
         res.elevation[i] = base.elevation[i];
-        res.packedParams[i] = base.packedParams[i];
+        copyKeys(base.packedKeys, res.packedKeys, i);
         res.barbsChanged[i] = base.barbsChanged[i];
         res.bounds[i] = base.bounds[i];
         std::copy(base.points.begin() + base.pointOffset[i], base.points.begin() + base.pointOffset[i + 1],
@@ -1998,9 +2057,57 @@ std::vector<uint32_t> changedFeathers(const CoatFeathers& a, const CoatFeathers&
   return out;
 }
 
+void packedParamsInto(const CoatFeathers& coat, const PackResult& result, uint32_t i, feather::FeatherParams& out) {
+  const PackedKeyBarbs& K = result.packedKeys;
+  PTERYLA_CHECK(i < coat.size() && K.replaced.size() == coat.size() && K.keyOffset.size() == coat.size() + 1,
+                "packedParams: the result is not a pack of this coat");
+  out = coat.params[i];
+  if (!K.replaced[i]) return;
+  const uint32_t a = K.keyOffset[i], m = a + K.leftKeys[i], b = K.keyOffset[i + 1];
+  for (int v = 0; v < 2; ++v) {
+    std::vector<feather::KeyBarb>& kb = out.vane(v).keyBarbs;
+    const uint32_t k0 = v == 0 ? a : m, k1 = v == 0 ? m : b;
+    kb.resize(k1 - k0);
+    for (uint32_t k = k0; k < k1; ++k) {
+      kb[k - k0].rp = K.rp[k];
+      kb[k - k0].cvs.assign(K.cvs.begin() + K.cvOffset[k], K.cvs.begin() + K.cvOffset[k + 1]);
+    }
+  }
+}
+
+feather::FeatherParams packedParams(const CoatFeathers& coat, const PackResult& result, uint32_t i) {
+  feather::FeatherParams p;
+  packedParamsInto(coat, result, i, p);
+  return p;
+}
+
+bool packedParamsEqual(const feather::FeatherParams& p, const CoatFeathers& coat, const PackResult& result, uint32_t i) {
+  const PackedKeyBarbs& K = result.packedKeys;
+  PTERYLA_CHECK(i < coat.size() && K.replaced.size() == coat.size() && K.keyOffset.size() == coat.size() + 1,
+                "packedParams: the result is not a pack of this coat");
+  if (!K.replaced[i]) return p == coat.params[i];
+  const uint32_t a = K.keyOffset[i], m = a + K.leftKeys[i], b = K.keyOffset[i + 1];
+  for (int v = 0; v < 2; ++v) {
+    const std::vector<feather::KeyBarb>& kb = p.vane(v).keyBarbs;
+    const uint32_t k0 = v == 0 ? a : m, k1 = v == 0 ? m : b;
+    if (kb.size() != k1 - k0) return false;
+    for (uint32_t k = k0; k < k1; ++k)
+      if (!(kb[k - k0].rp == K.rp[k]) || !std::equal(kb[k - k0].cvs.begin(), kb[k - k0].cvs.end(), K.cvs.begin() + K.cvOffset[k],
+                                                      K.cvs.begin() + K.cvOffset[k + 1]))
+        return false;
+  }
+  return p.equalExceptKeyBarbs(coat.params[i]);
+}
+
+std::vector<feather::FeatherParams> allPackedParams(const CoatFeathers& coat, const PackResult& result) {
+  std::vector<feather::FeatherParams> out(coat.size());
+  for (uint32_t i = 0; i < coat.size(); ++i) packedParamsInto(coat, result, i, out[i]);
+  return out;
+}
+
 std::vector<PlacedKeyBarb> placedKeyBarbs(const CoatFeathers& coat, const PackResult& result, uint32_t i) {
-  PTERYLA_CHECK(i < coat.size() && i < result.packedParams.size(), "feather index out of range");
-  const feather::FeatherParams& p = result.packedParams[i];
+  PTERYLA_CHECK(i < coat.size() && i < result.elevation.size(), "feather index out of range");
+  const feather::FeatherParams p = packedParams(coat, result, i);
   const FeatherFrame& F = coat.frames[i];
   const double e = result.elevation[i];
   std::vector<PlacedKeyBarb> out;

@@ -34,7 +34,7 @@ double FeatherParams::barbLengthAt(int v, double rp) const {
   return prof.empty() ? barbLength : prof.at(rp);
 }
 
-bool FeatherParams::operator==(const FeatherParams& o) const {
+bool FeatherParams::equalExceptKeyBarbs(const FeatherParams& o) const {
   const bool afterEq = (!afterfeather && !o.afterfeather) ||
                        (afterfeather && o.afterfeather && *afterfeather == *o.afterfeather);
   return afterEq && name == o.name && generator == o.generator && generatorParams == o.generatorParams &&
@@ -42,8 +42,13 @@ bool FeatherParams::operator==(const FeatherParams& o) const {
          rachisLength == o.rachisLength && rachisWidth == o.rachisWidth &&
          rachisLateralCurvature == o.rachisLateralCurvature &&
          rachisVentralDorsalCurvature == o.rachisVentralDorsalCurvature && barbLength == o.barbLength &&
-         silhouette == o.silhouette && left == o.left && right == o.right && spacingBase == o.spacingBase &&
+         silhouette == o.silhouette && left.baseAngle == o.left.baseAngle && left.tipAngle == o.left.tipAngle &&
+         right.baseAngle == o.right.baseAngle && right.tipAngle == o.right.tipAngle && spacingBase == o.spacingBase &&
          spacingTip == o.spacingTip && splits == o.splits && seed == o.seed && material == o.material;
+}
+
+bool FeatherParams::operator==(const FeatherParams& o) const {
+  return left.keyBarbs == o.left.keyBarbs && right.keyBarbs == o.right.keyBarbs && equalExceptKeyBarbs(o);
 }
 
 void fillPlumulaceousBarb(uint64_t seed, glm::dvec3* cvs) {

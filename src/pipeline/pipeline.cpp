@@ -112,6 +112,7 @@ struct Pipeline::Impl {
   TimeState timeState;
   std::vector<double> fixedElevation;
   const coat::PackResult* packed = nullptr;  // timeState.frame.result once packed
+  const coat::CoatFeathers* packedCoat = nullptr;  // the coat `packed` was packed from (coatNow or packCoat)
   CoatMesh mesh;
   // Rest-state generation: bumped whenever the directions stage (downstream of every rest stage) runs,
   // so caches of time-stage results know when the rest state they were made from is gone.
@@ -484,9 +485,11 @@ void Pipeline::Impl::computePack() {
     // growing feathers are packed over it (docs/moult.md). With "moult_pack": "full" the frame is
     // repacked like any other (below).
     packed = &packMoultFrame(scene, posed, matureCoat(coatNow, timeState), *packInput, o, timeState, packGrownAge);
+    packedCoat = packInput;
   } else {
     // Repacks incrementally from the last frame's pack or this frame's natural pack when it can.
     packed = &packFrame(scene, posed, *packInput, o, timeState, packGrownAge);
+    packedCoat = packInput;
   }
   report(progress, "pack", 1);
 }
@@ -717,11 +720,17 @@ void Pipeline::Impl::computeMesh() {
       // A feather packed as grown (computePack) is meshed from its packed parameters as they are; the
       // mature feather (unpacked) gives its texture coordinates and LOD order. Any other growing feather
       // was packed mature and grows from its packed parameters.
-      const bool asGrown = growing && !packed->packedParams.empty() && packedAsGrown(age, schedule);
-      const feather::FeatherParams& packedP = packed->packedParams.empty() ? coatNow.params[i] : packed->packedParams[i];
-      const feather::FeatherParams& p = asGrown ? coatNow.params[i] : packedP;
-      if (!matureValid[i] || !(meshParams[i] == p)) {
-        meshParams[i] = p;
+      // The packed parameters are rebuilt from the pack's flat key barbs only when they differ from the
+      // cached ones (coat::packedParamsEqual compares without building them).
+      const bool havePacked = !packed->packedKeys.keyOffset.empty();
+      const bool asGrown = growing && havePacked && packedAsGrown(age, schedule);
+      const bool meshUnpacked = asGrown || !havePacked;  // mesh params = coatNow.params[i], else the packed ones
+      const bool same = matureValid[i] && (meshUnpacked ? meshParams[i] == coatNow.params[i]
+                                                        : coat::packedParamsEqual(meshParams[i], *packedCoat, *packed, i));
+      if (!same) {
+        if (meshUnpacked) meshParams[i] = coatNow.params[i];
+        else coat::packedParamsInto(*packedCoat, *packed, i, meshParams[i]);
+        const feather::FeatherParams& p = meshParams[i];
         feather::generateBarbs(p, matureCurves[i]);
         feather::computeLodOrder(matureCurves[i], lodOrders[i]);
         matureValid[i] = 1;
@@ -731,9 +740,10 @@ void Pipeline::Impl::computeMesh() {
       if (growing) {
         const feather::GrowthState st = feather::growthStateAt(age, schedule);
         // Whether a feather is packed as grown depends on its age only, so equal ages mean the same path.
-        if (std::memcmp(&grownAge[i], &age, sizeof(double)) != 0 || (asGrown && !(grownParams[i] == packedP))) {
-          if (asGrown) grownParams[i] = packedP;
-          feather::generateBarbs(asGrown ? packedP : feather::featherAtState(p, st, schedule), grownCurves[i]);
+        if (std::memcmp(&grownAge[i], &age, sizeof(double)) != 0 ||
+            (asGrown && !coat::packedParamsEqual(grownParams[i], *packedCoat, *packed, i))) {
+          if (asGrown) coat::packedParamsInto(*packedCoat, *packed, i, grownParams[i]);
+          feather::generateBarbs(asGrown ? grownParams[i] : feather::featherAtState(meshParams[i], st, schedule), grownCurves[i]);
           // Same barbs as the mature feather (the usual case): its LOD order (as buildFeatherMesh does).
           if (grownCurves[i].barbs.size() != matureCurves[i].barbs.size())
             feather::computeLodOrder(grownCurves[i], grownOrders[i]);
@@ -934,7 +944,8 @@ QualityMetrics Pipeline::check() {
   }
   const std::vector<double> flat(impl_->coatNow.size(), median);
   const TriMesh unpacked = coat::proxyCoatMesh(impl_->coatNow, flat, impl_->coatNow.params);
-  const TriMesh packedProxy = coat::proxyCoatMesh(impl_->coatNow, impl_->packed->elevation, impl_->packed->packedParams);
+  const TriMesh packedProxy = coat::proxyCoatMesh(impl_->coatNow, impl_->packed->elevation,
+                                                  coat::allPackedParams(*impl_->packedCoat, *impl_->packed));
   m.intersectingPairsUnpacked = coat::countIntersectingPairs(unpacked);
   m.intersectingPairsProxy = coat::countIntersectingPairs(packedProxy);
   report(impl_->progress, "check", 1);

@@ -41,8 +41,17 @@ void expectIdentical(const PackResult& a, const PackResult& b) {
   ASSERT_EQ(a.elevation.size(), b.elevation.size());
   for (size_t i = 0; i < a.elevation.size(); ++i) {
     ASSERT_TRUE(sameBits(a.elevation[i], b.elevation[i])) << "feather " << i << ": " << a.elevation[i] << " vs " << b.elevation[i];
-    ASSERT_TRUE(a.packedParams[i] == b.packedParams[i]) << "feather " << i;
   }
+  // The packed key barbs, bit for bit.
+  const PackedKeyBarbs &ka = a.packedKeys, &kb = b.packedKeys;
+  ASSERT_EQ(ka.keyOffset, kb.keyOffset);
+  ASSERT_EQ(ka.leftKeys, kb.leftKeys);
+  ASSERT_EQ(ka.replaced, kb.replaced);
+  ASSERT_EQ(ka.cvOffset, kb.cvOffset);
+  ASSERT_EQ(ka.rp.size(), kb.rp.size());
+  ASSERT_EQ(ka.cvs.size(), kb.cvs.size());
+  EXPECT_EQ(0, std::memcmp(ka.rp.data(), kb.rp.data(), ka.rp.size() * sizeof(double)));
+  EXPECT_EQ(0, std::memcmp(ka.cvs.data(), kb.cvs.data(), ka.cvs.size() * sizeof(glm::dvec3)));
   ASSERT_EQ(a.pointOffset, b.pointOffset);
   ASSERT_EQ(a.points.size(), b.points.size());
   EXPECT_EQ(0, std::memcmp(a.points.data(), b.points.data(), a.points.size() * sizeof(glm::vec4)));
@@ -165,7 +174,7 @@ TEST(Pack, NoShaftBelowTheSkinOnASphere) {
   const PackResult r = pack(s.skin, s.coat, o);
   size_t tested = 0;
   for (uint32_t i = 0; i < s.coat.size(); ++i) {
-    const feather::FeatherParams& p = r.packedParams[i];
+    const feather::FeatherParams p = packedParams(s.coat, r, i);
     for (int k = 0; k <= 32; ++k) {
       const feather::RachisFrame f = feather::rachisFrame(p, k / 32.0);
       const dvec3 w = placePoint(s.coat.frames[i], r.elevation[i], f.point);
@@ -187,7 +196,7 @@ TEST(Pack, ReducesIntersectingPairsAndSkinPenetrations) {
   const PackResult r = pack(s.skin, s.coat, o);
   ProxyMeshOptions mo;
   mo.barbStride = 2;
-  const TriMesh packed = proxyCoatMesh(s.coat, r.elevation, r.packedParams, mo);
+  const TriMesh packed = proxyCoatMesh(s.coat, r.elevation, allPackedParams(s.coat, r), mo);
   const TriMesh unpacked = proxyCoatMesh(s.coat, std::vector<double>(s.coat.size(), 0.0), s.coat.params, mo);
   CheckOptions co;
   setFeatherBases(co, s.coat, o.baseAllowance);
@@ -320,7 +329,7 @@ TEST(Pack, PackOverPacksOnlyTheChangedFeathers) {
     // Everything else keeps its pose from the base pack exactly.
     EXPECT_EQ(over.recomputed[i], 0);
     ASSERT_TRUE(sameBits(over.elevation[i], base.elevation[i])) << i;
-    ASSERT_TRUE(over.packedParams[i] == base.packedParams[i]) << i;
+    ASSERT_TRUE(packedParams(moulted, over, i) == packedParams(s.coat, base, i)) << i;
     ASSERT_EQ(cnt, base.pointOffset[i + 1] - base.pointOffset[i]);
     EXPECT_EQ(0, std::memcmp(over.points.data() + over.pointOffset[i], base.points.data() + base.pointOffset[i],
                              cnt * sizeof(glm::vec4)));
@@ -375,7 +384,8 @@ TEST(Pack, UnopenedFeathersPackAsStraightShafts) {
   for (size_t i = 0; i < s.coat.size(); ++i) {
     if (s.coat.age[i] >= o.openingAge) continue;
     ++unopened;
-    EXPECT_TRUE(r.packedParams[i] == s.coat.params[i]);
+    EXPECT_EQ(r.packedKeys.replaced[i], 0);
+    EXPECT_TRUE(packedParams(s.coat, r, i) == s.coat.params[i]);
     EXPECT_EQ(r.barbsChanged[i], 0);
     EXPECT_EQ(r.pointOffset[i + 1] - r.pointOffset[i], static_cast<uint32_t>(o.shaftSamples + 1));
     // Straight: all shaft points on one line through the follicle.
@@ -564,7 +574,10 @@ TEST(PackGeometry, PlacedKeyBarbsMatchTheBarbGenerator) {
   c.follicle = {0};
   PackResult r;
   r.elevation = {0.4};
-  r.packedParams = {p};
+  r.packedKeys.keyOffset = {0, 0};  // the feather keeps its input key barbs
+  r.packedKeys.leftKeys = {0};
+  r.packedKeys.replaced = {0};
+  r.packedKeys.cvOffset = {0};
   const feather::FeatherCurves curves = feather::generateBarbs(p);
   size_t matched = 0;
   for (const PlacedKeyBarb& kb : placedKeyBarbs(c, r, 0)) {

@@ -133,8 +133,8 @@ TEST(FlowOrder, TwoTractBorderPacksWithFewerIntersectionsThanTractOrder) {
   };
   const std::vector<double> flat(s.coat.size(), median(r.elevation));
   const TriMesh unpacked = proxyCoatMesh(s.coat, flat, s.coat.params);
-  const TriMesh packed = proxyCoatMesh(s.coat, r.elevation, r.packedParams);
-  const TriMesh packedByTract = proxyCoatMesh(byTract, rt.elevation, rt.packedParams);
+  const TriMesh packed = proxyCoatMesh(s.coat, r.elevation, allPackedParams(s.coat, r));
+  const TriMesh packedByTract = proxyCoatMesh(byTract, rt.elevation, allPackedParams(byTract, rt));
   CheckOptions co;
   co.coverage = false;
   setFeatherBases(co, s.coat, PackOptions{}.baseAllowance);
@@ -286,7 +286,7 @@ TEST(PackSkin, NoVertexBelowACurvedSkinAtAnySampleSpacing) {
     PackOptions o;
     o.skinSampleSpacing = spacing;
     const PackResult res = pack(skin, coat, o);
-    const TriMesh packed = proxyCoatMesh(coat, res.elevation, res.packedParams);
+    const TriMesh packed = proxyCoatMesh(coat, res.elevation, allPackedParams(coat, res));
     const CheckResult c = check(skin, {}, packed, co);
     EXPECT_EQ(c.skinPenetrations, 0u) << "skin sample spacing " << spacing;
     EXPECT_GT(c.samplePoints, 10000u);

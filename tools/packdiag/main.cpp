@@ -207,7 +207,7 @@ int main(int argc, char** argv) {
       p.setLod(lod);
       packedMesh = p.coatMesh().mesh;
     } else {
-      packedMesh = coat::proxyCoatMesh(coat, pr.elevation, pr.packedParams);
+      packedMesh = coat::proxyCoatMesh(coat, pr.elevation, coat::allPackedParams(coat, pr));
     }
     const coat::CheckResult cr = coat::check(skin, allFaces, packedMesh, co);
     std::printf("%s check %.1f s: %zu triangles, intersecting_pairs %zu, skin_penetrations %zu, coverage %.4f\n",
@@ -231,7 +231,7 @@ int main(int argc, char** argv) {
     const auto up = coat::intersectingFeatherPairs(unpacked);
     size_t upTotal = 0;
     for (const auto& q : up) upTotal += q.pairs;
-    const TriMesh packedProxy = coat::proxyCoatMesh(coat, pr.elevation, pr.packedParams);
+    const TriMesh packedProxy = coat::proxyCoatMesh(coat, pr.elevation, coat::allPackedParams(coat, pr));
     const auto pp = coat::intersectingFeatherPairs(packedProxy);
     size_t ppTotal = 0;
     for (const auto& q : pp) ppTotal += q.pairs;

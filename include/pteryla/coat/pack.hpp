@@ -137,11 +137,28 @@ struct UninitializedAllocator : std::allocator<T> {
 };
 using PackedPoints = std::vector<glm::vec4, UninitializedAllocator<glm::vec4>>;
 
+// Every feather's packed key barbs in a few flat arrays (the bird's 110k key barbs used to be as many
+// small vectors in per-feather FeatherParams copies: ~23 MB of fresh memory in 4 KB pages, faulted in one
+// by one in every first pack). Feather i's key barbs are k = keyOffset[i] .. keyOffset[i+1]: the left
+// vane's first (leftKeys[i] of them), each vane by ascending rp, the afterfeather's not included; key k
+// lies at rp[k] with control vertices cvs[cvOffset[k] .. cvOffset[k+1]) (barb-local unit frame, as
+// feather::KeyBarb::cvs). replaced[i] = 0 for feathers that keep their input key barbs (not packed:
+// absent, or unopened and packed as a straight shaft); they have no keys here. packedParams() below
+// rebuilds a feather's parameters from these and the coat that was packed.
+struct PackedKeyBarbs {
+  std::vector<uint32_t> keyOffset;  // feathers + 1
+  std::vector<uint32_t> leftKeys;   // per feather
+  std::vector<uint8_t> replaced;    // per feather
+  std::vector<double, UninitializedAllocator<double>> rp;  // per key barb
+  std::vector<uint32_t> cvOffset;   // key barbs + 1
+  std::vector<glm::dvec3, UninitializedAllocator<glm::dvec3>> cvs;
+};
+
 struct PackResult {
   std::vector<uint32_t> order;                   // layer order used (copy of CoatFeathers::layerOrder)
   std::vector<double> elevation;                 // radians per feather (0 for feathers not packed)
-  std::vector<feather::FeatherParams> packedParams;  // per feather: params with elevated key barbs
-  std::vector<uint8_t> barbsChanged;             // 1 when packedParams[i] differs from the input params
+  PackedKeyBarbs packedKeys;                     // per feather: the elevated key barbs (packedParams())
+  std::vector<uint8_t> barbsChanged;             // 1 when fitting raised any of feather i's key barbs
   std::vector<uint8_t> recomputed;               // 1 when this call computed feather i (else reused)
   // Packed geometry handed to later feathers, world coordinates: xyz and a thickness radius (shaft
   // points carry the shaft radius, barb points 0). Points of feather i: points[pointOffset[i] .. [i+1]).
@@ -198,8 +215,16 @@ glm::dvec3 placePoint(const FeatherFrame& f, double elevation, const glm::dvec3&
 // World direction of feather-local direction d.
 glm::dvec3 placeDirection(const FeatherFrame& f, double elevation, const glm::dvec3& d);
 
+// Feather i's parameters as packed: coat.params[i] with its vanes' key barbs replaced by the packed ones
+// (coat must be the coat `result` was packed from, or one with the same parameters). `Into` reuses out's
+// storage; `Equal` compares without building them; `all` gives every feather's (e.g. for proxyCoatMesh).
+feather::FeatherParams packedParams(const CoatFeathers& coat, const PackResult& result, uint32_t feather);
+void packedParamsInto(const CoatFeathers& coat, const PackResult& result, uint32_t feather, feather::FeatherParams& out);
+bool packedParamsEqual(const feather::FeatherParams& p, const CoatFeathers& coat, const PackResult& result, uint32_t feather);
+std::vector<feather::FeatherParams> allPackedParams(const CoatFeathers& coat, const PackResult& result);
+
 // World-space control vertices of every key barb of feather i as packed (effective key barbs of
-// result.packedParams[i], placed with result.elevation[i]): one vector per key barb, left vane first.
+// packedParams(coat, result, i), placed with result.elevation[i]): one vector per key barb, left vane first.
 struct PlacedKeyBarb {
   uint8_t vane = 0;
   double rp = 0;

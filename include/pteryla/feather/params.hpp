@@ -123,6 +123,8 @@ struct FeatherParams {
   double totalLength() const { return calamusLength + rachisLength; }
 
   bool operator==(const FeatherParams& o) const;
+  // Everything but the vanes' key barbs (their angles included) is equal.
+  bool equalExceptKeyBarbs(const FeatherParams& o) const;
   bool operator!=(const FeatherParams& o) const { return !(*this == o); }
 };
 
