@@ -400,6 +400,47 @@ TEST(Pack, UnopenedFeathersPackAsStraightShafts) {
   EXPECT_GT(unopened, 10u);
 }
 
+TEST(Pack, PackedParamsComeFromTheFlatKeyBarbs) {
+  SphereScene s(120);
+  for (size_t i = 0; i < s.coat.size(); i += 5) s.coat.age[i] = 0.5;  // unopened: input key barbs kept
+  const PackResult r = pack(s.skin, s.coat, PackOptions{});
+  const PackedKeyBarbs& K = r.packedKeys;
+  size_t raised = 0;
+  feather::FeatherParams reused = packtest::contourFeather(2.0);  // storage of another feather, reused
+  for (uint32_t i = 0; i < s.coat.size(); ++i) {
+    const feather::FeatherParams p = packedParams(s.coat, r, i);
+    packedParamsInto(s.coat, r, i, reused);
+    ASSERT_TRUE(reused == p) << i;
+    ASSERT_TRUE(packedParamsEqual(p, s.coat, r, i)) << i;
+    EXPECT_TRUE(p.equalExceptKeyBarbs(s.coat.params[i])) << i;
+    if (!K.replaced[i]) {
+      EXPECT_TRUE(p == s.coat.params[i]) << i;
+      continue;
+    }
+    // The left vane's key barbs first, then the right's, each as stored.
+    ASSERT_EQ(p.left.keyBarbs.size(), K.leftKeys[i]);
+    ASSERT_EQ(p.left.keyBarbs.size() + p.right.keyBarbs.size(), K.keyOffset[i + 1] - K.keyOffset[i]);
+    const feather::KeyBarb& last = p.right.keyBarbs.back();
+    const uint32_t k = K.keyOffset[i + 1] - 1;
+    EXPECT_EQ(last.rp, K.rp[k]);
+    ASSERT_EQ(last.cvs.size(), K.cvOffset[k + 1] - K.cvOffset[k]);
+    EXPECT_TRUE(last.cvs.back() == K.cvs[K.cvOffset[k + 1] - 1]);
+    raised += r.barbsChanged[i];
+    // Any difference is seen: a control vertex, a key barb's position, another field.
+    feather::FeatherParams q = p;
+    q.left.keyBarbs.front().cvs.back().z += 1e-9;
+    EXPECT_FALSE(packedParamsEqual(q, s.coat, r, i));
+    q = p;
+    q.right.keyBarbs.back().rp -= 1e-9;
+    EXPECT_FALSE(packedParamsEqual(q, s.coat, r, i));
+    q = p;
+    q.right.tipAngle += 0.01;
+    EXPECT_FALSE(packedParamsEqual(q, s.coat, r, i));
+  }
+  EXPECT_GT(raised, 0u);  // some stored key barbs are elevated ones
+  EXPECT_EQ(allPackedParams(s.coat, r).size(), s.coat.size());
+}
+
 TEST(Pack, MissingFeathersAreSkippedAndBadInputThrows) {
   SphereScene s(120);
   s.coat.present[5] = 0;
