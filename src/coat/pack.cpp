@@ -32,6 +32,7 @@
 #endif
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_for_each.h>
 #include <tbb/task_arena.h>
 
@@ -67,8 +68,9 @@ namespace detail {
 // cone (a sine bound) of normal. Packing against the patches instead of the points keeps feathers off
 // the skin between the samples, at any sample spacing.
 struct PackSkinSamples {
-  std::vector<glm::dvec3> pts, normal;
-  std::vector<float> rho, cone;
+  // Sized first and written once per sample, in parallel over the faces (not zero-filled serially).
+  std::vector<glm::dvec3, UninitializedAllocator<glm::dvec3>> pts, normal;
+  std::vector<float, UninitializedAllocator<float>> rho, cone;
   PointGrid grid;
   double maxRho = 0;                      // largest patch radius
   std::vector<glm::dvec3> skinPositions;  // the skin they were sampled from (packOver checks it)
@@ -776,6 +778,9 @@ double lineMax(const dvec3& q, const dvec3& g, const dvec3& w, double wl, double
 }
 
 
+// Written once per chunk by closeChunks (packed or kept feather), so not zero-filled first.
+using ChunkBounds = std::vector<glm::dvec4, UninitializedAllocator<glm::dvec4>>;
+
 struct Output {
   std::vector<double>& elevation;
   PackedKeyBarbs& keys;
@@ -785,11 +790,11 @@ struct Output {
   std::vector<glm::dvec4>& bounds;
   const std::vector<uint32_t>& groupOffset;
   const std::vector<uint32_t>& groupPoint;
-  std::vector<glm::vec4>& groupBounds;
+  PackedGroupBounds& groupBounds;
   // Internal culling level above the groups: chunk c of feather i (chunkOffset[i] <= c < [i+1]) holds
   // groups groupOffset[i] + kChunk (c - chunkOffset[i]) .. + kChunk, with a sphere around their spheres.
   const std::vector<uint32_t>& chunkOffset;
-  std::vector<glm::dvec4>& chunkBounds;
+  ChunkBounds& chunkBounds;
 };
 
 constexpr uint32_t kChunk = 4;
@@ -1470,8 +1475,8 @@ void setup(Context& ctx) {
     auto segs = [&](double len) { return std::clamp(static_cast<int>(std::ceil(len / h)), 1, 32); };
     std::vector<uint8_t> used(sk.positions.size(), 0);
     for (const auto& t : sk.faces) used[t[0]] = used[t[1]] = used[t[2]] = 1;
-    for (size_t v = 0; v < sk.positions.size(); ++v)
-      if (used[v]) sd.pts.push_back(sk.positions[v]);
+    size_t base = 0;
+    for (size_t v = 0; v < sk.positions.size(); ++v) base += used[v];
     std::vector<uint32_t> faceOff(nf + 1, 0);
     std::vector<int> faceN(nf);
     for (size_t f = 0; f < nf; ++f) {
@@ -1489,8 +1494,12 @@ void setup(Context& ctx) {
       cnt += static_cast<uint32_t>(m >= 3 ? (m - 1) * (m - 2) / 2 : 0);
       faceOff[f + 1] = faceOff[f] + cnt;
     }
-    const size_t base = sd.pts.size();
     sd.pts.resize(base + faceOff.back());
+    {
+      size_t q = 0;
+      for (size_t v = 0; v < sk.positions.size(); ++v)
+        if (used[v]) sd.pts[q++] = sk.positions[v];
+    }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nf, 64), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t f = r.begin(); f < r.end(); ++f) {
         const auto& t = sk.faces[f];
@@ -1512,73 +1521,76 @@ void setup(Context& ctx) {
         PTERYLA_CHECK(q == base + faceOff[f + 1], "skin sample count mismatch");
       }
     });
-    // Patches. A point of face f lies in the sub-triangle of f's m-subdivision (longest edge le / m,
-    // covering radius <= le / (m sqrt 3)); a corner of that sub-triangle on an edge of f may be replaced by
-    // the nearest sample of that edge, at most half an edge step away.
-    std::vector<double> faceRho(nf);
-    for (size_t f = 0; f < nf; ++f) {
-      const auto& t = sk.faces[f];
-      double le = 0, edgeHalf = 0;
-      for (int c = 0; c < 3; ++c) {
-        const double l = glm::length(sk.positions[t[(c + 1) % 3]] - sk.positions[t[c]]);
-        le = std::max(le, l);
-        edgeHalf = std::max(edgeHalf, 0.5 * l / segs(l));
-      }
-      faceRho[f] = (le / faceN[f] / std::sqrt(3.0) + edgeHalf) * (1 + 1e-9);
-    }
-    sd.normal.assign(sd.pts.size(), dvec3(0));
-    sd.rho.assign(sd.pts.size(), 0.0f);
-    sd.cone.assign(sd.pts.size(), 0.0f);
-    auto setPatch = [&](size_t q, const uint32_t* faces, size_t count) {
-      dvec3 nsum(0);
-      double rho = 0;
-      for (size_t k = 0; k < count; ++k) {
-        nsum += sk.faceNormals[faces[k]];
-        rho = std::max(rho, faceRho[faces[k]]);
-      }
-      const double l = glm::length(nsum);
-      const dvec3 nrm = l > 1e-12 ? nsum / l : sk.faceNormals[faces[0]];
-      double cone = 0;
-      for (size_t k = 0; k < count; ++k) {
-        const dvec3 x = glm::cross(nrm, sk.faceNormals[faces[k]]);
-        // sine of the angle (or 1 past 90 degrees)
-        cone = std::max(cone, glm::dot(nrm, sk.faceNormals[faces[k]]) < 0 ? 1.0 : glm::length(x));
-      }
-      sd.normal[q] = nrm;
-      sd.rho[q] = static_cast<float>(rho * (1 + 1e-6));
-      sd.cone[q] = static_cast<float>(std::min(1.0, cone * (1 + 1e-6) + 1e-9));
-    };
-    {
-      size_t q = 0;
-      std::vector<uint32_t> inc;
-      for (size_t v = 0; v < sk.positions.size(); ++v) {
-        if (!used[v]) continue;
-        inc.clear();
-        if (!sk.vertexFaceOffsets.empty()) {
-          for (uint32_t k = sk.vertexFaceOffsets[v]; k < sk.vertexFaceOffsets[v + 1]; ++k) inc.push_back(sk.vertexFaces[k]);
-        } else {
-          for (uint32_t f = 0; f < nf; ++f)
-            if (sk.faces[f][0] == v || sk.faces[f][1] == v || sk.faces[f][2] == v) inc.push_back(f);
-        }
-        setPatch(q++, inc.data(), inc.size());
-      }
-    }
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, nf, 64), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t f = r.begin(); f < r.end(); ++f) {
-        size_t q = base + faceOff[f];
-        const uint32_t self = static_cast<uint32_t>(f);
+    // The sample grid (serial, ~2.5 MB of fresh memory on the bird) is built beside the patches.
+    auto patches = [&] {
+      // Patches. A point of face f lies in the sub-triangle of f's m-subdivision (longest edge le / m,
+      // covering radius <= le / (m sqrt 3)); a corner of that sub-triangle on an edge of f may be replaced by
+      // the nearest sample of that edge, at most half an edge step away.
+      std::vector<double> faceRho(nf);
+      for (size_t f = 0; f < nf; ++f) {
+        const auto& t = sk.faces[f];
+        double le = 0, edgeHalf = 0;
         for (int c = 0; c < 3; ++c) {
-          const int32_t nb = sk.faceNeighbors.empty() ? -1 : sk.faceNeighbors[f][c];
-          if (!(nb < 0 || static_cast<size_t>(nb) > f)) continue;
-          const int m = segs(glm::length(sk.positions[sk.faces[f][(c + 1) % 3]] - sk.positions[sk.faces[f][c]]));
-          const uint32_t two[2] = {self, static_cast<uint32_t>(nb < 0 ? self : static_cast<uint32_t>(nb))};
-          for (int k = 1; k < m; ++k) setPatch(q++, two, 2);
+          const double l = glm::length(sk.positions[t[(c + 1) % 3]] - sk.positions[t[c]]);
+          le = std::max(le, l);
+          edgeHalf = std::max(edgeHalf, 0.5 * l / segs(l));
         }
-        for (; q < base + faceOff[f + 1]; ++q) setPatch(q, &self, 1);
+        faceRho[f] = (le / faceN[f] / std::sqrt(3.0) + edgeHalf) * (1 + 1e-9);
       }
-    });
+      sd.normal.resize(sd.pts.size());
+      sd.rho.resize(sd.pts.size());
+      sd.cone.resize(sd.pts.size());
+      auto setPatch = [&](size_t q, const uint32_t* faces, size_t count) {
+        dvec3 nsum(0);
+        double rho = 0;
+        for (size_t k = 0; k < count; ++k) {
+          nsum += sk.faceNormals[faces[k]];
+          rho = std::max(rho, faceRho[faces[k]]);
+        }
+        const double l = glm::length(nsum);
+        const dvec3 nrm = l > 1e-12 ? nsum / l : sk.faceNormals[faces[0]];
+        double cone = 0;
+        for (size_t k = 0; k < count; ++k) {
+          const dvec3 x = glm::cross(nrm, sk.faceNormals[faces[k]]);
+          // sine of the angle (or 1 past 90 degrees)
+          cone = std::max(cone, glm::dot(nrm, sk.faceNormals[faces[k]]) < 0 ? 1.0 : glm::length(x));
+        }
+        sd.normal[q] = nrm;
+        sd.rho[q] = static_cast<float>(rho * (1 + 1e-6));
+        sd.cone[q] = static_cast<float>(std::min(1.0, cone * (1 + 1e-6) + 1e-9));
+      };
+      {
+        size_t q = 0;
+        std::vector<uint32_t> inc;
+        for (size_t v = 0; v < sk.positions.size(); ++v) {
+          if (!used[v]) continue;
+          inc.clear();
+          if (!sk.vertexFaceOffsets.empty()) {
+            for (uint32_t k = sk.vertexFaceOffsets[v]; k < sk.vertexFaceOffsets[v + 1]; ++k) inc.push_back(sk.vertexFaces[k]);
+          } else {
+            for (uint32_t f = 0; f < nf; ++f)
+              if (sk.faces[f][0] == v || sk.faces[f][1] == v || sk.faces[f][2] == v) inc.push_back(f);
+          }
+          setPatch(q++, inc.data(), inc.size());
+        }
+      }
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, nf, 64), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t f = r.begin(); f < r.end(); ++f) {
+          size_t q = base + faceOff[f];
+          const uint32_t self = static_cast<uint32_t>(f);
+          for (int c = 0; c < 3; ++c) {
+            const int32_t nb = sk.faceNeighbors.empty() ? -1 : sk.faceNeighbors[f][c];
+            if (!(nb < 0 || static_cast<size_t>(nb) > f)) continue;
+            const int m = segs(glm::length(sk.positions[sk.faces[f][(c + 1) % 3]] - sk.positions[sk.faces[f][c]]));
+            const uint32_t two[2] = {self, static_cast<uint32_t>(nb < 0 ? self : static_cast<uint32_t>(nb))};
+            for (int k = 1; k < m; ++k) setPatch(q++, two, 2);
+          }
+          for (; q < base + faceOff[f + 1]; ++q) setPatch(q, &self, 1);
+        }
+      });
+    };
+    tbb::parallel_invoke([&] { sd.grid.build(sd.pts.data(), sd.pts.size(), std::max(0.2 * medReach, 2 * h)); }, patches);
     for (float r : sd.rho) sd.maxRho = std::max(sd.maxRho, static_cast<double>(r));
-    sd.grid.build(sd.pts, std::max(0.2 * medReach, 2 * h));
     ctx.skinData = std::move(data);
   }
 }
@@ -1725,6 +1737,10 @@ void initResult(const Context& ctx, PackResult& res) {
   res.bounds.assign(n, glm::dvec4(0));
   res.groupOffset.assign(n + 1, 0);
   res.groupPoint.clear();
+  size_t groups = 1;
+  for (const LocalFeather& L : ctx.local)
+    if (L.packable) groups += 1 + (L.after.empty() ? 0 : 1) + L.keys.size();
+  res.groupPoint.reserve(groups);
   for (size_t i = 0; i < n; ++i) {
     const LocalFeather& L = ctx.local[i];
     uint32_t p = res.pointOffset[i];
@@ -1733,7 +1749,8 @@ void initResult(const Context& ctx, PackResult& res) {
     res.groupOffset[i + 1] = static_cast<uint32_t>(res.groupPoint.size());
   }
   res.groupPoint.push_back(res.pointOffset[n]);
-  res.groupBounds.assign(res.groupOffset[n], glm::vec4(0));
+  res.groupBounds.clear();
+  res.groupBounds.resize(res.groupOffset[n]);  // uninitialised: each group's sphere is written by its feather
   res.barbFields.clear();
   res.stats = {};
 }
@@ -1791,7 +1808,7 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
     initResult(ctx, res);
     tbb::enumerable_thread_specific<Scratch> scratch;
     const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
-    std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
+    ChunkBounds chunkBounds(chunkOffset.back());
     Output out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
     schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) {
       packFeather(ctx, i, scratch.local(), out);
@@ -1848,7 +1865,7 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
     std::vector<uint8_t> outChanged(n, 0);
     tbb::enumerable_thread_specific<Scratch> scratch;
     const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
-    std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
+    ChunkBounds chunkBounds(chunkOffset.back());
     Output out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
     schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) {
       bool dirty = isChanged[i] || touched[i];
@@ -1999,11 +2016,12 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
     res.groupPoint.push_back(res.pointOffset[n]);
     reserveHuge(res.points, res.pointOffset[n]);
     res.points.resize(res.pointOffset[n]);
-    res.groupBounds.assign(res.groupOffset[n], glm::vec4(0));
+    res.groupBounds.clear();
+    res.groupBounds.resize(res.groupOffset[n]);  // uninitialised: written by packed and kept feathers
     res.barbFields.clear();
     res.stats = {};
     const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
-    std::vector<glm::dvec4> chunkBounds(chunkOffset.back());
+    ChunkBounds chunkBounds(chunkOffset.back());
     Output out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
     // Kept feathers: base's results as they are.
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, static_cast<uint32_t>(n), 32), [&](const tbb::blocked_range<uint32_t>& r) {

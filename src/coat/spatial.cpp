@@ -16,20 +16,20 @@ namespace pteryla::coat::detail {
 
 // ---------------------------------------------------------------- PointGrid
 
-void PointGrid::build(const std::vector<glm::dvec3>& points, double cell) {
-  count_ = points.size();
+void PointGrid::build(const glm::dvec3* points, size_t count, double cell) {
+  count_ = count;
   offsets_.clear();
   items_.clear();
-  if (points.empty()) return;
+  if (count == 0) return;
   PTERYLA_CHECK(cell > 0 && std::isfinite(cell), "grid cell must be positive");
   Box b;
-  for (const auto& p : points) b.add(p);
+  for (size_t i = 0; i < count; ++i) b.add(points[i]);
   // Keep the cell count bounded (a few cells per point at most).
   const glm::dvec3 ext = b.hi - b.lo;
   double c = cell;
   for (;;) {
     const double n = std::floor(ext.x / c + 1) * std::floor(ext.y / c + 1) * std::floor(ext.z / c + 1);
-    if (n <= 4.0 * static_cast<double>(points.size()) + 64) break;
+    if (n <= 4.0 * static_cast<double>(count) + 64) break;
     c *= 1.5;
   }
   cell_ = c;
@@ -37,17 +37,17 @@ void PointGrid::build(const std::vector<glm::dvec3>& points, double cell) {
   for (int k = 0; k < 3; ++k) dims_[k] = static_cast<int>(std::floor(ext[k] / c)) + 1;
   const size_t cells = static_cast<size_t>(dims_.x) * dims_.y * dims_.z;
   offsets_.assign(cells + 1, 0);
-  std::vector<uint32_t> cellOfPoint(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
+  std::vector<uint32_t> cellOfPoint(count);
+  for (size_t i = 0; i < count; ++i) {
     const glm::ivec3 q = cellOf(points[i]);
     const size_t ci = (static_cast<size_t>(q.z) * dims_.y + q.y) * dims_.x + q.x;
     cellOfPoint[i] = static_cast<uint32_t>(ci);
     ++offsets_[ci + 1];
   }
   for (size_t i = 0; i < cells; ++i) offsets_[i + 1] += offsets_[i];
-  items_.resize(points.size());
+  items_.resize(count);
   std::vector<uint32_t> fill(offsets_.begin(), offsets_.end() - 1);
-  for (size_t i = 0; i < points.size(); ++i) items_[fill[cellOfPoint[i]]++] = static_cast<uint32_t>(i);
+  for (size_t i = 0; i < count; ++i) items_[fill[cellOfPoint[i]]++] = static_cast<uint32_t>(i);
 }
 
 // ---------------------------------------------------------------- TriangleBvh

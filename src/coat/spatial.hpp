@@ -40,7 +40,8 @@ struct Box {
 // deterministic order.
 class PointGrid {
  public:
-  void build(const std::vector<glm::dvec3>& points, double cell);
+  void build(const std::vector<glm::dvec3>& points, double cell) { build(points.data(), points.size(), cell); }
+  void build(const glm::dvec3* points, size_t count, double cell);
   // Calls f(index) for every point in a cell overlapping [lo, hi] (a superset of the points in the box).
   template <class F>
   void query(const glm::dvec3& lo, const glm::dvec3& hi, F&& f) const {

@@ -136,6 +136,7 @@ struct UninitializedAllocator : std::allocator<T> {
   }
 };
 using PackedPoints = std::vector<glm::vec4, UninitializedAllocator<glm::vec4>>;
+using PackedGroupBounds = std::vector<glm::vec4, UninitializedAllocator<glm::vec4>>;
 
 // Every feather's packed key barbs in a few flat arrays (the bird's 110k key barbs used to be as many
 // small vectors in per-feather FeatherParams copies: ~23 MB of fresh memory in 4 KB pages, faulted in one
@@ -168,7 +169,7 @@ struct PackResult {
   // Point groups (the shaft, then each key barb's samples) with bounding spheres, for culling: the groups
   // of feather i are groupOffset[i] .. [i+1]; group g holds points groupPoint[g] .. groupPoint[g+1].
   std::vector<uint32_t> groupOffset, groupPoint;
-  std::vector<glm::vec4> groupBounds;
+  PackedGroupBounds groupBounds;
   std::vector<BarbField> barbFields;             // captureFields only
   PackStats stats;
   // The automatic values this pack resolved (the options' own values when they were given): scene-unit
