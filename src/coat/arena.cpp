@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <mutex>
 #include <new>
+#include <unordered_map>
 
 #include <sys/mman.h>
 
@@ -65,7 +66,71 @@ void giveChunk(char* c, size_t size) {
   munmap(c, size);
 }
 
+// Large result buffers (allocateHugeBlock): freed blocks are kept for reuse up to kBlockPoolMax bytes, so
+// a repack of the same coat writes its points into memory that is already mapped.
+constexpr size_t kBlockPoolMax = size_t(128) << 20;
+
+struct BlockPool {
+  std::mutex m;
+  std::vector<std::pair<char*, size_t>> free;  // oldest first
+  size_t freeBytes = 0;
+  std::unordered_map<char*, size_t> live;      // block -> mapped size
+};
+
+BlockPool& blockPool() {
+  static BlockPool* p = new BlockPool;  // never destroyed, like pool()
+  return *p;
+}
+
 }  // namespace
+
+void* allocateHugeBlock(size_t bytes) {
+  const size_t size = (bytes + kHuge - 1) & ~(kHuge - 1);
+  BlockPool& p = blockPool();
+  std::lock_guard<std::mutex> lock(p.m);
+  // The smallest free block that holds it, within 8 MiB (larger ones stay for larger buffers); of equal
+  // ones the last freed.
+  size_t best = p.free.size();
+  for (size_t k = 0; k < p.free.size(); ++k)
+    if (p.free[k].second >= size && p.free[k].second <= size + (size_t(8) << 20) &&
+        (best == p.free.size() || p.free[k].second <= p.free[best].second))
+      best = k;
+  char* c;
+  size_t got;
+  if (best < p.free.size()) {
+    c = p.free[best].first;
+    got = p.free[best].second;
+    p.free.erase(p.free.begin() + static_cast<std::ptrdiff_t>(best));
+    p.freeBytes -= got;
+  } else {
+    c = mapChunk(size);
+    got = size;
+  }
+  p.live[c] = got;
+  return c;
+}
+
+void freeHugeBlock(void* block) {
+  if (!block) return;
+  BlockPool& p = blockPool();
+  char* c = static_cast<char*>(block);
+  std::vector<std::pair<char*, size_t>> unmap;
+  {
+    std::lock_guard<std::mutex> lock(p.m);
+    const auto it = p.live.find(c);
+    if (it == p.live.end()) return;  // not ours: nothing to release
+    const size_t size = it->second;
+    p.live.erase(it);
+    p.free.emplace_back(c, size);
+    p.freeBytes += size;
+    while (p.freeBytes > kBlockPoolMax) {  // the oldest go back to the system
+      unmap.push_back(p.free.front());
+      p.freeBytes -= p.free.front().second;
+      p.free.erase(p.free.begin());
+    }
+  }
+  for (const auto& [q, size] : unmap) munmap(q, size);
+}
 
 HugeArena::~HugeArena() {
   for (const Chunk& c : chunks_) giveChunk(c.base, c.size);

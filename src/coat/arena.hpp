@@ -34,6 +34,8 @@ class ArenaArray {
   size_t n_ = 0;
 };
 
+// allocateHugeBlock / freeHugeBlock (large result buffers) are declared in pteryla/coat/pack.hpp.
+
 // Not thread-safe: one arena per thread. Memory lives until the arena is destroyed.
 class HugeArena {
  public:

@@ -24,9 +24,6 @@
 #include <memory>
 
 #include <glm/geometric.hpp>
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -1628,7 +1625,8 @@ void schedule(const Context& ctx, const std::vector<uint32_t>& items, const uint
     if (c == 0) ready.push_back(i);
   }
   for (size_t i = 0; i < n; ++i) succOff[i + 1] += succOff[i];
-  std::vector<uint32_t> succ(succOff[n]), fill(succOff.begin(), succOff.end() - 1);
+  std::vector<uint32_t, UninitializedAllocator<uint32_t>> succ(succOff[n]);  // every slot is filled below
+  std::vector<uint32_t> fill(succOff.begin(), succOff.end() - 1);
   for (uint32_t i : items)
     for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k)
       if (in(ctx.deps[k])) succ[fill[ctx.deps[k]]++] = i;
@@ -1638,19 +1636,6 @@ void schedule(const Context& ctx, const std::vector<uint32_t>& items, const uint
       if (pending[succ[k]].fetch_sub(1, std::memory_order_acq_rel) == 1) feeder.add(succ[k]);
   };
   tbb::parallel_for_each(ready.begin(), ready.end(), body);
-}
-
-// Reserves a large result buffer and asks Linux for transparent huge pages on it before it is first
-// written: the bird's ~30 MB of packed points otherwise cost ~7,500 page faults, serial, in every pack.
-template <class T, class A>
-void reserveHuge(std::vector<T, A>& v, size_t count) {
-  v.reserve(count);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-  const uintptr_t a = reinterpret_cast<uintptr_t>(v.data()), b = a + count * sizeof(T);
-  const uintptr_t lo = (a + kHuge - 1) & ~(kHuge - 1), hi = b & ~(kHuge - 1);
-  if (count * sizeof(T) >= 4 * kHuge && hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
-#endif
 }
 
 // Appends the point groups of a packed feather (its shaft, afterfeather shaft, then each key barb's
@@ -1690,8 +1675,7 @@ void layoutKeys(size_t n, PackedKeyBarbs& K, Count&& count, CvCount&& cvCount) {
   K.rp.clear();
   K.rp.resize(K.keyOffset[n]);
   K.cvs.clear();
-  reserveHuge(K.cvs, K.cvOffset.back());
-  K.cvs.resize(K.cvOffset.back());
+  K.cvs.resize(K.cvOffset.back());  // huge pages, uninitialised (UninitializedAllocator)
 }
 
 // The key barb layout of a feather packed from its local data: the main (packed) key barbs of an opened
@@ -1732,7 +1716,7 @@ void initResult(const Context& ctx, PackResult& res) {
   res.barbsChanged.assign(n, 0);
   res.recomputed.assign(n, 0);
   res.pointOffset = pointOffsets(ctx);
-  reserveHuge(res.points, res.pointOffset.back());
+  res.points.clear();
   res.points.resize(res.pointOffset.back());  // uninitialised: every feather writes its own points
   res.bounds.assign(n, glm::dvec4(0));
   res.groupOffset.assign(n + 1, 0);
@@ -2014,7 +1998,7 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
       res.groupOffset[i + 1] = static_cast<uint32_t>(res.groupPoint.size());
     }
     res.groupPoint.push_back(res.pointOffset[n]);
-    reserveHuge(res.points, res.pointOffset[n]);
+    res.points.clear();
     res.points.resize(res.pointOffset[n]);
     res.groupBounds.clear();
     res.groupBounds.resize(res.groupOffset[n]);  // uninitialised: written by packed and kept feathers

@@ -8,6 +8,7 @@
 #include <glm/vec3.hpp>
 
 #include "../../src/coat/arena.hpp"
+#include "pteryla/coat/pack.hpp"
 
 using pteryla::coat::detail::ArenaArray;
 using pteryla::coat::detail::HugeArena;
@@ -60,4 +61,32 @@ TEST(HugeArena, ReleasedChunksAreReused) {
   HugeArena b;
   // The pool is a stack: the chunk just released is the next one handed out.
   EXPECT_EQ(first, b.allocate(64, 64));
+}
+
+TEST(HugeBlock, LargeBuffersAreWholeHugePagesAndReusedAfterRelease) {
+  const size_t bytes = (5u << 20) + 123;  // rounds up to 6 MiB
+  char* a = static_cast<char*>(pteryla::coat::detail::allocateHugeBlock(bytes));
+  ASSERT_NE(a, nullptr);
+  EXPECT_EQ(0u, reinterpret_cast<uintptr_t>(a) % (2u << 20));
+  a[0] = 1;
+  a[bytes - 1] = 2;
+  pteryla::coat::detail::freeHugeBlock(a);
+  // Of the smallest free blocks that fit, the last freed is handed out next: this one.
+  char* b = static_cast<char*>(pteryla::coat::detail::allocateHugeBlock(bytes));
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(2, b[bytes - 1]);  // the same, already written memory (the allocator does not clear it)
+  pteryla::coat::detail::freeHugeBlock(b);
+  pteryla::coat::detail::freeHugeBlock(nullptr);  // no-op
+}
+
+TEST(HugeBlock, UninitializedAllocatorUsesThemForLargeVectorsOnly) {
+  std::vector<double, pteryla::coat::UninitializedAllocator<double>> big, small;
+  big.resize(1u << 20);  // 8 MiB
+  small.resize(16);
+  EXPECT_EQ(0u, reinterpret_cast<uintptr_t>(big.data()) % (2u << 20));
+  for (size_t i = 0; i < big.size(); i += 4096) big[i] = static_cast<double>(i);
+  EXPECT_EQ(4096.0, big[4096]);
+  big.push_back(1.0);  // regrowth copies and releases the old block
+  EXPECT_EQ(4096.0, big[4096]);
+  EXPECT_EQ(1.0, big.back());
 }
