@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/memory.hpp"
 
 using namespace pteryla::cli;
 
@@ -24,6 +25,7 @@ void addSceneOptions(CLI::App* sub, SceneArgs& a, bool withSize) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  pteryla::keepFreedMemoryInProcess();
   CLI::App app{"pteryla: bird feather coats (Streit 2003) from the command line.\n"
                "Scenes are JSON files (docs/scene-format.md) or bare meshes."};
   app.require_subcommand(1);

@@ -5,9 +5,11 @@
 #include <regex>
 
 #include "app.hpp"
+#include "pteryla/core/memory.hpp"
 #include "script.hpp"
 
 int main(int argc, char** argv) {
+  pteryla::keepFreedMemoryInProcess();
   pteryla::viewer::ViewerOptions o;
   CLI::App cli{"pteryla-viewer: GLFW + Dear ImGui viewer over the pteryla pipeline (docs/viewer.md)"};
   std::string size;
