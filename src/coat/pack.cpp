@@ -1211,14 +1211,13 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     for (size_t kk = 0; kk < nk; ++kk) {
       const LocalKey& k = L.keys[kk];
       if (k.sExt <= 0) continue;
-      glm::dvec3* const cvs = K.cvs.data() + K.cvOffset[k0 + kk];
-      const size_t cvn = K.cvOffset[k0 + kk + 1] - K.cvOffset[k0 + kk];
-      const BarbFit fit = fitBarb(cvs, cvn, k.len, k.sExt, &S.bh[kk * fb], fb, o, S);
+      glm::dvec3* const cvs = K.cvs.data() + K.cvOffset[k0 + kk];  // k.cvCount of them (checked above)
+      const BarbFit fit = fitBarb(cvs, k.cvCount, k.len, k.sExt, &S.bh[kk * fb], fb, o, S);
       if (fit.mu > 0 || fit.alpha > 0) {
         ++st.barbsElevated;
         anyChanged = true;
         const double ca = std::cos(fit.alpha), sa = std::sin(fit.alpha);
-        for (size_t c = 0; c < cvn; ++c) {
+        for (size_t c = 0; c < k.cvCount; ++c) {
           glm::dvec3& cv = cvs[c];
           const double z = cv.z + fit.mu * std::max(0.0, -cv.z);
           cv = {cv.x * ca - z * sa, cv.y, cv.x * sa + z * ca};
@@ -1291,12 +1290,9 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
   const int bs = std::max(1, o.barbSamples);
   for (size_t kk = 0; kk < L.keys.size(); ++kk) {
     const LocalKey& k = L.keys[kk];
-    const glm::dvec3* cv = &L.cvs[k.cvOff];
-    size_t cn = k.cvCount;
-    if (kk < nKeys && !L.unopened) {
-      cv = K.cvs.data() + K.cvOffset[k0 + kk];
-      cn = K.cvOffset[k0 + kk + 1] - K.cvOffset[k0 + kk];
-    }
+    // The packed (elevated) control vertices of an opened feather's main keys, else the local ones.
+    const glm::dvec3* cv = kk < nKeys && !L.unopened ? K.cvs.data() + K.cvOffset[k0 + kk] : &L.cvs[k.cvOff];
+    const size_t cn = k.cvCount;
     for (int s = 1; s <= bs; s += 2) {
       glm::dvec3 c[2];
       bezierPair(cv, cn, static_cast<double>(s) / bs, static_cast<double>(s + 1) / bs, c[0], c[1]);
@@ -2059,16 +2055,29 @@ std::vector<uint32_t> changedFeathers(const CoatFeathers& a, const CoatFeathers&
   return out;
 }
 
-void packedParamsInto(const CoatFeathers& coat, const PackResult& result, uint32_t i, feather::FeatherParams& out) {
+namespace {
+// Feather i's packed keys: checks that `result` is a pack of `coat`.
+const PackedKeyBarbs& packedKeysOf(const CoatFeathers& coat, const PackResult& result, uint32_t i) {
   const PackedKeyBarbs& K = result.packedKeys;
   PTERYLA_CHECK(i < coat.size() && K.replaced.size() == coat.size() && K.keyOffset.size() == coat.size() + 1,
                 "packedParams: the result is not a pack of this coat");
+  return K;
+}
+
+// Keys [first, second) of feather i's vane v (0 left, 1 right) in K.
+std::pair<uint32_t, uint32_t> vaneKeys(const PackedKeyBarbs& K, uint32_t i, int v) {
+  const uint32_t m = K.keyOffset[i] + K.leftKeys[i];
+  return v == 0 ? std::make_pair(K.keyOffset[i], m) : std::make_pair(m, K.keyOffset[i + 1]);
+}
+}  // namespace
+
+void packedParamsInto(const CoatFeathers& coat, const PackResult& result, uint32_t i, feather::FeatherParams& out) {
+  const PackedKeyBarbs& K = packedKeysOf(coat, result, i);
   out = coat.params[i];
   if (!K.replaced[i]) return;
-  const uint32_t a = K.keyOffset[i], m = a + K.leftKeys[i], b = K.keyOffset[i + 1];
   for (int v = 0; v < 2; ++v) {
     std::vector<feather::KeyBarb>& kb = out.vane(v).keyBarbs;
-    const uint32_t k0 = v == 0 ? a : m, k1 = v == 0 ? m : b;
+    const auto [k0, k1] = vaneKeys(K, i, v);
     kb.resize(k1 - k0);
     for (uint32_t k = k0; k < k1; ++k) {
       kb[k - k0].rp = K.rp[k];
@@ -2084,14 +2093,11 @@ feather::FeatherParams packedParams(const CoatFeathers& coat, const PackResult& 
 }
 
 bool packedParamsEqual(const feather::FeatherParams& p, const CoatFeathers& coat, const PackResult& result, uint32_t i) {
-  const PackedKeyBarbs& K = result.packedKeys;
-  PTERYLA_CHECK(i < coat.size() && K.replaced.size() == coat.size() && K.keyOffset.size() == coat.size() + 1,
-                "packedParams: the result is not a pack of this coat");
+  const PackedKeyBarbs& K = packedKeysOf(coat, result, i);
   if (!K.replaced[i]) return p == coat.params[i];
-  const uint32_t a = K.keyOffset[i], m = a + K.leftKeys[i], b = K.keyOffset[i + 1];
   for (int v = 0; v < 2; ++v) {
     const std::vector<feather::KeyBarb>& kb = p.vane(v).keyBarbs;
-    const uint32_t k0 = v == 0 ? a : m, k1 = v == 0 ? m : b;
+    const auto [k0, k1] = vaneKeys(K, i, v);
     if (kb.size() != k1 - k0) return false;
     for (uint32_t k = k0; k < k1; ++k)
       if (!(kb[k - k0].rp == K.rp[k]) || !std::equal(kb[k - k0].cvs.begin(), kb[k - k0].cvs.end(), K.cvs.begin() + K.cvOffset[k],

@@ -201,14 +201,14 @@ int main(int argc, char** argv) {
     std::sort(allFaces.begin(), allFaces.end());
     allFaces.erase(std::unique(allFaces.begin(), allFaces.end()), allFaces.end());
 
+    const TriMesh packedProxy = coat::proxyCoatMesh(coat, pr.elevation, coat::allPackedParams(coat, pr));
     t0 = std::chrono::steady_clock::now();
-    TriMesh packedMesh;
+    TriMesh fullMesh;
     if (full) {
       p.setLod(lod);
-      packedMesh = p.coatMesh().mesh;
-    } else {
-      packedMesh = coat::proxyCoatMesh(coat, pr.elevation, coat::allPackedParams(coat, pr));
+      fullMesh = p.coatMesh().mesh;
     }
+    const TriMesh& packedMesh = full ? fullMesh : packedProxy;
     const coat::CheckResult cr = coat::check(skin, allFaces, packedMesh, co);
     std::printf("%s check %.1f s: %zu triangles, intersecting_pairs %zu, skin_penetrations %zu, coverage %.4f\n",
                 full ? "full" : "proxy", secondsSince(t0), cr.coatTriangles, cr.intersectingPairs,
@@ -231,7 +231,6 @@ int main(int argc, char** argv) {
     const auto up = coat::intersectingFeatherPairs(unpacked);
     size_t upTotal = 0;
     for (const auto& q : up) upTotal += q.pairs;
-    const TriMesh packedProxy = coat::proxyCoatMesh(coat, pr.elevation, coat::allPackedParams(coat, pr));
     const auto pp = coat::intersectingFeatherPairs(packedProxy);
     size_t ppTotal = 0;
     for (const auto& q : pp) ppTotal += q.pairs;
