@@ -28,6 +28,15 @@ void App::scriptStep() {
   if (!fakeMouse_.empty()) return;  // a scripted click or drag is being played
   if (doc_.failed()) return;  // frame() reports the error and fails the script
   if (shotWanted_) return;    // a screenshot is waiting for its frame
+  if (view_.ui.pending) {
+    // A `ui` command waits for its panel to take the request (the header opens on the same frame).
+    view_.panelRequests[view_.ui.panel] = 1;
+    if (++view_.ui.frames > 30)
+      fail(options_.script + ": ui: no widget '" + view_.ui.widget + (view_.ui.value.empty() ? "" : " " + view_.ui.value) +
+               "' in the panel '" + view_.ui.panel + "'",
+           2);
+    return;
+  }
   if (scriptWaitFrames_ > 0) {
     --scriptWaitFrames_;
     return;
@@ -123,6 +132,12 @@ void App::scriptStep() {
         }
       if (!found) throw Error("unknown tool '" + c.args[0] + "' (orbit, key, vector, edit-vectors, bias, brush, control, pin)", file, "line " + std::to_string(c.line));
       if (c.args.size() == 2) view_.toolFeather = c.args[1];
+    } else if (c.verb == "ui") {
+      needArgs(c, 2, 3, "ui PANEL WIDGET [VALUE]", file);
+      if (!doc_.hasScene()) throw Error("no scene is open", file, "line " + std::to_string(c.line));
+      view_.ui = UiRequest{c.args[0], c.args[1], c.args.size() > 2 ? c.args[2] : "", true, 0};
+      view_.panelRequests[c.args[0]] = 1;
+      view_.hidePanels = false;
     } else if (c.verb == "frame") {
       needArgs(c, 0, 0, "frame", file);
       frameAll();

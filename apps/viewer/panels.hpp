@@ -28,6 +28,15 @@ enum class Tool {
   Pin,            // click on the skin: pinned follicle in the selected tract
 };
 
+// A panel widget a script drives (`ui PANEL WIDGET [VALUE]`, app_script.cpp): the panel checks
+// uiRequested() next to the ImGui widget and acts exactly as when the user uses it, so a scripted session
+// runs the panel's own code (not only the action behind it).
+struct UiRequest {
+  std::string panel, widget, value;
+  bool pending = false;
+  int frames = 0;  // frames the script has waited for a panel to take the request
+};
+
 // View settings and selections shared by panels, overlays and the app.
 struct ViewState {
   bool showCoat = true, showSkin = true, wireframe = false;
@@ -69,6 +78,7 @@ struct ViewState {
   bool hidePanels = false;
   // Panel headers to open (1) or close (0) on the next frame, by name ("*" = all): set by scripts.
   std::map<std::string, int> panelRequests;
+  UiRequest ui;
   // Windows.
   bool showDesigner = false, showJsonInspector = false, showHelp = false;
   // A styling vector being dragged (preview until release).
@@ -99,6 +109,14 @@ void sectionTitle(const char* title);
 
 // Runs `fn` and routes a pteryla::Error (or any std::exception) to the error modal.
 void guarded(PanelContext& ctx, const std::function<void()>& fn);
+
+// Scripted widgets (UiRequest): true once when the script asks for `widget` of `panel` (with `value`, for
+// list items named or numbered by it); the request is then taken. The widget "throw" of a panel makes
+// its first uiRequested() call throw (`ui PANEL throw`, a test of the panel guard in app_ui.cpp).
+bool uiRequested(PanelContext& ctx, const char* panel, const char* widget);
+bool uiRequested(PanelContext& ctx, const char* panel, const char* widget, const std::string& value);
+// A slider or field: sets `v` to the script's number.
+bool uiRequestedNumber(PanelContext& ctx, const char* panel, const char* widget, float& v);
 
 // panels_view.cpp
 void drawViewPanel(PanelContext& ctx);

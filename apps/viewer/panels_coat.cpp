@@ -22,8 +22,7 @@ using pipeline::Scene;
 namespace {
 
 // Combo over the scene's tracts; keeps view.selectedTract valid. Returns the selected index or -1.
-int tractCombo(PanelContext& ctx, const char* label) {
-  const Scene& s = ctx.doc.scene();
+int tractCombo(PanelContext& ctx, const Scene& s, const char* panel, const char* label) {
   const int n = static_cast<int>(s.tracts.size());
   if (n == 0) {
     ImGui::TextDisabled("no tracts (the whole mesh is one tract)");
@@ -32,6 +31,8 @@ int tractCombo(PanelContext& ctx, const char* label) {
   }
   int& sel = ctx.view.selectedTract;
   sel = std::clamp(sel, 0, n - 1);
+  for (int i = 0; i < n; ++i)
+    if (uiRequested(ctx, panel, "tract", tractName(s, size_t(i)))) sel = i;
   if (ImGui::BeginCombo(label, tractName(s, size_t(sel)).c_str())) {
     for (int i = 0; i < n; ++i)
       if (ImGui::Selectable(tractName(s, size_t(i)).c_str(), i == sel)) sel = i;
@@ -93,7 +94,8 @@ void drawTractsPanel(PanelContext& ctx) {
     for (size_t i = 0; i < s.tracts.size(); ++i) {
       ImGui::TableNextRow();
       ImGui::TableNextColumn();
-      if (ImGui::Selectable(tractName(s, i).c_str(), ctx.view.selectedTract == int(i), ImGuiSelectableFlags_SpanAllColumns))
+      if (ImGui::Selectable(tractName(s, i).c_str(), ctx.view.selectedTract == int(i), ImGuiSelectableFlags_SpanAllColumns) ||
+          uiRequested(ctx, "Tracts", "select", tractName(s, i)))
         ctx.view.selectedTract = int(i);
       ImGui::TableNextColumn();
       if (i < snap.tractFaces.size()) ImGui::Text("%zu", snap.tractFaces[i].size()); else ImGui::TextDisabled("-");
@@ -102,7 +104,7 @@ void drawTractsPanel(PanelContext& ctx) {
     }
     ImGui::EndTable();
   }
-  const int t = tractCombo(ctx, "Tract");
+  const int t = tractCombo(ctx, s, "Tracts", "Tract");
   if (t >= 0) {
     const Json& tj = s.tracts[size_t(t)];
     const bool byCount = tj.contains("count");
@@ -148,7 +150,7 @@ void drawTractsPanel(PanelContext& ctx) {
 void drawFolliclesPanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
   const Scene& s = doc.scene();
-  const int t = tractCombo(ctx, "Tract##f");
+  const int t = tractCombo(ctx, s, "Follicles", "Tract##f");
   if (t < 0) return;
   const Json& tj = s.tracts[size_t(t)];
   const Json relax = tj.contains("relax") && tj["relax"].is_object() ? tj["relax"] : Json::object();
@@ -216,7 +218,7 @@ void drawKeyFeathersPanel(PanelContext& ctx) {
   if (ImGui::Button("Add / replace feather")) guarded(ctx, [&] { actions::setFeatherFile(doc, newName, newPath); });
 
   sectionTitle("Key feathers of a tract (6.2)");
-  const int t = tractCombo(ctx, "Tract##k");
+  const int t = tractCombo(ctx, s, "Key feathers", "Tract##k");
   if (t < 0) return;
   const Json& tj = s.tracts[size_t(t)];
   std::vector<std::string> names;
@@ -244,7 +246,8 @@ void drawKeyFeathersPanel(PanelContext& ctx) {
       else
         ImGui::Text("%s at %s", kj.value("feather", std::string("?")).c_str(), kj.value("at", Json()).dump().c_str());
       ImGui::SameLine();
-      if (ImGui::SmallButton("remove")) guarded(ctx, [&] { actions::removeKeyFeather(doc, size_t(t), k); });
+      if (ImGui::SmallButton("remove") || uiRequested(ctx, "Key feathers", "remove", std::to_string(k)))
+        guarded(ctx, [&] { actions::removeKeyFeather(doc, size_t(t), k); });
       ImGui::PopID();
     }
   }

@@ -159,7 +159,9 @@ void drawControlsPanel(PanelContext& ctx) {
   for (size_t k = 0; k < s.controls.size(); ++k) {
     const Json& c = s.controls[k];
     const std::string name = c.is_object() ? c.value("name", "control " + std::to_string(k)) : "control " + std::to_string(k);
-    if (ImGui::Selectable((name + "##" + std::to_string(k)).c_str(), v.selectedControl == int(k))) v.selectedControl = int(k);
+    if (ImGui::Selectable((name + "##" + std::to_string(k)).c_str(), v.selectedControl == int(k)) ||
+        uiRequested(ctx, "Expressive controls", "select", name))
+      v.selectedControl = int(k);
   }
   if (v.selectedControl < 0 || size_t(v.selectedControl) >= s.controls.size()) {
     v.selectedControl = -1;
@@ -174,7 +176,7 @@ void drawControlsPanel(PanelContext& ctx) {
     const char* b = actions::kControlBehaviours[i];
     float value = float(now.value[i]);
     const std::string label = std::string(b) + (now.keyed[i] ? " (keyed)" : "");
-    if (ImGui::SliderFloat(label.c_str(), &value, 0.0f, 1.0f))
+    if (ImGui::SliderFloat(label.c_str(), &value, 0.0f, 1.0f) || uiRequestedNumber(ctx, "Expressive controls", b, value))
       guarded(ctx, [&] { actions::setControlValue(doc, k, b, value, doc.time()); });
   }
   glm::dvec3 at = actions::jsonVec3(c.value("at", Json()));

@@ -4,6 +4,7 @@
 #include <imgui_stdlib.h>
 
 #include <cmath>
+#include <string>
 
 #include "actions.hpp"
 #include "json_widgets.hpp"
@@ -28,6 +29,52 @@ void guarded(PanelContext& ctx, const std::function<void()>& fn) {
   } catch (const std::exception& e) {
     ctx.app.error(e.what());
   }
+}
+
+namespace {
+
+// The pending request for `panel`, or nullptr. A "throw" request throws here (in the panel's body).
+UiRequest* uiFor(PanelContext& ctx, const char* panel) {
+  UiRequest& r = ctx.view.ui;
+  if (!r.pending || r.panel != panel) return nullptr;
+  if (r.widget == "throw") {
+    r.pending = false;
+    throw Error("scripted fault inside the panel (ui " + r.panel + " throw)");
+  }
+  return &r;
+}
+
+}  // namespace
+
+bool uiRequested(PanelContext& ctx, const char* panel, const char* widget) {
+  UiRequest* r = uiFor(ctx, panel);
+  if (!r || r->widget != widget) return false;
+  r->pending = false;
+  return true;
+}
+
+bool uiRequested(PanelContext& ctx, const char* panel, const char* widget, const std::string& value) {
+  UiRequest* r = uiFor(ctx, panel);
+  if (!r || r->widget != widget || r->value != value) return false;
+  r->pending = false;
+  return true;
+}
+
+bool uiRequestedNumber(PanelContext& ctx, const char* panel, const char* widget, float& v) {
+  UiRequest* r = uiFor(ctx, panel);
+  if (!r || r->widget != widget) return false;
+  r->pending = false;
+  size_t used = 0;
+  float x = 0;
+  try {
+    x = std::stof(r->value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != r->value.size() || !std::isfinite(x))
+    throw Error("ui " + r->panel + " " + r->widget + ": expected a number, got '" + r->value + "'");
+  v = x;
+  return true;
 }
 
 void drawViewPanel(PanelContext& ctx) {
