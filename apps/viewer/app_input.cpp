@@ -85,7 +85,7 @@ bool App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
     }
     if (view_.tool == Tool::EditVectors) {
       // Grab the styling vector whose tip is nearest the mouse.
-      const Json& d = doc_.scene().directions;
+      const Json d = doc_.scene().directions;  // a copy, like the panels' (panels.hpp)
       if (!d.contains("vectors") || !d["vectors"].is_array()) return false;
       const float len = overlayArrowLength(snap);
       std::vector<glm::vec3> tips;

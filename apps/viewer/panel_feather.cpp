@@ -221,7 +221,7 @@ void FeatherDesigner::draw(PanelContext& ctx, bool* open) {
     ImGui::End();
     return;
   }
-  const pipeline::Scene& scene = ctx.doc.scene();
+  const pipeline::Scene scene = ctx.doc.scene();  // a copy: Apply below replaces doc.scene()
   std::vector<std::string> names;
   for (auto it = scene.feathers.begin(); it != scene.feathers.end(); ++it) names.push_back(it.key());
   if ((!d.loaded || !scene.feathers.contains(d.name)) && !names.empty()) d.load(ctx, names.front());

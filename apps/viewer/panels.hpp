@@ -1,6 +1,12 @@
 #pragma once
 // The viewer's panels: thin ImGui views over the Document. Panels never touch the Pipeline while a job
 // runs; they read the Snapshot and edit the scene through actions.hpp (one undo step per edit).
+//
+// Edits replace the scene: Document::edit (and undo, redo, open) move-assigns doc.scene(), so a
+// `const Json&`, an iterator or a string_view into it dangles after the edit. A panel therefore reads a
+// copy of the scene (`const Scene s = doc.scene();`, sections are small JSON) taken before it draws, and
+// edits address elements by index or name, re-checked by the action (actions.hpp) against the scene it
+// edits. Nothing a panel holds across an edit points into the document.
 // Viewport tools (placing key feathers, styling vectors, brushes, controls, bias vectors) are modes
 // set here and carried out by the app on mouse input (tool.hpp-like state in ViewState).
 #include <functional>

@@ -83,7 +83,8 @@ void metricsTable(const std::optional<pipeline::QualityMetrics>& m) {
 
 void drawTractsPanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
-  const Scene& s = doc.scene();
+  // A copy: an edit below replaces doc.scene(), and this panel keeps reading what it drew from.
+  const Scene s = doc.scene();
   const Snapshot& snap = doc.snapshot();
   if (ImGui::BeginTable("tracts", 3, ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV | ImGuiTableFlags_ScrollY,
                         ImVec2(0, 150))) {
@@ -119,7 +120,7 @@ void drawTractsPanel(PanelContext& ctx) {
     if (ImGui::TreeNode("Tract JSON")) {
       Json copy = tj;
       if (jsonEditor("tract", copy))
-        guarded(ctx, [&] { doc.edit("tract " + std::to_string(t), [&](Scene& sc) { sc.tracts[size_t(t)] = copy; }); });
+        guarded(ctx, [&] { doc.edit("tract " + std::to_string(t), [&](Scene& sc) { sc.tracts.at(size_t(t)) = copy; }); });
       ImGui::TreePop();
     }
   }
@@ -149,7 +150,8 @@ void drawTractsPanel(PanelContext& ctx) {
 
 void drawFolliclesPanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
-  const Scene& s = doc.scene();
+  // A copy: an edit below replaces doc.scene(), and this panel keeps reading what it drew from.
+  const Scene s = doc.scene();
   const int t = tractCombo(ctx, s, "Follicles", "Tract##f");
   if (t < 0) return;
   const Json& tj = s.tracts[size_t(t)];
@@ -189,7 +191,8 @@ void drawFolliclesPanel(PanelContext& ctx) {
       if (ImGui::SmallButton("remove"))
         guarded(ctx, [&] {
           doc.edit("remove bias", [&](Scene& sc) {
-            Json& arr = sc.tracts[size_t(t)]["relax"]["bias"];
+            Json& arr = sc.tracts.at(size_t(t)).at("relax").at("bias");
+            if (k >= arr.size()) throw Error("no bias vector " + std::to_string(k), sc.file, "relax.bias");
             arr.erase(arr.begin() + long(k));
           });
         });
@@ -207,7 +210,8 @@ void drawFolliclesPanel(PanelContext& ctx) {
 
 void drawKeyFeathersPanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
-  const Scene& s = doc.scene();
+  // A copy: an edit below replaces doc.scene(), and this panel keeps reading what it drew from.
+  const Scene s = doc.scene();
   sectionTitle("Feather library");
   for (auto it = s.feathers.begin(); it != s.feathers.end(); ++it) {
     ImGui::BulletText("%s: %s", it.key().c_str(), it->is_string() ? it->get<std::string>().c_str() : "(designed in the scene)");
@@ -254,12 +258,13 @@ void drawKeyFeathersPanel(PanelContext& ctx) {
   double jitter = tj.value("scale_jitter", 0.0);
   float jf = float(jitter);
   if (ImGui::SliderFloat("Scale jitter", &jf, 0.0f, 0.5f))
-    guarded(ctx, [&] { doc.edit("scale jitter", [&](Scene& sc) { sc.tracts[size_t(t)]["scale_jitter"] = jf; }); });
+    guarded(ctx, [&] { doc.edit("scale jitter", [&](Scene& sc) { sc.tracts.at(size_t(t))["scale_jitter"] = jf; }); });
 }
 
 void drawDirectionsPanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
-  const Scene& s = doc.scene();
+  // A copy: an edit below replaces doc.scene(), and this panel keeps reading what it drew from.
+  const Scene s = doc.scene();
   const Json& d = s.directions;
   const bool axis = d.contains("axis"), vectors = d.contains("vectors");
   ImGui::Text("Field: %s", axis ? "body axis" : vectors ? "styling vectors" : "fallback only");
@@ -296,7 +301,8 @@ void drawDirectionsPanel(PanelContext& ctx) {
 
 void drawPackingPanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
-  const Scene& s = doc.scene();
+  // A copy: an edit below replaces doc.scene(), and this panel keeps reading what it drew from.
+  const Scene s = doc.scene();
   const Json& p = s.packing;
   if (doc.busy()) {
     const JobProgress pr = doc.progress();

@@ -120,7 +120,8 @@ void drawTimelinePanel(PanelContext& ctx) {
     if (moultEditor("moult", copy)) guarded(ctx, [&] { doc.edit("moult", [&](Scene& s) { s.moult = copy; }); });
   }
   sectionTitle("Moult (per tract)");
-  const Scene& s = doc.scene();
+  // A copy: an edit below replaces doc.scene(), and this panel keeps reading what it drew from.
+  const Scene s = doc.scene();
   if (s.tracts.empty()) {
     ImGui::TextDisabled("no tracts");
     return;
@@ -135,20 +136,21 @@ void drawTimelinePanel(PanelContext& ctx) {
   const Json& tj = s.tracts[size_t(sel)];
   if (!tj.contains("moult")) {
     if (ImGui::Button("Add moult settings to this tract"))
-      guarded(ctx, [&] { doc.edit("tract moult", [&](Scene& sc) { sc.tracts[size_t(sel)]["moult"] = Json::object(); }); });
+      guarded(ctx, [&] { doc.edit("tract moult", [&](Scene& sc) { sc.tracts.at(size_t(sel))["moult"] = Json::object(); }); });
   } else {
     Json copy = tj["moult"].is_object() ? tj["moult"] : Json::object();
     if (moultEditor("tract_moult", copy))
-      guarded(ctx, [&] { doc.edit("tract moult " + std::to_string(sel), [&](Scene& sc) { sc.tracts[size_t(sel)]["moult"] = copy; }); });
+      guarded(ctx, [&] { doc.edit("tract moult " + std::to_string(sel), [&](Scene& sc) { sc.tracts.at(size_t(sel))["moult"] = copy; }); });
     if (ImGui::SmallButton("Remove moult settings"))
-      guarded(ctx, [&] { doc.edit("tract moult", [&](Scene& sc) { sc.tracts[size_t(sel)].erase("moult"); }); });
+      guarded(ctx, [&] { doc.edit("tract moult", [&](Scene& sc) { sc.tracts.at(size_t(sel)).erase("moult"); }); });
   }
 }
 
 void drawControlsPanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
   ViewState& v = ctx.view;
-  const Scene& s = doc.scene();
+  // A copy: an edit below replaces doc.scene(), and this panel keeps reading what it drew from.
+  const Scene s = doc.scene();
   ImGui::SliderFloat("New control radius", &v.controlRadius, 0.001f, 5.0f, "%.3f", ImGuiSliderFlags_Logarithmic);
   const bool active = v.tool == Tool::AddControl;
   if (ImGui::Button(active ? "Done placing" : "Place control")) v.tool = active ? Tool::Orbit : Tool::AddControl;
@@ -209,7 +211,7 @@ void drawControlsPanel(PanelContext& ctx) {
     const std::string cur = c.value("interpolation", std::string("linear"));
     int idx = cur == "smooth" ? 1 : cur == "step" ? 2 : 0;
     if (ImGui::Combo("interpolation", &idx, interps, 3))
-      guarded(ctx, [&] { doc.edit("interpolation", [&](Scene& sc) { sc.controls[k]["interpolation"] = interps[idx]; }); });
+      guarded(ctx, [&] { doc.edit("interpolation", [&](Scene& sc) { sc.controls.at(k)["interpolation"] = interps[idx]; }); });
   }
   if (ImGui::Button("Remove control")) {
     guarded(ctx, [&] { actions::removeControl(doc, k); });
@@ -218,7 +220,7 @@ void drawControlsPanel(PanelContext& ctx) {
   }
   if (ImGui::TreeNode("Control JSON")) {
     Json copy = c;
-    if (jsonEditor("control", copy)) guarded(ctx, [&] { doc.edit("control " + std::to_string(k), [&](Scene& sc) { sc.controls[k] = copy; }); });
+    if (jsonEditor("control", copy)) guarded(ctx, [&] { doc.edit("control " + std::to_string(k), [&](Scene& sc) { sc.controls.at(k) = copy; }); });
     ImGui::TreePop();
   }
 }

@@ -144,7 +144,8 @@ void drawViewPanel(PanelContext& ctx) {
 
 void drawRenderPanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
-  const Scene& s = doc.scene();
+  // A copy: an edit below replaces doc.scene(), and this panel keeps reading what it drew from.
+  const Scene s = doc.scene();
   int style = s.render.style == "scratchboard" ? 1 : 0;
   const char* styles[] = {"shaded", "scratchboard"};
   if (ImGui::Combo("Style", &style, styles, 2)) guarded(ctx, [&] { actions::setStyle(doc, styles[style]); });
@@ -182,13 +183,18 @@ void drawRenderPanel(PanelContext& ctx) {
       if (ch && (dir[0] != 0 || dir[1] != 0 || dir[2] != 0))
         guarded(ctx, [&] {
           doc.edit("light " + std::to_string(i), [&](Scene& sc) {
-            sc.lights[i].direction = {dir[0], dir[1], dir[2]};
-            sc.lights[i].color = {col[0], col[1], col[2]};
-            sc.lights[i].intensity = inten;
+            sc.lights.at(i).direction = {dir[0], dir[1], dir[2]};
+            sc.lights.at(i).color = {col[0], col[1], col[2]};
+            sc.lights.at(i).intensity = inten;
           });
         });
       if (ImGui::SmallButton("remove light") && s.lights.size() > 1)
-        guarded(ctx, [&] { doc.edit("remove light", [&](Scene& sc) { sc.lights.erase(sc.lights.begin() + long(i)); }); });
+        guarded(ctx, [&] {
+          doc.edit("remove light", [&](Scene& sc) {
+            if (i >= sc.lights.size()) throw Error("no light " + std::to_string(i));
+            sc.lights.erase(sc.lights.begin() + long(i));
+          });
+        });
       ImGui::Separator();
       ImGui::PopID();
     }

@@ -13,52 +13,17 @@
 #include <set>
 
 #include "fixtures.hpp"
+#include "viewer_run.hpp"
 #include "pteryla/core/json.hpp"
 #include "pteryla/pipeline/scene.hpp"
 #include "pteryla/render/image.hpp"
 
 using namespace pteryla;
 
-namespace {
-
-bool haveXvfbRun() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
-
-struct ViewerRun {
-  int code = -1;
-  std::string out;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
-}
-
-// Runs the viewer under xvfb-run. The viewer's own exit status is written to `<errFile>.status` by a
-// shell inside xvfb-run and read from there: xvfb-run's status is not the program's when its own
-// clean-up of the temporary Xauthority directory races a program that ends within a second or two
-// (it then exits 5 even though the viewer exited 0 or 2).
-ViewerRun runViewer(const std::string& args, const std::string& errFile) {
-  const std::string statusFile = errFile + ".status";
-  std::remove(statusFile.c_str());
-  const std::string inner = "\"" + std::string(PTERYLA_VIEWER_EXE) + "\" " + args + " 2>\"" + errFile +
-                            "\"; echo $? >\"" + statusFile + "\"";
-  std::string quoted;  // `inner` inside single quotes for sh -c
-  for (char c : inner) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  const std::string cmd = "xvfb-run -a -s \"-screen 0 1024x768x24\" sh -c '" + quoted + "'";
-  ViewerRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(p);
-  const std::string recorded = slurp(statusFile);
-  if (!recorded.empty()) r.code = std::atoi(recorded.c_str());  // the viewer ran: its own status
-  else r.code = WIFEXITED(status) ? 1000 + WEXITSTATUS(status) : 2000 + WTERMSIG(status);  // it never ran
-  return r;
-}
-
-}  // namespace
+using viewer_test::haveXvfbRun;
+using viewer_test::runViewer;
+using viewer_test::slurp;
+using viewer_test::ViewerRun;
 
 TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
   if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";

@@ -1,0 +1,92 @@
+// Issue 21 (part 1): the viewer never crashes and never loses work. The real viewer binary under xvfb-run
+// runs scripts that use the panels' own widgets (`ui PANEL WIDGET VALUE`): the two reported repros (a
+// control's lift/aim sliders on the crest scene; removing a key feather of the bird's "capital" tract)
+// used to abort in ImGui ("Forgot to call Render() or EndFrame()") because the panels kept references
+// into the scene across the edit.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+#include "fixtures.hpp"
+#include "pteryla/core/json.hpp"
+#include "pteryla/pipeline/scene.hpp"
+#include "viewer_run.hpp"
+
+using namespace pteryla;
+using viewer_test::haveXvfbRun;
+using viewer_test::runViewer;
+using viewer_test::slurp;
+using viewer_test::ViewerRun;
+
+namespace {
+
+#define NEED_XVFB() \
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)"
+
+// What the viewer reported through its error modal (scripted runs print it on stderr too).
+bool reportedError(const std::string& err) { return err.find("pteryla-viewer: error:") != std::string::npos; }
+
+}  // namespace
+
+// Repro 1: crest.json, Expressive controls, select "crest", drag lift, click aim.
+TEST(ViewerRobust, ControlSlidersOnTheCrestScene) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_crest");
+  const std::string saved = dir + "/crest.json", script = dir + "/s.txt";
+  std::ofstream(script) << "ui \"Expressive controls\" select crest\n"
+                           "ui \"Expressive controls\" lift 0.3\n"
+                           "ui \"Expressive controls\" lift 0.8\n"
+                           "ui \"Expressive controls\" aim 0.5\n"
+                           "frames 3\n"
+                        << "save " << saved << "\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("\"" + viewer_test::dataPath("scenes/crest.json") + "\" --lod 0.2 --script \"" + script + "\"",
+                                dir + "/stderr.txt");
+  const std::string err = slurp(dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << err;
+  EXPECT_FALSE(reportedError(err)) << err;
+  // The edits went through the panel: aim is a constant, lift is keyed (a key at the scene's time 1.5).
+  const pipeline::Scene back = pipeline::loadScene(saved);
+  ASSERT_EQ(back.controls.size(), 1u);
+  const Json& c = back.controls[0];
+  EXPECT_DOUBLE_EQ(c.value("aim", -1.0), 0.5);
+  bool keyed = false;
+  for (const auto& k : c["keys"])
+    if (k.value("t", -1.0) == 1.5) {
+      EXPECT_NEAR(k.value("lift", -1.0), 0.8, 1e-6);
+      keyed = true;
+    }
+  EXPECT_TRUE(keyed) << c.dump();
+}
+
+// Repro 2: bird.json --lod 0.2, Key feathers, tract "capital", remove.
+TEST(ViewerRobust, RemoveKeyFeathersOfTheBird) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_bird");
+  const std::string saved = dir + "/bird.json", script = dir + "/s.txt";
+  const Json before = pipeline::loadScene(viewer_test::dataPath("scenes/bird.json")).tracts;
+  size_t capital = before.size();
+  for (size_t i = 0; i < before.size(); ++i)
+    if (before[i].value("name", std::string()) == "capital") capital = i;
+  ASSERT_LT(capital, before.size());
+  const Json keys = before[capital]["key_feathers"];
+  ASSERT_GE(keys.size(), 3u);
+  std::ofstream(script) << "ui \"Key feathers\" tract capital\n"
+                           "ui \"Key feathers\" remove 0\n"
+                           "ui \"Key feathers\" remove 1\n"
+                           "frames 3\n"
+                        << "save " << saved << "\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("\"" + viewer_test::dataPath("scenes/bird.json") + "\" --lod 0.2 --script \"" + script + "\"",
+                                dir + "/stderr.txt");
+  const std::string err = slurp(dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << err;
+  EXPECT_FALSE(reportedError(err)) << err;
+  const pipeline::Scene back = pipeline::loadScene(saved);
+  const Json& left = back.tracts[capital]["key_feathers"];
+  // Removed the first, then the second of the remaining ones (the original third).
+  ASSERT_EQ(left.size(), keys.size() - 2);
+  EXPECT_EQ(left[0]["at"], keys[1]["at"]);
+  for (size_t i = 1; i < left.size(); ++i) EXPECT_EQ(left[i]["at"], keys[i + 2]["at"]);
+}
