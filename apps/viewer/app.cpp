@@ -9,6 +9,7 @@
 #include <GL/gl.h>
 #include <imgui.h>
 #include <imgui_impl_glfw.h>
+#include <imgui_internal.h>
 #include <imgui_impl_opengl3.h>
 
 #include <algorithm>
@@ -135,14 +136,24 @@ int App::run() {
     try {
       frame();
     } catch (const Error& e) {
-      // Anything that escapes a panel or the view sync: report and keep running (scripts stop).
+      // Anything that escapes the panel guards or the view sync: report and keep running (scripts stop).
+      endFrameAfterError();
       if (scripted()) fail(e.what(), 2); else showError(e.what());
     } catch (const std::exception& e) {
+      endFrameAfterError();
       if (scripted()) fail(e.what(), 1); else showError(e.what());
     }
     if (glfwWindowShouldClose(window_)) quit_ = true;
   }
   return exitCode_;
+}
+
+void App::endFrameAfterError() {
+  if (!imguiReady_) return;
+  ImGuiContext& g = *ImGui::GetCurrentContext();
+  if (!g.WithinFrameScope) return;
+  ImGui::ErrorCheckEndFrameRecover(nullptr);
+  ImGui::EndFrame();
 }
 
 void App::onCloseRequested() {
@@ -194,9 +205,10 @@ void App::frame() {
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(static_cast<intptr_t>(viewTexture_)),
                                              ImVec2(o.x, o.y), ImVec2(e.x, e.y));
   }
-  handleInput();
+  guardedUi("viewport", [&] { handleInput(); });
   buildUi();
-  if (doc_.hasScene() && options_.benchmarkOrbit <= 0) drawOverlays(ImGui::GetBackgroundDrawList(), *panels_);
+  if (doc_.hasScene() && options_.benchmarkOrbit <= 0)
+    guardedUi("overlays", [&] { drawOverlays(ImGui::GetBackgroundDrawList(), *panels_); });
   ImGui::Render();
 
   if (fw > 0 && fh > 0) {

@@ -6,6 +6,7 @@
 //   app_input.cpp   camera navigation and the viewport tools (picking on the skin)
 //   app_script.cpp  --script sessions
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -77,12 +78,16 @@ class App {
   void updateFps();
   void benchmarkStep();
   void fail(const std::string& message, int code);
+  void endFrameAfterError();  // an exception left an ImGui frame open: close it so the next one starts cleanly
   // app_ui.cpp
   void buildUi();
   void menuBar();
   void panelColumn();
   void dialogs();
   void showError(const std::string& message);
+  // Runs one panel or window body; an exception from it unwinds what it left open on ImGui's stack
+  // (windows, tables, trees, IDs, colours) and goes to the error modal, so the frame ends cleanly.
+  void guardedUi(const char* what, const std::function<void()>& body);
   void requestOpen(const std::string& path);
   void openNow(const std::string& path);
   void fitTimeRange();  // timeline range from the scene's keys and moult windows

@@ -2,7 +2,10 @@
 // changes on quit or open (Save / Discard / Cancel), errors from any stage (the viewer keeps running).
 #include <GL/gl.h>
 #include <imgui.h>
+#include <imgui_internal.h>
 #include <imgui_stdlib.h>
+
+#include <cstdio>
 
 #include <filesystem>
 
@@ -18,8 +21,39 @@
 namespace pteryla::viewer {
 
 void App::showError(const std::string& message) {
+  if (scripted()) std::fprintf(stderr, "pteryla-viewer: error: %s\n", message.c_str());
   errors_.push_back(message);
   if (popupToOpen_.empty()) popupToOpen_ = "Error";
+}
+
+namespace {
+
+// Closes what an interrupted body left open above `windows` windows on ImGui's window stack (child
+// windows, tables, combos, popups, each with its trees, IDs, colours and style variables), then the
+// trees, IDs, tables and colours it left in the window it ran in (a panel body starts with none).
+void recoverImGuiStack(int windows) {
+  ImGuiContext& g = *ImGui::GetCurrentContext();
+  while (g.CurrentWindowStack.Size > windows) {
+    ImGui::ErrorCheckEndWindowRecover(nullptr);  // may end a table's own child window
+    if (g.CurrentWindowStack.Size <= windows) break;
+    if (g.CurrentWindow->Flags & ImGuiWindowFlags_ChildWindow) ImGui::EndChild(); else ImGui::End();
+  }
+  ImGui::ErrorCheckEndWindowRecover(nullptr);
+}
+
+}  // namespace
+
+void App::guardedUi(const char* what, const std::function<void()>& body) {
+  const int windows = ImGui::GetCurrentContext()->CurrentWindowStack.Size;
+  try {
+    body();
+  } catch (const std::exception& e) {
+    recoverImGuiStack(windows);
+    showError(std::string(what) + ": " + e.what());
+  } catch (...) {
+    recoverImGuiStack(windows);
+    showError(std::string(what) + ": unknown error");
+  }
 }
 
 void App::requestOpen(const std::string& path) {
@@ -100,15 +134,17 @@ void App::afterSave() {
 }
 
 void App::buildUi() {
-  menuBar();
+  guardedUi("menu", [&] { menuBar(); });
   menuHeight_ = ImGui::GetFrameHeight();
   if (!view_.hidePanels) panelColumn();
-  drawStatusBar(*panels_, kStatusHeight);
-  if (view_.showDesigner && doc_.hasScene()) designer_.draw(*panels_, &view_.showDesigner);
-  if (view_.showJsonInspector && doc_.hasScene()) sceneJsonWindow();
-  if (view_.showHelp) helpWindow();
-  if (doc_.hasScene() && doc_.scene().render.style == "scratchboard") scratchboardWindow();
-  dialogs();
+  guardedUi("status bar", [&] { drawStatusBar(*panels_, kStatusHeight); });
+  if (view_.showDesigner && doc_.hasScene())
+    guardedUi("Feather designer", [&] { designer_.draw(*panels_, &view_.showDesigner); });
+  if (view_.showJsonInspector && doc_.hasScene()) guardedUi("Scene JSON", [&] { sceneJsonWindow(); });
+  if (view_.showHelp) guardedUi("Help", [&] { helpWindow(); });
+  if (doc_.hasScene() && doc_.scene().render.style == "scratchboard")
+    guardedUi("Scratchboard preview", [&] { scratchboardWindow(); });
+  guardedUi("dialog", [&] { dialogs(); });
   // Keyboard shortcuts (when no text field has the keyboard).
   ImGuiIO& io = ImGui::GetIO();
   if (!io.WantCaptureKeyboard) {
@@ -187,16 +223,21 @@ void App::panelColumn() {
     if (it != view_.panelRequests.end()) ImGui::SetNextItemOpen(it->second != 0);
     return ImGui::CollapsingHeader(name, defaultOpen ? ImGuiTreeNodeFlags_DefaultOpen : 0);
   };
-  if (header("View", true)) drawViewPanel(ctx);
+  // Each panel body is guarded on its own: an exception from one shows in the error modal, and the
+  // other panels, the window and the frame go on.
+  auto panel = [&](const char* name, bool defaultOpen, void (*draw)(PanelContext&)) {
+    if (header(name, defaultOpen)) guardedUi(name, [&] { draw(ctx); });
+  };
+  panel("View", true, drawViewPanel);
   if (header("Feather designer", false)) ImGui::Checkbox("Show the designer window", &view_.showDesigner);
-  if (header("Tracts", false)) drawTractsPanel(ctx);
-  if (header("Follicles", false)) drawFolliclesPanel(ctx);
-  if (header("Key feathers", false)) drawKeyFeathersPanel(ctx);
-  if (header("Directions", false)) drawDirectionsPanel(ctx);
-  if (header("Packing", false)) drawPackingPanel(ctx);
-  if (header("Timeline", true)) drawTimelinePanel(ctx);
-  if (header("Expressive controls", false)) drawControlsPanel(ctx);
-  if (header("Render", false)) drawRenderPanel(ctx);
+  panel("Tracts", false, drawTractsPanel);
+  panel("Follicles", false, drawFolliclesPanel);
+  panel("Key feathers", false, drawKeyFeathersPanel);
+  panel("Directions", false, drawDirectionsPanel);
+  panel("Packing", false, drawPackingPanel);
+  panel("Timeline", true, drawTimelinePanel);
+  panel("Expressive controls", false, drawControlsPanel);
+  panel("Render", false, drawRenderPanel);
   if (header("Stage timings", false)) {
     const Snapshot& s = doc_.snapshot();
     for (int i = 0; i < 10; ++i)

@@ -2,7 +2,7 @@
 // runs scripts that use the panels' own widgets (`ui PANEL WIDGET VALUE`): the two reported repros (a
 // control's lift/aim sliders on the crest scene; removing a key feather of the bird's "capital" tract)
 // used to abort in ImGui ("Forgot to call Render() or EndFrame()") because the panels kept references
-// into the scene across the edit.
+// into the scene across the edit. An exception inside a panel must leave the viewer running.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -89,4 +89,32 @@ TEST(ViewerRobust, RemoveKeyFeathersOfTheBird) {
   ASSERT_EQ(left.size(), keys.size() - 2);
   EXPECT_EQ(left[0]["at"], keys[1]["at"]);
   for (size_t i = 1; i < left.size(); ++i) EXPECT_EQ(left[i]["at"], keys[i + 2]["at"]);
+}
+
+// An exception inside a panel's body (here inside the Tracts table) goes to the error modal; the frame
+// ends cleanly and the session carries on (without the guard the scripted run ends with code 2, an
+// interactive one aborts in ImGui at the next frame).
+TEST(ViewerRobust, ExceptionInsideAPanelKeepsTheViewerRunning) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_throw");
+  const std::string saved = dir + "/patch.json", script = dir + "/s.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "count 0 24\n"
+                           "relax 2\n"
+                           "lod 0.2\n"
+                           "ui Tracts throw\n"
+                           "frames 3\n"
+                           "ui \"Key feathers\" throw\n"
+                           "frames 3\n"
+                           "ui Tracts select patch\n"
+                           "count 0 30\n"
+                           "frames 3\n"
+                        << "save " << saved << "\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("--script \"" + script + "\"", dir + "/stderr.txt");
+  const std::string err = slurp(dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << err;
+  EXPECT_NE(err.find("pteryla-viewer: error: Tracts: scripted fault inside the panel"), std::string::npos) << err;
+  EXPECT_NE(err.find("pteryla-viewer: error: Key feathers: scripted fault inside the panel"), std::string::npos) << err;
+  EXPECT_EQ(pipeline::loadScene(saved).tracts[0]["count"], 30);
 }
