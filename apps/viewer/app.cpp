@@ -43,7 +43,7 @@ int runViewer(const ViewerOptions& options) {
   return app.run();
 }
 
-App::App(const ViewerOptions& o) : options_(o) {
+App::App(const ViewerOptions& o) : options_(o), autosave_(o.autosaveSeconds) {
   requests_.frameAll = [this] { frameAll(); };
   requests_.screenshot = [this](const std::string& p) {
     shotPath_ = p;
@@ -117,6 +117,7 @@ int App::run() {
     if (!initWindow()) return 1;
     if (!options_.script.empty()) script_ = loadScript(options_.script);
     if (!options_.scene.empty()) doc_.open(options_.scene);
+    offerRecovery();
     fitTimeRange();
     if (options_.lod) doc_.setLod(*options_.lod);
     if (!options_.screenshot.empty()) {
@@ -145,6 +146,8 @@ int App::run() {
     }
     if (glfwWindowShouldClose(window_)) quit_ = true;
   }
+  // Saved (or never changed): the recovery file is not needed any more. Unsaved work keeps it.
+  autosave_.finish(doc_);
   return exitCode_;
 }
 
@@ -154,6 +157,48 @@ void App::endFrameAfterError() {
   if (!g.WithinFrameScope) return;
   ImGui::ErrorCheckEndFrameRecover(nullptr);
   ImGui::EndFrame();
+}
+
+void App::autosaveTick() {
+  try {
+    const double now = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    if (autosave_.tick(doc_, now) && scripted())
+      std::fprintf(stderr, "pteryla-viewer: autosaved %s\n", autosave_.written().c_str());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pteryla-viewer: autosave failed: %s\n", e.what());
+    if (!autosaveErrorShown_) showError(std::string("autosave failed (retrying): ") + e.what());
+    autosaveErrorShown_ = true;
+  }
+}
+
+// At start: unsaved work of the scene given (or, with no scene, the newest) is offered for restoring;
+// --recover restores it without asking (scripted sessions), other scripted runs leave it alone.
+void App::offerRecovery() {
+  const bool bareMesh = doc_.hasScene() && doc_.path().empty();
+  std::optional<std::string> file;
+  if (!bareMesh) file = findRecovery(doc_.hasScene() ? doc_.path() : "");
+  if (!file) {
+    if (options_.recover) throw Error("--recover: no unsaved work to recover", recoveryDir());
+    return;
+  }
+  if (!options_.recover && scripted()) return;
+  try {
+    offered_ = readRecovery(*file);
+  } catch (const Error& e) {
+    if (options_.recover) throw;
+    showError(std::string("a recovery file cannot be read (it is kept): ") + e.what());  // the viewer still starts
+    return;
+  }
+  if (options_.recover) restoreOffered(); else popupToOpen_ = "Recover unsaved work";
+}
+
+void App::restoreOffered() {
+  if (!offered_) return;
+  const Recovery r = std::move(*offered_);
+  offered_.reset();
+  restoreRecovery(doc_, r);
+  autosave_.adopt(r.file, doc_);
+  std::fprintf(stderr, "pteryla-viewer: restored unsaved work from %s\n", r.file.c_str());
 }
 
 void App::onCloseRequested() {
@@ -172,6 +217,7 @@ void App::frame() {
   if (auto e = doc_.takeError()) {
     if (scripted()) fail("evaluation failed: " + *e, 2); else showError(*e);
   }
+  autosaveTick();
   advancePlayback(*panels_);
   if (!script_.empty()) scriptStep();
   if (quit_) return;

@@ -16,6 +16,7 @@
 #include "document.hpp"
 #include "navigation.hpp"
 #include "panels.hpp"
+#include "recovery.hpp"
 #include "script.hpp"
 
 struct GLFWwindow;
@@ -43,6 +44,8 @@ struct ViewerOptions {
   int width = 1280, height = 800;
   std::optional<double> lod;
   bool vsync = true;
+  double autosaveSeconds = 60.0;  // --autosave-seconds: recovery file interval (0 = off), recovery.hpp
+  bool recover = false;           // --recover: restore the recovery file without asking
 };
 
 // Runs the viewer; returns the process exit code (0 ok, 1 internal/window error, 2 bad input or a
@@ -79,6 +82,10 @@ class App {
   void benchmarkStep();
   void fail(const std::string& message, int code);
   void endFrameAfterError();  // an exception left an ImGui frame open: close it so the next one starts cleanly
+  // Autosave and recovery (recovery.hpp).
+  void autosaveTick();
+  void offerRecovery();
+  void restoreOffered();
   // app_ui.cpp
   void buildUi();
   void menuBar();
@@ -141,6 +148,11 @@ class App {
   glm::ivec2 viewPixels_{0};  // the 3D view in framebuffer pixels
   float menuHeight_ = 19.0f;
 
+  // Autosave: the recovery file written while the scene has unsaved changes, and the one offered at start.
+  Autosaver autosave_;
+  std::optional<Recovery> offered_;
+  bool autosaveErrorShown_ = false;
+
   // Dialogs.
   std::vector<std::string> errors_;
   std::string popupToOpen_;
@@ -156,6 +168,7 @@ class App {
   std::vector<ScriptCommand> script_;
   size_t scriptNext_ = 0;
   int scriptWaitFrames_ = 0;
+  std::chrono::steady_clock::time_point scriptSleepUntil_{};  // `sleep S`: keep drawing until then
   bool awaitingMetrics_ = false;
   int exitCode_ = 0;
 

@@ -2,6 +2,7 @@
 // window keeps drawing (and the result is the same however long a stage takes). Any error ends the
 // session with exit code 2.
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 #include "app.hpp"
@@ -37,6 +38,7 @@ void App::scriptStep() {
            2);
     return;
   }
+  if (std::chrono::steady_clock::now() < scriptSleepUntil_) return;
   if (scriptWaitFrames_ > 0) {
     --scriptWaitFrames_;
     return;
@@ -138,6 +140,20 @@ void App::scriptStep() {
       view_.ui = UiRequest{c.args[0], c.args[1], c.args.size() > 2 ? c.args[2] : "", true, 0};
       view_.panelRequests[c.args[0]] = 1;
       view_.hidePanels = false;
+    } else if (c.verb == "sleep") {
+      needArgs(c, 1, 1, "sleep SECONDS", file);
+      const double secs = scriptNumber(c, 0, file);
+      if (!(secs >= 0 && secs <= 3600)) throw Error("sleep: seconds must be in [0, 3600]", file, "line " + std::to_string(c.line));
+      scriptSleepUntil_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(long(secs * 1000.0));
+    } else if (c.verb == "autosave") {
+      needArgs(c, 0, 0, "autosave", file);
+      const std::string written = autosave_.saveNow(doc_);
+      std::fprintf(stderr, "pteryla-viewer: autosaved %s\n", written.c_str());
+    } else if (c.verb == "crash") {
+      // Test hook: the process ends at once, as in a crash (no clean-up, no save, the recovery file stays).
+      needArgs(c, 0, 0, "crash", file);
+      std::fflush(nullptr);
+      std::_Exit(70);
     } else if (c.verb == "frame") {
       needArgs(c, 0, 0, "frame", file);
       frameAll();

@@ -279,6 +279,34 @@ void App::dialogs() {
   }
 
   ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+  if (ImGui::BeginPopupModal("Recover unsaved work", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    if (offered_) {
+      const std::string what = offered_->scenePath.empty() ? std::string("an untitled scene") : offered_->scenePath;
+      ImGui::Text("Unsaved changes to %s were autosaved (%s UTC).", what.c_str(), offered_->savedAt.c_str());
+      ImGui::TextDisabled("%s", offered_->file.c_str());
+      ImGui::Text("Restore them? The scene file is not changed until you save.");
+      if (ImGui::Button("Restore")) {
+        ImGui::CloseCurrentPopup();
+        try {
+          restoreOffered();
+          fitTimeRange();
+        } catch (const std::exception& e) {
+          showError(std::string("restore failed (the recovery file is kept): ") + e.what());
+        }
+      }
+      ImGui::SameLine();
+      if (ImGui::Button("Discard")) {
+        ImGui::CloseCurrentPopup();
+        removeRecovery(offered_->file);
+        offered_.reset();
+      }
+    } else {
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+  }
+
+  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
   if (ImGui::BeginPopupModal("Open scene", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
     ImGui::SetNextItemWidth(520);
     ImGui::InputText("scene or mesh", &openPath_);
@@ -355,6 +383,7 @@ void App::dialogs() {
     ImGui::SameLine();
     if (ImGui::Button("Discard")) {
       ImGui::CloseCurrentPopup();
+      autosave_.discard();  // the user threw the changes away: no recovery for them
       if (pending_ == Pending::Quit) quit_ = true;
       else if (pending_ == Pending::Open) openNow(pendingPath_);
       pending_ = Pending::None;

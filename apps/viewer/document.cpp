@@ -65,6 +65,7 @@ void Document::reset(Scene scene, const std::string& path) {
   scene_ = std::move(scene);
   path_ = path;
   modified_ = false;
+  ++changes_;
   undo_.clear();
   redo_.clear();
   gestureOpen_ = false;
@@ -88,6 +89,7 @@ void Document::reset(Scene scene, const std::string& path) {
 
 void Document::markChanged(const Scene& before) {
   modified_ = true;
+  ++changes_;
   failed_ = false;
   halted_ = false;
   metrics_.reset();

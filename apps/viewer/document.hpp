@@ -79,6 +79,13 @@ class Document {
   const pipeline::Scene& scene() const { return scene_; }
   const std::string& path() const { return path_; }  // "" for bare meshes: Save needs a path
   bool modified() const { return modified_; }
+  // Counts changes of the scene (edits, undo, redo, open): autosave writes when it moved on.
+  uint64_t changeCount() const { return changes_; }
+  // Marks the document as having unsaved changes (a scene restored from a recovery file).
+  void markModified() {
+    modified_ = true;
+    ++changes_;
+  }
 
   // Applies `fn` to the scene; one undo step (merged with the previous one when `label` is the same
   // and the gesture has not ended). A throwing `fn` leaves the scene unchanged.
@@ -141,6 +148,7 @@ class Document {
   pipeline::Scene scene_;
   std::string path_;
   bool modified_ = false;
+  uint64_t changes_ = 0;
   std::vector<Entry> undo_, redo_;
   bool gestureOpen_ = false;
   std::string lastLabel_;

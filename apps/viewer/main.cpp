@@ -26,6 +26,11 @@ int main(int argc, char** argv) {
   cli.add_option("--size", size, "Window size WxH (default 1280x800)");
   cli.add_option("--lod", lod, "Level of detail in (0,1] (default: the scene's render.lod)")->check(CLI::Range(1e-3, 1.0));
   cli.add_flag("--no-vsync", noVsync, "Do not wait for the display's refresh");
+  cli.add_option("--autosave-seconds", o.autosaveSeconds,
+                 "Write unsaved changes to a recovery file every N seconds (default 60, 0 = off; docs/viewer.md)")
+      ->check(CLI::Range(0.0, 1e9));
+  cli.add_flag("--recover", o.recover,
+               "Restore the autosaved unsaved work of SCENE (or, without SCENE, the newest) without asking");
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

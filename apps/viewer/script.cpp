@@ -87,7 +87,7 @@ std::vector<ScriptCommand> loadScript(const std::string& path) {
 }
 
 bool isViewCommand(const std::string& v) {
-  return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "click" || v == "drag" || v == "ui" || v == "tool" || v == "orbit" || v == "zoom" || v == "frame" || v == "frames" || v == "quit";
+  return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "click" || v == "drag" || v == "ui" || v == "autosave" || v == "crash" || v == "sleep" || v == "tool" || v == "orbit" || v == "zoom" || v == "frame" || v == "frames" || v == "quit";
 }
 
 double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file) {
@@ -262,11 +262,13 @@ const char* scriptHelp() {
   style shaded|scratchboard | brdf D H
   echo TEXT
   screenshot PATH | screenshot-window PATH (with the panels)
-  orbit YAW_DEG PITCH_DEG | zoom FACTOR | frame | frames N | quit
+  orbit YAW_DEG PITCH_DEG | zoom FACTOR | frame | frames N | sleep SECONDS | quit
   panel NAME|* open|closed       open or close panel headers (names as shown)
   tool orbit|key|vector|edit-vectors|bias|brush|control|pin [FEATHER]   viewport tool
   click X Y | drag X1 Y1 X2 Y2 [left|right|middle [STEPS]]   mouse in the 3D view (pixels or N%)
   ui PANEL WIDGET [VALUE]        use a panel's widget as a user would (docs/viewer.md lists them)
+  autosave                       write the recovery file now (the scene must have unsaved changes)
+  crash                          end the process at once, without clean-up (tests recovery)
   show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin|navigation on|off
 )";
 }

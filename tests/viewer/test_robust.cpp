@@ -2,9 +2,11 @@
 // runs scripts that use the panels' own widgets (`ui PANEL WIDGET VALUE`): the two reported repros (a
 // control's lift/aim sliders on the crest scene; removing a key feather of the bird's "capital" tract)
 // used to abort in ImGui ("Forgot to call Render() or EndFrame()") because the panels kept references
-// into the scene across the edit. An exception inside a panel must leave the viewer running.
+// into the scene across the edit. An exception inside a panel must leave the viewer running, and
+// unsaved work autosaved to the recovery file must come back after a crash.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -24,6 +26,16 @@ namespace {
 #define NEED_XVFB() \
   if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)"
 
+// Recovery files go to $XDG_STATE_HOME/pteryla/recovery: each test has its own.
+std::string stateEnv(const std::string& dir) { return "XDG_STATE_HOME=\"" + dir + "/state\""; }
+
+size_t filesIn(const std::string& dir) {
+  std::error_code ec;
+  size_t n = 0;
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) ++n;
+  return n;
+}
+
 // What the viewer reported through its error modal (scripted runs print it on stderr too).
 bool reportedError(const std::string& err) { return err.find("pteryla-viewer: error:") != std::string::npos; }
 
@@ -42,7 +54,7 @@ TEST(ViewerRobust, ControlSlidersOnTheCrestScene) {
                         << "save " << saved << "\n"
                         << "quit\n";
   const ViewerRun r = runViewer("\"" + viewer_test::dataPath("scenes/crest.json") + "\" --lod 0.2 --script \"" + script + "\"",
-                                dir + "/stderr.txt");
+                                dir + "/stderr.txt", stateEnv(dir));
   const std::string err = slurp(dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << err;
   EXPECT_FALSE(reportedError(err)) << err;
@@ -79,7 +91,7 @@ TEST(ViewerRobust, RemoveKeyFeathersOfTheBird) {
                         << "save " << saved << "\n"
                         << "quit\n";
   const ViewerRun r = runViewer("\"" + viewer_test::dataPath("scenes/bird.json") + "\" --lod 0.2 --script \"" + script + "\"",
-                                dir + "/stderr.txt");
+                                dir + "/stderr.txt", stateEnv(dir));
   const std::string err = slurp(dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << err;
   EXPECT_FALSE(reportedError(err)) << err;
@@ -111,10 +123,79 @@ TEST(ViewerRobust, ExceptionInsideAPanelKeepsTheViewerRunning) {
                            "frames 3\n"
                         << "save " << saved << "\n"
                         << "quit\n";
-  const ViewerRun r = runViewer("--script \"" + script + "\"", dir + "/stderr.txt");
+  const ViewerRun r = runViewer("--script \"" + script + "\"", dir + "/stderr.txt", stateEnv(dir));
   const std::string err = slurp(dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << err;
   EXPECT_NE(err.find("pteryla-viewer: error: Tracts: scripted fault inside the panel"), std::string::npos) << err;
   EXPECT_NE(err.find("pteryla-viewer: error: Key feathers: scripted fault inside the panel"), std::string::npos) << err;
   EXPECT_EQ(pipeline::loadScene(saved).tracts[0]["count"], 30);
+}
+
+// Autosave by the timer, a crash, and the next start restores the groom (--recover); the scene file is
+// never written, and the recovery file goes away once the work is saved.
+TEST(ViewerRobust, AutosaveRecoversTheGroomAfterACrash) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_autosave");
+  const std::string scene = dir + "/groom.json", recovered = dir + "/recovered.json";
+  pipeline::Scene start = viewer_test::smallPatch();
+  pipeline::saveScene(scene, start);
+  const std::string original = slurp(scene);
+
+  // Session 1: edits, waits past the autosave interval (the timer writes the file), then crashes.
+  const std::string s1 = dir + "/s1.txt";
+  std::ofstream(s1) << "count 0 31\n"
+                       "relax 2\n"
+                       "control 0 0.05 0 0.5\n"
+                       "lift 0 0.7\n"
+                       "sleep 2.5\n"
+                       "crash\n";
+  const ViewerRun r1 =
+      runViewer("\"" + scene + "\" --autosave-seconds 1 --script \"" + s1 + "\"", dir + "/stderr1.txt", stateEnv(dir));
+  const std::string err1 = slurp(dir + "/stderr1.txt");
+  ASSERT_EQ(r1.code, 70) << "the crash command ends the process with 70\n" << err1;
+  EXPECT_NE(err1.find("pteryla-viewer: autosaved "), std::string::npos) << err1;
+  const std::string recoveryDir = dir + "/state/pteryla/recovery";
+  ASSERT_EQ(filesIn(recoveryDir), 1u) << "one recovery file, no temporary left";
+  EXPECT_EQ(slurp(scene), original) << "autosave never writes the scene file";
+
+  // Session 2: the same scene with --recover: the groom is back, unsaved; Save As writes it.
+  const std::string s2 = dir + "/s2.txt";
+  std::ofstream(s2) << "save " << recovered << "\n"
+                    << "quit\n";
+  const ViewerRun r2 = runViewer("\"" + scene + "\" --recover --script \"" + s2 + "\"", dir + "/stderr2.txt", stateEnv(dir));
+  const std::string err2 = slurp(dir + "/stderr2.txt");
+  ASSERT_EQ(r2.code, 0) << err2;
+  EXPECT_NE(err2.find("pteryla-viewer: restored unsaved work from "), std::string::npos) << err2;
+  const pipeline::Scene back = pipeline::loadScene(recovered);
+  EXPECT_EQ(back.tracts[0]["count"], 31);
+  EXPECT_EQ(back.tracts[0]["relax"]["iterations"], 2);
+  ASSERT_EQ(back.controls.size(), 1u);
+  EXPECT_DOUBLE_EQ(back.controls[0].value("lift", -1.0), 0.7);
+  EXPECT_EQ(slurp(scene), original) << "restoring never writes the scene file";
+  EXPECT_EQ(filesIn(recoveryDir), 0u) << "saving removes the recovery file";
+
+  // Nothing left to recover: --recover says so (exit 2).
+  const ViewerRun r3 = runViewer("\"" + scene + "\" --recover --script \"" + s2 + "\"", dir + "/stderr3.txt", stateEnv(dir));
+  EXPECT_EQ(r3.code, 2) << slurp(dir + "/stderr3.txt");
+}
+
+// The explicit `autosave` command, quitting without saving (a scripted quit does not ask), and a start
+// with no scene restores the newest recovery file.
+TEST(ViewerRobust, ForcedAutosaveIsRestoredOnAStartWithoutAScene) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_autosave_forced");
+  const std::string scene = dir + "/groom.json", recovered = dir + "/recovered.json";
+  pipeline::saveScene(scene, viewer_test::smallPatch());
+  const std::string s1 = dir + "/s1.txt", s2 = dir + "/s2.txt";
+  std::ofstream(s1) << "load " << scene << "\n"
+                    << "count 0 27\n"
+                       "autosave\n"
+                       "quit\n";
+  const ViewerRun r1 = runViewer("--autosave-seconds 0 --script \"" + s1 + "\"", dir + "/stderr1.txt", stateEnv(dir));
+  ASSERT_EQ(r1.code, 0) << slurp(dir + "/stderr1.txt");
+  std::ofstream(s2) << "save " << recovered << "\n"
+                    << "quit\n";
+  const ViewerRun r2 = runViewer("--recover --script \"" + s2 + "\"", dir + "/stderr2.txt", stateEnv(dir));
+  ASSERT_EQ(r2.code, 0) << slurp(dir + "/stderr2.txt");
+  EXPECT_EQ(pipeline::loadScene(recovered).tracts[0]["count"], 27);
 }
