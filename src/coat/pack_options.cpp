@@ -15,6 +15,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 PackOptions parsePackOptions(JsonReader& r) {
   PackOptions o;
+  o.method = r.oneOf("method", "height_field", {"height_field", "drape"}) == "drape" ? PackMethod::Drape : PackMethod::HeightField;
+  o.drapeMaxSlopeDeg = r.number("drape_max_slope_deg", o.drapeMaxSlopeDeg, 0.0, 60.0);
   o.clearance = r.number("clearance", 0.0, 0.0, kInf);
   o.skinClearance = r.number("skin_clearance", 0.0, 0.0, kInf);
   o.minElevation = r.number("min_elevation_deg", 0.0, -90.0, 180.0) * kDeg;
@@ -45,6 +47,8 @@ PackOptions parsePackOptions(JsonReader& r) {
 Json packOptionsToJson(const PackOptions& o) {
   const PackOptions d;
   Json j = Json::object();
+  if (o.method != d.method) j["method"] = o.method == PackMethod::Drape ? "drape" : "height_field";
+  if (o.drapeMaxSlopeDeg != d.drapeMaxSlopeDeg) j["drape_max_slope_deg"] = o.drapeMaxSlopeDeg;
   if (o.clearance != d.clearance) j["clearance"] = o.clearance;
   if (o.skinClearance != d.skinClearance) j["skin_clearance"] = o.skinClearance;
   if (o.minElevation != d.minElevation) j["min_elevation_deg"] = o.minElevation / kDeg;

@@ -20,6 +20,7 @@
 #include "pteryla/coat/key_feathers.hpp"
 #include "pteryla/coat/metrics.hpp"
 #include "pteryla/coat/ordering.hpp"
+#include "pteryla/coat/drape.hpp"
 #include "pteryla/coat/pack.hpp"
 #include "pteryla/coat/parameterize.hpp"
 #include "pteryla/coat/relax.hpp"
@@ -113,6 +114,12 @@ struct Pipeline::Impl {
   std::vector<double> fixedElevation;
   const coat::PackResult* packed = nullptr;  // timeState.frame.result once packed
   const coat::CoatFeathers* packedCoat = nullptr;  // the coat `packed` was packed from (coatNow or packCoat)
+  // Draped packing (packing.method "drape"): the pack stage lays nothing (every elevation 0, `flatPack`)
+  // and the mesh stage drapes the assembled mesh; `drape` is its last result. The mesh's indices before
+  // draping trimmed triangles are kept, since assembleMesh copies reused slices from the last mesh.
+  coat::PackResult flatPack;
+  coat::DrapeResult drape;
+  std::vector<uint32_t> undrapedIndices;
   CoatMesh mesh;
   // Rest-state generation: bumped whenever the directions stage (downstream of every rest stage) runs,
   // so caches of time-stage results know when the rest state they were made from is gone.
@@ -480,7 +487,15 @@ void Pipeline::Impl::computePack() {
     });
     packInput = &packCoat;
   }
-  if (o.moultOver && moulting(coatNow)) {
+  if (o.method == coat::PackMethod::Drape) {
+    // Laid by the mesh stage (computeMesh drapes the flat coat): every feather meshed flat, unpacked.
+    flatPack = coat::PackResult{};
+    flatPack.order = coatNow.layerOrder;
+    flatPack.elevation.assign(coatNow.size(), 0.0);
+    flatPack.stats.packed = coatNow.layerOrder.size();
+    packed = &flatPack;
+    packedCoat = &coatNow;
+  } else if (o.moultOver && moulting(coatNow)) {
     // A moult frame: the mature coat is packed as a frame without a moult would be, and the lost and
     // growing feathers are packed over it (docs/moult.md). With "moult_pack": "full" the frame is
     // repacked like any other (below).
@@ -779,7 +794,18 @@ void Pipeline::Impl::computeMesh() {
     which.push_back(i);
   }
   std::vector<feather::FeatherMeshRanges> ranges;
+  if (!undrapedIndices.empty() && undrapedIndices.size() == mesh.mesh.indices.size()) mesh.mesh.indices.swap(undrapedIndices);
+  undrapedIndices.clear();
   assembleMesh(inputs, which, shed, ranges);
+  drape = coat::DrapeResult{};
+  if (packOptions.method == coat::PackMethod::Drape) {
+    undrapedIndices = mesh.mesh.indices;
+    coat::DrapeOptions dopt;
+    dopt.gap = packOptions.clearance;
+    dopt.maxSlope = std::tan(packOptions.drapeMaxSlopeDeg * feather::kPi / 180.0);
+    dopt.threads = packOptions.threads;
+    drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt);
+  }
   mesh.ranges.clear();
   mesh.ranges.reserve(ranges.size());
   std::map<std::string, uint32_t> matIndex;
@@ -934,20 +960,30 @@ QualityMetrics Pipeline::check() {
   m.intersectingPairs = r.intersectingPairs;
   m.skinPenetrations = r.skinPenetrations;
   m.coverage = r.coverage;
+  // How steeply feathers rise: the packed elevations, or for a draped coat its rise over the skin.
+  const bool draped = impl_->packOptions.method == coat::PackMethod::Drape;
+  const std::vector<double>& elevation = draped ? impl_->drape.elevation : impl_->packed->elevation;
   std::vector<double> el;
   for (size_t i = 0; i < impl_->coatNow.size(); ++i)
-    if (impl_->coatNow.present[i]) el.push_back(impl_->packed->elevation[i]);
-  double median = 0;
+    if (impl_->coatNow.present[i] && i < elevation.size()) el.push_back(elevation[i] * 180.0 / feather::kPi);
   if (!el.empty()) {
-    std::nth_element(el.begin(), el.begin() + el.size() / 2, el.end());
-    median = el[el.size() / 2];
+    std::sort(el.begin(), el.end());
+    m.elevationP50 = el[el.size() / 2];
+    m.elevationP90 = el[std::min(el.size() - 1, el.size() * 9 / 10)];
   }
-  const std::vector<double> flat(impl_->coatNow.size(), median);
+  if (draped) {
+    m.fixedFeathers = impl_->drape.stats.trimmedFeathers;
+    m.hiddenFeathers = impl_->drape.stats.hiddenFeathers;
+  }
+  // The unpacked coat, from the input alone: every feather at kUnpackedElevationDeg with its own key barbs.
+  const std::vector<double> flat(impl_->coatNow.size(), kUnpackedElevationDeg * feather::kPi / 180.0);
   const TriMesh unpacked = coat::proxyCoatMesh(impl_->coatNow, flat, impl_->coatNow.params);
-  const TriMesh packedProxy = coat::proxyCoatMesh(impl_->coatNow, impl_->packed->elevation,
-                                                  coat::allPackedParams(*impl_->packedCoat, *impl_->packed));
+  if (!draped) {
+    const TriMesh packedProxy = coat::proxyCoatMesh(impl_->coatNow, impl_->packed->elevation,
+                                                    coat::allPackedParams(*impl_->packedCoat, *impl_->packed));
+    m.intersectingPairsProxy = coat::countIntersectingPairs(packedProxy);
+  }
   m.intersectingPairsUnpacked = coat::countIntersectingPairs(unpacked);
-  m.intersectingPairsProxy = coat::countIntersectingPairs(packedProxy);
   report(impl_->progress, "check", 1);
   setLod(savedLod);
   return m;

@@ -1,0 +1,68 @@
+#pragma once
+// Draped packing: every feather lies on the skin, following it, stacked on the feathers under it.
+//
+// The height-field packer (pack.hpp, thesis 6.3.2-6.3.3) turns each feather as a rigid body about its
+// follicle until it clears what lies under its footprint. On a body that curves, a rigid feather must
+// stand to clear concave skin and floats off convex skin, and it sees only the skin under its own
+// footprint. Draping keeps the thesis' one-pass, ordered, deterministic layering but measures height
+// over the skin instead of over the follicle's tangent plane (the "aim mesh" and "surface blend" of
+// production systems, docs/packing.md):
+//
+//  1. Chart. Each feather's flat layout (elevation 0, local x along the shaft, y across the vane) is
+//     mapped onto the skin by marching: along the shaft from the follicle, then across from each shaft
+//     node, every step a closest-point projection within the step length of the previous surface point,
+//     with the feather's direction transported into each new tangent plane. The chart is a small grid
+//     of surface points, normals and directions per feather.
+//  2. Height. In layer order (bottom first), a node's required height over the skin is the highest
+//     feather material already laid near its surface point (a hash over surface cells, split by normal
+//     class so the far side of a thin part does not count), plus a gap. The feather's height is the
+//     smallest function above those requirements whose slope over the skin is at most `maxSlope` (the
+//     upper Lipschitz envelope): a stiff feather rides over what is under it instead of following each
+//     bump. Near the follicle the height ramps from the skin over the calamus.
+//  3. Mesh. Every vertex of the feather mesh (built at elevation 0) is moved to its chart point plus its
+//     height along the chart normal; normals and tangents turn with the chart frame.
+//  4. Guarantees. Material of an earlier (lower) feather over a later feather's follicle, where the later
+//     feather rises out of the skin, is trimmed; so are vertices whose chart left the skin or landed
+//     inside it. Trimmed and hidden feathers are counted.
+#include <cstdint>
+#include <vector>
+
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/core/trimesh.hpp"
+
+namespace pteryla::coat {
+
+struct DrapeOptions {
+  double gap = 0;          // scene units between stacked feathers and above the skin; 0 = auto (0.004 x median feather length)
+  double maxSlope = 0.27;  // largest rise of a feather's height over the skin per unit length (tan 15 degrees)
+  int gridAlong = 16;      // chart nodes along a feather (>= 2)
+  int gridAcross = 9;      // chart nodes across it (>= 2)
+  int threads = 0;         // 0 = all cores
+};
+
+struct DrapeStats {
+  size_t draped = 0;            // feathers laid on the skin
+  size_t trimmedFeathers = 0;   // feathers that lost triangles (over a later follicle, off or inside the skin)
+  size_t hiddenFeathers = 0;    // feathers with no triangle left
+  size_t trimmedTriangles = 0;  // triangles removed (collapsed to a point)
+  double gap = 0;               // the gap used (scene units)
+  double seconds = 0;
+};
+
+struct DrapeResult {
+  // Per feather, radians: how steeply the shaft rises over the skin, atan(height / distance along the
+  // skin), the largest over the shaft's chart nodes past the calamus. 0 for feathers not draped.
+  std::vector<double> elevation;
+  std::vector<uint8_t> trimmed;  // per feather: 1 when it lost triangles
+  std::vector<uint8_t> hidden;   // per feather: 1 when it lost every triangle
+  DrapeStats stats;
+};
+
+// Drapes `mesh`, the coat meshed with every feather at elevation 0 from `coat.frames` (featherId per
+// vertex; feathers absent from coat.layerOrder are left alone), over `skin`. Rewrites positions, normals
+// and tangents in place and collapses trimmed triangles to a point (index ranges stay valid).
+// Throws Error for inconsistent input (featherId out of range or missing).
+DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& options = {});
+
+}  // namespace pteryla::coat

@@ -1,0 +1,679 @@
+// Draped packing (drape.hpp): feathers laid on the skin along surface charts and stacked by height over
+// the skin, in layer order.
+#include "pteryla/coat/drape.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "pteryla/core/error.hpp"
+#include "spatial.hpp"
+
+namespace pteryla::coat {
+
+using glm::dvec3;
+
+namespace {
+
+constexpr double kFoldCos = 0.766;  // cos 40 degrees
+constexpr double kFacing = 0.35;  // cos 70 degrees: samples facing away belong to another part
+
+struct Node {
+  dvec3 c{0};        // surface point
+  dvec3 n{0, 0, 1};  // skin normal there
+  dvec3 t{1, 0, 0};  // the feather's direction transported into the tangent plane
+  double h = 0;      // height over the skin
+  uint8_t ok = 0;    // the chart reached the skin here
+  uint8_t active = 0;  // next to feather material
+};
+
+struct Chart {
+  double x0 = 0, y0 = 0, hx = 1, hy = 1, diag = 0;
+  int nx = 0, ny = 0;
+  double ramp = 0;   // the height ramps up from the skin over x in [0, ramp] (the calamus)
+  double scale = 1;  // the feather's flat layout is scaled by this (shortened over later follicles)
+  double maxEdge = 0;
+  std::vector<uint8_t> material;  // per cell ((nx - 1) x (ny - 1)): holds feather vertices
+  // Finer material mask: kSub x kSub sub-cells per cell, set where a vertex lies, dilated by one sub-cell.
+  static constexpr int kSub = 4;
+  std::vector<uint8_t> fine;
+  int fineX() const { return (nx - 1) * kSub; }
+  int fineY() const { return (ny - 1) * kSub; }
+  bool covers(double x, double y) const {
+    const int a = static_cast<int>(std::floor((x - x0) / hx * kSub)), b = static_cast<int>(std::floor((y - y0) / hy * kSub));
+    if (a < 0 || b < 0 || a >= fineX() || b >= fineY()) return false;
+    return fine[static_cast<size_t>(a) * fineY() + b] != 0;
+  }
+  std::vector<Node> nodes;  // a * ny + b
+  const Node& at(int a, int b) const { return nodes[static_cast<size_t>(a) * ny + b]; }
+  Node& at(int a, int b) { return nodes[static_cast<size_t>(a) * ny + b]; }
+  // Cell and bilinear weights of local (x, y), clamped to the grid.
+  void locate(double x, double y, int& a, int& b, double& u, double& v) const {
+    const double fx = (x - x0) / hx, fy = (y - y0) / hy;
+    a = std::clamp(static_cast<int>(std::floor(fx)), 0, nx - 2);
+    b = std::clamp(static_cast<int>(std::floor(fy)), 0, ny - 2);
+    u = std::clamp(fx - a, 0.0, 1.0);
+    v = std::clamp(fy - b, 0.0, 1.0);
+  }
+};
+
+class Surface {
+ public:
+  explicit Surface(const SkinMesh& s) : skin_(s) {
+    flat_.resize(3 * s.faces.size());
+    for (size_t f = 0; f < s.faces.size(); ++f)
+      for (int k = 0; k < 3; ++k) flat_[3 * f + k] = s.faces[f][k];
+    bvh_.build(s.positions.data(), flat_.data(), s.faces.size());
+  }
+  // One step of length dist along the unit tangent dir from `from`, back onto the skin (the closest skin
+  // point within dist of the moved point); the direction t is transported into the new tangent plane.
+  bool step(const Node& from, const dvec3& dir, double dist, Node& to) const {
+    const dvec3 q = from.c + dist * dir;
+    const double md = std::max(dist, 1e-300);
+    dvec3 bary;
+    double d2 = 0;
+    const int64_t f = bvh_.nearest(q, md * md, bary, d2);
+    if (f < 0) return false;
+    to.c = pointAt(skin_, static_cast<uint32_t>(f), bary);
+    to.n = normalAt(skin_, static_cast<uint32_t>(f), bary);
+    const dvec3 t = from.t - glm::dot(from.t, to.n) * to.n;
+    const double l = glm::length(t);
+    if (!(l > 1e-12) || !std::isfinite(l)) return false;
+    to.t = t / l;
+    to.ok = 1;
+    return true;
+  }
+  // Marches a signed distance along the feather direction (along) or across it (+ = n x t), in steps of
+  // at most maxStep.
+  bool march(Node p, bool along, double dist, double maxStep, Node& out) const {
+    if (dist == 0) {
+      out = p;
+      return p.ok;
+    }
+    const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(dist) / maxStep)));
+    const double d = std::abs(dist) / steps, sign = dist < 0 ? -1.0 : 1.0;
+    for (int k = 0; k < steps; ++k) {
+      const dvec3 dir = sign * (along ? p.t : glm::normalize(glm::cross(p.n, p.t)));
+      Node next;
+      if (!step(p, dir, d, next)) return false;
+      p = next;
+    }
+    out = p;
+    return true;
+  }
+  // Does p, at most `dist` from the skin, lie inside it? (The nearest skin point's interpolated normal
+  // points away from p.)
+  bool inside(const dvec3& p, double dist) const {
+    dvec3 bary;
+    double d2 = 0;
+    const int64_t f = bvh_.nearest(p, dist * dist, bary, d2);
+    if (f < 0) return false;
+    const dvec3 q = pointAt(skin_, static_cast<uint32_t>(f), bary);
+    return glm::dot(p - q, normalAt(skin_, static_cast<uint32_t>(f), bary)) < 0;
+  }
+  // Is the body at c thinner than `depth` (skin hit going in along -n)?
+  bool thinnerThan(const dvec3& c, const dvec3& n, double depth) const {
+    return bvh_.anyHit(c - 1e-9 * depth * n, -n, 0.0, depth);
+  }
+  // Is any skin closer to p than `dist`?
+  bool skinWithin(const dvec3& p, double dist) const {
+    dvec3 bary;
+    double d2 = 0;
+    return bvh_.nearest(p, dist * dist, bary, d2) >= 0;
+  }
+
+ private:
+  const SkinMesh& skin_;
+  std::vector<uint32_t> flat_;
+  detail::TriangleBvh bvh_;
+};
+
+// The top of the coat laid so far, on samples of the skin: every face sampled on a barycentric grid no
+// coarser than `spacing`; top[s] is the height over the skin of the highest feather material over sample s
+// (0: bare skin). Samples are looked up by position and only count for a node whose normal is within
+// about 70 degrees of theirs, so the far side of a thin part never raises a feather.
+class CoatTop {
+ public:
+  CoatTop(const SkinMesh& skin, double spacing) {
+    for (size_t f = 0; f < skin.faces.size(); ++f) {
+      const auto& t = skin.faces[f];
+      const dvec3 a = skin.positions[t[0]], b = skin.positions[t[1]], c = skin.positions[t[2]];
+      const double e = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+      const int m = std::clamp(static_cast<int>(std::ceil(e / spacing)), 1, 4096);
+      for (int i = 0; i <= m; ++i)
+        for (int j = 0; i + j <= m; ++j) {
+          const dvec3 bary(double(m - i - j) / m, double(i) / m, double(j) / m);
+          pos_.push_back(pointAt(skin, static_cast<uint32_t>(f), bary));
+          nrm_.push_back(normalAt(skin, static_cast<uint32_t>(f), bary));
+        }
+    }
+    top_.assign(pos_.size(), 0.0f);
+    grid_.build(pos_, spacing * 2);
+  }
+  size_t size() const { return pos_.size(); }
+  // Highest top within radius of c among samples facing like n.
+  double highest(const dvec3& c, const dvec3& n, double radius) const {
+    double best = 0;
+    const double r2 = radius * radius;
+    grid_.query(c - dvec3(radius), c + dvec3(radius), [&](uint32_t s) {
+      if (top_[s] <= best) return;
+      const dvec3 d = pos_[s] - c;
+      if (glm::dot(d, d) <= r2 && glm::dot(nrm_[s], n) > kFacing) best = top_[s];
+    });
+    return best;
+  }
+  // Calls f(sample) for the samples within radius of c facing like n.
+  template <class F>
+  void near(const dvec3& c, const dvec3& n, double radius, F&& f) {
+    const double r2 = radius * radius;
+    grid_.query(c - dvec3(radius), c + dvec3(radius), [&](uint32_t s) {
+      const dvec3 d = pos_[s] - c;
+      if (glm::dot(d, d) <= r2 && glm::dot(nrm_[s], n) > kFacing) f(s);
+    });
+  }
+  const dvec3& position(uint32_t s) const { return pos_[s]; }
+  double at(uint32_t s) const { return top_[s]; }
+  void raise(uint32_t s, double h) { top_[s] = std::max(top_[s], static_cast<float>(h)); }
+
+ private:
+  std::vector<dvec3> pos_, nrm_;
+  std::vector<float> top_;
+  detail::PointGrid grid_;
+};
+
+void buildChart(const Surface& S, const FeatherFrame& F, const feather::FeatherParams& p, const TriMesh& mesh,
+                const uint32_t* verts, size_t count, double scale, const DrapeOptions& o, Chart& C) {
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  for (size_t k = 0; k < count; ++k) {
+    const dvec3 d = dvec3(mesh.positions[verts[k]]) - F.origin;
+    const double x = scale * glm::dot(d, F.tangent), y = scale * glm::dot(d, F.binormal);
+    x0 = std::min(x0, x);
+    x1 = std::max(x1, x);
+    y0 = std::min(y0, y);
+    y1 = std::max(y1, y);
+  }
+  const double len = std::max(x1 - x0, 1e-9);
+  C.nx = std::max(2, o.gridAlong);
+  C.ny = std::max(2, o.gridAcross);
+  const double pad = 1e-6 * len;
+  C.x0 = x0 - pad;
+  C.y0 = y0 - pad;
+  C.hx = (x1 - x0 + 2 * pad) / (C.nx - 1);
+  C.hy = std::max(y1 - y0 + 2 * pad, 2 * pad) / (C.ny - 1);
+  C.diag = std::sqrt(C.hx * C.hx + C.hy * C.hy);
+  C.ramp = std::clamp(scale * p.calamusLength, 0.02 * len, 0.25 * len);
+  C.nodes.assign(static_cast<size_t>(C.nx) * C.ny, Node{});
+  C.scale = scale;
+  const double maxStep = std::min(C.hx, std::max(C.hy, 0.25 * C.hx));
+  Node root;
+  root.c = F.origin;
+  root.n = F.normal;
+  root.t = F.tangent;
+  root.ok = 1;
+  // The spine (y = 0) at every column's x: forward from the follicle, then backward.
+  std::vector<Node> spine(C.nx);
+  Node cur = root;
+  double xCur = 0;
+  bool alive = true;
+  for (int a = 0; a < C.nx; ++a) {
+    const double x = C.x0 + a * C.hx;
+    if (x < 0) continue;
+    alive = alive && S.march(cur, true, x - xCur, maxStep, cur);
+    xCur = x;
+    spine[a] = alive ? cur : Node{};
+  }
+  cur = root;
+  xCur = 0;
+  alive = true;
+  for (int a = C.nx - 1; a >= 0; --a) {
+    const double x = C.x0 + a * C.hx;
+    if (x >= 0) continue;
+    alive = alive && S.march(cur, true, x - xCur, maxStep, cur);
+    xCur = x;
+    spine[a] = alive ? cur : Node{};
+  }
+  // Across from the spine: toward +y, then toward -y.
+  for (int a = 0; a < C.nx; ++a) {
+    for (int side = 0; side < 2; ++side) {
+      Node p = spine[a];
+      double yCur = 0;
+      bool ok = p.ok;
+      for (int k = 0; k < C.ny; ++k) {
+        const int b = side == 0 ? k : C.ny - 1 - k;
+        const double y = C.y0 + b * C.hy;
+        if (side == 0 ? y < 0 : y >= 0) continue;
+        ok = ok && S.march(p, false, y - yCur, maxStep, p);
+        yCur = y;
+        C.at(a, b) = ok ? p : Node{};
+      }
+    }
+  }
+  // Nodes next to material: the corners of every cell holding a vertex; the longest edge for trimming.
+  std::vector<uint8_t>& cell = C.material;
+  cell.assign(static_cast<size_t>(C.nx - 1) * (C.ny - 1), 0);
+  for (size_t k = 0; k < count; ++k) {
+    const dvec3 d = dvec3(mesh.positions[verts[k]]) - F.origin;
+    int a, b;
+    double u, v;
+    C.locate(scale * glm::dot(d, F.tangent), scale * glm::dot(d, F.binormal), a, b, u, v);
+    cell[static_cast<size_t>(a) * (C.ny - 1) + b] = 1;
+  }
+  std::vector<uint8_t> raw(static_cast<size_t>(C.fineX()) * C.fineY(), 0);
+  for (size_t k = 0; k < count; ++k) {
+    const dvec3 d = dvec3(mesh.positions[verts[k]]) - F.origin;
+    const int a = std::clamp(static_cast<int>(std::floor((scale * glm::dot(d, F.tangent) - C.x0) / C.hx * Chart::kSub)), 0, C.fineX() - 1);
+    const int b = std::clamp(static_cast<int>(std::floor((scale * glm::dot(d, F.binormal) - C.y0) / C.hy * Chart::kSub)), 0, C.fineY() - 1);
+    raw[static_cast<size_t>(a) * C.fineY() + b] = 1;
+  }
+  C.fine.assign(raw.size(), 0);
+  for (int a = 0; a < C.fineX(); ++a)
+    for (int b = 0; b < C.fineY(); ++b) {
+      bool any = false;
+      for (int da = -1; da <= 1 && !any; ++da)
+        for (int db = -1; db <= 1 && !any; ++db) {
+          const int aa = a + da, bb = b + db;
+          any = aa >= 0 && bb >= 0 && aa < C.fineX() && bb < C.fineY() && raw[static_cast<size_t>(aa) * C.fineY() + bb];
+        }
+      C.fine[static_cast<size_t>(a) * C.fineY() + b] = any ? 1 : 0;
+    }
+  for (int a = 0; a + 1 < C.nx; ++a)
+    for (int b = 0; b + 1 < C.ny; ++b)
+      if (cell[static_cast<size_t>(a) * (C.ny - 1) + b])
+        C.at(a, b).active = C.at(a + 1, b).active = C.at(a, b + 1).active = C.at(a + 1, b + 1).active = 1;
+}
+
+// Layer order agrees with the feathers: a feather never covers the follicle of a feather laid after it
+// (that feather would rise out of the skin through it). The flat footprint (a raster of where the
+// feather has vertices, local x, y) is tested against the root zones of the later follicles in reach,
+// taken into the feather's tangent plane; the feather is scaled about its follicle by the largest factor
+// in [minScale, 1] that covers none (bisection).
+double shrinkScale(const FeatherFrame& F, const TriMesh& mesh, const uint32_t* verts, size_t count,
+                   const std::vector<std::pair<glm::dvec2, double>>& later, int rx, int ry, double minScale) {
+  if (later.empty() || count == 0) return 1.0;
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  std::vector<glm::dvec2> loc(count);
+  for (size_t k = 0; k < count; ++k) {
+    const dvec3 d = dvec3(mesh.positions[verts[k]]) - F.origin;
+    loc[k] = {glm::dot(d, F.tangent), glm::dot(d, F.binormal)};
+    x0 = std::min(x0, loc[k].x);
+    x1 = std::max(x1, loc[k].x);
+    y0 = std::min(y0, loc[k].y);
+    y1 = std::max(y1, loc[k].y);
+  }
+  const double cx = std::max(x1 - x0, 1e-12) / rx, cy = std::max(y1 - y0, 1e-12) / ry;
+  std::vector<uint8_t> raw(static_cast<size_t>(rx) * ry, 0), m(raw.size(), 0);
+  for (const auto& q : loc)
+    raw[static_cast<size_t>(std::clamp(int((q.x - x0) / cx), 0, rx - 1)) * ry + std::clamp(int((q.y - y0) / cy), 0, ry - 1)] = 1;
+  for (int a = 0; a < rx; ++a)
+    for (int b = 0; b < ry; ++b)
+      for (int da = -1; da <= 1; ++da)
+        for (int db = -1; db <= 1; ++db) {
+          const int aa = a + da, bb = b + db;
+          if (aa >= 0 && bb >= 0 && aa < rx && bb < ry && raw[static_cast<size_t>(aa) * ry + bb]) m[static_cast<size_t>(a) * ry + b] = 1;
+        }
+  auto covered = [&](double x, double y) {
+    const double fa = std::floor((x - x0) / cx), fb = std::floor((y - y0) / cy);
+    return fa >= 0 && fb >= 0 && fa < rx && fb < ry && m[static_cast<size_t>(fa) * ry + static_cast<size_t>(fb)];
+  };
+  auto anyCovered = [&](double s) {
+    for (const auto& [c, r] : later) {
+      if (c.x <= 0.5 * r) continue;  // behind or beside the follicle: the calamus, not the vane
+      for (int k = 0; k <= 8; ++k) {
+        const double ang = k * (2 * 3.14159265358979323846 / 8);
+        const double rr = k == 8 ? 0.0 : r;
+        if (covered((c.x + rr * std::cos(ang)) / s, (c.y + rr * std::sin(ang)) / s)) return true;
+      }
+    }
+    return false;
+  };
+  if (!anyCovered(1.0)) return 1.0;
+  if (anyCovered(minScale)) return minScale;
+  double lo = minScale, hi = 1.0;
+  for (int it = 0; it < 10; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (anyCovered(mid) ? hi : lo) = mid;
+  }
+  return lo;
+}
+
+// Calls f(sample, a, b, u, v) for the skin samples under a chart's material (cell a, b, weights u, v),
+// their chart coordinates from each nearby node's frame (a sample may come more than once).
+template <class F>
+void forCoveredSamples(const Chart& C, CoatTop& top, F&& f) {
+  for (int k = 0; k < C.nx * C.ny; ++k) {
+    const Node& nd = C.nodes[k];
+    if (!nd.ok || !nd.active) continue;
+    const double xa = C.x0 + (k / C.ny) * C.hx, yb = C.y0 + (k % C.ny) * C.hy;
+    const dvec3 bn = glm::cross(nd.n, nd.t);
+    top.near(nd.c, nd.n, 0.75 * C.diag, [&](uint32_t s) {
+      const dvec3 d = top.position(s) - nd.c;
+      const double x = xa + glm::dot(d, nd.t), y = yb + glm::dot(d, bn);
+      if (!C.covers(x, y)) return;
+      int a, b;
+      double u, v;
+      C.locate(x, y, a, b, u, v);
+      f(s, a, b, u, v);
+    });
+  }
+}
+
+// Heights of one chart's active nodes over the skin: above the coat's top near each node by the gap, as
+// the smallest function with slope <= maxSlope over those requirements. Then the feather becomes the
+// coat's top over the samples its material covers.
+void layChart(Chart& C, CoatTop& top, double reqRadius, double gap, double maxSlope,
+              std::vector<double>& req, std::vector<int>& idx) {
+  idx.clear();
+  for (int k = 0; k < C.nx * C.ny; ++k)
+    if (C.nodes[k].ok && C.nodes[k].active) idx.push_back(k);
+  req.resize(idx.size());
+  for (size_t j = 0; j < idx.size(); ++j) {
+    const Node& n = C.nodes[idx[j]];
+    req[j] = top.highest(n.c, n.n, reqRadius) + gap;
+  }
+  auto envelope = [&] {
+    for (size_t j = 0; j < idx.size(); ++j) req[j] = C.nodes[idx[j]].h;
+    for (size_t j = 0; j < idx.size(); ++j) {
+      const int aj = idx[j] / C.ny, bj = idx[j] % C.ny;
+      double h = req[j];
+      for (size_t m = 0; m < idx.size(); ++m) {
+        if (req[m] <= h) continue;
+        const double dx = (idx[m] / C.ny - aj) * C.hx, dy = (idx[m] % C.ny - bj) * C.hy;
+        h = std::max(h, req[m] - maxSlope * std::sqrt(dx * dx + dy * dy));
+      }
+      C.nodes[idx[j]].h = h;
+    }
+  };
+  for (size_t j = 0; j < idx.size(); ++j) C.nodes[idx[j]].h = req[j];
+  // Every sample under the feather's material: where the interpolated height is below the coat's top
+  // there plus the gap, the cell's corners rise by the shortfall (heights only rise, so one pass leaves
+  // every sample satisfied).
+  forCoveredSamples(C, top, [&](uint32_t s, int a, int b, double u, double v) {
+    Node* c4[4] = {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)};
+    const double w4[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
+    double h = 0;
+    for (int m = 0; m < 4; ++m) {
+      if (!c4[m]->ok || !c4[m]->active) return;
+      h += w4[m] * c4[m]->h;
+    }
+    const double need = top.at(s) + gap;
+    if (h < need)
+      for (int m = 0; m < 4; ++m) c4[m]->h += need - h;
+  });
+  envelope();
+  forCoveredSamples(C, top, [&](uint32_t s, int a, int b, double u, double v) {
+    const Node* c4[4] = {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)};
+    const double w4[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
+    double h = 0;
+    for (int m = 0; m < 4; ++m) {
+      if (!c4[m]->ok || !c4[m]->active) return;
+      h += w4[m] * c4[m]->h;
+    }
+    top.raise(s, h);
+  });
+}
+
+template <class F>
+void inArena(int threads, F&& f) {
+  if (threads >= 1) {
+    tbb::task_arena arena(threads);
+    arena.execute(f);
+  } else {
+    f();
+  }
+}
+
+}  // namespace
+
+DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t n = coat.size(), nv = mesh.positions.size();
+  if (mesh.featherId.size() != nv) throw Error("the coat mesh needs one featherId per vertex", {}, "featherId");
+  if (coat.frames.size() != n || coat.params.size() != n)
+    throw Error("the coat needs one frame and one parameter set per feather", {}, "frames");
+  DrapeResult res;
+  res.elevation.assign(n, 0.0);
+  res.trimmed.assign(n, 0);
+  res.hidden.assign(n, 0);
+  if (nv == 0 || skin.faces.empty()) return res;
+  // Vertices per feather (CSR).
+  std::vector<uint32_t> first(n + 1, 0), verts(nv);
+  for (uint32_t f : mesh.featherId) {
+    if (f >= n) throw Error("featherId " + std::to_string(f) + " out of range", {}, "featherId");
+    ++first[f + 1];
+  }
+  for (size_t i = 0; i < n; ++i) first[i + 1] += first[i];
+  {
+    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+    for (uint32_t v = 0; v < nv; ++v) verts[fill[mesh.featherId[v]]++] = v;
+  }
+  std::vector<int64_t> rank(n, -1);
+  std::vector<uint32_t> order;
+  for (uint32_t i : coat.layerOrder)
+    if (i < n && rank[i] < 0 && first[i + 1] > first[i]) {
+      rank[i] = static_cast<int64_t>(order.size());
+      order.push_back(i);
+    }
+  if (order.empty()) return res;
+  const Surface S(skin);
+  std::vector<Chart> charts(n);
+  // Scale factors: no feather covers a later follicle's root zone.
+  std::vector<double> scale(n, 1.0);
+  {
+    std::vector<dvec3> origins;
+    double reach = 0;
+    for (uint32_t i : order) {
+      origins.push_back(coat.frames[i].origin);
+      for (uint32_t q = first[i]; q < first[i + 1]; ++q)
+        reach = std::max(reach, double(glm::length(dvec3(mesh.positions[verts[q]]) - coat.frames[i].origin)));
+    }
+    detail::PointGrid og;
+    og.build(origins, std::max(reach, 1e-12));
+    inArena(o.threads, [&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<std::pair<glm::dvec2, double>> later;
+        for (size_t k = r.begin(); k < r.end(); ++k) {
+          const uint32_t i = order[k];
+          const FeatherFrame& F = coat.frames[i];
+          double ri = 0;
+          for (uint32_t q = first[i]; q < first[i + 1]; ++q)
+            ri = std::max(ri, double(glm::length(dvec3(mesh.positions[verts[q]]) - F.origin)));
+          later.clear();
+          og.query(F.origin - dvec3(ri), F.origin + dvec3(ri), [&](uint32_t j) {
+            if (j <= k) return;
+            const FeatherFrame& G = coat.frames[order[j]];
+            if (glm::dot(G.normal, F.normal) < 0.3) return;  // the far side of a thin part
+            const dvec3 d = G.origin - F.origin;
+            if (glm::length(d) > ri) return;
+            const feather::FeatherParams& pj = coat.params[order[j]];
+            later.push_back({{glm::dot(d, F.tangent), glm::dot(d, F.binormal)},
+                             0.5 * pj.rachisWidth + std::max(pj.calamusLength, 0.02 * pj.totalLength())});
+          });
+          scale[i] = shrinkScale(F, mesh, verts.data() + first[i], first[i + 1] - first[i], later,
+                                 4 * (std::max(2, o.gridAlong) - 1), 4 * (std::max(2, o.gridAcross) - 1), 0.3);
+        }
+      });
+    });
+  }
+  std::vector<double> lengths;
+  inArena(o.threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) {
+        const uint32_t i = order[k];
+        buildChart(S, coat.frames[i], coat.params[i], mesh, verts.data() + first[i], first[i + 1] - first[i],
+                   scale[i], o, charts[i]);
+      }
+    });
+  });
+  for (uint32_t i : order) lengths.push_back(charts[i].hx * (charts[i].nx - 1));
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  const double medianLength = lengths[lengths.size() / 2];
+  const double gap = o.gap > 0 ? o.gap : 0.004 * medianLength;
+  res.stats.gap = gap;
+  std::vector<double> steps;
+  for (uint32_t i : order) steps.push_back(std::min(charts[i].hx, charts[i].hy));
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  double spacing = std::max(0.75 * steps[steps.size() / 2], 1e-12);
+  const double area = skin.totalArea();
+  if (area / (spacing * spacing) > 8e6) spacing = std::sqrt(area / 8e6);  // at most about 8M samples
+  CoatTop top(skin, spacing);
+  {
+    std::vector<double> req;
+    std::vector<int> idx;
+    for (uint32_t i : order) layChart(charts[i], top, 1.5 * spacing, gap, o.maxSlope, req, idx);
+  }
+  // A node whose lifted point has other skin closer than half its height sits in a fold, and one where
+  // the body is thinner than twice its height would meet the coat of the other side: not draped.
+  inArena(o.threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k)
+        for (Node& nd : charts[order[k]].nodes)
+          if (nd.ok && nd.active &&
+              (S.skinWithin(nd.c + nd.h * nd.n, 0.5 * nd.h * (1 - 1e-9)) || S.thinnerThan(nd.c, nd.n, 2 * nd.h + gap)))
+            nd.ok = 0;
+    });
+  });
+  // Move every vertex; remember its surface point for trimming.
+  std::vector<glm::vec3> surfacePoint(nv);
+  std::vector<uint8_t> bad(nv, 0);
+  const bool hasN = mesh.normals.size() == nv, hasT = mesh.tangents.size() == nv;
+  inArena(o.threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) {
+        const uint32_t i = order[k];
+        Chart& C = charts[i];
+        const FeatherFrame& F = coat.frames[i];
+        for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
+          const uint32_t v = verts[q];
+          const dvec3 d = dvec3(mesh.positions[v]) - F.origin;
+          const double x = C.scale * glm::dot(d, F.tangent), y = C.scale * glm::dot(d, F.binormal);
+          int a, b;
+          double u, w;
+          C.locate(x, y, a, b, u, w);
+          const Node* c4[4] = {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)};
+          const double w4[4] = {(1 - u) * (1 - w), u * (1 - w), (1 - u) * w, u * w};
+          dvec3 c(0), nn(0), tt(0);
+          double h = 0;
+          bool ok = true;
+          // A cell whose corners' normals differ by more than ~40 degrees folds over a rim or into a
+          // crease: its chords leave the skin's side. Trimmed.
+          for (int m = 0; m < 4 && ok; ++m)
+            for (int m2 = m + 1; m2 < 4 && ok; ++m2) ok = glm::dot(c4[m]->n, c4[m2]->n) > kFoldCos;
+          for (int m = 0; m < 4; ++m) {
+            ok = ok && c4[m]->ok;
+            c += w4[m] * c4[m]->c;
+            nn += w4[m] * c4[m]->n;
+            tt += w4[m] * c4[m]->t;
+            h += w4[m] * c4[m]->h;
+          }
+          const double nl = glm::length(nn);
+          if (!ok || !(nl > 1e-9)) {
+            bad[v] = 1;
+            surfacePoint[v] = glm::vec3(F.origin + d);
+            continue;
+          }
+          nn /= nl;
+          tt -= glm::dot(tt, nn) * nn;
+          const double tl = glm::length(tt);
+          tt = tl > 1e-12 ? tt / tl : F.tangent;
+          const dvec3 bb = glm::cross(nn, tt);
+          if (x < C.ramp) h *= std::max(0.0, x) / C.ramp;
+          const dvec3 pos = c + h * nn;
+          // The guarantee: a vertex inside the skin (a fold the chart did not see, another body part) is trimmed.
+          if (x >= C.ramp && S.inside(dvec3(glm::vec3(pos)), h * 1.001 + 1e-12)) bad[v] = 1;
+          mesh.positions[v] = glm::vec3(pos);
+          surfacePoint[v] = glm::vec3(c);
+          auto turn = [&](const glm::vec3& e) {
+            const dvec3 ed(e);
+            return glm::vec3(glm::dot(ed, F.tangent) * tt + glm::dot(ed, F.binormal) * bb + glm::dot(ed, F.normal) * nn);
+          };
+          if (hasN) mesh.normals[v] = turn(mesh.normals[v]);
+          if (hasT) mesh.tangents[v] = turn(mesh.tangents[v]);
+        }
+        // Elevation: the steepest rise of the spine's nodes past the calamus.
+        const int b0 = std::clamp(static_cast<int>(std::lround(-C.y0 / C.hy)), 0, C.ny - 1);
+        double e = 0;
+        for (int a = 0; a < C.nx; ++a) {
+          const double x = C.x0 + a * C.hx;
+          const Node& nd = C.at(a, b0);
+          if (x > C.ramp && nd.ok && nd.active) e = std::max(e, std::atan2(nd.h, x));
+        }
+        res.elevation[i] = e;
+      }
+    });
+  });
+  // Longest triangle edge per feather (for the trimming radius).
+  const size_t nt = mesh.triangleCount();
+  for (size_t t = 0; t < nt; ++t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    const uint32_t f = mesh.featherId[tri[0]];
+    for (int k = 0; k < 3; ++k)
+      charts[f].maxEdge = std::max(charts[f].maxEdge, double(glm::length(surfacePoint[tri[k]] - surfacePoint[tri[(k + 1) % 3]])));
+  }
+  // Trim lower feathers' material over a later feather's follicle, where that feather rises out of the skin.
+  std::vector<dvec3> origins;
+  double reachMax = 0, edgeMax = 0;
+  for (uint32_t i : order) {
+    origins.push_back(coat.frames[i].origin);
+    reachMax = std::max(reachMax, charts[i].ramp + 0.5 * coat.params[i].rachisWidth);
+    edgeMax = std::max(edgeMax, charts[i].maxEdge);
+  }
+  detail::PointGrid grid;
+  grid.build(origins, std::max(reachMax + edgeMax, 1e-12));
+  inArena(o.threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) {
+        const uint32_t i = order[k];
+        const double pad = reachMax + charts[i].maxEdge;
+        for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
+          const uint32_t v = verts[q];
+          if (bad[v]) continue;
+          const dvec3 c(surfacePoint[v]);
+          grid.query(c - dvec3(pad), c + dvec3(pad), [&](uint32_t j) {
+            if (static_cast<int64_t>(j) <= rank[i] || bad[v]) return;
+            const uint32_t f = order[j];
+            const double rj = charts[f].ramp + 0.5 * coat.params[f].rachisWidth + charts[i].maxEdge;
+            if (glm::length(c - coat.frames[f].origin) < rj) bad[v] = 1;
+          });
+        }
+      }
+    });
+  });
+  // Trimmed vertices serve only collapsed triangles: park them at their follicle.
+  for (uint32_t v = 0; v < nv; ++v)
+    if (bad[v] && rank[mesh.featherId[v]] >= 0) mesh.positions[v] = glm::vec3(coat.frames[mesh.featherId[v]].origin);
+  std::vector<size_t> kept(n, 0), cut(n, 0);
+  for (size_t t = 0; t < nt; ++t) {
+    uint32_t* tri = &mesh.indices[3 * t];
+    const uint32_t f = mesh.featherId[tri[0]];
+    if (rank[f] < 0) continue;
+    if (bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) {
+      tri[1] = tri[2] = tri[0];
+      ++cut[f];
+    } else {
+      ++kept[f];
+    }
+  }
+  for (uint32_t i : order) {
+    ++res.stats.draped;
+    if (cut[i]) {
+      res.trimmed[i] = 1;
+      ++res.stats.trimmedFeathers;
+      res.stats.trimmedTriangles += cut[i];
+      if (!kept[i]) {
+        res.hidden[i] = 1;
+        ++res.stats.hiddenFeathers;
+      }
+    }
+  }
+  res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+}  // namespace pteryla::coat

@@ -1,0 +1,92 @@
+// Draped packing (coat/drape.hpp) through the pipeline: a draped coat lies down, stays out of the skin
+// and out of other feathers on a smooth body, is deterministic, and the check's unpacked baseline does
+// not depend on how the coat was packed.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "pteryla/coat/pack.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+
+using namespace pteryla;
+using namespace pteryla::pipeline;
+
+namespace {
+// The sphere with one direction axis and nothing else but the packing method.
+Scene sphereScene(const char* method, double clearance = 0) {
+  Json j = Json::parse(R"({"pteryla": 1, "seed": 3, "mesh": "meshes/sphere_1600.obj",
+    "feathers": {"contour": "feathers/contour.json"},
+    "tracts": [{"name": "all", "count": 400, "feather_scale": "auto", "feather_spacings": 3.0,
+                "parameterization": {"method": "projection", "view_direction": [0, -1, 0]}}],
+    "directions": {"axis": [[0, 1.5, 0], [0, -1.5, 0]]},
+    "ordering": {"method": "axis", "axis": [[0, 1.5, 0], [0, -1.5, 0]]}})");
+  j["packing"] = Json{{"method", method}};
+  if (clearance > 0) j["packing"]["clearance"] = clearance;
+  return sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
+}
+}  // namespace
+
+TEST(Drape, SphereCoatLiesDownWithoutPenetrationsOrCrossings) {
+  Pipeline p(sphereScene("drape"));
+  const QualityMetrics m = p.check();
+  ASSERT_TRUE(m.skinPenetrations && m.intersectingPairs && m.intersectingPairsUnpacked && m.elevationP50);
+  EXPECT_EQ(*m.skinPenetrations, 0u);
+  EXPECT_EQ(*m.intersectingPairs, 0u);
+  EXPECT_GT(*m.intersectingPairsUnpacked, 1000u);  // the same feathers at 10 degrees cross everywhere
+  EXPECT_LT(*m.elevationP50, 10.0);                // a coat a few feathers deep
+  EXPECT_GT(*m.coverage, 0.97);
+  ASSERT_TRUE(m.hiddenFeathers);
+  EXPECT_LT(*m.hiddenFeathers, 4u);
+}
+
+TEST(Drape, FeathersFollowTheSkinInsteadOfStandingOff) {
+  // Every vertex of a draped feather lies close over the skin (the sphere's radius is 1; its polygons lie
+  // up to a few percent inside it), where a rigid feather's tip floats off a convex body.
+  Pipeline p(sphereScene("drape"));
+  const TriMesh& m = p.coatMesh().mesh;
+  ASSERT_FALSE(m.empty());
+  double worst = 0;
+  for (const auto& v : m.positions) worst = std::max(worst, std::abs(double(glm::length(v)) - 1.0));
+  Pipeline rigid(sphereScene("height_field"));
+  double worstRigid = 0;
+  for (const auto& v : rigid.coatMesh().mesh.positions) worstRigid = std::max(worstRigid, std::abs(double(glm::length(v)) - 1.0));
+  EXPECT_LT(worst, 0.12) << "rigid " << worstRigid;
+  EXPECT_GT(worstRigid, 2 * worst);
+}
+
+TEST(Drape, SameSceneGivesTheSameCoatBitForBit) {
+  Pipeline a(sphereScene("drape")), b(sphereScene("drape"));
+  EXPECT_EQ(a.coatMesh().mesh.positions, b.coatMesh().mesh.positions);
+  EXPECT_EQ(a.coatMesh().mesh.indices, b.coatMesh().mesh.indices);
+}
+
+TEST(Drape, UnpackedBaselineDependsOnTheInputOnly) {
+  const QualityMetrics a = Pipeline(sphereScene("drape")).check();
+  const QualityMetrics b = Pipeline(sphereScene("height_field")).check();
+  const QualityMetrics c = Pipeline(sphereScene("drape", 0.01)).check();
+  EXPECT_EQ(*a.intersectingPairsUnpacked, *b.intersectingPairsUnpacked);
+  EXPECT_EQ(*a.intersectingPairsUnpacked, *c.intersectingPairsUnpacked);
+  ASSERT_TRUE(b.elevationP50 && b.elevationP90);
+  EXPECT_LE(*b.elevationP50, *b.elevationP90);
+}
+
+TEST(Drape, BareMeshScenesDrapeAndTheMethodRoundTrips) {
+  Json j = Json::parse(R"({"pteryla": 1, "mesh": "meshes/sphere_250.obj", "feathers": {"contour": "feathers/contour.json"},
+                         "packing": {"method": "drape", "drape_max_slope_deg": 10}})");
+  const Scene s = sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
+  JsonReader r(s.packing, "scene_test.json", "packing");
+  const coat::PackOptions o = coat::parsePackOptions(r);
+  EXPECT_EQ(o.method, coat::PackMethod::Drape);
+  EXPECT_EQ(o.drapeMaxSlopeDeg, 10.0);
+  EXPECT_EQ(coat::packOptionsToJson(o), s.packing);
+  Json bad = j;
+  bad["packing"]["method"] = "stack";
+  const Scene sb = sceneFromJson(bad, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
+  JsonReader rb(sb.packing, "scene_test.json", "packing");
+  EXPECT_THROW(coat::parsePackOptions(rb), Error);
+  const Scene bare = loadScene(std::string(PTERYLA_DATA_DIR) + "/meshes/sphere_250.obj");
+  EXPECT_EQ(bare.packing.value("method", ""), "drape");
+}
