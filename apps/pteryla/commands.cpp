@@ -95,12 +95,14 @@ int cmdCheck(const Common& c, const SceneArgs& a) {
   endProgress(c);
   std::printf(
       "{\"follicles\": %s, \"hex_fraction\": %s, \"nn_cv\": %s, \"feathers\": %s, \"intersecting_pairs\": %s, "
-      "\"intersecting_pairs_unpacked\": %s, \"intersecting_pairs_proxy\": %s, \"skin_penetrations\": %s, \"coverage\": %s}\n",
+      "\"intersecting_pairs_unpacked\": %s, \"intersecting_pairs_proxy\": %s, \"skin_penetrations\": %s, \"coverage\": %s, "
+      "\"elevation_p50\": %s, \"elevation_p90\": %s, \"fixed_feathers\": %s, \"hidden_feathers\": %s}\n",
       jsonCountOrNull(m.follicles).c_str(), jsonNumberOrNull(m.hexFraction).c_str(), jsonNumberOrNull(m.nnCv).c_str(),
       jsonCountOrNull(m.feathers).c_str(), jsonCountOrNull(m.intersectingPairs).c_str(),
       jsonCountOrNull(m.intersectingPairsUnpacked).c_str(), jsonCountOrNull(m.intersectingPairsProxy).c_str(),
-      jsonCountOrNull(m.skinPenetrations).c_str(),
-      jsonNumberOrNull(m.coverage).c_str());
+      jsonCountOrNull(m.skinPenetrations).c_str(), jsonNumberOrNull(m.coverage).c_str(),
+      jsonNumberOrNull(m.elevationP50).c_str(), jsonNumberOrNull(m.elevationP90).c_str(),
+      jsonCountOrNull(m.fixedFeathers).c_str(), jsonCountOrNull(m.hiddenFeathers).c_str());
   return 0;
 }
 

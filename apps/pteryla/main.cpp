@@ -43,7 +43,9 @@ int main(int argc, char** argv) {
   SceneArgs check;
   auto* cCheck = app.add_subcommand(
       "check", "Print one JSON object of quality metrics on stdout: follicles, hex_fraction, nn_cv, feathers,\n"
-               "intersecting_pairs, intersecting_pairs_unpacked, skin_penetrations, coverage (null = not computed)");
+               "intersecting_pairs, intersecting_pairs_unpacked (every feather at 10 degrees, unflattened),\n"
+               "intersecting_pairs_proxy, skin_penetrations, coverage, elevation_p50, elevation_p90 (degrees),\n"
+               "fixed_feathers, hidden_feathers (draped coats) (null = not computed)");
   addSceneOptions(cCheck, check, false);
 
   SceneArgs bench;

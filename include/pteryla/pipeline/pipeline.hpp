@@ -61,7 +61,17 @@ struct QualityMetrics {
   // Same-geometry comparison for the unpacked count: the packed coat meshed like the unpacked one.
   std::optional<size_t> intersectingPairsProxy;
   std::optional<double> coverage;
+  // Median and 90th percentile of how steeply feathers rise, degrees (packed elevation; for a draped
+  // coat, the rise of the shaft over the skin).
+  std::optional<double> elevationP50, elevationP90;
+  // Draped coats: feathers the drape's guarantees trimmed (material over a later follicle, off or inside
+  // the skin) and feathers left with no triangle.
+  std::optional<size_t> fixedFeathers, hiddenFeathers;
 };
+
+// The unpacked coat `check` compares against: every feather at this elevation (degrees) with its own,
+// unflattened barbs, from the input alone.
+inline constexpr double kUnpackedElevationDeg = 10.0;
 
 // How the last evaluation of the pack and mesh stages reused earlier work (diagnostics for tests and
 // benchmarks; results never depend on it).
