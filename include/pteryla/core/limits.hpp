@@ -1,0 +1,20 @@
+#pragma once
+// Resource ceilings checked before allocating (docs/limits.md). pteryla estimates the memory a request
+// needs (follicles, barbs, triangles, pixels, textures, declared mesh counts) and refuses it with a
+// pteryla::Error naming the file and key when the estimate exceeds the ceiling, instead of running the
+// machine out of memory. The ceiling defaults to kDefaultMemoryLimitGb; `pteryla --max-memory GB` raises it.
+#include <string>
+
+namespace pteryla {
+
+constexpr double kDefaultMemoryLimitGb = 4.0;
+
+// Process-wide ceiling in bytes.
+double memoryLimitBytes();
+void setMemoryLimitBytes(double bytes);
+
+// Throws Error(file, element) when `bytes` exceeds the ceiling:
+// "<what> needs about 6.3 GB, above the memory ceiling of 4 GB (raise it with --max-memory GB)".
+void requireMemory(double bytes, const std::string& what, const std::string& file, const std::string& element);
+
+}  // namespace pteryla
