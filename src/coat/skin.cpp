@@ -119,6 +119,56 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
     raw.positions[v] = glm::dvec3(0);
   }
 
+  // Texture coordinates and normals end up in exported meshes: no NaN or infinity.
+  for (uint32_t p = 0; p < np && !raw.cornerUVs.empty(); ++p)
+    for (uint32_t k = raw.polyOffsets[p]; k < raw.polyOffsets[p + 1]; ++k)
+      if (!std::isfinite(raw.cornerUVs[k].x) || !std::isfinite(raw.cornerUVs[k].y) ||
+          std::abs(raw.cornerUVs[k].x) > 1e12 || std::abs(raw.cornerUVs[k].y) > 1e12)
+        throw Error("texture coordinate is not finite (or beyond +-1e12)", file, faceName(p));
+  for (size_t v = 0; v < raw.vertexNormals.size(); ++v)
+    if (!finite(raw.vertexNormals[v])) throw Error("normal is not finite " + fmtVec(raw.vertexNormals[v]), file, "vertex " + std::to_string(v));
+
+  // Magnitude and precision. Feathers are meshed and rendered in 32-bit float: far from the origin, or
+  // tiny next to their distance from it, triangles collapse (and spatial searches degenerate).
+  {
+    size_t far = nv;
+    double farAbs = 0;
+    for (size_t v = 0; v < nv; ++v) {
+      if (badVertex[v]) continue;
+      const double a = std::max({std::abs(raw.positions[v].x), std::abs(raw.positions[v].y), std::abs(raw.positions[v].z)});
+      if (a > farAbs) { farAbs = a; far = v; }
+    }
+    if (farAbs > kMaxMeshCoordinate) {
+      std::ostringstream os;
+      os << "coordinate " << fmtVec(raw.positions[far]) << " is beyond +-" << kMaxMeshCoordinate
+         << " (the largest supported; move the mesh near the origin or change its units)";
+      throw Error(os.str(), file, "vertex " + std::to_string(far));
+    }
+    std::vector<double> edges;
+    edges.reserve(std::min<size_t>(np, 100000));
+    const size_t step = std::max<size_t>(1, np / 100000);
+    for (uint32_t p = 0; p < np; p += static_cast<uint32_t>(step)) {
+      const uint32_t b = raw.polyOffsets[p], e = raw.polyOffsets[p + 1];
+      if (e - b < 2) continue;
+      const uint32_t v0 = raw.polyIndices[b], v1 = raw.polyIndices[b + 1];
+      if (badVertex[v0] || badVertex[v1]) continue;
+      const double len = glm::length(raw.positions[v1] - raw.positions[v0]);
+      if (len > 0) edges.push_back(len);
+    }
+    if (!edges.empty()) {
+      std::nth_element(edges.begin(), edges.begin() + static_cast<long>(edges.size() / 2), edges.end());
+      const double typical = edges[edges.size() / 2];
+      if (farAbs > kMaxMeshRange * typical) {
+        std::ostringstream os;
+        os << "vertex " << fmtVec(raw.positions[far]) << " lies " << farAbs / typical
+           << " typical edge lengths (" << typical << ") from the origin, more than " << kMaxMeshRange
+           << ": 32-bit float geometry cannot resolve feathers there (a mistyped vertex? otherwise move the mesh "
+              "near the origin)";
+        throw Error(os.str(), file, "vertex " + std::to_string(far));
+      }
+    }
+  }
+
   // Bounding-box diagonal over finite vertices used by faces.
   glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
   for (uint32_t v : raw.polyIndices)

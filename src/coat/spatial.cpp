@@ -26,6 +26,7 @@ void PointGrid::build(const glm::dvec3* points, size_t count, double cell) {
   for (size_t i = 0; i < count; ++i) b.add(points[i]);
   // Keep the cell count bounded (a few cells per point at most).
   const glm::dvec3 ext = b.hi - b.lo;
+  PTERYLA_CHECK(std::isfinite(ext.x) && std::isfinite(ext.y) && std::isfinite(ext.z), "grid points must be finite");
   double c = cell;
   for (;;) {
     const double n = std::floor(ext.x / c + 1) * std::floor(ext.y / c + 1) * std::floor(ext.z / c + 1);

@@ -100,7 +100,22 @@ void CellGrid::kNearest(const glm::dvec3* pts, const glm::dvec3& p, uint32_t sel
   out.clear();
   const auto c = coords(p);
   const int rmax = maxShell(c);
+  // Shell r costs about 24 r^2 + 2 table look-ups. Points far apart (an outlier, or mesh components 1e6
+  // cells away) would need millions of shells; once the look-ups would exceed a few per point, a scan of
+  // every point is cheaper and gives the same answer (exact distances, ties by index).
+  const double scanCost = 4.0 * static_cast<double>(order_.size()) + 64.0;
+  double spent = 0;
   for (int r = 0;; ++r) {
+    spent += 24.0 * double(r) * double(r) + 2.0;
+    if (r > 1 && spent > scanCost) {
+      out.clear();
+      for (uint32_t q : order_) {
+        if (q == self) continue;
+        const glm::dvec3 d = pts[q] - p;
+        out.emplace_back(glm::dot(d, d), q);
+      }
+      break;
+    }
     shell.clear();
     gatherShell(c, r, shell);
     for (uint32_t q : shell) {

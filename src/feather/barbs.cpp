@@ -66,7 +66,9 @@ struct Arc {
       c = std::cos(phi);
     }
     const double r = length / theta;
-    const double oneMinusC = s * s / (1 + c);  // stable 1 - cos
+    // 1 - cos without cancellation near phi = 0; near phi = pi (a half-circle rachis) 1 + c vanishes
+    // and 1 - c itself is exact.
+    const double oneMinusC = 1 + c > 1e-3 ? s * s / (1 + c) : 1 - c;
     // point = base + r (s x + (1 - c) n)
     f.point = base + glm::dvec3(r * s, r * oneMinusC * ny, r * oneMinusC * nz);
     f.tangent = {c, s * ny, s * nz};

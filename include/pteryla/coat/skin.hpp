@@ -24,6 +24,13 @@
 
 namespace pteryla::coat {
 
+// Skin meshes are refused (pteryla::Error naming the vertex) when a coordinate exceeds kMaxMeshCoordinate,
+// or when the farthest coordinate is more than kMaxMeshRange typical (median) edge lengths from the origin:
+// feathers are meshed and rendered in 32-bit float, which cannot resolve them there (docs/limits.md).
+constexpr double kMaxMeshCoordinate = 1e6;
+constexpr double kMaxMeshRange = 1e4;
+
+
 struct MeshLoadOptions {
   // Repair instead of rejecting: drop faces touching non-finite vertices, drop polygons with < 3 vertices,
   // weld vertices closer than weldTolerance, drop degenerate faces, drop faces that make an edge
