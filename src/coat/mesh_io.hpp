@@ -27,6 +27,9 @@ struct RawMesh {
 RawMesh readObj(const std::string& path);
 // PLY / OFF / STL through OpenMesh's readers with a capturing importer (no connectivity fix-ups).
 RawMesh readWithOpenMesh(const std::string& path);
+// PLY / OFF / STL: checks the header, declared counts (against the file size and the memory ceiling)
+// and list lengths before OpenMesh reads the file; throws pteryla::Error naming the file and element.
+void checkMeshFileStructure(const std::string& path);
 // Validates / repairs and builds the SkinMesh.
 SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& options, const std::string& file);
 

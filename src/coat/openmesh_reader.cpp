@@ -5,10 +5,12 @@
 #include <OpenMesh/Core/IO/IOManager.hh>
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/IO/importer/BaseImporter.hh>
+#include <OpenMesh/Core/System/omstream.hh>
 
 #include "mesh_io.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
+#include "pteryla/core/quiet.hpp"
 
 namespace pteryla::coat::detail {
 namespace {
@@ -94,12 +96,21 @@ class CaptureImporter final : public BaseImporter {
 
 RawMesh readWithOpenMesh(const std::string& path) {
   if (!fileExists(path)) throw Error("cannot open mesh file (does it exist?)", path);
+  checkMeshFileStructure(path);
   CaptureImporter imp;
   OpenMesh::IO::Options opt;
   opt += OpenMesh::IO::Options::VertexNormal;
   opt += OpenMesh::IO::Options::VertexTexCoord;
   bool ok = false;
   try {
+    // OpenMesh's own log and error lines (omlog, omerr) would duplicate or precede pteryla's message.
+    // OpenMesh buffers these streams and may flush them after our scope (or at exit): disable them.
+    if (quiet()) {
+      omerr().disable();
+      omlog().disable();
+      omout().disable();
+    }
+    const QuietThirdParty silence;
     ok = OpenMesh::IO::IOManager().read(path, imp, opt);
   } catch (const std::exception& e) {
     throw Error(std::string("mesh reader failed: ") + e.what(), path);
