@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "pteryla/core/atomic_file.hpp"
 #include "pteryla/core/error.hpp"
 
 namespace pteryla {
@@ -31,10 +32,7 @@ Json readJsonFile(const std::string& path) {
 }
 
 void writeJsonFile(const std::string& path, const Json& j) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw Error("cannot write file", path);
-  out << j.dump(2) << "\n";
-  if (!out) throw Error("write failed", path);
+  writeFileAtomic(path, j.dump(2) + "\n");
 }
 
 JsonReader::JsonReader(const Json& j, std::string file, std::string path)
@@ -62,6 +60,13 @@ double jsonNumber(const Json& v, const std::string& file, const std::string& pat
   if (!v.is_number()) throw Error("expected a number, got " + std::string(v.type_name()), file, path);
   const double d = v.get<double>();
   if (!std::isfinite(d)) throw Error("expected a finite number", file, path);
+  // Squares and products of larger values overflow to infinity inside the geometry (1e154 squared).
+  if (std::abs(d) > kMaxJsonMagnitude) {
+    std::ostringstream os;
+    os << "value " << d << " is too large (pteryla accepts numbers in [-" << kMaxJsonMagnitude << ", "
+       << kMaxJsonMagnitude << "])";
+    throw Error(os.str(), file, path);
+  }
   return d;
 }
 

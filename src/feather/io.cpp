@@ -7,7 +7,9 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <sstream>
 
+#include "pteryla/core/atomic_file.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/feather/bezier.hpp"
 #include "pteryla/feather/generator.hpp"
@@ -307,8 +309,7 @@ void saveFeather(const std::string& path, const FeatherParams& p) {
 }
 
 void writeCurvesObj(const std::string& path, const FeatherCurves& curves, int barbSegments) {
-  std::ofstream out(path);
-  if (!out) throw Error("cannot write file", path);
+  std::ostringstream out;
   out << "# pteryla feather curves: " << curves.partCount() << " shaft(s), " << curves.barbs.size() << " barbs\n";
   size_t next = 1;  // OBJ indices are 1-based
   char buf[96];
@@ -337,7 +338,10 @@ void writeCurvesObj(const std::string& path, const FeatherCurves& curves, int ba
     out << "\n";
     next += poly.size();
   }
-  if (!out) throw Error("write failed", path);
+  const std::string text = out.str();
+  if (text.find("nan") != std::string::npos || text.find("inf") != std::string::npos)
+    throw Error("the feather curves have non-finite coordinates; nothing written", path);
+  writeFileAtomic(path, text);
 }
 
 }  // namespace pteryla::feather

@@ -8,31 +8,20 @@
 #include <memory>
 #include <vector>
 
+#include "pteryla/core/atomic_file.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/finite.hpp"
 
 namespace pteryla::feather {
 
 namespace {
 
+// Output through a temporary file renamed on success (a failed write keeps the previous file).
 struct File {
-  std::FILE* f = nullptr;
-  std::string path;
-  explicit File(const std::string& p) : path(p) {
-    f = std::fopen(p.c_str(), "wb");
-    if (!f) throw Error("cannot open file for writing", p);
-    std::setvbuf(f, nullptr, _IOFBF, 1 << 20);
-  }
-  ~File() {
-    if (f) std::fclose(f);
-  }
-  void write(const void* data, size_t n) {
-    if (n && std::fwrite(data, 1, n, f) != n) throw Error("write failed (disk full?)", path);
-  }
-  void close() {
-    const int rc = std::fclose(f);
-    f = nullptr;
-    if (rc != 0) throw Error("write failed (disk full?)", path);
-  }
+  AtomicFile out;
+  explicit File(const std::string& p) : out(p) {}
+  void write(const void* data, size_t n) { out.write(data, n); }
+  void close() { out.commit(); }
 };
 
 // Text accumulated in a buffer and flushed in large blocks.
@@ -53,7 +42,7 @@ struct TextOut {
   }
 };
 
-void checkMesh(const TriMesh& m) {
+void checkMesh(const TriMesh& m, const std::string& path) {
   const size_t n = m.positions.size();
   auto ok = [n](size_t s) { return s == 0 || s == n; };
   PTERYLA_CHECK(ok(m.normals.size()) && ok(m.tangents.size()) && ok(m.uvGlobal.size()) && ok(m.uvBarb.size()) &&
@@ -62,6 +51,8 @@ void checkMesh(const TriMesh& m) {
                 "TriMesh attribute arrays must be empty or have one entry per vertex");
   PTERYLA_CHECK(m.indices.size() % 3 == 0, "TriMesh indices must come in triples");
   for (uint32_t i : m.indices) PTERYLA_CHECK(i < n, "TriMesh index out of range");
+  // No NaN or infinity ever reaches a file: refuse before anything is written.
+  requireFinite(m, path);
 }
 
 const std::vector<glm::vec2>& uvSet(const TriMesh& m, UvSet s) {
@@ -83,7 +74,7 @@ bool littleEndian() {
 }  // namespace
 
 void writeObj(const std::string& path, const TriMesh& m, UvSet uv) {
-  checkMesh(m);
+  checkMesh(m, path);
   File file(path);
   TextOut out(file);
   const std::vector<glm::vec2>& t = uvSet(m, uv);
@@ -106,7 +97,7 @@ void writeObj(const std::string& path, const TriMesh& m, UvSet uv) {
 }
 
 void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) {
-  checkMesh(m);
+  checkMesh(m, path);
   File file(path);
   const std::vector<glm::vec2>& t = uvSet(m, opt.uv);
   struct Prop {

@@ -21,6 +21,7 @@
 
 #include "gl_api.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/render/image.hpp"
 #include "shaders.hpp"
 
 namespace pteryla::render {
@@ -163,7 +164,13 @@ struct Renderer::Impl {
     return it == p.loc.end() ? -1 : it->second;
   }
 
-  GLuint makeTexture(const Image& img, bool mipmap, GLint wrapS, GLint wrapT) {
+  GLuint makeTexture(const Image& source, bool mipmap, GLint wrapS, GLint wrapT) {
+    // Larger than the GL implementation allows (a 20000x1 strip): scaled down to fit instead of a GL error.
+    GLint maxSide = 0;
+    gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &maxSide);
+    const bool tooLarge = maxSide > 0 && (source.width > maxSide || source.height > maxSide);
+    const Image fitted = tooLarge ? fitImage(source, maxSide) : Image();
+    const Image& img = tooLarge ? fitted : source;
     // Image rows are top-first; texture t = 0 is the bottom row.
     std::vector<uint8_t> flipped(img.rgba.size());
     const size_t row = static_cast<size_t>(img.width) * 4;

@@ -68,6 +68,10 @@ class JsonReader {
   std::set<std::string> used_;
 };
 
+// Largest magnitude of any number read from a pteryla file (docs/limits.md): beyond it squares and
+// products overflow inside the geometry.
+constexpr double kMaxJsonMagnitude = 1e12;
+
 // Helpers for numbers in arrays (element paths like "cvs[3][1]").
 double jsonNumber(const Json& v, const std::string& file, const std::string& path);
 
