@@ -1,5 +1,6 @@
 #pragma once
 // Shared CLI plumbing: progress bar on stderr, size parsing, output-file policy.
+#include <optional>
 #include <string>
 
 #include "pteryla/core/progress.hpp"
@@ -8,6 +9,7 @@ namespace pteryla::cli {
 
 struct Common {
   bool quiet = false;
+  std::optional<double> maxMemoryGb;  // --max-memory
 };
 
 // A ProgressFn drawing "stage [#####     ] 42%" on stderr (only when not quiet and stderr is a TTY or

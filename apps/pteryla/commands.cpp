@@ -4,6 +4,7 @@
 
 #include <sys/resource.h>
 
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -12,7 +13,9 @@
 
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/follicles.hpp"
+#include "pteryla/core/atomic_file.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/limits.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/io.hpp"
@@ -34,14 +37,34 @@ struct Loaded {
   int width = 0, height = 0;
 };
 
+// Bytes per rendered pixel: OSMesa colour + depth buffers, the read-back, the flipped Image and the
+// encoder's copy.
+constexpr double kBytesPerPixel = 24.0;
+
+uint64_t parseSeed(const std::string& text) {
+  uint64_t v = 0;
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size())
+    throw Error("expected an integer in [0, 18446744073709551615], got '" + text + "'", "", "--seed");
+  return v;
+}
+
 Loaded load(const Common& c, const SceneArgs& a) {
   Loaded l;
   if (!a.size.empty()) parseSize(a.size, "--size", l.width, l.height);
   if (a.lod && !(*a.lod > 0 && *a.lod <= 1)) throw Error("expected a fraction in (0, 1], got " + std::to_string(*a.lod), "", "--lod");
   if (a.time && !std::isfinite(*a.time)) throw Error("expected a finite time", "", "--time");
+  const std::optional<uint64_t> seed = a.seed.empty() ? std::nullopt : std::optional<uint64_t>(parseSeed(a.seed));
+  if (l.width)
+    requireMemory(double(l.width) * l.height * kBytesPerPixel, "a " + a.size + " image", "", "--size");
   pipeline::Scene s = pipeline::loadScene(a.scene);
-  if (a.seed) s.seed = *a.seed;
-  if (!l.width) { l.width = s.render.width; l.height = s.render.height; }
+  if (seed) s.seed = *seed;
+  if (!l.width) {
+    l.width = s.render.width;
+    l.height = s.render.height;
+    requireMemory(double(l.width) * l.height * kBytesPerPixel,
+                  "a " + std::to_string(l.width) + "x" + std::to_string(l.height) + " image", s.file, "render.size");
+  }
   l.pipeline = std::make_unique<Pipeline>(std::move(s), makeProgress(c));
   if (a.time) l.pipeline->setTime(*a.time);
   if (a.lod) l.pipeline->setLod(*a.lod);
@@ -70,6 +93,21 @@ std::string jsonNumberOrNull(const std::optional<double>& v) {
   os << *v;
   return os.str();
 }
+std::string jsonEscape(const std::string& in) {
+  std::string out;
+  for (const char ch : in) {
+    if (ch == '"' || ch == '\\') out.push_back('\\');
+    if (static_cast<unsigned char>(ch) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", ch);
+      out += buf;
+    } else {
+      out.push_back(ch);
+    }
+  }
+  return out;
+}
+
 std::string jsonCountOrNull(const std::optional<size_t>& v) { return v ? std::to_string(*v) : "null"; }
 
 }  // namespace
@@ -77,10 +115,11 @@ std::string jsonCountOrNull(const std::optional<size_t>& v) { return v ? std::to
 int cmdRender(const Common& c, const RenderArgs& a) {
   checkOutExtension(a.out, {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}, "an image");
   Loaded l = load(c, a);
-  ensureParentDir(a.out);
   render::OsMesaContext ctx(l.width, l.height);
   render::SceneView view(ctx);
   const render::Image img = view.render(*l.pipeline, l.width, l.height, a.style);
+  // Directories are created only once the scene has evaluated: a failing scene leaves no trace.
+  ensureParentDir(a.out);
   render::saveImage(a.out, img);
   endProgress(c);
   info(c, "wrote " + a.out + " (" + std::to_string(l.width) + "x" + std::to_string(l.height) + ", " +
@@ -152,7 +191,7 @@ int cmdExport(const Common& c, const ExportArgs& a) {
   Loaded l = load(c, a);
   TriMesh all = l.pipeline->skinTriMesh();
   all.append(l.pipeline->coatMesh().mesh);
-  ensureParentDir(a.out);
+  ensureParentDir(a.out);  // after evaluation: a failing scene leaves no trace
   feather::writeMesh(a.out, all);
   endProgress(c);
   info(c, "wrote " + a.out + " (" + std::to_string(all.triangleCount()) + " triangles)");
@@ -163,43 +202,101 @@ int cmdFeather(const Common& c, const FeatherArgs& a) {
   checkOutExtension(a.out, {".obj", ".ply", ".png"}, "a mesh or an image");
   if (!(a.lod > 0 && a.lod <= 1)) throw Error("expected a fraction in (0, 1]", "", "--lod");
   const feather::FeatherParams p = feather::loadFeather(a.file);
+  int w = 0, h = 0;
+  if (extensionOf(a.out) == ".png") {
+    parseSize(a.size, "--size", w, h);
+    requireMemory(double(w) * h * kBytesPerPixel, "a " + a.size + " image", "", "--size");
+  }
   const TriMesh mesh = feather::buildFeatherMesh(p, a.age, a.lod);
-  ensureParentDir(a.out);
   if (extensionOf(a.out) != ".png") {
+    ensureParentDir(a.out);
     feather::writeMesh(a.out, mesh);
     info(c, "wrote " + a.out + " (" + std::to_string(mesh.triangleCount()) + " triangles)");
     return 0;
   }
-  int w = 0, h = 0;
-  parseSize(a.size, "--size", w, h);
   render::OsMesaContext ctx(w, h);
-  render::saveImage(a.out, render::renderFeatherImage(ctx, p, mesh, w, h));
+  const render::Image img = render::renderFeatherImage(ctx, p, mesh, w, h);
+  ensureParentDir(a.out);
+  render::saveImage(a.out, img);
   info(c, "wrote " + a.out + " (" + std::to_string(mesh.triangleCount()) + " triangles)");
   return 0;
 }
 
+namespace {
+
+// frame_0000.png, frame_0001.png, ...: the name pattern `frames` owns in its directory.
+std::string frameName(uint64_t k) {
+  char name[64];
+  std::snprintf(name, sizeof name, "frame_%04llu.png", static_cast<unsigned long long>(k));
+  return name;
+}
+bool isFrameName(const std::string& n, uint64_t& index) {
+  if (n.size() < 14 || n.compare(0, 6, "frame_") != 0 || n.compare(n.size() - 4, 4, ".png") != 0) return false;
+  const std::string digits = n.substr(6, n.size() - 10);
+  if (digits.size() < 4 || digits.find_first_not_of("0123456789") != std::string::npos) return false;
+  const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), index);
+  return r.ec == std::errc() && frameName(index) == n;
+}
+
+}  // namespace
+
 int cmdFrames(const Common& c, const FramesArgs& a) {
+  if (!std::isfinite(a.from)) throw Error("expected a finite time", "", "--from");
+  if (!std::isfinite(a.to)) throw Error("expected a finite time", "", "--to");
   if (!(a.to >= a.from)) throw Error("--to must not be before --from", "", "--to");
+  // Counted in double: (to - from) * fps can exceed any integer type (--to 3e9).
+  const double countD = std::floor((a.to - a.from) * a.fps + 1e-9) + 1;
+  constexpr double kMaxFrames = 100000;
+  if (!(countD <= kMaxFrames)) {
+    std::ostringstream os;
+    os << "too many frames (" << countD << ", at most " << kMaxFrames << "); lower --fps or the range";
+    throw Error(os.str(), "", "--to");
+  }
+  const auto count = static_cast<uint64_t>(countD);
   Loaded l = load(c, a);
-  const int count = static_cast<int>(std::floor((a.to - a.from) * a.fps + 1e-9)) + 1;
-  if (count > 100000) throw Error("too many frames (" + std::to_string(count) + "); lower --fps or the range", "", "--fps");
-  std::error_code ec;
-  std::filesystem::create_directories(a.out, ec);
-  if (ec) throw Error("cannot create output directory: " + ec.message(), a.out, "--out");
   render::OsMesaContext ctx(l.width, l.height);
   render::SceneView view(ctx);
   l.pipeline->setProgress({});
   const ProgressFn bar = makeProgress(c);
-  for (int k = 0; k < count; ++k) {
+  // The first frame is rendered before the directory exists: a scene that fails creates nothing.
+  l.pipeline->setTime(a.from);
+  render::Image first = view.render(*l.pipeline, l.width, l.height, a.style);
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(a.out, ec);
+  if (ec) throw Error("cannot create output directory: " + ec.message(), a.out, "--out");
+  for (uint64_t k = 0; k < count; ++k) {
     const double t = a.from + double(k) / a.fps;
-    l.pipeline->setTime(t);
-    char name[64];
-    std::snprintf(name, sizeof name, "frame_%04d.png", k);
-    render::saveImage((std::filesystem::path(a.out) / name).string(), view.render(*l.pipeline, l.width, l.height, a.style));
+    if (k > 0) {
+      l.pipeline->setTime(t);
+      first = view.render(*l.pipeline, l.width, l.height, a.style);
+    }
+    render::saveImage((fs::path(a.out) / frameName(k)).string(), first);
     report(bar, "frames", double(k + 1) / double(count));
   }
+  // Frames of an earlier, longer run would look like part of this sequence: remove them.
+  size_t removed = 0;
+  for (const auto& entry : fs::directory_iterator(a.out, ec)) {
+    uint64_t index = 0;
+    if (entry.is_regular_file() && isFrameName(entry.path().filename().string(), index) && index >= count) {
+      std::error_code rm;
+      if (fs::remove(entry.path(), rm)) ++removed;
+    }
+  }
+  // Manifest: what this directory holds and how it was made.
+  std::ostringstream m;
+  m.precision(17);
+  m << "{\n  \"scene\": \"" << jsonEscape(a.scene) << "\",\n  \"from\": " << a.from << ",\n  \"to\": " << a.to
+    << ",\n  \"fps\": " << a.fps << ",\n  \"width\": " << l.width << ",\n  \"height\": " << l.height
+    << ",\n  \"count\": " << count << ",\n  \"frames\": [";
+  for (uint64_t k = 0; k < count; ++k) {
+    m << (k ? ", " : "") << "{\"file\": \"" << frameName(k) << "\", \"time\": " << a.from + double(k) / a.fps << "}";
+  }
+  m << "]\n}\n";
+  writeFileAtomic((fs::path(a.out) / "frames.json").string(), m.str());
   endProgress(c);
-  info(c, "wrote " + std::to_string(count) + " frames to " + a.out);
+  info(c, "wrote " + std::to_string(count) + " frames to " + a.out +
+              (removed ? " (removed " + std::to_string(removed) + " stale frames of an earlier run)" : ""));
   return 0;
 }
 

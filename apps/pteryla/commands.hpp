@@ -10,7 +10,7 @@ struct SceneArgs {
   std::string scene;
   std::optional<double> time;
   std::optional<double> lod;
-  std::optional<uint64_t> seed;
+  std::string seed;  // empty = the scene's seed; else a non-negative integer (checked in load)
   std::string size;  // "WxH" or empty for the scene's render size
 };
 

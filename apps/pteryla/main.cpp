@@ -7,7 +7,9 @@
 
 #include "commands.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/limits.hpp"
 #include "pteryla/core/memory.hpp"
+#include "pteryla/core/quiet.hpp"
 
 using namespace pteryla::cli;
 
@@ -18,7 +20,7 @@ void addSceneOptions(CLI::App* sub, SceneArgs& a, bool withSize) {
       ->required();
   sub->add_option("--time,-t", a.time, "Time on the scene's timeline (moult, skinning, controls); default: scene time");
   sub->add_option("--lod", a.lod, "Fraction of feather geometry in (0,1]; default: the scene's render.lod (with render.lod_by_screen_size, the level of the largest feathers on screen)");
-  sub->add_option("--seed", a.seed, "Override the scene's master seed");
+  sub->add_option("--seed", a.seed, "Override the scene's master seed (an integer in [0, 2^64-1])");
   if (withSize) sub->add_option("--size", a.size, "Image size WxH; default: the scene's render.size");
 }
 
@@ -27,11 +29,19 @@ void addSceneOptions(CLI::App* sub, SceneArgs& a, bool withSize) {
 int main(int argc, char** argv) {
   pteryla::keepFreedMemoryInProcess();
   CLI::App app{"pteryla: bird feather coats (Streit 2003) from the command line.\n"
-               "Scenes are JSON files (docs/scene-format.md) or bare meshes."};
+               "Scenes are JSON files (docs/scene-format.md) or bare meshes.\n"
+               "Exit codes: 0 success, 2 bad input (including requests above --max-memory and failed writes;\n"
+               "every output is written to a temporary file and renamed, so a failed write keeps the old file),\n"
+               "1 internal failure. Limits: docs/limits.md."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "pteryla 0.1.0");
   Common common;
   app.add_flag("--quiet,-q", common.quiet, "No progress or info on stderr")->configurable(false);
+  const std::string memoryHelp =
+      "Memory ceiling in GB (default " + std::to_string(int(pteryla::kDefaultMemoryLimitGb)) +
+      "): requests estimated above it (follicles, barbs, triangles, image or texture pixels, declared mesh "
+      "counts) are refused with exit 2 before allocating (docs/limits.md)";
+  app.add_option("--max-memory", common.maxMemoryGb, memoryHelp)->configurable(false);
 
   RenderArgs render;
   auto* cRender = app.add_subcommand("render", "Render a scene to a PNG headlessly (OSMesa)");
@@ -70,7 +80,8 @@ int main(int argc, char** argv) {
   cFeather->add_option("--size", feather.size, "Image size WxH for .png output");
 
   FramesArgs frames;
-  auto* cFrames = app.add_subcommand("frames", "Render a time range to a PNG sequence DIR/frame_0000.png ...");
+  auto* cFrames = app.add_subcommand("frames", "Render a time range to a PNG sequence DIR/frame_0000.png ... (at most 100000 frames) and a\n"
+      "manifest DIR/frames.json; frame_NNNN.png files of an earlier, longer run are removed");
   addSceneOptions(cFrames, frames, true);
   cFrames->add_option("--from", frames.from, "Start time")->required();
   cFrames->add_option("--to", frames.to, "End time (inclusive)")->required();
@@ -80,6 +91,7 @@ int main(int argc, char** argv) {
 
   for (auto* sub : app.get_subcommands([](CLI::App*) { return true; }))
     sub->add_flag("--quiet,-q", common.quiet, "No progress or info on stderr");
+  for (auto* sub : app.get_subcommands([](CLI::App*) { return true; })) sub->add_option("--max-memory", common.maxMemoryGb, memoryHelp);
 
   try {
     app.parse(argc, argv);
@@ -93,6 +105,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "pteryla: error: %s\n", e.what());
     std::fprintf(stderr, "Run 'pteryla --help' or 'pteryla <command> --help'.\n");
     return 2;
+  }
+
+  pteryla::setQuiet(common.quiet);
+  if (common.maxMemoryGb) {
+    if (!(*common.maxMemoryGb > 0 && *common.maxMemoryGb <= 1e6)) {
+      std::fprintf(stderr, "pteryla: error: --max-memory: expected a number of GB in (0, 1e6]\n");
+      return 2;
+    }
+    pteryla::setMemoryLimitBytes(*common.maxMemoryGb * 1e9);
   }
 
   try {

@@ -36,7 +36,7 @@ PackOptions parsePackOptions(JsonReader& r) {
   o.elevateBarbs = r.boolean("elevate_barbs", o.elevateBarbs);
   o.extendShaft = r.boolean("extend_shaft", o.extendShaft);
   o.skin = r.boolean("skin", o.skin);
-  o.skinSampleSpacing = r.number("skin_sample_spacing", 0.0, 0.0, kInf);
+  o.skinSampleSpacing = r.number("skin_sample_spacing", 0.0, 0.0, 1e6);
   o.threads = static_cast<int>(r.integer("threads", 0, 0, 1024));
   o.moultOver = r.oneOf("moult_pack", "over", {"over", "full"}) == "over";
   for (JsonReader& s : r.objects("styling")) o.styling.push_back(parseStyleSelection(s));

@@ -170,17 +170,21 @@ void barbShapeAt(const std::vector<KeyBarb>& keys, double rp, std::vector<glm::d
 
 namespace {
 bool finite(double x) { return std::isfinite(x); }
+constexpr double kMaxFeatherLength = 1e6;
+constexpr double kMaxKeyBarbCoordinate = 1e3;
 
 void validateImpl(const FeatherParams& p, const std::string& file, const std::string& prefix) {
   auto fail = [&](const std::string& elem, const std::string& what) { throw Error(what, file, prefix + elem); };
+  // Lengths and widths are bounded so that products of them stay finite (docs/limits.md).
   auto nonNeg = [&](double v, const char* elem) {
-    if (!finite(v) || v < 0) fail(elem, "expected a finite number >= 0");
+    if (!finite(v) || v < 0 || v > kMaxFeatherLength) fail(elem, "expected a number in [0, 1e6]");
   };
   nonNeg(p.calamusLength, "calamus.length");
   nonNeg(p.calamusWidthRatio, "calamus.width_ratio");
   nonNeg(p.rachisWidth, "rachis.width");
   nonNeg(p.barbLength, "barbs.length");
-  if (!finite(p.rachisLength) || p.rachisLength <= 0) fail("rachis.length", "expected a finite number > 0");
+  if (!finite(p.rachisLength) || p.rachisLength <= 0 || p.rachisLength > kMaxFeatherLength)
+    fail("rachis.length", "expected a number in (0, 1e6]");
   if (!finite(p.rachisLateralCurvature) || std::abs(p.rachisLateralCurvature) > kPi)
     fail("rachis.lateral_curvature", "expected a turning angle in [-pi, pi] radians");
   if (!finite(p.rachisVentralDorsalCurvature) || std::abs(p.rachisVentralDorsalCurvature) > kPi)
@@ -203,8 +207,10 @@ void validateImpl(const FeatherParams& p, const std::string& file, const std::st
       if (kb.cvs.size() < 2) fail(kn + ".cvs", "a key barb needs at least 2 control vertices");
       if (kb.cvs.size() > 32) fail(kn + ".cvs", "at most 32 control vertices per key barb");
       for (size_t i = 0; i < kb.cvs.size(); ++i)
-        if (!finite(kb.cvs[i].x) || !finite(kb.cvs[i].y) || !finite(kb.cvs[i].z))
-          fail(kn + ".cvs[" + std::to_string(i) + "]", "expected finite coordinates");
+        if (!finite(kb.cvs[i].x) || !finite(kb.cvs[i].y) || !finite(kb.cvs[i].z) ||
+            std::max({std::abs(kb.cvs[i].x), std::abs(kb.cvs[i].y), std::abs(kb.cvs[i].z)}) > kMaxKeyBarbCoordinate)
+          fail(kn + ".cvs[" + std::to_string(i) + "]",
+               "expected finite coordinates in [-1000, 1000] (key barbs are in units of the barb's chord)");
     }
     const LengthProfile& prof = v == 0 ? p.silhouette.left : p.silhouette.right;
     const std::string sn = std::string("silhouette.") + (v == 0 ? "left" : "right");
@@ -212,7 +218,7 @@ void validateImpl(const FeatherParams& p, const std::string& file, const std::st
       const glm::dvec2 q = prof.points[i];
       const std::string en = sn + "[" + std::to_string(i) + "]";
       if (!finite(q.x) || q.x < 0 || q.x > 1) fail(en, "expected rp in [0, 1]");
-      if (!finite(q.y) || q.y < 0) fail(en, "expected a barb length >= 0");
+      if (!finite(q.y) || q.y < 0 || q.y > kMaxFeatherLength) fail(en, "expected a barb length in [0, 1e6]");
       if (i > 0 && q.x < prof.points[i - 1].x) fail(en, "rp values must not decrease");
     }
   }

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <limits>
 #include <glm/common.hpp>
 #include <cmath>
@@ -28,6 +29,7 @@
 #include "pteryla/coat/style.hpp"
 #include "pteryla/coat/tracts.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/limits.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/core/rng.hpp"
 #include "pteryla/feather/barbs.hpp"
@@ -72,6 +74,11 @@ struct TractSettings {
 };
 
 constexpr size_t kAutoCount = 1500;
+// Memory estimates checked against the ceiling (core/limits.hpp, docs/limits.md). Lower bounds from the
+// bird (3152 feathers, 1.29 M triangles at lod 0.6: 775 MB peak), so no scene that fits is refused.
+constexpr double kBytesPerFollicle = 32e3;
+constexpr double kTrianglesPerBarb = 16;
+constexpr double kBytesPerTriangle = 200;
 
 // Axes of the rest skin's bounding box, longest first.
 void boxAxes(const coat::SkinMesh& m, glm::dvec3& lo, glm::dvec3& hi, int axes[3]) {
@@ -198,6 +205,10 @@ void Pipeline::Impl::computeSkin() {
   report(progress, "load", 0);
   coat::MeshLoadOptions o;
   o.repair = scene.meshRepair;
+  if (!scene.fromBareMesh && !std::filesystem::is_regular_file(scene.meshPath))
+    throw Error("mesh file '" + scene.meshPath + "' " +
+                    (std::filesystem::exists(scene.meshPath) ? "is not a regular file" : "does not exist"),
+                scene.file, "mesh");
   rest = coat::loadSkinMesh(scene.meshPath, o);
   // Feather library: every named feather of the scene.
   library.clear();
@@ -229,6 +240,7 @@ void Pipeline::Impl::computeTracts() {
   tracts.clear();
   std::vector<coat::Tract> earlier;
   const double meshArea = rest.totalArea();
+  double plannedFollicles = 0;
   if (scene.tracts.empty()) scene.tracts = Json::array({Json{{"name", "all"}}});
   for (size_t i = 0; i < scene.tracts.size(); ++i) {
     const std::string where = "tracts[" + std::to_string(i) + "]";
@@ -241,12 +253,20 @@ void Pipeline::Impl::computeTracts() {
     if (r.has("count")) {
       t.count = static_cast<size_t>(r.integer("count", 0, 2000000));
       r.allow("density");
-    } else if (r.has("density") && r.json().at("density").is_number()) {
+    } else if (r.has("density")) {
+      if (!r.json().at("density").is_number()) r.fail("density", "expected a number of follicles per unit area");
       t.density = r.number("density", 0.0, 1e9);
     } else {
       r.allow("density");
       t.count = static_cast<size_t>(std::lround(kAutoCount * area / std::max(meshArea, 1e-300)));
     }
+    // Memory before distributing: every follicle becomes a feather (frames, pack data, mesh).
+    const double follicles = t.count ? double(t.count) : t.density * area;
+    plannedFollicles += follicles;
+    requireMemory(plannedFollicles * kBytesPerFollicle,
+                  "the coat of about " + std::to_string(static_cast<uint64_t>(std::min(plannedFollicles, 1e18))) +
+                      " follicles",
+                  scene.file, where + (t.count ? ".count" : r.has("density") ? ".density" : ""));
     if (r.has("feather_scale") && r.json().at("feather_scale").is_string()) {
       if (r.string("feather_scale") != "auto") r.fail("feather_scale", "expected a positive number or \"auto\"");
       t.autoScale = true;
@@ -380,6 +400,26 @@ void Pipeline::Impl::computeInterpolate() {
       for (size_t f = 0; f < coatRest.size(); ++f)
         if (coatRest.tract[f] == i) coat::scaleFeather(coatRest.params[f], s);
   }
+  // Memory of the coat's geometry before packing and meshing it: barbs on both vanes (and afterfeathers)
+  // at the current level of detail, about kTrianglesPerBarb triangles each.
+  double triangles = 0;
+  size_t largest = 0;
+  double largestBarbs = 0;
+  for (size_t f = 0; f < coatRest.size(); ++f) {
+    double barbs = 0;
+    for (const feather::FeatherParams* p = &coatRest.params[f]; p; p = p->afterfeather.get())
+      barbs += 2.0 * p->rachisLength / std::max(std::min(p->spacingBase, p->spacingTip), 1e-300);
+    if (barbs > largestBarbs) { largestBarbs = barbs; largest = f; }
+    triangles += barbs * kTrianglesPerBarb * lod;
+  }
+  if (!coatRest.params.empty()) {
+    const std::string name = coatRest.params[largest].name;
+    requireMemory(triangles * kBytesPerTriangle,
+                  "the coat's geometry (about " + std::to_string(static_cast<uint64_t>(std::min(triangles, 1e18))) +
+                      " triangles; up to " + std::to_string(static_cast<uint64_t>(std::min(largestBarbs, 1e18))) +
+                      " barbs per feather)",
+                  scene.file, name.empty() ? "feathers" : "feathers." + name);
+  }
   report(progress, "interpolate", 1);
 }
 
@@ -412,7 +452,11 @@ void Pipeline::Impl::computeDirections() {
   ++restGeneration;
   directions = coat::computeSurfaceDirections(rest, tracts, follicles, directionOptions);
   coat::evaluateFrames(rest, follicles, directions, coatRest);
-  coat::orderLayers(rest, tracts, params, follicles, directions, orderOptions, coatRest);
+  try {
+    coat::orderLayers(rest, tracts, params, follicles, directions, orderOptions, coatRest);
+  } catch (const Error& e) {
+    throw e.withFile(scene.file);  // "ordering.tracts[2]" is a key of the scene
+  }
 }
 
 void Pipeline::Impl::computePose() {
@@ -446,7 +490,14 @@ void Pipeline::Impl::computeControls() {
     packOptions = coat::parsePackOptions(r);
   }
   fixedElevation.assign(coatNow.size(), std::nan(""));
-  if (!packOptions.styling.empty()) fixedElevation = coat::applyStyling(coatNow, packOptions.styling, fixedElevation).fixedElevation;
+  if (!packOptions.styling.empty()) {
+    try {
+      fixedElevation = coat::applyStyling(coatNow, packOptions.styling, fixedElevation).fixedElevation;
+    } catch (const Error& e) {
+      if (!e.file().empty()) throw;
+      throw Error(e.detail(), scene.file, "packing." + e.element());  // "styling[0].ids[3]" is under packing
+    }
+  }
   applyControls(scene, time, posed, posedFollicles, timeState, coatNow, fixedElevation);
 }
 
