@@ -260,7 +260,7 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
   const ProgressFn bar = makeProgress(c);
   // The first frame is rendered before the directory exists: a scene that fails creates nothing.
   l.pipeline->setTime(a.from);
-  render::Image first = view.render(*l.pipeline, l.width, l.height, a.style);
+  render::Image frame = view.render(*l.pipeline, l.width, l.height, a.style);
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(a.out, ec);
@@ -269,9 +269,9 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
     const double t = a.from + double(k) / a.fps;
     if (k > 0) {
       l.pipeline->setTime(t);
-      first = view.render(*l.pipeline, l.width, l.height, a.style);
+      frame = view.render(*l.pipeline, l.width, l.height, a.style);
     }
-    render::saveImage((fs::path(a.out) / frameName(k)).string(), first);
+    render::saveImage((fs::path(a.out) / frameName(k)).string(), frame);
     report(bar, "frames", double(k + 1) / double(count));
   }
   // Frames of an earlier, longer run would look like part of this sequence: remove them.

@@ -80,8 +80,9 @@ int main(int argc, char** argv) {
   cFeather->add_option("--size", feather.size, "Image size WxH for .png output");
 
   FramesArgs frames;
-  auto* cFrames = app.add_subcommand("frames", "Render a time range to a PNG sequence DIR/frame_0000.png ... (at most 100000 frames) and a\n"
-      "manifest DIR/frames.json; frame_NNNN.png files of an earlier, longer run are removed");
+  auto* cFrames = app.add_subcommand(
+      "frames", "Render a time range to a PNG sequence DIR/frame_0000.png ... (at most 100000 frames) and a\n"
+                "manifest DIR/frames.json; frame_NNNN.png files of an earlier, longer run are removed");
   addSceneOptions(cFrames, frames, true);
   cFrames->add_option("--from", frames.from, "Start time")->required();
   cFrames->add_option("--to", frames.to, "End time (inclusive)")->required();
@@ -91,7 +92,8 @@ int main(int argc, char** argv) {
 
   for (auto* sub : app.get_subcommands([](CLI::App*) { return true; }))
     sub->add_flag("--quiet,-q", common.quiet, "No progress or info on stderr");
-  for (auto* sub : app.get_subcommands([](CLI::App*) { return true; })) sub->add_option("--max-memory", common.maxMemoryGb, memoryHelp);
+  for (auto* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    sub->add_option("--max-memory", common.maxMemoryGb, memoryHelp);
 
   try {
     app.parse(argc, argv);

@@ -264,11 +264,12 @@ void checkOff(const std::string& path, const std::string& d) {
                              : double(counts[0]) * 6.0 + double(counts[1]) * 8.0;
   if (need > rest)
     throw Error("the header declares " + std::to_string(counts[0]) + " vertices and " + std::to_string(counts[1]) +
-                    " faces but only " + std::to_string(d.size() - p) + " bytes follow (truncated file or wrong counts)",
+                    " faces but only " + std::to_string(d.size() - p) +
+                    " bytes follow (truncated file or wrong counts)",
                 path, "header counts");
   requireMemory(double(counts[0]) * 64.0 + double(counts[1]) * 128.0,
-                "a mesh of " + std::to_string(counts[0]) + " vertices and " + std::to_string(counts[1]) + " faces", path,
-                "header counts");
+                "a mesh of " + std::to_string(counts[0]) + " vertices and " + std::to_string(counts[1]) + " faces",
+                path, "header counts");
   if (binary) return;
   // Face corner counts must be sane.
   for (uint64_t v = 0; v < counts[0]; ++v) {
@@ -283,7 +284,8 @@ void checkOff(const std::string& path, const std::string& d) {
     uint64_t n = 0;
     if (!token(t)) throw Error("file ends inside the faces (truncated?)", path, "face " + std::to_string(f));
     if (!parseCount(t, n) || n > kMaxListLength)
-      throw Error("expected a corner count in [0, " + std::to_string(kMaxListLength) + "], got '" + std::string(t) + "'",
+      throw Error("expected a corner count in [0, " + std::to_string(kMaxListLength) + "], got '" + std::string(t) +
+                      "'",
                   path, "face " + std::to_string(f) + " (line " + std::to_string(line) + ")");
     for (uint64_t k = 0; k < n; ++k)
       if (!token(t)) throw Error("file ends inside the faces (truncated?)", path, "face " + std::to_string(f));

@@ -126,7 +126,8 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
           std::abs(raw.cornerUVs[k].x) > 1e12 || std::abs(raw.cornerUVs[k].y) > 1e12)
         throw Error("texture coordinate is not finite (or beyond +-1e12)", file, faceName(p));
   for (size_t v = 0; v < raw.vertexNormals.size(); ++v)
-    if (!finite(raw.vertexNormals[v])) throw Error("normal is not finite " + fmtVec(raw.vertexNormals[v]), file, "vertex " + std::to_string(v));
+    if (!finite(raw.vertexNormals[v]))
+      throw Error("normal is not finite " + fmtVec(raw.vertexNormals[v]), file, "vertex " + std::to_string(v));
 
   // Magnitude and precision. Feathers are meshed and rendered in 32-bit float: far from the origin, or
   // tiny next to their distance from it, triangles collapse (and spatial searches degenerate).
@@ -135,7 +136,8 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
     double farAbs = 0;
     for (size_t v = 0; v < nv; ++v) {
       if (badVertex[v]) continue;
-      const double a = std::max({std::abs(raw.positions[v].x), std::abs(raw.positions[v].y), std::abs(raw.positions[v].z)});
+      const glm::dvec3& q = raw.positions[v];
+      const double a = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)});
       if (a > farAbs) { farAbs = a; far = v; }
     }
     if (farAbs > kMaxMeshCoordinate) {

@@ -211,7 +211,8 @@ Tract readTract(JsonReader& r, const SkinMesh& mesh, const std::vector<Tract>& e
   if (hasFile) {
     const std::string path = resolveRelative(r.file(), r.string("labels_file"));
     std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) r.fail("labels_file", "'" + path + "' is a directory; expected a file of face labels");
+    if (std::filesystem::is_directory(path, ec))
+      r.fail("labels_file", "'" + path + "' is a directory; expected a file of face labels");
     if (!std::filesystem::exists(path, ec)) r.fail("labels_file", "label file '" + path + "' does not exist");
     const auto wanted = intList(r, "label");
     const auto labels = readFaceLabels(path, mesh.sourceFaceCount);

@@ -70,7 +70,8 @@ void saveImage(const std::string& path, const Image& image) {
     out->close();
     throw Error("cannot write image: " + msg + " (any previous file is unchanged)", path);
   }
-  if (!out->close()) throw Error("cannot finish writing image: " + out->geterror() + " (any previous file is unchanged)", path);
+  if (!out->close())
+    throw Error("cannot finish writing image: " + out->geterror() + " (any previous file is unchanged)", path);
   out.reset();
   if (inMemory) {
     if (encoded.empty()) throw Error("the image encoder produced no data", path);
@@ -126,9 +127,11 @@ Image fitImage(const Image& image, int maxSide) {
   // Box filter: each output pixel averages the source pixels it covers (in full or in part).
   const double sx = double(image.width) / w, sy = double(image.height) / h;
   for (int y = 0; y < h; ++y) {
-    const int y0 = static_cast<int>(y * sy), y1 = std::max(y0 + 1, std::min(image.height, static_cast<int>(std::ceil((y + 1) * sy))));
+    const int y0 = static_cast<int>(y * sy);
+    const int y1 = std::max(y0 + 1, std::min(image.height, static_cast<int>(std::ceil((y + 1) * sy))));
     for (int x = 0; x < w; ++x) {
-      const int x0 = static_cast<int>(x * sx), x1 = std::max(x0 + 1, std::min(image.width, static_cast<int>(std::ceil((x + 1) * sx))));
+      const int x0 = static_cast<int>(x * sx);
+      const int x1 = std::max(x0 + 1, std::min(image.width, static_cast<int>(std::ceil((x + 1) * sx))));
       uint32_t sum[4] = {0, 0, 0, 0};
       for (int yy = y0; yy < y1; ++yy)
         for (int xx = x0; xx < x1; ++xx)

@@ -38,6 +38,8 @@ class AtomicFile {
 
 // Writes `n` bytes to `path` atomically (see AtomicFile).
 void writeFileAtomic(const std::string& path, const void* data, size_t n);
-inline void writeFileAtomic(const std::string& path, const std::string& s) { writeFileAtomic(path, s.data(), s.size()); }
+inline void writeFileAtomic(const std::string& path, const std::string& s) {
+  writeFileAtomic(path, s.data(), s.size());
+}
 
 }  // namespace pteryla
