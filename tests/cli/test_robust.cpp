@@ -204,6 +204,7 @@ TEST(Robust, CoatsAboveTheMemoryCeilingAreRefusedBeforeAllocating) {
 }
 
 TEST(Robust, ImageSizeAboveTheCeilingIsRefused) {
+  fs::remove(kBuild + "/robust_huge.png");
   const auto r = run(30, "render " + kData + "/scenes/patch.json --size 16384x16384 -o " + kBuild + "/robust_huge.png");
   expectBadInput(r, {"--size", "--max-memory"});
   EXPECT_FALSE(fs::exists(kBuild + "/robust_huge.png"));
