@@ -36,7 +36,8 @@ uint32_t triFeather(const TriMesh& m, size_t t) {
 
 // Counts intersecting triangle pairs of different feathers; with `attribution`, also lists the feather
 // pair of every intersecting triangle pair (as (a << 32 | b), a < b, unsorted).
-size_t intersectingPairs(const TriMesh& coat, std::vector<uint64_t>* attribution = nullptr) {
+size_t intersectingPairs(const TriMesh& coat, std::vector<uint64_t>* attribution = nullptr,
+                         std::vector<uint64_t>* triangles = nullptr) {
   const size_t nt = coat.triangleCount();
   if (nt < 2) return 0;
   detail::TriangleBvh bvh;
@@ -45,7 +46,7 @@ size_t intersectingPairs(const TriMesh& coat, std::vector<uint64_t>* attribution
   const size_t total = tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, nt, 256), size_t(0),
       [&](const tbb::blocked_range<size_t>& r, size_t acc) {
-        std::vector<uint64_t>* mine = attribution ? &found.local() : nullptr;
+        std::vector<uint64_t>* mine = attribution || triangles ? &found.local() : nullptr;
         for (size_t t = r.begin(); t < r.end(); ++t) {
           const uint32_t ft = triFeather(coat, t);
           const dvec3 a0 = bvh.vertex(static_cast<uint32_t>(t), 0), a1 = bvh.vertex(static_cast<uint32_t>(t), 1),
@@ -61,16 +62,18 @@ size_t intersectingPairs(const TriMesh& coat, std::vector<uint64_t>* attribution
             if (fu == ft) return;
             if (detail::trianglesIntersect(a0, a1, a2, bvh.vertex(u, 0), bvh.vertex(u, 1), bvh.vertex(u, 2))) {
               ++acc;
-              if (mine) mine->push_back((uint64_t(std::min(ft, fu)) << 32) | std::max(ft, fu));
+              if (mine)
+                mine->push_back(triangles ? (uint64_t(t) << 32) | u : (uint64_t(std::min(ft, fu)) << 32) | std::max(ft, fu));
             }
           });
         }
         return acc;
       },
       [](size_t a, size_t b) { return a + b; });
-  if (attribution) {
-    attribution->clear();
-    found.combine_each([&](const std::vector<uint64_t>& v) { attribution->insert(attribution->end(), v.begin(), v.end()); });
+  if (std::vector<uint64_t>* out = triangles ? triangles : attribution) {
+    out->clear();
+    found.combine_each([&](const std::vector<uint64_t>& v) { out->insert(out->end(), v.begin(), v.end()); });
+    if (triangles) std::sort(out->begin(), out->end());
   }
   return total;
 }
@@ -136,6 +139,46 @@ SkinSign buildSign(const SkinMesh& s) {
   return g;
 }
 
+// Coat vertices inside (below) the skin: the nearest skin point's angle-weighted pseudo-normal points
+// away from the vertex; vertices within their feather's base radius and within tol of the skin are not.
+std::vector<uint8_t> insideSkin(const SkinMesh& skin, const SkinSign& sign, const TriMesh& coat, const CheckOptions& o,
+                          double tol) {
+  detail::TriangleBvh sb;
+  sb.build(skin.positions.data(), sign.flat.data(), skin.faces.size());
+  const size_t nv = coat.positions.size();
+  std::vector<uint8_t> bad(nv, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nv, 512), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      const dvec3 p(coat.positions[v]);
+      if (!o.featherOrigins.empty() && !coat.featherId.empty()) {
+        const uint32_t f = coat.featherId[v];
+        if (f < o.featherOrigins.size() && glm::length(p - o.featherOrigins[f]) <= o.featherBaseRadius[f]) continue;
+      }
+      glm::dvec3 bary;
+      double d2 = 0;
+      const int64_t f = sb.nearest(p, std::numeric_limits<double>::infinity(), bary, d2);
+      if (f < 0 || d2 <= tol * tol) continue;
+      const auto& t = skin.faces[static_cast<size_t>(f)];
+      const dvec3 q = bary.x * skin.positions[t[0]] + bary.y * skin.positions[t[1]] + bary.z * skin.positions[t[2]];
+      dvec3 n;
+      const int zeros = (bary.x == 0) + (bary.y == 0) + (bary.z == 0);
+      if (zeros >= 2) {
+        const int c = bary.x != 0 ? 0 : (bary.y != 0 ? 1 : 2);
+        if (sign.vertexBoundary[t[c]]) continue;
+        n = sign.vertexN[t[c]];
+      } else if (zeros == 1) {
+        const int c = bary.z == 0 ? 0 : (bary.x == 0 ? 1 : 2);
+        if (sign.edgeBoundary[static_cast<size_t>(f)][c]) continue;
+        n = sign.edgeN[static_cast<size_t>(f)][c];
+      } else {
+        n = skin.faceNormals[static_cast<size_t>(f)];
+      }
+      if (glm::dot(p - q, n) < 0) bad[v] = 1;
+    }
+  });
+  return bad;
+}
+
 }  // namespace
 
 size_t countIntersectingPairs(const TriMesh& coat, int threads) {
@@ -144,6 +187,18 @@ size_t countIntersectingPairs(const TriMesh& coat, int threads) {
     return arena.execute([&] { return intersectingPairs(coat); });
   }
   return intersectingPairs(coat);
+}
+
+std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat) {
+  std::vector<uint64_t> tris;
+  intersectingPairs(coat, nullptr, &tris);
+  return tris;
+}
+
+std::vector<uint8_t> verticesInsideSkin(const SkinMesh& skin, const TriMesh& coat, const CheckOptions& o) {
+  if (skin.faces.empty()) return std::vector<uint8_t>(coat.positions.size(), 0);
+  const double tol = o.skinTolerance > 0 ? o.skinTolerance : 1e-6 * diagonal(skin);
+  return insideSkin(skin, buildSign(skin), coat, o, tol);
 }
 
 std::vector<FeatherPairCount> intersectingFeatherPairs(const TriMesh& coat, int threads) {
@@ -184,39 +239,8 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
     if ((o.penetrations || o.coverage) && !skin.faces.empty()) {
       const SkinSign sign = buildSign(skin);
       if (o.penetrations) {
-        detail::TriangleBvh sb;
-        sb.build(skin.positions.data(), sign.flat.data(), skin.faces.size());
         const size_t nv = coat.positions.size();
-        std::vector<uint8_t> bad(nv, 0);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, nv, 512), [&](const tbb::blocked_range<size_t>& r) {
-          for (size_t v = r.begin(); v < r.end(); ++v) {
-            const dvec3 p(coat.positions[v]);
-            if (!o.featherOrigins.empty() && !coat.featherId.empty()) {
-              const uint32_t f = coat.featherId[v];
-              if (f < o.featherOrigins.size() && glm::length(p - o.featherOrigins[f]) <= o.featherBaseRadius[f]) continue;
-            }
-            glm::dvec3 bary;
-            double d2 = 0;
-            const int64_t f = sb.nearest(p, std::numeric_limits<double>::infinity(), bary, d2);
-            if (f < 0 || d2 <= tol * tol) continue;
-            const auto& t = skin.faces[static_cast<size_t>(f)];
-            const dvec3 q = bary.x * skin.positions[t[0]] + bary.y * skin.positions[t[1]] + bary.z * skin.positions[t[2]];
-            dvec3 n;
-            const int zeros = (bary.x == 0) + (bary.y == 0) + (bary.z == 0);
-            if (zeros >= 2) {
-              const int c = bary.x != 0 ? 0 : (bary.y != 0 ? 1 : 2);
-              if (sign.vertexBoundary[t[c]]) continue;
-              n = sign.vertexN[t[c]];
-            } else if (zeros == 1) {
-              const int c = bary.z == 0 ? 0 : (bary.x == 0 ? 1 : 2);
-              if (sign.edgeBoundary[static_cast<size_t>(f)][c]) continue;
-              n = sign.edgeN[static_cast<size_t>(f)][c];
-            } else {
-              n = skin.faceNormals[static_cast<size_t>(f)];
-            }
-            if (glm::dot(p - q, n) < 0) bad[v] = 1;
-          }
-        });
+        const std::vector<uint8_t> bad = insideSkin(skin, sign, coat, o, tol);
         res.samplePoints = nv;
         std::vector<uint8_t> featherBad;
         for (size_t v = 0; v < nv; ++v) {

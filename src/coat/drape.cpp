@@ -14,6 +14,7 @@
 #include <tbb/task_arena.h>
 
 #include "pteryla/core/error.hpp"
+#include "pteryla/coat/check.hpp"
 #include "spatial.hpp"
 
 namespace pteryla::coat {
@@ -30,6 +31,7 @@ struct Node {
   dvec3 n{0, 0, 1};  // skin normal there
   dvec3 t{1, 0, 0};  // the feather's direction transported into the tangent plane
   double h = 0;      // height over the skin
+  double sag = 0;    // how far the feather's triangles (chords) may dip below their vertices' surface here
   uint8_t ok = 0;    // the chart reached the skin here
   uint8_t active = 0;  // next to feather material
 };
@@ -107,16 +109,6 @@ class Surface {
     }
     out = p;
     return true;
-  }
-  // Does p, at most `dist` from the skin, lie inside it? (The nearest skin point's interpolated normal
-  // points away from p.)
-  bool inside(const dvec3& p, double dist) const {
-    dvec3 bary;
-    double d2 = 0;
-    const int64_t f = bvh_.nearest(p, dist * dist, bary, d2);
-    if (f < 0) return false;
-    const dvec3 q = pointAt(skin_, static_cast<uint32_t>(f), bary);
-    return glm::dot(p - q, normalAt(skin_, static_cast<uint32_t>(f), bary)) < 0;
   }
   // Is the body at c thinner than `depth` (skin hit going in along -n)?
   bool thinnerThan(const dvec3& c, const dvec3& n, double depth) const {
@@ -289,6 +281,42 @@ void buildChart(const Surface& S, const FeatherFrame& F, const feather::FeatherP
         C.at(a, b).active = C.at(a + 1, b).active = C.at(a, b + 1).active = C.at(a + 1, b + 1).active = 1;
 }
 
+// Does a cell holding material fold (corner normals more than 40 degrees apart) or have a corner off the
+// skin?
+bool foldsOrLeaves(const Chart& C) {
+  for (int a = 0; a + 1 < C.nx; ++a)
+    for (int b = 0; b + 1 < C.ny; ++b) {
+      if (!C.material[static_cast<size_t>(a) * (C.ny - 1) + b]) continue;
+      const Node* c4[4] = {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)};
+      for (int m = 0; m < 4; ++m) {
+        if (!c4[m]->ok) return true;
+        for (int m2 = m + 1; m2 < 4; ++m2)
+          if (glm::dot(c4[m]->n, c4[m2]->n) <= kFoldCos) return true;
+      }
+    }
+  return false;
+}
+
+// Per node: the curvature of the skin toward its chart neighbours (normal turn over distance) and the
+// dip of a chord of length `edge` there.
+void setSag(Chart& C, double edge) {
+  for (int a = 0; a < C.nx; ++a)
+    for (int b = 0; b < C.ny; ++b) {
+      Node& nd = C.at(a, b);
+      if (!nd.ok) continue;
+      double kappa = 0;
+      const int da[4] = {1, -1, 0, 0}, db[4] = {0, 0, 1, -1};
+      for (int k = 0; k < 4; ++k) {
+        const int aa = a + da[k], bb = b + db[k];
+        if (aa < 0 || bb < 0 || aa >= C.nx || bb >= C.ny || !C.at(aa, bb).ok) continue;
+        const Node& o = C.at(aa, bb);
+        const double d = glm::length(o.c - nd.c);
+        if (d > 1e-12) kappa = std::max(kappa, std::acos(std::clamp(glm::dot(o.n, nd.n), -1.0, 1.0)) / d);
+      }
+      nd.sag = 0.5 * edge * edge * kappa / 8;
+    }
+}
+
 // Layer order agrees with the feathers: a feather never covers the follicle of a feather laid after it
 // (that feather would rise out of the skin through it). The flat footprint (a raster of where the
 // feather has vertices, local x, y) is tested against the root zones of the later follicles in reach,
@@ -375,7 +403,7 @@ void layChart(Chart& C, CoatTop& top, double reqRadius, double gap, double maxSl
   req.resize(idx.size());
   for (size_t j = 0; j < idx.size(); ++j) {
     const Node& n = C.nodes[idx[j]];
-    req[j] = top.highest(n.c, n.n, reqRadius) + gap;
+    req[j] = top.highest(n.c, n.n, reqRadius) + gap + n.sag;
   }
   auto envelope = [&] {
     for (size_t j = 0; j < idx.size(); ++j) req[j] = C.nodes[idx[j]].h;
@@ -397,12 +425,13 @@ void layChart(Chart& C, CoatTop& top, double reqRadius, double gap, double maxSl
   forCoveredSamples(C, top, [&](uint32_t s, int a, int b, double u, double v) {
     Node* c4[4] = {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)};
     const double w4[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
-    double h = 0;
+    double h = 0, sag = 0;
     for (int m = 0; m < 4; ++m) {
       if (!c4[m]->ok || !c4[m]->active) return;
       h += w4[m] * c4[m]->h;
+      sag = std::max(sag, c4[m]->sag);
     }
-    const double need = top.at(s) + gap;
+    const double need = top.at(s) + gap + sag;
     if (h < need)
       for (int m = 0; m < 4; ++m) c4[m]->h += need - h;
   });
@@ -463,6 +492,15 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   if (order.empty()) return res;
   const Surface S(skin);
   std::vector<Chart> charts(n);
+  // Longest triangle edge per feather as meshed (flat): its chords dip below the skin-following surface by
+  // about edge^2 x curvature / 8, which the gap over what lies under it must exceed.
+  std::vector<double> flatEdge(n, 0.0);
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    const uint32_t f = mesh.featherId[tri[0]];
+    for (int k = 0; k < 3; ++k)
+      flatEdge[f] = std::max(flatEdge[f], double(glm::length(mesh.positions[tri[k]] - mesh.positions[tri[(k + 1) % 3]])));
+  }
   // Scale factors: no feather covers a later follicle's root zone.
   std::vector<double> scale(n, 1.0);
   {
@@ -506,8 +544,15 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         const uint32_t i = order[k];
-        buildChart(S, coat.frames[i], coat.params[i], mesh, verts.data() + first[i], first[i + 1] - first[i],
-                   scale[i], o, charts[i]);
+        // A feather whose chart folds over a rim or into a crease, or leaves the skin, is shortened
+        // (shorter where the surface curves tightly) before anything of it is trimmed.
+        for (int attempt = 0;; ++attempt) {
+          buildChart(S, coat.frames[i], coat.params[i], mesh, verts.data() + first[i], first[i + 1] - first[i],
+                     scale[i], o, charts[i]);
+          if (attempt == 3 || scale[i] < 0.4 || !foldsOrLeaves(charts[i])) break;
+          scale[i] *= 0.8;
+        }
+        setSag(charts[i], scale[i] * flatEdge[i]);
       }
     });
   });
@@ -585,8 +630,6 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
           const dvec3 bb = glm::cross(nn, tt);
           if (x < C.ramp) h *= std::max(0.0, x) / C.ramp;
           const dvec3 pos = c + h * nn;
-          // The guarantee: a vertex inside the skin (a fold the chart did not see, another body part) is trimmed.
-          if (x >= C.ramp && S.inside(dvec3(glm::vec3(pos)), h * 1.001 + 1e-12)) bad[v] = 1;
           mesh.positions[v] = glm::vec3(pos);
           surfacePoint[v] = glm::vec3(c);
           auto turn = [&](const glm::vec3& e) {
@@ -645,20 +688,39 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
       }
     });
   });
+  // The guarantee, with the checker's own tests: vertices inside the skin (a fold the chart did not see,
+  // another body part) are trimmed; then, of every pair of crossing triangles, the lower feather's (the
+  // upper one covers it there).
+  {
+    CheckOptions co;
+    setFeatherBases(co, coat, o.baseAllowance);
+    const std::vector<uint8_t> inside = verticesInsideSkin(skin, mesh, co);
+    for (uint32_t v = 0; v < nv; ++v)
+      if (inside[v] && rank[mesh.featherId[v]] >= 0) bad[v] = 1;
+  }
+  std::vector<size_t> kept(n, 0), cut(n, 0);
+  auto collapse = [&](size_t t) {
+    uint32_t* tri = &mesh.indices[3 * t];
+    if (tri[1] == tri[0] && tri[2] == tri[0]) return;
+    tri[1] = tri[2] = tri[0];
+    ++cut[mesh.featherId[tri[0]]];
+  };
+  for (size_t t = 0; t < nt; ++t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    if (rank[mesh.featherId[tri[0]]] >= 0 && (bad[tri[0]] || bad[tri[1]] || bad[tri[2]])) collapse(t);
+  }
   // Trimmed vertices serve only collapsed triangles: park them at their follicle.
   for (uint32_t v = 0; v < nv; ++v)
     if (bad[v] && rank[mesh.featherId[v]] >= 0) mesh.positions[v] = glm::vec3(coat.frames[mesh.featherId[v]].origin);
-  std::vector<size_t> kept(n, 0), cut(n, 0);
+  for (uint64_t pr : intersectingTrianglePairs(mesh)) {
+    const size_t t = pr >> 32, u = pr & 0xffffffffu;
+    const uint32_t ft = mesh.featherId[mesh.indices[3 * t]], fu = mesh.featherId[mesh.indices[3 * u]];
+    if (rank[ft] < 0 || rank[fu] < 0) continue;
+    collapse(rank[ft] < rank[fu] ? t : u);
+  }
   for (size_t t = 0; t < nt; ++t) {
-    uint32_t* tri = &mesh.indices[3 * t];
-    const uint32_t f = mesh.featherId[tri[0]];
-    if (rank[f] < 0) continue;
-    if (bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) {
-      tri[1] = tri[2] = tri[0];
-      ++cut[f];
-    } else {
-      ++kept[f];
-    }
+    const uint32_t* tri = &mesh.indices[3 * t];
+    if (tri[1] != tri[0] || tri[2] != tri[0]) ++kept[mesh.featherId[tri[0]]];
   }
   for (uint32_t i : order) {
     ++res.stats.draped;

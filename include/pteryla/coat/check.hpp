@@ -72,6 +72,10 @@ size_t countIntersectingPairs(const TriMesh& coat, int threads = 0);
 // The intersecting pairs per pair of feathers (FeatherPairCount, sorted; counts sum to
 // countIntersectingPairs).
 std::vector<FeatherPairCount> intersectingFeatherPairs(const TriMesh& coat, int threads = 0);
+// Every intersecting triangle pair of different feathers as (t << 32 | u), t < u, sorted.
+std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat);
+// Per coat vertex: 1 when check() counts it as a skin penetration (the same test, the same exemptions).
+std::vector<uint8_t> verticesInsideSkin(const SkinMesh& skin, const TriMesh& coat, const CheckOptions& options);
 
 // Fills featherOrigins / featherBaseRadius from the coat: radius = baseAllowance x total feather length
 // (use the same value as PackOptions::baseAllowance), at least the calamus radius.

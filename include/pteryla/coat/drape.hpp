@@ -21,9 +21,12 @@
 //     bump. Near the follicle the height ramps from the skin over the calamus.
 //  3. Mesh. Every vertex of the feather mesh (built at elevation 0) is moved to its chart point plus its
 //     height along the chart normal; normals and tangents turn with the chart frame.
-//  4. Guarantees. Material of an earlier (lower) feather over a later feather's follicle, where the later
-//     feather rises out of the skin, is trimmed; so are vertices whose chart left the skin or landed
-//     inside it. Trimmed and hidden feathers are counted.
+//  4. Guarantees. A feather never covers the follicle of a feather laid after it, and one whose chart
+//     folds over a rim or into a crease is shortened first (scaled about its follicle). What still fails
+//     is trimmed: material over a later follicle, cells that fold or leave the skin, and then, with the
+//     coat checker's own tests (check.hpp), every vertex inside the skin and, of every pair of crossing
+//     triangles, the lower feather's. A draped coat has no skin penetration and no crossing triangles.
+//     Trimmed and hidden feathers are counted.
 #include <cstdint>
 #include <vector>
 
@@ -35,9 +38,10 @@ namespace pteryla::coat {
 
 struct DrapeOptions {
   double gap = 0;          // scene units between stacked feathers and above the skin; 0 = auto (0.004 x median feather length)
-  double maxSlope = 0.27;  // largest rise of a feather's height over the skin per unit length (tan 15 degrees)
+  double maxSlope = 1.0;   // largest rise of a feather's height over the skin per unit length (tan 45 degrees)
   int gridAlong = 16;      // chart nodes along a feather (>= 2)
   int gridAcross = 9;      // chart nodes across it (>= 2)
+  double baseAllowance = 0.08;  // fraction of a feather's length around its follicle the checks exempt (PackOptions::baseAllowance)
   int threads = 0;         // 0 = all cores
 };
 
