@@ -15,7 +15,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 PackOptions parsePackOptions(JsonReader& r) {
   PackOptions o;
-  o.method = r.oneOf("method", "height_field", {"height_field", "drape"}) == "drape" ? PackMethod::Drape : PackMethod::HeightField;
+  o.method = r.oneOf("method", "drape", {"drape", "height_field"}) == "drape" ? PackMethod::Drape : PackMethod::HeightField;
   o.drapeMaxSlopeDeg = r.number("drape_max_slope_deg", o.drapeMaxSlopeDeg, 0.0, 60.0);
   o.clearance = r.number("clearance", 0.0, 0.0, kInf);
   o.skinClearance = r.number("skin_clearance", 0.0, 0.0, kInf);

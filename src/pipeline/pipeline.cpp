@@ -37,6 +37,7 @@
 #include "pteryla/feather/io.hpp"
 #include "pteryla/feather/lod.hpp"
 #include "pteryla/feather/mesh.hpp"
+#include "scene_sections.hpp"
 #include "time_stages.hpp"
 
 namespace pteryla::pipeline {
@@ -73,7 +74,9 @@ struct TractSettings {
   std::string element;
 };
 
-constexpr size_t kAutoCount = 1500;
+// Follicles of a tract with neither count nor density, times its share of the mesh area: 3,000 lets the
+// small parts of real meshes (fingers, ears, fins) carry their own feathers (issue #22, docs/packing.md).
+constexpr size_t kAutoCount = 3000;
 // Memory estimates checked against the ceiling (core/limits.hpp, docs/limits.md). Lower bounds from the
 // bird (3152 feathers, 1.29 M triangles at lod 0.6: 775 MB peak), so no scene that fits is refused.
 constexpr double kBytesPerFollicle = 32e3;
@@ -213,7 +216,11 @@ void Pipeline::Impl::computeSkin() {
   // Feather library: every named feather of the scene.
   library.clear();
   materialNames.clear();
-  for (auto it = scene.feathers.begin(); it != scene.feathers.end(); ++it) {
+  // A scene without feathers gets the bundled contour feather, as a bare mesh does.
+  const Json feathers = scene.feathers.empty()
+                            ? Json{{"contour", (std::filesystem::path(dataDir()) / "feathers" / "contour.json").string()}}
+                            : scene.feathers;
+  for (auto it = feathers.begin(); it != feathers.end(); ++it) {
     feather::FeatherParams p;
     if (it->is_string()) {
       try {
@@ -271,8 +278,9 @@ void Pipeline::Impl::computeTracts() {
       if (r.string("feather_scale") != "auto") r.fail("feather_scale", "expected a positive number or \"auto\"");
       t.autoScale = true;
     } else {
+      // Without a feather_scale, feathers are sized from the follicle spacing, on any mesh.
+      t.autoScale = !r.has("feather_scale");
       t.featherScale = r.number("feather_scale", 1.0, 1e-6, 1e6);
-      t.autoScale = scene.fromBareMesh;
     }
     t.featherSpacings = r.number("feather_spacings", t.featherSpacings, 0.1, 100.0);
     t.relax.iterations = 40;
@@ -448,6 +456,10 @@ void Pipeline::Impl::computeDirections() {
   if (!scene.ordering.empty()) {
     JsonReader r(scene.ordering, scene.file, "ordering");
     orderOptions = coat::parseOrdering(r);
+  } else if (!scene.directions.empty() && directionOptions.field.axis.size() >= 2) {
+    // A scene that gives a body axis and no ordering is layered along that axis (roof tiles from the tail).
+    orderOptions.method = coat::OrderMethod::Axis;
+    orderOptions.axis = directionOptions.field.axis;
   }
   ++restGeneration;
   directions = coat::computeSurfaceDirections(rest, tracts, follicles, directionOptions);
@@ -855,6 +867,7 @@ void Pipeline::Impl::computeMesh() {
     dopt.gap = packOptions.clearance;
     dopt.maxSlope = std::tan(packOptions.drapeMaxSlopeDeg * feather::kPi / 180.0);
     dopt.threads = packOptions.threads;
+    dopt.baseAllowance = packOptions.baseAllowance;
     drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt);
   }
   mesh.ranges.clear();

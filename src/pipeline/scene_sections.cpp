@@ -61,8 +61,6 @@ Scene bareMeshScene(const std::string& meshPath) {
   s.feathers = Json::object();
   s.feathers["contour"] = (std::filesystem::path(dataDir()) / "feathers" / "contour.json").string();
   s.tracts = Json::array({Json{{"name", "all"}, {"parameterization", {{"method", "projection"}}}}});
-  // A mesh nobody tuned: feathers draped over the skin (docs/packing.md, "Draped packing").
-  s.packing = Json{{"method", "drape"}};
   s.lights.push_back(LightSpec{});
   s.lights.push_back(LightSpec{{0.7, -0.3, 0.6}, {0.55, 0.6, 0.7}, 0.5});
   return s;

@@ -37,7 +37,8 @@ Json wingScene() {
       {"name": "remiges", "groups": ["remiges_base"], "count": 40, "feather_scale": "auto",
        "feather_spacings": 1.5, "relax": {"iterations": 5}}
     ],
-    "directions": {"axis": [[0, 0, -0.2], [2, 0, 0.4]]}
+    "directions": {"axis": [[0, 0, -0.2], [2, 0, 0.4]]},
+    "packing": {"method": "height_field"}
   })");
 }
 
@@ -50,7 +51,8 @@ Json patchScene() {
     "feathers": {"contour": "../feathers/contour.json"},
     "tracts": [{"name": "patch", "groups": ["patch"], "count": 220, "feather_scale": "auto",
                 "feather_spacings": 1.5, "relax": {"iterations": 10}}],
-    "directions": {"vectors": [{"at": [0, 0, 0], "direction": [1, 0, 0]}]}
+    "directions": {"vectors": [{"at": [0, 0, 0], "direction": [1, 0, 0]}]},
+    "packing": {"method": "height_field"}
   })");
 }
 

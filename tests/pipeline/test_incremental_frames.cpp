@@ -37,7 +37,7 @@ Json patchScene() {
     "tracts": [{"name": "patch", "groups": ["patch"], "count": 220, "feather_scale": "auto",
                 "feather_spacings": 1.5, "relax": {"iterations": 10}}],
     "directions": {"vectors": [{"at": [0, 0, 0], "direction": [1, 0, 0]}]},
-    "packing": {"clearance": 0.0004, "skin_sample_spacing": 0.01}
+    "packing": {"method": "height_field", "clearance": 0.0004, "skin_sample_spacing": 0.01}
   })");
 }
 

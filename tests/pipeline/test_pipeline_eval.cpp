@@ -18,6 +18,7 @@ Scene smallScene() {
                 "parameterization": {"method": "projection", "view_direction": [0, -1, 0]}}],
     "directions": {"axis": [[0, 1.5, 0], [0, -1.5, 0]]},
     "ordering": {"method": "axis", "axis": [[0, 1.5, 0], [0, -1.5, 0]]},
+    "packing": {"method": "height_field"},
     "render": {"lod": 0.3}})");
   return sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
 }

@@ -27,6 +27,7 @@ pipeline::Scene coatScene(bool bySize, double lod = 0.6) {
                 "parameterization": {"method": "projection", "view_direction": [0, -1, 0]}}],
     "directions": {"axis": [[0, 1.5, 0], [0, -1.5, 0]]},
     "ordering": {"method": "axis", "axis": [[0, 1.5, 0], [0, -1.5, 0]]},
+    "packing": {"method": "height_field"},
     "camera": {"auto_frame": false, "eye": [0.4, 0.6, 3.2], "target": [0, 0, 0], "fov": 35}})");
   j["render"] = {{"lod", lod}, {"lod_by_screen_size", bySize}};
   return pipeline::sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");

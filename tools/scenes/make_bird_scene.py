@@ -410,7 +410,7 @@ tracts.append({'name': 'rectrices', 'groups': ['caudal'], 'count': 0, 'feather_s
 # (pack_digest --time: 264-310 ms vs 330-385 ms on 2 threads); 8 barb samples: 1524 pairs.
 # shaft_band 0.8: the shaft clears what lies under the inner 80% of the vane and the barbs lift over the
 # rest, so feathers lie a little flatter (coverage 0.926 -> 0.930 for ~70 more pairs; 0.6 doubles pairs).
-PACKING = {'shaft_band': float(os.environ.get('BIRD_SHAFT_BAND', 0.8)), 'conflict_elevation_deg': float(os.environ.get('BIRD_CONFLICT', 88)), 'barb_samples': 10, 'key_barbs_per_vane': 12, 'shaft_samples': 12, 'barb_field_bins': 24,
+PACKING = {'method': 'height_field', 'shaft_band': float(os.environ.get('BIRD_SHAFT_BAND', 0.8)), 'conflict_elevation_deg': float(os.environ.get('BIRD_CONFLICT', 88)), 'barb_samples': 10, 'key_barbs_per_vane': 12, 'shaft_samples': 12, 'barb_field_bins': 24,
            'styling': styling}
 # Skin samples at the packer's automatic spacing: since each sample stands for its patch of skin (packing.md)
 # the coat stays above the skin without the old 0.004 spacing (measured: 0 penetrations, pairs 1622 of

@@ -47,16 +47,16 @@ struct PackSkinSamples;  // the skin samples of a pack (pack.cpp), shared with p
 }
 
 // How the pipeline lays the coat (pack() itself is always the height-field method):
-//  - HeightField (default for scene files): Streit's rigid shaft rotation and barb elevation against
-//    height fields (pack());
-//  - Drape (a bare mesh's default): every feather lies on the skin along a surface chart, stacked over
-//    what lies under it by height over the skin (drape.hpp); styling elevations, expressive lifts and
-//    moult packing are not applied.
-enum class PackMethod { HeightField, Drape };
+//  - Drape (the default): every feather lies on the skin along a surface chart, stacked over what lies
+//    under it by height over the skin (drape.hpp); styling elevations, expressive lifts and moult packing
+//    over the mature coat are not applied;
+//  - HeightField: Streit's rigid shaft rotation and barb elevation against height fields (pack()); the
+//    bundled scenes use it.
+enum class PackMethod { Drape, HeightField };
 
 struct PackOptions {
-  PackMethod method = PackMethod::HeightField;
-  double drapeMaxSlopeDeg = 15;  // drape: steepest rise of a feather over the skin, degrees
+  PackMethod method = PackMethod::Drape;
+  double drapeMaxSlopeDeg = 45;  // drape: steepest rise of a feather over the skin, degrees
   double clearance = 0;        // scene units kept between a feather and what is under it; 0 = auto (0.25 x median rachis width)
   double skinClearance = 0;    // scene units kept above the skin; 0 = auto (= clearance)
   double minElevation = 0;     // radians; lower bound for every computed elevation
