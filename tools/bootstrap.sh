@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
 # Installs exactly the Debian 12 packages pteryla needs to build, test and render headlessly.
+# clang-14 + libclang-rt-14-dev (libFuzzer, ASan/UBSan runtimes) and llvm-14 (llvm-symbolizer) are for
+# tools/fuzz.sh; gcc's own sanitizer runtimes (tools/sanitize.sh) come with build-essential.
 # Idempotent and quiet: packages already present are skipped; apt-get update runs at most once.
 set -euo pipefail
 PACKAGES=(
@@ -8,6 +10,7 @@ PACKAGES=(
   libopenimageio-dev libosmesa6-dev libglfw3-dev libgl-dev libimgui-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
+  clang-14 libclang-rt-14-dev llvm-14
 )
 missing=()
 for p in "${PACKAGES[@]}"; do
