@@ -28,6 +28,13 @@ Json readJsonFile(const std::string& path) {
     if (p != std::string::npos) msg = msg.substr(p);
     throw Error("malformed JSON at line " + std::to_string(line) + ", column " + std::to_string(col) + ": " + msg,
                 path);
+  } catch (const nlohmann::json::exception& e) {
+    // The parser's other rejections, e.g. out_of_range 406 "number overflow parsing '1e999'" (found by
+    // tests/fuzz): bad input like a syntax error, not an internal failure. They carry no offset.
+    std::string msg = e.what();
+    const auto p = msg.find("] ");
+    if (p != std::string::npos) msg = msg.substr(p + 2);
+    throw Error("malformed JSON: " + msg, path);
   }
 }
 

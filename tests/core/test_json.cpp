@@ -41,3 +41,14 @@ TEST(JsonFile, MalformedJsonReportsLine) {
   }
   EXPECT_THROW(readJsonFile(path + ".does-not-exist"), Error);
 }
+
+// Found by tests/fuzz (feather reader): a number too large for a double made nlohmann throw out_of_range,
+// which escaped as an internal failure instead of a pteryla::Error naming the file.
+TEST(JsonFile, NumberOverflowIsBadInput) {
+  const std::string path = std::string(PTERYLA_BUILD_DIR) + "/overflow_test.json";
+  { FILE* f = fopen(path.c_str(), "w"); fputs("{\n  \"length\": 1e3081\n}\n", f); fclose(f); }
+  try { readJsonFile(path); FAIL(); } catch (const Error& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_NE(std::string(e.what()).find("number overflow"), std::string::npos) << e.what();
+  }
+}
