@@ -187,11 +187,18 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
     const double tol = std::max(opt.weldTolerance * diag, std::numeric_limits<double>::min());
     const double inv = 1.0 / tol;
     std::unordered_map<uint64_t, std::vector<uint32_t>> cells;
+    // Grid coordinates are clamped before the integer conversion: the bounds cover only vertices used by
+    // faces, so an unused vertex far outside them (or any huge extent) gives cell numbers beyond int64
+    // (undefined behaviour, found by tests/fuzz). Clamped vertices share edge cells; the distance test
+    // below keeps the weld exact.
+    auto cellCoord = [](double q, int d) {
+      return static_cast<uint64_t>(static_cast<int64_t>(std::clamp(std::floor(q), -0x1p52, 0x1p52)) + d) & 0x1FFFFF;
+    };
     auto cellOf = [&](const glm::dvec3& p, int dx, int dy, int dz) {
       const glm::dvec3 q = (p - lo) * inv;
-      const uint64_t i = static_cast<uint64_t>(static_cast<int64_t>(std::floor(q.x)) + dx) & 0x1FFFFF;
-      const uint64_t j = static_cast<uint64_t>(static_cast<int64_t>(std::floor(q.y)) + dy) & 0x1FFFFF;
-      const uint64_t k = static_cast<uint64_t>(static_cast<int64_t>(std::floor(q.z)) + dz) & 0x1FFFFF;
+      const uint64_t i = cellCoord(q.x, dx);
+      const uint64_t j = cellCoord(q.y, dy);
+      const uint64_t k = cellCoord(q.z, dz);
       return (i << 42) | (j << 21) | k;
     };
     for (uint32_t v = 0; v < nv; ++v) {

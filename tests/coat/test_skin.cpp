@@ -176,6 +176,18 @@ TEST(SkinLoad, RepairWeldsDuplicateVertices) {
   EXPECT_EQ(welded.vertexCount(), 6u);  // indices stay stable; duplicates become unreferenced
 }
 
+// Found by tests/fuzz (mesh): the weld grid converted (p - lo) / tol to int64 for every vertex, and an
+// unused vertex far outside the faces' bounds overflowed it (undefined behaviour under UBSan).
+TEST(SkinLoad, RepairWeldIgnoresFarUnusedVertices) {
+  std::vector<glm::dvec3> p = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 2e98}};
+  std::vector<std::array<uint32_t, 3>> f = {{0, 1, 2}, {3, 4, 5}};
+  MeshLoadOptions repair;
+  repair.repair = true;
+  const SkinMesh welded = makeSkinMesh(p, f, {}, {}, repair);
+  EXPECT_EQ(welded.repairs.weldedVertices, 2u);
+  EXPECT_EQ(boundaryEdges(welded), 4u);
+}
+
 TEST(SkinLoad, MakeSkinMeshValidatesIndicesAndGroups) {
   std::vector<glm::dvec3> p = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}};
   try {
