@@ -8,7 +8,8 @@
 // 9f68211 "PLY/OFF/STL: check structure and declared counts before OpenMesh reads them", are merged):
 // OpenMesh trusts headers, so a PLY header that is not a clean sequence of known lines makes its reader
 // loop forever (found here within seconds: "end_header" with one byte changed), a "property" line before
-// the first "element" line crashes it (SEGV writing in _PLYReader_::can_u_read), and declared counts or
+// the first "element" line crashes it (SEGV writing in _PLYReader_::can_u_read), an OFF without its counts
+// line runs on uninitialised counts, and declared counts or
 // list lengths far beyond the file's size allocate gigabytes. Such inputs are skipped (and counted, see
 // the message at exit) unless PTERYLA_FUZZ_MESH_UNGUARDED=1, so the rest of the readers is still fuzzed.
 #include <OpenMesh/Core/System/omstream.hh>
@@ -54,14 +55,15 @@ bool isCountType(const std::string& t) {
   return false;
 }
 
-// Any run of digits worth more than the file's size: OpenMesh reads counts with operator>>, so
-// "08888888uint" declares 8888888 faces. No file this size can back such a count or index.
+// Any run of digits worth far more than the file's size (colours up to 255 and the like stay fine):
+// OpenMesh reads counts with operator>>, so "08888888uint" declares 8888888 faces. No file this size can
+// back such a count or index.
 bool hugeDigitRun(const uint8_t* data, size_t size, size_t from) {
   unsigned long long v = 0;
   for (size_t i = from; i < size; ++i) {
     if (data[i] >= '0' && data[i] <= '9') {
       v = v > 1000000000000ULL ? v : v * 10 + unsigned(data[i] - '0');
-      if (v > size) return true;
+      if (v > size + 65536) return true;
     } else {
       v = 0;
     }
@@ -92,7 +94,7 @@ bool knownOpenMeshIssue(const uint8_t* data, size_t size, const std::string& ext
         binary = t[1] != "ascii";
       } else if (t[0] == "element" && t.size() == 3 && t[2].find_first_not_of("0123456789") == std::string::npos &&
                  t[2].size() < 10) {
-        if (std::strtoull(t[2].c_str(), nullptr, 10) > size) return true;
+        if (std::strtoull(t[2].c_str(), nullptr, 10) > size + 65536) return true;
         element = true;
       } else if (t[0] == "property" && !element) {
         return true;  // SEGV (write) in OpenMesh's _PLYReader_::can_u_read, found here
@@ -111,10 +113,9 @@ bool knownOpenMeshIssue(const uint8_t* data, size_t size, const std::string& ext
     std::string magic, count;
     in >> magic;
     if (magic.find("nOFF") != std::string::npos) in >> count;  // dimension
-    for (int i = 0; i < 3; ++i) {
-      if (!(in >> count)) break;
-      if (count.find_first_not_of("0123456789") != std::string::npos) return true;
-    }
+    // Missing counts ("OFF" alone) leave OpenMesh's counts uninitialised: a hang or a huge loop.
+    for (int i = 0; i < 3; ++i)
+      if (!(in >> count) || count.find_first_not_of("0123456789") != std::string::npos) return true;
     // A negative integer where OpenMesh expects a face's corner count ("-1") is read as 2^32 - 1 corners.
     // Without the face structure at hand, skip every negative integer token (negative coordinates
     // written as decimals, "-1.0", still go through).
