@@ -116,11 +116,11 @@ bool knownOpenMeshIssue(const uint8_t* data, size_t size, const std::string& ext
     // Missing counts ("OFF" alone) leave OpenMesh's counts uninitialised: a hang or a huge loop.
     for (int i = 0; i < 3; ++i)
       if (!(in >> count) || count.find_first_not_of("0123456789") != std::string::npos) return true;
-    // A negative integer where OpenMesh expects a face's corner count ("-1") is read as 2^32 - 1 corners.
-    // Without the face structure at hand, skip every negative integer token (negative coordinates
-    // written as decimals, "-1.0", still go through).
-    for (std::string tok; in >> tok;)
-      if (tok.size() > 1 && tok[0] == '-' && tok.find_first_not_of("0123456789", 1) == std::string::npos) return true;
+    // A negative number where OpenMesh expects a face's corner count ("-1", or "-1.5" and "-04v" once the
+    // stream is misaligned) is read as about 2^32 corners. Without the face structure at hand, skip every
+    // OFF with a negative number (OFF files with non-negative coordinates are still fuzzed).
+    for (size_t i = 0; i + 1 < size; ++i)
+      if (data[i] == '-' && ((data[i + 1] >= '0' && data[i + 1] <= '9') || data[i + 1] == '.')) return true;
     return hugeDigitRun(data, size, 0);
   }
   if (ext == ".stl" && !(size >= 5 && std::memcmp(data, "solid", 5) == 0)) {
