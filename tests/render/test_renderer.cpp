@@ -157,7 +157,8 @@ TEST(Renderer, SkinWritesDepthFeathersTestButDoNotWriteDepth) {
   }
   r.setCoat(coat, ranges);
   r.setMaterials({lambert({1, 1, 0}), lambert({1, 0, 0}), lambert({0, 1, 0})});
-  const uint8_t* p = centre(r.renderImage(frontCamera(), kFrontLight, s));
+  const Image img = r.renderImage(frontCamera(), kFrontLight, s);  // p points into it: keep it alive
+  const uint8_t* p = centre(img);
   // A (yellow) is hidden by the skin; B (red, 0.5) over blue; C (green, 0.5) drawn over that although
   // it is behind B: B wrote no depth.
   const double red = 0.5 * 0.5, green = 0.5, blue = 0.5 * 0.5;
