@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs exactly the Debian 12 packages pteryla needs to build, test and render headlessly.
-# clang-14 + libclang-rt-14-dev (libFuzzer, ASan/UBSan runtimes) and llvm-14 (llvm-symbolizer) are for
-# tools/fuzz.sh; gcc's own sanitizer runtimes (tools/sanitize.sh) come with build-essential.
+# `--fuzz` adds clang-14 + libclang-rt-14-dev (libFuzzer, ASan/UBSan runtimes) and llvm-14
+# (llvm-symbolizer) for tools/fuzz.sh; gcc's own sanitizer runtimes (tools/sanitize.sh) come with
+# build-essential.
 # Idempotent and quiet: packages already present are skipped; apt-get update runs at most once.
 set -euo pipefail
 PACKAGES=(
@@ -10,8 +11,8 @@ PACKAGES=(
   libopenimageio-dev libosmesa6-dev libglfw3-dev libgl-dev libimgui-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
-  clang-14 libclang-rt-14-dev llvm-14
 )
+[ "${1:-}" = --fuzz ] && PACKAGES+=(clang-14 libclang-rt-14-dev llvm-14)
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

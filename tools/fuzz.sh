@@ -19,7 +19,7 @@ JOBS=${PTERYLA_FUZZ_JOBS:-$(nproc)}
 # Longest input each target may grow (about the largest seed, so it stays a reader test).
 declare -A MAXLEN=([scene]=12288 [feather]=4096 [skeleton]=4096 [mesh]=4096)
 
-bash tools/bootstrap.sh
+bash tools/bootstrap.sh --fuzz
 export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PWD}
 if [ ! -f build-fuzz/CMakeCache.txt ]; then
   # -O1 -g1 and assertions on (no NDEBUG): the usual fuzzing trade-off between speed and checks.
