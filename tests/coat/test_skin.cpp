@@ -177,12 +177,21 @@ TEST(SkinLoad, RepairWeldsDuplicateVertices) {
 }
 
 // Found by tests/fuzz (mesh): the weld grid converted (p - lo) / tol to int64 for every vertex, and an
-// unused vertex far outside the faces' bounds overflowed it (undefined behaviour under UBSan).
-TEST(SkinLoad, RepairWeldIgnoresFarUnusedVertices) {
+// unused vertex far outside the faces' bounds overflowed it (undefined behaviour under UBSan). The weld
+// now clamps, and the mesh checks of issue #21 refuse such a vertex before it is reached: bad input with
+// the vertex named, never undefined behaviour.
+TEST(SkinLoad, RepairWeldNeverSeesFarUnusedVertices) {
   std::vector<glm::dvec3> p = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 2e98}};
   std::vector<std::array<uint32_t, 3>> f = {{0, 1, 2}, {3, 4, 5}};
   MeshLoadOptions repair;
   repair.repair = true;
+  try {
+    makeSkinMesh(p, f, {}, {}, repair);
+    FAIL() << "a vertex at 2e98 was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 6"), std::string::npos) << e.what();
+  }
+  p.back() = {1, 0, 2};  // near: welded as before
   const SkinMesh welded = makeSkinMesh(p, f, {}, {}, repair);
   EXPECT_EQ(welded.repairs.weldedVertices, 2u);
   EXPECT_EQ(boundaryEdges(welded), 4u);
