@@ -11,7 +11,6 @@
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include "pteryla/core/error.hpp"
 #include "pteryla/coat/check.hpp"
@@ -448,16 +447,6 @@ void layChart(Chart& C, CoatTop& top, double reqRadius, double gap, double maxSl
   });
 }
 
-template <class F>
-void inArena(int threads, F&& f) {
-  if (threads >= 1) {
-    tbb::task_arena arena(threads);
-    arena.execute(f);
-  } else {
-    f();
-  }
-}
-
 }  // namespace
 
 DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& o) {
@@ -513,7 +502,7 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
     }
     detail::PointGrid og;
     og.build(origins, std::max(reach, 1e-12));
-    inArena(o.threads, [&] {
+    detail::inArena(o.threads, [&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
         std::vector<std::pair<glm::dvec2, double>> later;
         for (size_t k = r.begin(); k < r.end(); ++k) {
@@ -540,7 +529,7 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
     });
   }
   std::vector<double> lengths;
-  inArena(o.threads, [&] {
+  detail::inArena(o.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         const uint32_t i = order[k];
@@ -575,7 +564,7 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   }
   // A node whose lifted point has other skin closer than half its height sits in a fold, and one where
   // the body is thinner than twice its height would meet the coat of the other side: not draped.
-  inArena(o.threads, [&] {
+  detail::inArena(o.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k)
         for (Node& nd : charts[order[k]].nodes)
@@ -588,7 +577,7 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   std::vector<glm::vec3> surfacePoint(nv);
   std::vector<uint8_t> bad(nv, 0);
   const bool hasN = mesh.normals.size() == nv, hasT = mesh.tangents.size() == nv;
-  inArena(o.threads, [&] {
+  detail::inArena(o.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         const uint32_t i = order[k];
@@ -669,7 +658,7 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   }
   detail::PointGrid grid;
   grid.build(origins, std::max(reachMax + edgeMax, 1e-12));
-  inArena(o.threads, [&] {
+  detail::inArena(o.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         const uint32_t i = order[k];

@@ -1735,17 +1735,6 @@ void initResult(const Context& ctx, PackResult& res) {
   res.stats = {};
 }
 
-// Runs f in a task arena of `threads` threads (0 = TBB's default arena, all cores).
-template <class F>
-void inArena(int threads, F&& f) {
-  if (threads >= 1) {
-    tbb::task_arena arena(threads);
-    arena.execute(f);
-  } else {
-    f();
-  }
-}
-
 bool fieldBefore(const BarbField& a, const BarbField& b) {
   return a.feather != b.feather ? a.feather < b.feather : (a.vane != b.vane ? a.vane < b.vane : a.key < b.key);
 }
@@ -1797,7 +1786,7 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
     finish(ctx, scratch, res, t0);
   };
   PackResult res;
-  inArena(options.threads, [&] { run(res); });
+  detail::inArena(options.threads, [&] { run(res); });
   return res;
 }
 
@@ -1877,7 +1866,7 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
     });
     finish(ctx, scratch, res, t0);
   };
-  inArena(options.threads, run);
+  detail::inArena(options.threads, run);
   return res;
 }
 
@@ -2031,7 +2020,7 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
       std::sort(res.barbFields.begin(), res.barbFields.end(), fieldBefore);
     }
   };
-  inArena(options.threads, run);
+  detail::inArena(options.threads, run);
   return res;
 }
 

@@ -12,7 +12,20 @@
 #include <limits>
 #include <vector>
 
+#include <tbb/task_arena.h>
+
 namespace pteryla::coat::detail {
+
+// Runs f in a task arena of `threads` threads (0 = TBB's default arena, all cores).
+template <class F>
+void inArena(int threads, F&& f) {
+  if (threads >= 1) {
+    tbb::task_arena arena(threads);
+    arena.execute(f);
+  } else {
+    f();
+  }
+}
 
 struct Box {
   glm::dvec3 lo{std::numeric_limits<double>::infinity()};
