@@ -3,10 +3,16 @@
 // not depend on how the coat was packed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
 
 #include <glm/geometric.hpp>
 
+#include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/pack.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
@@ -53,7 +59,7 @@ TEST(Drape, FeathersFollowTheSkinInsteadOfStandingOff) {
   Pipeline rigid(sphereScene("height_field"));
   double worstRigid = 0;
   for (const auto& v : rigid.coatMesh().mesh.positions) worstRigid = std::max(worstRigid, std::abs(double(glm::length(v)) - 1.0));
-  EXPECT_LT(worst, 0.12) << "rigid " << worstRigid;
+  EXPECT_LT(worst, 0.15) << "rigid " << worstRigid;  // corners rise to the need under them (conservative)
   EXPECT_GT(worstRigid, 2 * worst);
 }
 
@@ -116,4 +122,66 @@ TEST(Drape, TheGuaranteeHoldsOnABareMeshWithABeakAndCreases) {
   EXPECT_LT(*m.elevationP50, 25.0);
   EXPECT_GT(*m.coverage, 0.8);
   EXPECT_LT(*m.hiddenFeathers, 50u);
+}
+
+namespace {
+// A thin disc (the unit sphere flattened to half a thickness of 0.03, like a wing or a fin), written next
+// to a scene in a temporary directory: feathers on its faces that point across it reach its rim.
+Scene discScene(const std::string& dir) {
+  std::ifstream in(std::string(PTERYLA_DATA_DIR) + "/meshes/sphere_1600.obj");
+  std::ofstream out(dir + "/disc.obj");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("v ", 0) == 0) {
+      std::istringstream ls(line.substr(2));
+      double x, y, z;
+      ls >> x >> y >> z;
+      out << "v " << x << ' ' << 0.03 * y << ' ' << z << '\n';
+    } else {
+      out << line << '\n';
+    }
+  }
+  out.close();
+  Json j = Json::parse(R"({"pteryla": 1, "seed": 5, "mesh": "disc.obj",
+    "feathers": {"contour": ")" + std::string(PTERYLA_DATA_DIR) + R"(/feathers/contour.json"},
+    "tracts": [{"name": "all", "count": 500, "feather_scale": "auto", "feather_spacings": 3.0,
+                "parameterization": {"method": "projection", "view_direction": [0, -1, 0]}}],
+    "directions": {"axis": [[-1.5, 0, 0], [1.5, 0, 0]]},
+    "packing": {"method": "drape"}})");
+  return sceneFromJson(j, dir + "/disc.json");
+}
+}  // namespace
+
+TEST(Drape, FeathersOverhangAThinPartsRimInsteadOfWrappingOrVanishing) {
+  // Past the rim of a thin part the skin turns away under the feather: it goes straight on, like a flight
+  // feather past the wing's edge. It neither wraps round onto the other side nor is trimmed away (the
+  // old test "the body is thinner than twice the height" hid whole feathers on thin parts).
+  const std::string dir = testing::TempDir() + "/pteryla_drape_disc";
+  std::filesystem::create_directories(dir);
+  Pipeline p(discScene(dir));
+  const QualityMetrics m = p.check();
+  EXPECT_EQ(*m.skinPenetrations, 0u);
+  EXPECT_EQ(*m.intersectingPairs, 0u);
+  EXPECT_LT(*m.hiddenFeathers, 10u);
+  EXPECT_GT(*m.coverage, 0.9);
+  const TriMesh& mesh = p.coatMesh().mesh;
+  const coat::CoatFeathers& coat = p.feathers();
+  size_t beyond = 0, wrapped = 0;
+  std::vector<uint8_t> used(mesh.positions.size(), 0);
+  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    if (tri[0] == tri[1] && tri[1] == tri[2]) continue;  // trimmed
+    for (int k = 0; k < 3; ++k) used[tri[k]] = 1;
+  }
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    if (!used[v]) continue;
+    const glm::vec3 q = mesh.positions[v];
+    const coat::FeatherFrame& f = coat.frames[mesh.featherId[v]];
+    if (std::abs(f.normal.y) < 0.9) continue;  // rooted on the rim itself
+    // Wrapped round: under the disc on the other face's side.
+    if (std::hypot(q.x, q.z) < 0.98 && f.normal.y * q.y < -0.03) ++wrapped;
+    if (std::hypot(q.x, q.z) > 1.03) ++beyond;
+  }
+  EXPECT_GT(beyond, 1000u);
+  EXPECT_EQ(wrapped, 0u);
 }

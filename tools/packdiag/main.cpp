@@ -5,6 +5,7 @@
 //
 //   pteryla_packdiag SCENE.json [--set /json/pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME]
 //                    [--cover] [--face-cover FILE] [--blame N] [--flat DEG] [--scale K]
+//                    [--follicles FILE]
 //
 // --blame N: which feathers under feather N raise it. For each feather before N in layer order within
 // reach, N is packed again over the pack without that feather (packOver); the ones whose absence lowers N
@@ -62,7 +63,7 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 int main(int argc, char** argv) {
   try {
     const char* usage = "usage: %s SCENE.json [--set /pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME] [--cover] "
-                        "[--face-cover FILE] [--blame N] [--flat DEG] [--scale K]\n";
+                        "[--face-cover FILE] [--blame N] [--flat DEG] [--scale K] [--follicles FILE]\n";
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
       std::fprintf(argc < 2 ? stderr : stdout, usage, argv[0]);
       return argc < 2 ? 2 : 0;
@@ -71,6 +72,7 @@ int main(int argc, char** argv) {
     bool full = true, cover = false;
     std::string listTract;      // --tract NAME: one line per feather of that tract (follicle, frame, elevations)
     std::string faceCoverPath;  // --face-cover FILE
+    std::string folliclesPath;  // --follicles FILE: "tract x y z length" per feather, then exit
     long blame = -1;            // --blame N
     double lod = 1.0;
     double flatDeg = NAN;   // --flat DEG
@@ -85,6 +87,7 @@ int main(int argc, char** argv) {
       else if (s == "--top" && a + 1 < argc) top = std::stoi(argv[++a]);
       else if (s == "--tract" && a + 1 < argc) listTract = argv[++a];
       else if (s == "--face-cover" && a + 1 < argc) faceCoverPath = argv[++a];
+      else if (s == "--follicles" && a + 1 < argc) folliclesPath = argv[++a];
       else if (s == "--blame" && a + 1 < argc) {
         const std::string v = argv[++a];
         char* end = nullptr;
@@ -131,6 +134,15 @@ int main(int argc, char** argv) {
     const coat::SkinMesh& skin = p.posedSkin();
     const size_t n = coat.size();
     std::printf("evaluated %zu feathers in %.1f s\n", n, secondsSince(t0));
+    if (!folliclesPath.empty()) {  // for tools/scenes/make_bird_scene.py (BIRD_FOLLICLES, BIRD_UNSCALED)
+      std::ofstream out(folliclesPath);
+      out.precision(9);
+      for (size_t i = 0; i < n; ++i)
+        out << tracts[coat.tract[i]].name << ' ' << coat.frames[i].origin.x << ' ' << coat.frames[i].origin.y << ' '
+            << coat.frames[i].origin.z << ' ' << coat.params[i].totalLength() << '\n';
+      if (!out) throw Error("cannot write", folliclesPath, {});
+      return 0;
+    }
 
     // Re-pack with the scene's options for the statistics (deterministic: must equal the pipeline's).
     coat::PackOptions po;

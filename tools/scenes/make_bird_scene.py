@@ -91,37 +91,6 @@ def closest_surface(verts, faces, p, group_prefix):
 def surface_normal(verts, faces, p, group_prefix):
     return closest_surface(verts, faces, p, group_prefix)[1]
 
-# Secondaries pack their shaft against what lies under the inner 30% of the vane (styling shaft_band; the
-# scene's packing.shaft_band 0.8 applies to everything else): their wide vanes overlap the next secondary's,
-# and with 0.8 each shaft cleared its neighbour's vane, so they climbed over one another (inner right-wing
-# secondaries up to 45 degrees above the wing plane, one pair at the conflict limit). Measured 2026-11-25
-# with the marginal coverts above: pairs 2086 -> 1183; on the primaries too (BIRD_PRIM_BAND=0.3) the
-# primaries' vanes crossed instead (1448); 0.5 on the primaries: 1187.
-SEC_BAND = float(os.environ.get('BIRD_SEC_BAND', 0.3)) if os.environ.get('BIRD_SEC_BAND', '0.3') != 'none' else None
-PRIM_BAND = float(os.environ['BIRD_PRIM_BAND']) if os.environ.get('BIRD_PRIM_BAND') else None
-def flight_styling(verts, faces, pins, dirs, group_prefix, min_elevation=True, bands=None):
-    """Styling for pinned flight feathers: `dirs` are world directions in the (horizontal) wing and tail
-    planes. Each feather's surface direction is set to it and its elevation kept at or above the angle
-    that points it along it (min_elevation_deg, from the skin normal at the pin), so the packer only ever
-    raises it over the ones under it: remiges and rectrices lie in the wing and tail planes, overlapping
-    like a fan."""
-    out = []
-    gap = min(math.dist(pins[i], pins[i + 1]) for i in range(len(pins) - 1))
-    for k, (p, d) in enumerate(zip(pins, dirs)):
-        d = unit(d)
-        n_skin = surface_normal(verts, faces, p, group_prefix)
-        e = math.degrees(math.asin(max(-1.0, min(1.0, dot(d, n_skin)))))
-        sel = {'select': 'sphere', 'center': [round(c, 5) for c in p], 'radius': round(0.3 * gap, 5),
-               'direction': [round(c, 4) for c in d]}
-        if bands and bands[k] is not None:
-            sel['shaft_band'] = bands[k]
-        if min_elevation == 'fixed':
-            sel['elevation_deg'] = round(max(0.0, min(85.0, e)), 2)
-        elif min_elevation:
-            sel['min_elevation_deg'] = round(max(0.0, min(85.0, e)), 2)
-        out.append(sel)
-    return out
-
 def farthest_points(points, k):
     if not points: return []
     cx = [sum(p[i] for p in points) / len(points) for i in range(3)]
@@ -264,7 +233,10 @@ SPACINGS = {'body': float(os.environ.get('BIRD_SPACINGS', 2.4)), 'alar': float(o
 SPACINGS.update(femoral=2.8, ventral=2.7)  # a little longer on the flanks and belly: fewer bare gaps between rows
 for k in ('femoral', 'ventral'):
     if os.environ.get('BIRD_%s_SPACINGS' % k.upper()): SPACINGS[k] = float(os.environ['BIRD_%s_SPACINGS' % k.upper()])
-ALAR_REMIGES = os.environ.get('BIRD_ALAR_REMIGES', '0') == '1'
+# The wing coverts' tracts also cover the band where the flight feathers root (greater coverts over the
+# remiges' bases, as on a real wing): draped, that band was the least covered skin (0.86, total 0.968);
+# with it 0.975 (2026-11-26).
+ALAR_REMIGES = os.environ.get('BIRD_ALAR_REMIGES', '1') == '1'
 tracts = []
 for name, kinds, n in body:
     pts = farthest_points(groups[name], n)
@@ -292,9 +264,16 @@ for name, kinds, n in body:
 # third of a spacing), packed differently and covered differently (right side of the head 0.76 vs 0.88
 # on the left). The right-side body tracts are instead pinned at the mirror images of the left tracts'
 # relaxed follicles, with the left tracts' automatic feather scale, so both halves carry the same coat.
-# The left follicles come from BIRD_FOLLICLES (lines "tract x y z length", one per feather, dumped from
-# the pipeline's follicles and feather lengths); without it the pinned lists and scales already in
-# data/scenes/bird.json are kept, so re-running the script reproduces the committed scene.
+# The left follicles come from BIRD_FOLLICLES (lines "tract x y z length", one per feather, written by
+# `pteryla_packdiag SCENE --follicles FILE`); without it the pinned lists and scales already in
+# data/scenes/bird.json are kept, so re-running the script reproduces the committed scene. After changing
+# a mirrored tract (its groups, density or spacing), regenerate in three steps:
+#   BIRD_MIRROR=0 BIRD_OUT=_m1.json python3 tools/scenes/make_bird_scene.py
+#   build/tools/packdiag/pteryla_packdiag data/scenes/_m1.json --follicles /tmp/f1.txt
+#   BIRD_FOLLICLES=/tmp/f1.txt BIRD_OUT=_m2.json python3 tools/scenes/make_bird_scene.py
+#   build/tools/packdiag/pteryla_packdiag data/scenes/_m2.json --follicles /tmp/f2.txt
+#   BIRD_FOLLICLES=/tmp/f1.txt BIRD_UNSCALED=/tmp/f2.txt python3 tools/scenes/make_bird_scene.py
+# (then delete data/scenes/_m1.json and _m2.json).
 MIRROR = os.environ.get('BIRD_MIRROR', '1') == '1'
 MIRRORED = ('capital', 'humeral', 'alar', 'femoral', 'crural')
 def mirror_tracts(tracts):
@@ -370,51 +349,21 @@ for side, sgn in (('left', 1), ('right', -1)):
                                     {'feather': sided('primary', 'remiges_' + side), 'at': prim[0]}, {'feather': sided('primary', 'remiges_' + side), 'at': prim[-1]}],
                    'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
 verts, faces = load_obj(os.path.join(DATA, 'meshes', 'bird.obj'))
-# 'min': flight feathers pack freely above the wing/tail plane; 'fixed': they lie in it (others pack
-# against them, their barbs still lift over the ones under them).
-mode = lambda v: 'fixed' if v == 'fixed' else v == 'min'
-FLIGHT_MODE = mode(os.environ.get('BIRD_FLIGHT_MODE', 'min'))
-TAIL_MODE = mode(os.environ.get('BIRD_TAIL_MODE', 'min'))
-styling = []
-for side, sgn in (('left', 1), ('right', -1)):
-    prim, sec = remex_pins(side)
-    # Secondaries straight back, primaries sweeping out toward the wing tip.
-    dirs = [[-1.0, 0.0, sgn * (0.1 + 0.2 * k / 9)] for k in range(10)]
-    dirs += [[-1.0 + 0.55 * k / 9, 0.0, sgn * (0.35 + 0.75 * k / 9)] for k in range(10)]
-    styling += flight_styling(verts, faces, sec + prim, dirs, 'remiges_' + side, FLIGHT_MODE, [SEC_BAND] * len(sec) + [PRIM_BAND] * len(prim))
 rect = resample(axes['tail_edge'], 12)
 # The tail edge runs around the stub's end, where the skin faces straight back: a rectrix pointing back
 # would point along its normal (no tangent direction). Rectrices root on the upper back of the stub
-# instead (over the pygostyle), where pointing back is a well-defined, moderate elevation.
+# instead (over the pygostyle), where pointing back is a well-defined direction.
 TAIL_LIFT = float(os.environ.get('BIRD_TAIL_LIFT', 0.04))
 if TAIL_LIFT > 0:
     rect = [[round(c, 5) for c in closest_surface(verts, faces, add(p, [0.0, TAIL_LIFT, 0.0]), 'caudal')[0]] for p in rect]
-# Rectrices fan out from the tail's end, the outer ones up to 30 degrees from the body axis.
-rdirs = [[-math.cos(a), 0.0, math.sin(a)] for a in (math.radians(30 - 60 * k / 11) for k in range(12))]
-styling += flight_styling(verts, faces, rect, rdirs, 'caudal', TAIL_MODE)
-# Styled head (thesis Fig. 9.20): the crown feathers combed straight back and raised into a low crest;
-# the other head feathers pack against them.
-CREST_DEG = float(os.environ.get('BIRD_CREST_DEG', 28))
-if CREST_DEG > 0:
-    styling.append({'select': 'sphere', 'center': [0.72, 0.46, 0.0], 'radius': 0.075,
-                    'min_elevation_deg': CREST_DEG, 'direction': [-1.0, 0.0, 0.0]})
 tracts.append({'name': 'rectrices', 'groups': ['caudal'], 'count': 0, 'feather_scale': 0.055,
                'pinned': [{'at': p} for p in rect], 'feather': 'rectrix',
                'parameterization': {'method': 'projection', 'view_direction': [0, -1, 0]}})
 
-# Denser obstacle samples than the packer's defaults: with 12 key barbs per vane and 10 points per key
-# barb handed to later feathers (and finer barb height fields), feathers see the barbs of the ones under
-# them instead of slipping between samples (full-geometry pairs 3608 -> ~2000). Measured with the skin
-# patches (pteryla_packdiag --set, 2026-11-25): 16 barb samples, 24 shaft samples and 32 field bins gave
-# 1622 pairs, 0 penetrations, coverage 0.9285; 10 / 12 / 24 give 1366, 0, 0.9287 and pack ~20% faster
-# (pack_digest --time: 264-310 ms vs 330-385 ms on 2 threads); 8 barb samples: 1524 pairs.
-# shaft_band 0.8: the shaft clears what lies under the inner 80% of the vane and the barbs lift over the
-# rest, so feathers lie a little flatter (coverage 0.926 -> 0.930 for ~70 more pairs; 0.6 doubles pairs).
-PACKING = {'method': 'height_field', 'shaft_band': float(os.environ.get('BIRD_SHAFT_BAND', 0.8)), 'conflict_elevation_deg': float(os.environ.get('BIRD_CONFLICT', 88)), 'barb_samples': 10, 'key_barbs_per_vane': 12, 'shaft_samples': 12, 'barb_field_bins': 24,
-           'styling': styling}
-# Skin samples at the packer's automatic spacing: since each sample stands for its patch of skin (packing.md)
-# the coat stays above the skin without the old 0.004 spacing (measured: 0 penetrations, pairs 1622 of
-# 33603 unpacked, coverage 0.9286 vs 0.931), and the bird packs a third faster (pteryla bench 1.43 -> 0.96 s).
+# Draped packing with its defaults (docs/packing.md): every feather lies on the skin and on the feathers
+# under it; flight feathers overhang the wing's and the tail's edges. No styling: the flight feathers
+# spread by the remiges' and rectrices' direction vectors alone, as a groomer would comb them.
+PACKING = {'method': 'drape'}
 for kv in os.environ.get('BIRD_PACK', '').split(','):
     if kv: PACKING[kv.split('=')[0]] = json.loads(kv.split('=')[1])
 body_axis = [[round(c, 5) for c in p] for p in axes['body_axis']]
@@ -488,6 +437,10 @@ scene = {
                                          {'at': [0.0, 0.2, 1.0], 'direction': [-0.6, 0.0, 1.0]}]},
             'remiges_right': {'vectors': [{'at': [0.0, 0.2, -0.5], 'direction': [-1.0, 0.0, -0.25]},
                                           {'at': [0.0, 0.2, -1.0], 'direction': [-0.6, 0.0, -1.0]}]},
+            # Rectrices fan out from the tail's end, the outer ones about 30 degrees from the body axis.
+            'rectrices': {'vectors': [{'at': rect[0], 'direction': [-1.0, 0.0, round(math.tan(math.radians(30)) * (1 if rect[0][2] > 0 else -1), 4)]},
+                                      {'at': rect[len(rect) // 2], 'direction': [-1.0, 0.0, 0.0]},
+                                      {'at': rect[-1], 'direction': [-1.0, 0.0, round(math.tan(math.radians(30)) * (1 if rect[-1][2] > 0 else -1), 4)]}]},
         },
     },
     'ordering': dict({'method': os.environ.get('BIRD_ORDER', 'flow')}, **({'tracts': [t['name'] for t in tracts if t['name'].startswith('down_')]} if DOWN > 0 else {})),

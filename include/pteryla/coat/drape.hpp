@@ -12,10 +12,14 @@
 //     mapped onto the skin by marching: along the shaft from the follicle, then across from each shaft
 //     node, every step a closest-point projection within the step length of the previous surface point,
 //     with the feather's direction transported into each new tangent plane. The chart is a small grid
-//     of surface points, normals and directions per feather.
+//     of surface points, normals and directions per feather. Where the skin ends under the feather (a
+//     step that barely advances), curves away with a radius under 0.15 x the feather's length (a rim, the
+//     edge of a wing, fin or ear: a feather is stiffer than that) or has turned a quarter turn from the
+//     follicle, the feather overhangs: it goes straight on, as a flight feather leaves the wing's edge.
 //  2. Height. In layer order (bottom first), a node's required height over the skin is the highest
 //     feather material already laid near its surface point (a hash over surface cells, split by normal
-//     class so the far side of a thin part does not count), plus a gap. The feather's height is the
+//     class so the far side of a thin part does not count), plus a gap. An overhanging node has no skin
+//     under it: it clears the material already laid around the line through it along its normal. The feather's height is the
 //     smallest function above those requirements whose slope over the skin is at most `maxSlope` (the
 //     upper Lipschitz envelope): a stiff feather rides over what is under it instead of following each
 //     bump. Near the follicle the height ramps from the skin over the calamus.
@@ -23,7 +27,8 @@
 //     height along the chart normal; normals and tangents turn with the chart frame.
 //  4. Guarantees. A feather never covers the follicle of a feather laid after it, and one whose chart
 //     folds over a rim or into a crease is shortened first (scaled about its follicle). What still fails
-//     is trimmed: material over a later follicle, cells that fold or leave the skin, and then, with the
+//     is trimmed: triangles over a later follicle's root zone, cells on the skin that fold, nodes the
+//     chart did not reach or whose lifted point sits in a fold of the skin, and then, with the
 //     coat checker's own tests (check.hpp), every vertex inside the skin and, of every pair of crossing
 //     triangles, the lower feather's. A draped coat has no skin penetration and no crossing triangles.
 //     Trimmed and hidden feathers are counted.
@@ -50,6 +55,7 @@ struct DrapeStats {
   size_t trimmedFeathers = 0;   // feathers that lost triangles (over a later follicle, off or inside the skin)
   size_t hiddenFeathers = 0;    // feathers with no triangle left
   size_t trimmedTriangles = 0;  // triangles removed (collapsed to a point)
+  size_t overhangingNodes = 0;  // chart nodes past the skin's edge (the feather goes straight on there)
   double gap = 0;               // the gap used (scene units)
   double seconds = 0;
 };
