@@ -59,6 +59,18 @@ struct Chart {
     return fine[static_cast<size_t>(a) * fineY() + b] != 0;
   }
   std::vector<Node> nodes;  // a * ny + b
+  // The skin samples a chart reads and writes while it is laid (static geometry, gathered in parallel
+  // before the sequential pass): per active node (in node order) the samples facing like it within the
+  // requirement radius, and once per sample the cell and weights of the material over it.
+  struct Cover {
+    uint32_t sample;
+    uint16_t a, b;
+    float u, v;
+  };
+  std::vector<int> active;          // active node indices
+  std::vector<uint32_t> reqOffset;  // active.size() + 1 offsets into reqSamples
+  std::vector<uint32_t> reqSamples;
+  std::vector<Cover> under;
   const Node& at(int a, int b) const { return nodes[static_cast<size_t>(a) * ny + b]; }
   Node& at(int a, int b) { return nodes[static_cast<size_t>(a) * ny + b]; }
   // Cell and bilinear weights of local (x, y), clamped to the grid.
@@ -169,20 +181,9 @@ class CoatTop {
     grid_.build(pos_, spacing * 2);
   }
   size_t size() const { return pos_.size(); }
-  // Highest top within radius of c among samples facing like n.
-  double highest(const dvec3& c, const dvec3& n, double radius) const {
-    double best = 0;
-    const double r2 = radius * radius;
-    grid_.query(c - dvec3(radius), c + dvec3(radius), [&](uint32_t s) {
-      if (top_[s] <= best) return;
-      const dvec3 d = pos_[s] - c;
-      if (glm::dot(d, d) <= r2 && glm::dot(nrm_[s], n) > kFacing) best = top_[s];
-    });
-    return best;
-  }
   // Calls f(sample) for the samples within radius of c facing like n.
   template <class F>
-  void near(const dvec3& c, const dvec3& n, double radius, F&& f) {
+  void near(const dvec3& c, const dvec3& n, double radius, F&& f) const {
     const double r2 = radius * radius;
     grid_.query(c - dvec3(radius), c + dvec3(radius), [&](uint32_t s) {
       const dvec3 d = pos_[s] - c;
@@ -444,13 +445,24 @@ double shrinkScale(const FeatherFrame& F, const TriMesh& mesh, const uint32_t* v
   return lo;
 }
 
-// Calls f(sample, a, b, u, v) for the skin samples under a chart's material (cell a, b, weights u, v),
-// their chart coordinates from each nearby node's frame (a sample may come more than once).
-template <class F>
-void forCoveredSamples(const Chart& C, CoatTop& top, F&& f) {
+// Gathers what laying a chart reads: its active nodes, the samples facing each within reqRadius, and the
+// samples under its material (their chart coordinates from the nearest-in-order node's frame that reaches
+// them; each sample once, cells whose corners are all on the chart).
+void gatherSamples(Chart& C, const CoatTop& top, double reqRadius) {
+  C.active.clear();
+  C.reqOffset.assign(1, 0);
+  C.reqSamples.clear();
+  C.under.clear();
   for (int k = 0; k < C.nx * C.ny; ++k) {
     const Node& nd = C.nodes[k];
     if (!nd.ok || !nd.active) continue;
+    C.active.push_back(k);
+    top.near(nd.c, nd.n, reqRadius, [&](uint32_t s) { C.reqSamples.push_back(s); });
+    C.reqOffset.push_back(static_cast<uint32_t>(C.reqSamples.size()));
+  }
+  std::vector<uint32_t> seen;
+  for (int k : C.active) {
+    const Node& nd = C.nodes[k];
     const double xa = C.x0 + (k / C.ny) * C.hx, yb = C.y0 + (k % C.ny) * C.hy;
     const dvec3 bn = glm::cross(nd.n, nd.t);
     top.near(nd.c, nd.n, 0.75 * C.diag, [&](uint32_t s) {
@@ -460,23 +472,38 @@ void forCoveredSamples(const Chart& C, CoatTop& top, F&& f) {
       int a, b;
       double u, v;
       C.locate(x, y, a, b, u, v);
-      f(s, a, b, u, v);
+      for (const Node* c : {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)})
+        if (!c->ok || !c->active) return;
+      seen.push_back(s);
+      C.under.push_back({s, static_cast<uint16_t>(a), static_cast<uint16_t>(b), static_cast<float>(u), static_cast<float>(v)});
     });
   }
+  // Each sample once (the first node that reached it).
+  std::vector<size_t> perm(C.under.size());
+  for (size_t i = 0; i < perm.size(); ++i) perm[i] = i;
+  std::stable_sort(perm.begin(), perm.end(), [&](size_t x, size_t y) { return C.under[x].sample < C.under[y].sample; });
+  std::vector<uint8_t> keep(C.under.size(), 0);
+  for (size_t i = 0; i < perm.size(); ++i)
+    if (i == 0 || C.under[perm[i]].sample != C.under[perm[i - 1]].sample) keep[perm[i]] = 1;
+  size_t w = 0;
+  for (size_t i = 0; i < C.under.size(); ++i)
+    if (keep[i]) C.under[w++] = C.under[i];
+  C.under.resize(w);
+  C.under.shrink_to_fit();
+  C.reqSamples.shrink_to_fit();
 }
 
 // Heights of one chart's active nodes over the skin: above the coat's top near each node by the gap, as
 // the smallest function with slope <= maxSlope over those requirements. Then the feather becomes the
 // coat's top over the samples its material covers.
-void layChart(Chart& C, CoatTop& top, AirTop& air, double reqRadius, double gap, double maxSlope,
-              std::vector<double>& req, std::vector<int>& idx) {
-  idx.clear();
-  for (int k = 0; k < C.nx * C.ny; ++k)
-    if (C.nodes[k].ok && C.nodes[k].active) idx.push_back(k);
+void layChart(Chart& C, CoatTop& top, AirTop& air, double gap, double maxSlope, std::vector<double>& req) {
+  const std::vector<int>& idx = C.active;
   req.resize(idx.size());
   for (size_t j = 0; j < idx.size(); ++j) {
     const Node& n = C.nodes[idx[j]];
-    req[j] = top.highest(n.c, n.n, reqRadius) + gap + n.sag;
+    double highest = 0;
+    for (uint32_t q = C.reqOffset[j]; q < C.reqOffset[j + 1]; ++q) highest = std::max(highest, top.at(C.reqSamples[q]));
+    req[j] = highest + gap + n.sag;
     if (n.free) req[j] = std::max(req[j], air.highest(n.c, n.n, 0.25 * (C.nx - 1) * C.hx) + gap);
   }
   auto envelope = [&] {
@@ -496,33 +523,32 @@ void layChart(Chart& C, CoatTop& top, AirTop& air, double reqRadius, double gap,
   // Every sample under the feather's material: where the interpolated height is below the coat's top
   // there plus the gap, the cell's corners rise to it (heights only rise, so one pass leaves every
   // sample satisfied, and no node rises above the highest need near it).
-  forCoveredSamples(C, top, [&](uint32_t s, int a, int b, double u, double v) {
-    Node* c4[4] = {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)};
+  for (const Chart::Cover& cv : C.under) {
+    Node* c4[4] = {&C.at(cv.a, cv.b), &C.at(cv.a + 1, cv.b), &C.at(cv.a, cv.b + 1), &C.at(cv.a + 1, cv.b + 1)};
+    const double u = cv.u, v = cv.v;
     const double w4[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
     double h = 0, sag = 0;
     for (int m = 0; m < 4; ++m) {
-      if (!c4[m]->ok || !c4[m]->active) return;
       h += w4[m] * c4[m]->h;
       sag = std::max(sag, c4[m]->sag);
     }
     // Each corner rises to the need, no higher: raising all four by the shortfall instead stacked up
     // where neighbouring cells share corners (up to 4x the need, compounding layer over layer).
-    const double need = top.at(s) + gap + sag;
+    const double need = top.at(cv.sample) + gap + sag;
     if (h < need)
       for (int m = 0; m < 4; ++m) c4[m]->h = std::max(c4[m]->h, need);
-  });
+  }
   envelope();
-  forCoveredSamples(C, top, [&](uint32_t s, int a, int b, double u, double v) {
-    const Node* c4[4] = {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)};
-    const double w4[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
-    double h = 0;
-    for (int m = 0; m < 4; ++m) {
-      if (!c4[m]->ok || !c4[m]->active) return;
-      h += w4[m] * c4[m]->h;
-    }
-    top.raise(s, h);
-  });
+  for (const Chart::Cover& cv : C.under) {
+    const double u = cv.u, v = cv.v;
+    top.raise(cv.sample, (1 - u) * (1 - v) * C.at(cv.a, cv.b).h + u * (1 - v) * C.at(cv.a + 1, cv.b).h +
+                             (1 - u) * v * C.at(cv.a, cv.b + 1).h + u * v * C.at(cv.a + 1, cv.b + 1).h);
+  }
   for (int k : idx) air.add(C.nodes[k].c + C.nodes[k].h * C.nodes[k].n, C.nodes[k].n);
+  // What was gathered for laying is not needed again.
+  C.reqSamples = {};
+  C.reqOffset = {};
+  C.under = {};
 }
 
 }  // namespace
@@ -637,11 +663,15 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   CoatTop top(skin, spacing);
   {
     std::vector<double> req;
-    std::vector<int> idx;
     double airRadius = 1.5 * spacing;
     for (uint32_t i : order) airRadius = std::max(airRadius, 0.75 * charts[i].diag);
     AirTop air(airRadius);
-    for (uint32_t i : order) layChart(charts[i], top, air, 1.5 * spacing, gap, o.maxSlope, req, idx);
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k < r.end(); ++k) gatherSamples(charts[order[k]], top, 1.5 * spacing);
+      });
+    });
+    for (uint32_t i : order) layChart(charts[i], top, air, gap, o.maxSlope, req);
   }
   // A node whose lifted point has other skin closer than half its height sits in a fold: not draped.
   // (Thin parts keep their coat: a node's height goes out along its own normal, away from the other
