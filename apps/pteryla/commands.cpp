@@ -3,12 +3,16 @@
 #include "commands.hpp"
 
 #include <sys/resource.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "pteryla/coat/coat_feathers.hpp"
@@ -17,12 +21,14 @@
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/limits.hpp"
 #include "pteryla/core/paths.hpp"
+#include "pteryla/core/sha256.hpp"
 #include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/io.hpp"
 #include "pteryla/feather/mesh.hpp"
 #include "pteryla/feather/mesh_io.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
+#include "pteryla/render/image.hpp"
 #include "pteryla/render/osmesa_context.hpp"
 #include "pteryla/render/scene_view.hpp"
 
@@ -222,7 +228,19 @@ int cmdFeather(const Common& c, const FeatherArgs& a) {
   return 0;
 }
 
+// ------------------------------------------------------------------ frames, chunks and the farm
+//
+// A frame is a pure function of (scene, time), so a range can be split into chunks rendered anywhere.
+// Contract (docs/farm.md): frame k of `--from A --to B --fps N` is at time A + k / N and is written to
+// DIR/frame_NNNN.png (k global, whatever the chunking). Its sidecar DIR/frame_NNNN.png.json is written
+// atomically after the PNG and records the PNG's SHA-256, the render seconds, the host and the parameters
+// that made it; a frame counts as complete only when its sidecar parses, its parameters match this run and
+// the PNG's digest matches. `--chunk K --task I` renders frames [I*K, min((I+1)*K, count)) and touches
+// nothing else; `--assemble` checks every frame and writes DIR/frames.json and DIR/contact_sheet.png.
+
 namespace {
+
+namespace fs = std::filesystem;
 
 // frame_0000.png, frame_0001.png, ...: the name pattern `frames` owns in its directory.
 std::string frameName(uint64_t k) {
@@ -230,7 +248,10 @@ std::string frameName(uint64_t k) {
   std::snprintf(name, sizeof name, "frame_%04llu.png", static_cast<unsigned long long>(k));
   return name;
 }
-bool isFrameName(const std::string& n, uint64_t& index) {
+std::string sidecarName(uint64_t k) { return frameName(k) + ".json"; }
+// frame_NNNN.png or its sidecar frame_NNNN.png.json.
+bool isFrameName(std::string n, uint64_t& index) {
+  if (n.size() > 5 && n.compare(n.size() - 5, 5, ".json") == 0) n.resize(n.size() - 5);
   if (n.size() < 14 || n.compare(0, 6, "frame_") != 0 || n.compare(n.size() - 4, 4, ".png") != 0) return false;
   const std::string digits = n.substr(6, n.size() - 10);
   if (digits.size() < 4 || digits.find_first_not_of("0123456789") != std::string::npos) return false;
@@ -238,9 +259,19 @@ bool isFrameName(const std::string& n, uint64_t& index) {
   return r.ec == std::errc() && frameName(index) == n;
 }
 
-}  // namespace
+std::string fmt17(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
 
-int cmdFrames(const Common& c, const FramesArgs& a) {
+std::string hostName() {
+  char buf[256] = {};
+  if (gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+  return buf;
+}
+
+uint64_t frameCount(const FramesArgs& a) {
   if (!std::isfinite(a.from)) throw Error("expected a finite time", "", "--from");
   if (!std::isfinite(a.to)) throw Error("expected a finite time", "", "--to");
   if (!(a.to >= a.from)) throw Error("--to must not be before --from", "", "--to");
@@ -252,51 +283,340 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
     os << "too many frames (" << countD << ", at most " << kMaxFrames << "); lower --fps or the range";
     throw Error(os.str(), "", "--to");
   }
-  const auto count = static_cast<uint64_t>(countD);
-  Loaded l = load(c, a);
-  render::OsMesaContext ctx(l.width, l.height);
-  render::SceneView view(ctx);
-  l.pipeline->setProgress({});
-  const ProgressFn bar = makeProgress(c);
-  // The first frame is rendered before the directory exists: a scene that fails creates nothing.
-  l.pipeline->setTime(a.from);
-  render::Image frame = view.render(*l.pipeline, l.width, l.height, a.style);
-  namespace fs = std::filesystem;
+  return static_cast<uint64_t>(countD);
+}
+
+// Number of chunks of `chunk` frames; throws naming --chunk / --task when they are out of range.
+uint64_t checkChunking(const FramesArgs& a, uint64_t count) {
+  if (a.chunk.has_value() != a.task.has_value())
+    throw Error("--chunk and --task go together (render chunk TASK of CHUNK frames)", "", a.chunk ? "--task" : "--chunk");
+  if (!a.chunk) return 1;
+  if (*a.chunk < 1) throw Error("expected a number of frames >= 1, got " + std::to_string(*a.chunk), "", "--chunk");
+  const uint64_t tasks = (count + uint64_t(*a.chunk) - 1) / uint64_t(*a.chunk);
+  if (*a.task < 0 || uint64_t(*a.task) >= tasks)
+    throw Error("expected a 0-based chunk index in [0, " + std::to_string(tasks - 1) + "] (" + std::to_string(count) +
+                    " frames in chunks of " + std::to_string(*a.chunk) + "), got " + std::to_string(*a.task),
+                "", "--task");
+  return tasks;
+}
+
+// What made a frame; a sidecar whose params differ (another scene file, size, LOD, style, seed or time)
+// does not count as complete.
+nlohmann::json frameParams(const FramesArgs& a, const std::string& sceneDigest, int w, int h, double t) {
+  nlohmann::json p;
+  p["scene"] = fs::absolute(a.scene).lexically_normal().string();
+  p["scene_sha256"] = sceneDigest;
+  p["time"] = t;
+  p["width"] = w;
+  p["height"] = h;
+  p["lod"] = a.lod ? nlohmann::json(*a.lod) : nlohmann::json(nullptr);
+  p["style"] = a.style;
+  p["seed"] = a.seed;
+  return p;
+}
+
+struct FrameStatus {
+  bool complete = false;
+  std::string problem;  // why not: "missing", "no sidecar", "checksum mismatch", ...
+  nlohmann::json sidecar;
+};
+
+FrameStatus checkFrame(const std::string& dir, uint64_t k, const nlohmann::json& params) {
+  FrameStatus s;
+  const fs::path png = fs::path(dir) / frameName(k);
   std::error_code ec;
-  fs::create_directories(a.out, ec);
-  if (ec) throw Error("cannot create output directory: " + ec.message(), a.out, "--out");
-  for (uint64_t k = 0; k < count; ++k) {
-    const double t = a.from + double(k) / a.fps;
-    if (k > 0) {
-      l.pipeline->setTime(t);
-      frame = view.render(*l.pipeline, l.width, l.height, a.style);
-    }
-    render::saveImage((fs::path(a.out) / frameName(k)).string(), frame);
-    report(bar, "frames", double(k + 1) / double(count));
-  }
-  // Frames of an earlier, longer run would look like part of this sequence: remove them.
+  if (!fs::is_regular_file(png, ec)) return s.problem = "missing", s;
+  std::ifstream in(fs::path(dir) / sidecarName(k), std::ios::binary);
+  if (!in) return s.problem = "no sidecar", s;
+  s.sidecar = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!s.sidecar.is_object() || !s.sidecar.contains("sha256") || !s.sidecar["sha256"].is_string())
+    return s.problem = "unreadable sidecar", s;
+  if (s.sidecar.value("params", nlohmann::json()) != params) return s.problem = "made with other parameters", s;
+  if (sha256File(png.string()) != s.sidecar["sha256"].get<std::string>()) return s.problem = "checksum mismatch", s;
+  s.complete = true;
+  return s;
+}
+
+// Removes frames (and sidecars) with an index >= count: an earlier, longer run's frames would look like
+// part of this sequence.
+size_t removeFramesFrom(const std::string& dir, uint64_t count) {
   size_t removed = 0;
-  for (const auto& entry : fs::directory_iterator(a.out, ec)) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
     uint64_t index = 0;
-    if (entry.is_regular_file() && isFrameName(entry.path().filename().string(), index) && index >= count) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_regular_file() && isFrameName(name, index) && index >= count) {
       std::error_code rm;
-      if (fs::remove(entry.path(), rm)) ++removed;
+      if (fs::remove(entry.path(), rm) && name.size() > 4 && name.compare(name.size() - 4, 4, ".png") == 0) ++removed;
     }
   }
-  // Manifest: what this directory holds and how it was made.
+  return removed;
+}
+
+// DIR/frames.json from the sidecars of frames [0, count) (all complete).
+void writeManifest(const FramesArgs& a, int w, int h, uint64_t count, const std::vector<nlohmann::json>& sidecars,
+                   const std::string& contactSheet) {
   std::ostringstream m;
   m.precision(17);
   m << "{\n  \"scene\": \"" << jsonEscape(a.scene) << "\",\n  \"from\": " << a.from << ",\n  \"to\": " << a.to
-    << ",\n  \"fps\": " << a.fps << ",\n  \"width\": " << l.width << ",\n  \"height\": " << l.height
-    << ",\n  \"count\": " << count << ",\n  \"frames\": [";
+    << ",\n  \"fps\": " << a.fps << ",\n  \"width\": " << w << ",\n  \"height\": " << h << ",\n  \"count\": " << count;
+  if (!contactSheet.empty()) m << ",\n  \"contact_sheet\": \"" << jsonEscape(contactSheet) << "\"";
+  m << ",\n  \"frames\": [";
   for (uint64_t k = 0; k < count; ++k) {
-    m << (k ? ", " : "") << "{\"file\": \"" << frameName(k) << "\", \"time\": " << a.from + double(k) / a.fps << "}";
+    const nlohmann::json& s = sidecars[k];
+    m << (k ? ",\n    " : "\n    ") << "{\"file\": \"" << frameName(k) << "\", \"time\": " << a.from + double(k) / a.fps
+      << ", \"sha256\": \"" << jsonEscape(s.value("sha256", "")) << "\", \"seconds\": " << jsonNumberOrNull(s.value("seconds", 0.0))
+      << ", \"host\": \"" << jsonEscape(s.value("host", "")) << "\"}";
   }
-  m << "]\n}\n";
+  m << "\n  ]\n}\n";
   writeFileAtomic((fs::path(a.out) / "frames.json").string(), m.str());
-  endProgress(c);
-  info(c, "wrote " + std::to_string(count) + " frames to " + a.out +
+}
+
+// A grid of downscaled frames (at most kMaxTiles, evenly sampled), tiles at most 160 px on a side.
+void writeContactSheet(const std::string& path, const std::string& dir, uint64_t count) {
+  constexpr uint64_t kMaxTiles = 64;
+  constexpr int kTile = 160, kGap = 4;
+  const uint64_t n = std::min(count, kMaxTiles);
+  std::vector<render::Image> tiles;
+  int tw = 0, th = 0;
+  for (uint64_t i = 0; i < n; ++i) {
+    const uint64_t k = n == 1 ? 0 : i * (count - 1) / (n - 1);
+    tiles.push_back(render::fitImage(render::loadImage((fs::path(dir) / frameName(k)).string()), kTile));
+    tw = std::max(tw, tiles.back().width);
+    th = std::max(th, tiles.back().height);
+  }
+  const int cols = int(std::ceil(std::sqrt(double(n))));
+  const int rows = int((n + cols - 1) / cols);
+  render::Image sheet(cols * (tw + kGap) + kGap, rows * (th + kGap) + kGap, 32, 32, 32, 255);
+  for (uint64_t i = 0; i < n; ++i) {
+    const int x0 = kGap + int(i % cols) * (tw + kGap), y0 = kGap + int(i / cols) * (th + kGap);
+    const render::Image& t = tiles[i];
+    for (int y = 0; y < t.height; ++y)
+      std::copy(t.pixel(0, y), t.pixel(0, y) + 4 * t.width, sheet.pixel(x0, y0 + y));
+  }
+  render::saveImage(path, sheet);
+}
+
+int assembleFrames(const Common& c, const FramesArgs& a, uint64_t count, const Loaded& l,
+                   const std::string& sceneDigest) {
+  std::vector<nlohmann::json> sidecars(count);
+  std::vector<std::string> problems;
+  size_t bad = 0;
+  for (uint64_t k = 0; k < count; ++k) {
+    FrameStatus s = checkFrame(a.out, k, frameParams(a, sceneDigest, l.width, l.height, a.from + double(k) / a.fps));
+    if (!s.complete) {
+      if (problems.size() < 10) problems.push_back(frameName(k) + " (" + s.problem + ")");
+      ++bad;
+    }
+    sidecars[k] = std::move(s.sidecar);
+  }
+  if (bad) {
+    std::string list;
+    for (const auto& p : problems) list += (list.empty() ? "" : ", ") + p;
+    if (bad > problems.size()) list += ", ...";
+    throw Error(std::to_string(bad) + " of " + std::to_string(count) +
+                    " frames are missing or invalid: " + list + "; rerun their tasks (a rerun renders only these)",
+                a.out, "--assemble");
+  }
+  const size_t removed = removeFramesFrom(a.out, count);
+  writeContactSheet((fs::path(a.out) / "contact_sheet.png").string(), a.out, count);
+  writeManifest(a, l.width, l.height, count, sidecars, "contact_sheet.png");
+  info(c, "assembled " + std::to_string(count) + " frames in " + a.out + ": every checksum matches; wrote frames.json" +
+              " and contact_sheet.png" +
               (removed ? " (removed " + std::to_string(removed) + " stale frames of an earlier run)" : ""));
+  return 0;
+}
+
+}  // namespace
+
+int cmdFrames(const Common& c, const FramesArgs& a) {
+  const uint64_t count = frameCount(a);
+  const uint64_t tasks = checkChunking(a, count);
+  if (a.assemble && a.chunk) throw Error("--assemble checks the whole range; it takes no --chunk/--task", "", "--assemble");
+  Loaded l = load(c, a);
+  const std::string sceneDigest = sha256File(a.scene);
+  if (a.assemble) return assembleFrames(c, a, count, l, sceneDigest);
+
+  const uint64_t lo = a.chunk ? uint64_t(*a.task) * uint64_t(*a.chunk) : 0;
+  const uint64_t hi = a.chunk ? std::min(count, lo + uint64_t(*a.chunk)) : count;
+  auto timeOf = [&](uint64_t k) { return a.from + double(k) / a.fps; };
+  std::vector<uint64_t> todo;
+  std::vector<nlohmann::json> sidecars(count);
+  for (uint64_t k = lo; k < hi; ++k) {
+    FrameStatus s;
+    if (!a.force) s = checkFrame(a.out, k, frameParams(a, sceneDigest, l.width, l.height, timeOf(k)));
+    if (s.complete)
+      sidecars[k] = std::move(s.sidecar);
+    else
+      todo.push_back(k);
+  }
+  const std::string host = hostName();
+  if (!todo.empty()) {
+    render::OsMesaContext ctx(l.width, l.height);
+    render::SceneView view(ctx);
+    l.pipeline->setProgress({});
+    const ProgressFn bar = makeProgress(c);
+    for (size_t i = 0; i < todo.size(); ++i) {
+      const uint64_t k = todo[i];
+      const auto t0 = std::chrono::steady_clock::now();
+      l.pipeline->setTime(timeOf(k));
+      const render::Image frame = view.render(*l.pipeline, l.width, l.height, a.style);
+      // The first frame is rendered before the directory exists: a scene that fails creates nothing.
+      if (i == 0) {
+        std::error_code ec;
+        fs::create_directories(a.out, ec);
+        if (ec) throw Error("cannot create output directory: " + ec.message(), a.out, "--out");
+      }
+      const std::string png = (fs::path(a.out) / frameName(k)).string();
+      const std::string side = (fs::path(a.out) / sidecarName(k)).string();
+      std::error_code rm;
+      fs::remove(side, rm);  // a crash between the PNG and its new sidecar must not leave an old, matching one
+      render::saveImage(png, frame);
+      nlohmann::json s;
+      s["file"] = frameName(k);
+      s["frame"] = k;
+      s["time"] = timeOf(k);
+      s["sha256"] = sha256File(png);
+      s["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      s["host"] = host;
+      s["params"] = frameParams(a, sceneDigest, l.width, l.height, timeOf(k));
+      writeFileAtomic(side, s.dump(2) + "\n");
+      sidecars[k] = std::move(s);
+      report(bar, "frames", double(i + 1) / double(todo.size()));
+    }
+  }
+  const uint64_t skipped = (hi - lo) - todo.size();
+  const std::string skippedText = skipped ? ", skipped " + std::to_string(skipped) + " complete" : "";
+  if (a.chunk) {
+    // A chunk touches only its own frames: no stale-frame removal, no manifest (that is --assemble's job).
+    endProgress(c);
+    info(c, "chunk " + std::to_string(*a.task) + " of " + std::to_string(tasks) + " (frames " + std::to_string(lo) +
+                "-" + std::to_string(hi - 1) + "): rendered " + std::to_string(todo.size()) + skippedText + " in " +
+                a.out);
+    return 0;
+  }
+  std::error_code ec;
+  fs::create_directories(a.out, ec);  // every frame may have been skipped; the directory then exists already
+  const size_t removed = removeFramesFrom(a.out, count);
+  writeManifest(a, l.width, l.height, count, sidecars, "");
+  endProgress(c);
+  info(c, "wrote " + std::to_string(todo.size()) + " frames to " + a.out + skippedText +
+              (removed ? " (removed " + std::to_string(removed) + " stale frames of an earlier run)" : ""));
+  return 0;
+}
+
+namespace {
+
+// 'text' for a POSIX shell.
+std::string shellQuote(const std::string& s) {
+  std::string out = "'";
+  for (const char ch : s) out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return out + "'";
+}
+
+std::string findOnPath(const std::string& exe) {
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "");
+  std::string d;
+  while (std::getline(dirs, d, ':')) {
+    const fs::path p = fs::path(d.empty() ? "." : d) / exe;
+    if (access(p.c_str(), X_OK) == 0) return p.string();
+  }
+  return {};
+}
+
+// Runs `cmd` through the shell; stdout, or throws Error naming what failed.
+std::string runCapture(const std::string& cmd, const std::string& what) {
+  std::FILE* p = popen(cmd.c_str(), "r");
+  if (!p) throw Error("cannot run " + what);
+  std::string out;
+  char buf[512];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  const int status = pclose(p);
+  if (status != 0) throw Error(what + " failed (" + cmd + "): " + out);
+  return out;
+}
+
+}  // namespace
+
+int cmdFarmSlurm(const Common& c, const FarmArgs& a) {
+  const uint64_t count = frameCount(a);
+  if (a.farmChunk < 1) throw Error("expected a number of frames >= 1, got " + std::to_string(a.farmChunk), "", "--chunk");
+  if (a.lod && !(*a.lod > 0 && *a.lod <= 1)) throw Error("expected a fraction in (0, 1], got " + std::to_string(*a.lod), "", "--lod");
+  if (!a.seed.empty()) parseSeed(a.seed);
+  int w = 0, h = 0;
+  if (!a.size.empty()) parseSize(a.size, "--size", w, h);
+  for (const std::string* v : {&a.partition, &a.mem})
+    if (v->find_first_of("\n\r") != std::string::npos)
+      throw Error("must be one line", "", v == &a.partition ? "--partition" : "--mem");
+  pipeline::loadScene(a.scene);  // a scene that does not load fails here, not on every node
+  const uint64_t tasks = (count + uint64_t(a.farmChunk) - 1) / uint64_t(a.farmChunk);
+  const std::string exe = fs::read_symlink("/proc/self/exe").string();
+  const std::string scene = fs::absolute(a.scene).lexically_normal().string();
+  const std::string out = fs::absolute(a.out).lexically_normal().string();
+  const std::string dir = (fs::path(out) / "slurm").string();
+
+  // The arguments both scripts share: the same range and parameters make the same frame parameters.
+  std::string common = shellQuote(exe) + " frames " + shellQuote(scene) + " --from " + fmt17(a.from) + " --to " +
+                       fmt17(a.to) + " --fps " + fmt17(a.fps) + " --out " + shellQuote(out);
+  if (a.lod) common += " --lod " + fmt17(*a.lod);
+  if (!a.size.empty()) common += " --size " + shellQuote(a.size);
+  if (!a.seed.empty()) common += " --seed " + a.seed;
+  if (!a.style.empty()) common += " --style " + a.style;
+  if (c.maxMemoryGb) common += " --max-memory " + fmt17(*c.maxMemoryGb);
+  common += " --quiet";
+  auto header = [&](const std::string& name, const std::string& log) {
+    std::string h = "#!/bin/bash\n# Written by `pteryla farm slurm` (docs/farm.md).\n#SBATCH --job-name=" + name +
+                    "\n#SBATCH --output=" + dir + "/" + log + "\n#SBATCH --ntasks=1\n";
+    if (!a.partition.empty()) h += "#SBATCH --partition=" + a.partition + "\n";
+    if (!a.mem.empty()) h += "#SBATCH --mem=" + a.mem + "\n";
+    return h;
+  };
+  const std::string framesScript =
+      header("pteryla-frames", "frames_%A_%a.log") + "#SBATCH --array=0-" + std::to_string(tasks - 1) +
+      "\n#SBATCH --requeue\n# " + std::to_string(count) + " frames in " + std::to_string(tasks) + " chunks of " +
+      std::to_string(a.farmChunk) + "; a requeued task renders only its frames without a valid sidecar.\nexec " +
+      common + " --chunk " + std::to_string(a.farmChunk) + " --task \"$SLURM_ARRAY_TASK_ID\"\n";
+  const std::string assembleScript = header("pteryla-assemble", "assemble_%j.log") +
+                                     "# Checks every frame's checksum, writes frames.json and contact_sheet.png.\nexec " +
+                                     common + " --assemble\n";
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw Error("cannot create directory: " + ec.message(), dir, "--out");
+  const std::string framesPath = dir + "/frames.sbatch", assemblePath = dir + "/assemble.sbatch";
+  writeFileAtomic(framesPath, framesScript);
+  writeFileAtomic(assemblePath, assembleScript);
+  fs::permissions(framesPath, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add, ec);
+  fs::permissions(assemblePath, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add, ec);
+
+  const std::string submit1 = "sbatch --parsable " + shellQuote(framesPath);
+  auto submit2 = [&](const std::string& id) {
+    return "sbatch --parsable --dependency=afterok:" + id + " --kill-on-invalid-dep=yes " + shellQuote(assemblePath);
+  };
+  if (a.dryRun) {
+    std::printf("# %s\n%s\n# %s\n%s\n# submit (dry run: nothing was submitted):\nJOB=$(%s)\n%s\n", framesPath.c_str(),
+                framesScript.c_str(), assemblePath.c_str(), assembleScript.c_str(), submit1.c_str(),
+                submit2("\"${JOB%%;*}\"").c_str());
+    info(c, "wrote " + framesPath + " (" + std::to_string(tasks) + " tasks) and " + assemblePath + "; not submitted");
+    return 0;
+  }
+  if (findOnPath("sbatch").empty())
+    throw Error("sbatch not found on PATH: run on a Slurm login node (Debian: slurm-client), or use --dry-run to only "
+                "write the scripts",
+                "", "farm slurm");
+  auto jobId = [](const std::string& text) {
+    const std::string id = text.substr(0, text.find_first_of(";\n"));
+    if (id.empty() || id.find_first_not_of("0123456789") != std::string::npos)
+      throw Error("sbatch printed no job id: '" + text + "'", "", "farm slurm");
+    return id;
+  };
+  const std::string arrayJob = jobId(runCapture(submit1 + " 2>&1", "sbatch"));
+  const std::string assembleJob = jobId(runCapture(submit2(arrayJob) + " 2>&1", "sbatch"));
+  std::printf("{\"array_job\": %s, \"tasks\": %llu, \"assemble_job\": %s}\n", arrayJob.c_str(),
+              static_cast<unsigned long long>(tasks), assembleJob.c_str());
+  info(c, "submitted job array " + arrayJob + " (" + std::to_string(tasks) + " tasks) and assembly job " + assembleJob +
+              "; output in " + out);
   return 0;
 }
 

@@ -1,4 +1,5 @@
 #pragma once
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -25,6 +26,16 @@ struct FramesArgs : SceneArgs {
   double from = 0, to = 1, fps = 24;
   std::string out;
   std::string style;
+  std::optional<int64_t> chunk;  // frames per task; with `task`, render only that chunk
+  std::optional<int64_t> task;   // 0-based chunk index
+  bool force = false;            // re-render frames even when their sidecar says they are complete
+  bool assemble = false;         // render nothing: verify every frame, write the manifest and contact sheet
+};
+struct FarmArgs : FramesArgs {
+  int64_t farmChunk = 10;  // frames per array task
+  std::string partition;
+  std::string mem;         // Slurm --mem for each task (e.g. 2G); empty = the cluster default
+  bool dryRun = false;
 };
 struct FeatherArgs {
   std::string file, out;
@@ -40,5 +51,6 @@ int cmdBench(const Common&, const SceneArgs&);
 int cmdExport(const Common&, const ExportArgs&);
 int cmdFeather(const Common&, const FeatherArgs&);
 int cmdFrames(const Common&, const FramesArgs&);
+int cmdFarmSlurm(const Common&, const FarmArgs&);
 
 }  // namespace pteryla::cli

@@ -81,14 +81,47 @@ int main(int argc, char** argv) {
 
   FramesArgs frames;
   auto* cFrames = app.add_subcommand(
-      "frames", "Render a time range to a PNG sequence DIR/frame_0000.png ... (at most 100000 frames) and a\n"
-                "manifest DIR/frames.json; frame_NNNN.png files of an earlier, longer run are removed");
+      "frames", "Render a time range to a PNG sequence DIR/frame_0000.png ... (frame k at time FROM + k/FPS; at\n"
+                "most 100000 frames), each with a sidecar frame_NNNN.png.json (SHA-256, seconds, host) written after\n"
+                "it. Frames whose sidecar matches are skipped, so a rerun redoes only missing or corrupt ones.\n"
+                "A whole-range run writes the manifest DIR/frames.json and removes frame_NNNN.png files of an\n"
+                "earlier, longer run. --chunk K --task I renders only chunk I (0-based) of K frames and touches\n"
+                "nothing else; --assemble then checks every frame and writes the manifest and\n"
+                "DIR/contact_sheet.png (docs/farm.md)");
   addSceneOptions(cFrames, frames, true);
   cFrames->add_option("--from", frames.from, "Start time")->required();
   cFrames->add_option("--to", frames.to, "End time (inclusive)")->required();
   cFrames->add_option("--fps", frames.fps, "Frames per unit of time")->check(CLI::Range(0.001, 10000.0));
   cFrames->add_option("--out,-o", frames.out, "Output directory")->required();
   cFrames->add_option("--style", frames.style, "shaded or scratchboard")->check(CLI::IsMember({"shaded", "scratchboard"}));
+  cFrames->add_option("--chunk", frames.chunk, "Frames per chunk (>= 1); with --task, render only that chunk");
+  cFrames->add_option("--task", frames.task,
+                      "0-based chunk index: renders frames [TASK*CHUNK, (TASK+1)*CHUNK) of the range (the last chunk "
+                      "may be shorter)");
+  cFrames->add_flag("--force", frames.force, "Render every frame again, even those whose sidecar says complete");
+  cFrames->add_flag("--assemble", frames.assemble,
+                    "Render nothing: check that every frame of the range exists with a matching checksum (exit 2 "
+                    "naming the missing ones), then write DIR/frames.json and DIR/contact_sheet.png");
+
+  FarmArgs farm;
+  auto* cFarm = app.add_subcommand("farm", "Split a frame range over a cluster scheduler (docs/farm.md)");
+  cFarm->require_subcommand(1);
+  auto* cSlurm = cFarm->add_subcommand(
+      "slurm", "Write DIR/slurm/frames.sbatch (a job array: task I runs `pteryla frames ... --chunk K --task I`)\n"
+               "and DIR/slurm/assemble.sbatch (runs `pteryla frames ... --assemble` after every task succeeded),\n"
+               "then submit both with sbatch (--dependency=afterok). Paths in the scripts are absolute.");
+  addSceneOptions(cSlurm, farm, true);
+  cSlurm->add_option("--from", farm.from, "Start time")->required();
+  cSlurm->add_option("--to", farm.to, "End time (inclusive)")->required();
+  cSlurm->add_option("--fps", farm.fps, "Frames per unit of time")->check(CLI::Range(0.001, 10000.0));
+  cSlurm->add_option("--out,-o", farm.out, "Output directory (must be visible to every node)")->required();
+  cSlurm->add_option("--style", farm.style, "shaded or scratchboard")->check(CLI::IsMember({"shaded", "scratchboard"}));
+  cSlurm->add_option("--chunk", farm.farmChunk, "Frames per array task (default 10)");
+  cSlurm->add_option("--partition", farm.partition, "Slurm partition (#SBATCH --partition)");
+  cSlurm->add_option("--mem", farm.mem, "Memory per task (#SBATCH --mem, e.g. 2G); default: the cluster's");
+  cSlurm->add_flag("--dry-run", farm.dryRun, "Write and print the scripts and the sbatch commands; submit nothing");
+  cSlurm->add_flag("--quiet,-q", common.quiet, "No progress or info on stderr");
+  cSlurm->add_option("--max-memory", common.maxMemoryGb, memoryHelp);
 
   for (auto* sub : app.get_subcommands([](CLI::App*) { return true; }))
     sub->add_flag("--quiet,-q", common.quiet, "No progress or info on stderr");
@@ -125,6 +158,7 @@ int main(int argc, char** argv) {
     if (*cExport) return cmdExport(common, exportArgs);
     if (*cFeather) return cmdFeather(common, feather);
     if (*cFrames) return cmdFrames(common, frames);
+    if (*cSlurm) return cmdFarmSlurm(common, farm);
   } catch (const pteryla::Error& e) {
     endProgress(common);
     std::fprintf(stderr, "pteryla: error: %s\n", e.what());
