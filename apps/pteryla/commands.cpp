@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -259,9 +260,13 @@ bool isFrameName(std::string n, uint64_t& index) {
   return r.ec == std::errc() && frameName(index) == n;
 }
 
+// Shortest decimal that reads back as exactly `v` (so a farm node computes the same frame times).
 std::string fmt17(double v) {
   char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
+  for (int precision = 6; precision <= 17; ++precision) {
+    std::snprintf(buf, sizeof buf, "%.*g", precision, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
   return buf;
 }
 
@@ -547,9 +552,16 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& a) {
   if (!a.seed.empty()) parseSeed(a.seed);
   int w = 0, h = 0;
   if (!a.size.empty()) parseSize(a.size, "--size", w, h);
-  for (const std::string* v : {&a.partition, &a.mem})
-    if (v->find_first_of("\n\r") != std::string::npos)
-      throw Error("must be one line", "", v == &a.partition ? "--partition" : "--mem");
+  if (a.partition.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.,-") !=
+      std::string::npos)
+    throw Error("expected a partition name (letters, digits, _ . , -), got '" + a.partition + "'", "", "--partition");
+  if (!a.mem.empty() && (a.mem.find_first_not_of("0123456789KMGTkmgt") != std::string::npos ||
+                         a.mem.find_first_of("0123456789") != 0))
+    throw Error("expected a Slurm memory size such as 2G or 4000M, got '" + a.mem + "'", "", "--mem");
+  if (!a.dryRun && findOnPath("sbatch").empty())
+    throw Error("sbatch not found on PATH: run on a Slurm login node (Debian: slurm-client), or use --dry-run to only "
+                "write the scripts",
+                "", "farm slurm");
   pipeline::loadScene(a.scene);  // a scene that does not load fails here, not on every node
   const uint64_t tasks = (count + uint64_t(a.farmChunk) - 1) / uint64_t(a.farmChunk);
   const std::string exe = fs::read_symlink("/proc/self/exe").string();
@@ -601,10 +613,6 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& a) {
     info(c, "wrote " + framesPath + " (" + std::to_string(tasks) + " tasks) and " + assemblePath + "; not submitted");
     return 0;
   }
-  if (findOnPath("sbatch").empty())
-    throw Error("sbatch not found on PATH: run on a Slurm login node (Debian: slurm-client), or use --dry-run to only "
-                "write the scripts",
-                "", "farm slurm");
   auto jobId = [](const std::string& text) {
     const std::string id = text.substr(0, text.find_first_of(";\n"));
     if (id.empty() || id.find_first_not_of("0123456789") != std::string::npos)
