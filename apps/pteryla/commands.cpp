@@ -334,7 +334,9 @@ FrameStatus checkFrame(const std::string& dir, uint64_t k, const nlohmann::json&
   std::ifstream in(fs::path(dir) / sidecarName(k), std::ios::binary);
   if (!in) return s.problem = "no sidecar", s;
   s.sidecar = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-  if (!s.sidecar.is_object() || !s.sidecar.contains("sha256") || !s.sidecar["sha256"].is_string())
+  const nlohmann::json& j = s.sidecar;
+  if (!j.is_object() || !j.contains("sha256") || !j["sha256"].is_string() || !j.contains("seconds") ||
+      !j["seconds"].is_number() || !j.contains("host") || !j["host"].is_string())
     return s.problem = "unreadable sidecar", s;
   if (s.sidecar.value("params", nlohmann::json()) != params) return s.problem = "made with other parameters", s;
   if (sha256File(png.string()) != s.sidecar["sha256"].get<std::string>()) return s.problem = "checksum mismatch", s;
