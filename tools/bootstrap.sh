@@ -3,6 +3,8 @@
 # `--fuzz` adds clang-14 + libclang-rt-14-dev (libFuzzer, ASan/UBSan runtimes) and llvm-14
 # (llvm-symbolizer) for tools/fuzz.sh; gcc's own sanitizer runtimes (tools/sanitize.sh) come with
 # build-essential.
+# `--slurm` adds slurm-wlm and munge for the single-node Slurm test (tests/farm/slurm_single_node.sh,
+# docs/farm.md); without them that test is skipped. The packages' services are not started.
 # Idempotent and quiet: packages already present are skipped; apt-get update runs at most once.
 set -euo pipefail
 PACKAGES=(
@@ -12,7 +14,13 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
 )
-[ "${1:-}" = --fuzz ] && PACKAGES+=(clang-14 libclang-rt-14-dev llvm-14)
+for arg in "$@"; do
+  case "$arg" in
+    --fuzz) PACKAGES+=(clang-14 libclang-rt-14-dev llvm-14) ;;
+    --slurm) PACKAGES+=(slurm-wlm munge) ;;
+    *) echo "bootstrap.sh: unknown option '$arg' (expected --fuzz, --slurm)" >&2; exit 2 ;;
+  esac
+done
 missing=()
 for p in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
