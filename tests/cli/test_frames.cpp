@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
+#include <unistd.h>
 
 #include "run.hpp"
 
@@ -46,16 +47,26 @@ std::string frame(int k) {
   return b;
 }
 
-// The whole range rendered by one process, once per test binary run.
+// The whole range rendered by one process, once per test process (ctest runs each test in its own process,
+// in parallel: each has its own reference directory, removed at exit).
+std::string g_referenceDir;
 const std::string& reference() {
   static const std::string dir = [] {
-    const std::string d = freshDir("reference") + "/seq";
+    g_referenceDir = freshDir("reference_" + std::to_string(::getpid()));
+    const std::string d = g_referenceDir + "/seq";
     const RunResult r = runPteryla("frames " + kScene + kRange + " -q -o " + d);
     EXPECT_EQ(r.code, 0) << r.err;
     return d;
   }();
   return dir;
 }
+
+struct RemoveReference : ::testing::Environment {
+  void TearDown() override {
+    if (!g_referenceDir.empty()) fs::remove_all(g_referenceDir);
+  }
+};
+const auto* const kRemoveReference = ::testing::AddGlobalTestEnvironment(new RemoveReference);
 
 void expectSameFrames(const std::string& dir) {
   for (int k = 0; k < kFrames; ++k) {
