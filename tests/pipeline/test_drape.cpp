@@ -104,7 +104,8 @@ TEST(Drape, BareMeshScenesDrapeAndTheMethodRoundTrips) {
   EXPECT_THROW(coat::parsePackOptions(rb), Error);
   // No method: draped (a bare mesh, or a scene that does not choose).
   const Scene bare = loadScene(std::string(PTERYLA_DATA_DIR) + "/meshes/sphere_250.obj");
-  JsonReader rn(bare.packing.is_null() ? Json::object() : bare.packing, "sphere_250.obj", "packing");
+  const Json bareOptions = bare.packing.is_null() ? Json::object() : bare.packing;
+  JsonReader rn(bareOptions, "sphere_250.obj", "packing");
   EXPECT_EQ(coat::parsePackOptions(rn).method, coat::PackMethod::Drape);
   EXPECT_EQ(coat::PackOptions{}.method, coat::PackMethod::Drape);
 }

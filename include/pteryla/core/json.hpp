@@ -24,6 +24,9 @@ void writeJsonFile(const std::string& path, const Json& j);
 class JsonReader {
  public:
   JsonReader(const Json& j, std::string file, std::string path = "");
+  // A reader keeps a reference to its JSON: a temporary would be destroyed under it (found by ASan:
+  // `JsonReader r(c ? Json::object() : j, ...)` read a dead object). Name the Json first.
+  JsonReader(Json&& j, std::string file, std::string path = "") = delete;
 
   bool has(const std::string& key) const;
   const std::string& file() const { return file_; }
