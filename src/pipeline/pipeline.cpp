@@ -103,6 +103,9 @@ struct Pipeline::Impl {
   StageGraph graph;
   StageGraph::Id ids[10];
 
+  std::optional<coat::SkinMesh> memorySkin;  // the rest skin when given in memory (else scene.meshPath)
+  std::vector<glm::dvec3> skinPose;          // the caller's posed positions (empty: skeleton / rest)
+
   // Cached stage results.
   coat::SkinMesh rest, posed;
   coat::FeatherLibrary library;
@@ -208,11 +211,15 @@ void Pipeline::Impl::computeSkin() {
   report(progress, "load", 0);
   coat::MeshLoadOptions o;
   o.repair = scene.meshRepair;
-  if (!scene.fromBareMesh && !std::filesystem::is_regular_file(scene.meshPath))
-    throw Error("mesh file '" + scene.meshPath + "' " +
-                    (std::filesystem::exists(scene.meshPath) ? "is not a regular file" : "does not exist"),
-                scene.file, "mesh");
-  rest = coat::loadSkinMesh(scene.meshPath, o);
+  if (memorySkin) {
+    rest = *memorySkin;
+  } else {
+    if (!scene.fromBareMesh && !std::filesystem::is_regular_file(scene.meshPath))
+      throw Error("mesh file '" + scene.meshPath + "' " +
+                      (std::filesystem::exists(scene.meshPath) ? "is not a regular file" : "does not exist"),
+                  scene.file, "mesh");
+    rest = coat::loadSkinMesh(scene.meshPath, o);
+  }
   // Feather library: every named feather of the scene.
   library.clear();
   materialNames.clear();
@@ -255,6 +262,9 @@ void Pipeline::Impl::computeTracts() {
     TractSettings t;
     t.element = where;
     t.tract = coat::readTract(r, rest, earlier);
+    // Names are how ordering, directions and controls refer to tracts (docs/tracts.md: unique).
+    for (const coat::Tract& e : earlier)
+      if (e.name == t.tract.name) r.fail("name", "duplicate tract name '" + e.name + "'");
     earlier.push_back(t.tract);
     const double area = coat::tractArea(rest, t.tract);
     if (r.has("count")) {
@@ -473,10 +483,25 @@ void Pipeline::Impl::computeDirections() {
 
 void Pipeline::Impl::computePose() {
   timeState.generation = restGeneration;
-  // poseSkin wants `posed` as a copy of `rest` and touches it only when the pose moves the skin.
-  if (posedGeneration != restGeneration) posed = rest;
-  poseSkin(scene, time, rest, posed, timeState);
-  posedGeneration = timeState.posedMoved ? 0 : restGeneration;
+  if (!skinPose.empty()) {
+    // The caller's pose (setSkinPose) replaces the skeleton's. Checked against the rest skin again here:
+    // a scene edit may have changed the mesh since it was set.
+    if (skinPose.size() != rest.positions.size())
+      throw Error("the skin pose has " + std::to_string(skinPose.size()) + " vertices, the skin " +
+                      std::to_string(rest.positions.size()),
+                  scene.file, "pose");
+    posed = rest;
+    posed.positions = skinPose;
+    coat::recomputeGeometry(posed);
+    timeState.rest = &rest;
+    timeState.posedMoved = true;
+    posedGeneration = 0;
+  } else {
+    // poseSkin wants `posed` as a copy of `rest` and touches it only when the pose moves the skin.
+    if (posedGeneration != restGeneration) posed = rest;
+    poseSkin(scene, time, rest, posed, timeState);
+    posedGeneration = timeState.posedMoved ? 0 : restGeneration;
+  }
   posedFollicles = follicles;
   coat::updateFollicleGeometry(posed, posedFollicles);
   // Rest data (params, follicles, layer order) is copied once per rest state; the time stages rewrite
@@ -878,6 +903,7 @@ void Pipeline::Impl::computeMesh() {
     const uint32_t i = which[k];
     const auto& r = ranges[k];
     CoatDrawRange d;
+    d.feather = i;
     const uint32_t first = r.shaftFirst;
     const uint32_t end = std::max({r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
                                    r.afterFirst + r.afterCount});
@@ -919,6 +945,10 @@ Pipeline::Pipeline(Scene scene, ProgressFn progress) : impl_(std::make_unique<Im
   impl_->build();
 }
 
+Pipeline::Pipeline(Scene scene, coat::SkinMesh skin, ProgressFn progress) : Pipeline(std::move(scene), std::move(progress)) {
+  impl_->memorySkin = std::move(skin);
+}
+
 Pipeline::~Pipeline() = default;
 
 const Scene& Pipeline::scene() const { return impl_->scene; }
@@ -937,6 +967,27 @@ void Pipeline::setTime(double t) {
   impl_->graph.invalidate(impl_->id(Stage::Pose));
 }
 double Pipeline::time() const { return impl_->time; }
+
+void Pipeline::setSkinPose(std::vector<glm::dvec3> positions) {
+  if (!positions.empty()) {
+    const size_t n = restSkin().positions.size();
+    if (positions.size() != n)
+      throw Error("the pose has " + std::to_string(positions.size()) + " vertices; the skin has " + std::to_string(n) +
+                      " (a pose keeps the skin's topology)",
+                  "", "pose");
+    for (size_t v = 0; v < n; ++v)
+      for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(positions[v][c]) || std::abs(positions[v][c]) > coat::kMaxMeshCoordinate)
+          throw Error("coordinate " + std::to_string(c) + " is " + std::to_string(positions[v][c]) +
+                          ": pose coordinates must be finite and at most " +
+                          std::to_string(coat::kMaxMeshCoordinate) + " in magnitude",
+                      "", "vertex " + std::to_string(v));
+  }
+  if (positions == impl_->skinPose) return;
+  impl_->skinPose = std::move(positions);
+  impl_->graph.invalidate(impl_->id(Stage::Pose));
+}
+const std::vector<glm::dvec3>& Pipeline::skinPose() const { return impl_->skinPose; }
 
 void Pipeline::setLod(double f) {
   if (!(f > 0 && f <= 1)) throw Error("level of detail must be in (0, 1]", "", "lod");

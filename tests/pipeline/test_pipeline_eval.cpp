@@ -4,6 +4,7 @@
 
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/follicles.hpp"
+#include "pteryla/coat/skin.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 
@@ -95,6 +96,66 @@ TEST(PipelineEval, BadTractKeyNamesItsPath) {
   } catch (const Error& e) {
     EXPECT_EQ(e.element(), "tracts[0].densty") << e.what();
   }
+}
+
+TEST(PipelineEval, DuplicateTractNameIsAnError) {
+  Scene s = smallScene();
+  s.tracts.push_back(s.tracts[0]);
+  Pipeline p(std::move(s));
+  try {
+    p.tracts();
+    FAIL() << "two tracts named 'all' accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.element(), "tracts[1].name") << e.what();
+  }
+}
+
+// A skin held in memory (the host API's door) evaluates like the same mesh read from its file, and a
+// pose given as positions moves the coat without re-distributing or re-interpolating it.
+TEST(PipelineEval, SkinInMemoryAndCallerPose) {
+  Pipeline fromFile(smallScene());
+  const coat::SkinMesh& rest = fromFile.restSkin();
+  Pipeline p(smallScene(), coat::makeSkinMesh(rest.positions, rest.faces, rest.groupNames, rest.faceGroup));
+  EXPECT_EQ(p.coatMesh().mesh.positions, fromFile.coatMesh().mesh.positions);
+  for (size_t k = 0; k < p.coatMesh().ranges.size(); ++k)
+    EXPECT_EQ(p.coatMesh().ranges[k].feather, p.feathers().layerOrder[k]);  // every feather present
+
+  auto& g = p.graph();
+  const auto dist = g.find("distribute"), interp = g.find("interpolate"), pose = g.find("pose");
+  std::vector<glm::dvec3> moved = rest.positions;
+  for (auto& v : moved) v.x *= 1.25;
+  p.setSkinPose(moved);
+  const std::vector<glm::vec3> posedCoat = p.coatMesh().mesh.positions;
+  EXPECT_EQ(g.evaluations(dist), 1u);
+  EXPECT_EQ(g.evaluations(interp), 1u);
+  EXPECT_EQ(g.evaluations(pose), 2u);
+  EXPECT_EQ(p.posedSkin().positions, moved);
+  EXPECT_NE(posedCoat, fromFile.coatMesh().mesh.positions);
+  // Follicles ride the skin: same (face, barycentric), posed position.
+  const coat::Follicles& f = p.follicles();
+  const coat::CoatFeathers& c = p.feathers();
+  for (size_t i = 0; i < c.size(); ++i) {
+    const glm::dvec3 expect = coat::pointAt(p.posedSkin(), f.face[c.follicle[i]], f.bary[c.follicle[i]]);
+    EXPECT_EQ(c.frames[i].origin, expect);
+  }
+  p.setSkinPose(moved);  // unchanged: nothing to redo
+  p.coatMesh();
+  EXPECT_EQ(g.evaluations(pose), 2u);
+  p.setSkinPose({});  // back to the rest skin, the rest coat bit for bit
+  EXPECT_EQ(p.coatMesh().mesh.positions, fromFile.coatMesh().mesh.positions);
+
+  std::vector<glm::dvec3> bad = rest.positions;
+  bad.pop_back();
+  EXPECT_THROW(p.setSkinPose(bad), Error);
+  bad = rest.positions;
+  bad[3].y = std::nan("");
+  try {
+    p.setSkinPose(bad);
+    FAIL() << "NaN pose accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.element(), "vertex 3") << e.what();
+  }
+  EXPECT_TRUE(p.skinPose().empty());  // a refused pose changes nothing
 }
 
 // A helical (Zhang & Kanai) feather is an ordinary feather to the coat: it distributes, packs and meshes.

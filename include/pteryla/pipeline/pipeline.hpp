@@ -36,6 +36,7 @@ const char* stageName(Stage s);
 // What the renderer needs to draw one feather of the coat mesh (mirrors render::FeatherDrawRange
 // without depending on the render module).
 struct CoatDrawRange {
+  uint32_t feather = 0;         // index into Pipeline::feathers()
   uint32_t firstIndex = 0, indexCount = 0;
   uint32_t material = 0;        // index into CoatMesh::materials
   glm::vec3 origin{0}, axisX{1, 0, 0}, axisY{0, 1, 0};
@@ -94,6 +95,9 @@ struct FrameReuse {
 class Pipeline {
  public:
   explicit Pipeline(Scene scene, ProgressFn progress = {});
+  // A pipeline over a skin held in memory (the host API's Session): `skin` is the rest skin and the
+  // scene's mesh path and mesh_repair are not read. Build `skin` with coat::makeSkinMesh, which checks it.
+  Pipeline(Scene scene, coat::SkinMesh skin, ProgressFn progress = {});
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
@@ -106,6 +110,13 @@ class Pipeline {
 
   void setTime(double t);
   double time() const;
+  // The posed skin's vertex positions, given by the caller (a host's own deformation), one per rest
+  // vertex, finite. It replaces the scene's skeleton pose at every time; empty = back to the skeleton
+  // (or the rest skin). Follicles keep their (face, barycentric) coordinates, so nothing is
+  // re-distributed: only pose and later stages are dirtied. Throws pteryla::Error naming the vertex for
+  // a wrong count or a non-finite coordinate.
+  void setSkinPose(std::vector<glm::dvec3> positions);
+  const std::vector<glm::dvec3>& skinPose() const;
   void setLod(double fraction);  // (0,1]
   double lod() const;
   // Per-feather levels of detail (indexed like feathers()), each in (0,1], multiplying lod(): feather i
