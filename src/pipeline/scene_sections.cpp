@@ -1,8 +1,8 @@
 #include "scene_sections.hpp"
 
-#include <cstdlib>
 #include <filesystem>
 
+#include "pteryla/core/data_dir.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
 
@@ -30,10 +30,7 @@ void validateFeathers(Scene& s) {
 
 }  // namespace
 
-std::string dataDir() {
-  if (const char* e = std::getenv("PTERYLA_DATA")) return e;
-  return PTERYLA_DATA_DIR;
-}
+std::string dataDir() { return dataDirectory(); }
 
 void validateSections(Scene& s) {
   validateFeathers(s);

@@ -12,7 +12,7 @@ void validateSections(Scene& s);
 Scene bareMeshScene(const std::string& meshPath);
 // Copy of a section with absolute paths rewritten relative to `relativeTo` (for saving).
 Json sectionsRelativeTo(const Scene& s, const Json& section, const std::string& which, const std::string& relativeTo);
-// Directory holding the bundled data (data/): $PTERYLA_DATA, else the source tree's data dir.
+// Directory holding the bundled data: pteryla::dataDirectory() (core/data_dir.hpp).
 std::string dataDir();
 
 }  // namespace pteryla::pipeline

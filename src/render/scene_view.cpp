@@ -6,6 +6,7 @@
 #include <map>
 
 #include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/core/data_dir.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/feather/mesh.hpp"
 #include "pteryla/feather/params.hpp"
@@ -17,10 +18,7 @@ namespace {
 
 glm::vec3 v3(const glm::dvec3& v) { return glm::vec3(v); }
 
-std::string textureDir() {
-  if (const char* e = std::getenv("PTERYLA_DATA")) return std::string(e) + "/textures";
-  return std::string(PTERYLA_DATA_DIR) + "/textures";
-}
+std::string textureDir() { return dataDirectory() + "/textures"; }
 
 }  // namespace
 

@@ -4,12 +4,15 @@
 //    the element (JSON key path, face index, ...) so the user can find it. The CLI exits 2.
 //  - broken invariants inside the library -> PTERYLA_CHECK, which throws InternalError. The CLI exits 1.
 // The library never calls exit().
+// Part of the installed host API (include/pteryla/pteryla.hpp): standard headers only.
 #include <stdexcept>
 #include <string>
 
+#include "pteryla/export.hpp"
+
 namespace pteryla {
 
-class Error : public std::runtime_error {
+class PTERYLA_API Error : public std::runtime_error {
  public:
   // what: what was wrong and what was expected; file: input file (may be empty);
   // element: where inside the file (JSON key path like "tracts[2].density", "face 17").
@@ -26,12 +29,12 @@ class Error : public std::runtime_error {
   std::string detail_, file_, element_;
 };
 
-class InternalError : public std::logic_error {
+class PTERYLA_API InternalError : public std::logic_error {
  public:
   using std::logic_error::logic_error;
 };
 
-[[noreturn]] void checkFailed(const char* expr, const char* file, int line, const std::string& msg);
+[[noreturn]] PTERYLA_API void checkFailed(const char* expr, const char* file, int line, const std::string& msg);
 
 }  // namespace pteryla
 
