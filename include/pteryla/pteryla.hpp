@@ -1,0 +1,199 @@
+#pragma once
+// The host API: what a program outside this repository (a DCC plug-in, a game tool, a script binding)
+// uses to feather its own mesh. This header and the two it includes (core/error.hpp,
+// core/data_dir.hpp) are what `cmake --install` ships; they use standard C++17 only (no JSON, GL, TBB,
+// CGAL, OpenMesh or GLM types), and the rest of the library stays behind them.
+//
+// A Session is stateful, in the style of geometry-central's solvers: build it once from the rest skin
+// and a coat set-up, then each frame hand it the posed skin (setPose) and/or a time (setTime),
+// evaluate(), and read the frame's flat arrays. Only what changed is recomputed: a new pose or time
+// re-frames, re-packs and re-meshes the coat but never re-distributes follicles, which stay attached to
+// the skin by (face, barycentric) coordinates.
+//
+//   pteryla::SkinArrays skin;            // the host's rest mesh
+//   skin.positions = {...};              // x, y, z per vertex
+//   skin.triangles = {...};              // 3 vertex indices per face, counter-clockwise from outside
+//   pteryla::CoatSetup setup;            // defaults: one tract over the whole skin, contour feathers
+//   pteryla::Session session(skin, setup);
+//   for (each frame) {
+//     session.setPose(posedPositions);   // same vertex count and order as skin.positions
+//     if (!session.evaluate(progress)) break;   // the progress callback returned false
+//     const pteryla::Frame& f = session.frame();
+//     draw(f.positions, f.indices);
+//   }
+//
+// Errors. Bad input (arrays, set-up, scene file, feather file) throws pteryla::Error with file() (""
+// for in-memory input), element() (where: "positions", "vertex 17", "tracts[2].faces[5]"; set-up
+// fields are named by their scene-format key where they have one, "tracts[0].feather_scale", else by
+// the field, "tracts[0].featherFile") and detail(). A broken
+// invariant inside the library throws pteryla::InternalError. Neither leaves the session unusable:
+// fix the input and call again. The library never calls exit().
+//
+// Threads. A Session is not thread-safe; use one from one thread at a time (it uses TBB inside).
+// Different sessions may run on different threads.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pteryla/core/data_dir.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/export.hpp"
+
+namespace pteryla {
+
+// The library's version (PROJECT_VERSION of its CMakeLists.txt), e.g. "0.1.0".
+PTERYLA_API const char* version();
+
+// The rest skin, held by the caller. A triangle mesh that is finite, free of degenerate faces,
+// edge-manifold and consistently oriented (docs/limits.md for the coordinate limits); `repair` instead
+// drops or fixes what is not (vertex indices are never renumbered, so poses stay aligned).
+struct SkinArrays {
+  std::vector<double> positions;        // x, y, z per vertex (scene units)
+  std::vector<uint32_t> triangles;      // 3 vertex indices per face, counter-clockwise seen from outside
+  std::vector<std::string> groupNames;  // optional face groups, selected by TractSetup::groups
+  std::vector<int32_t> faceGroups;      // empty, or per face: index into groupNames (-1 = none)
+  bool repair = false;                  // repair instead of refusing (docs/scene-format.md "mesh_repair")
+};
+
+// A feather tract (Streit 2003, 6.1): a set of skin faces carrying one kind of feather.
+struct TractSetup {
+  std::string name;                // required, unique
+  std::vector<std::string> groups;  // faces of these groups, united with `faces`;
+  std::vector<uint32_t> faces;      // ... these faces (triangle indices). Neither: the whole skin
+  size_t count = 0;                 // exact number of follicles, or
+  double density = 0;               // follicles per unit area (count 0). Both 0: 3,000 x area share
+  std::string featherFile;          // feather definition (docs/feather-format.md); "" = bundled contour
+  double featherScale = 0;          // multiplies every feather length; 0 = "auto": mean length =
+  double featherSpacings = 3.5;     //   featherSpacings x the follicle spacing
+  int relaxIterations = 40;         // Lloyd relaxation of the follicles (6.1)
+};
+
+// The coat set-up a Session is built from. It covers what maps cleanly onto the scene format; the
+// rest (key feathers and interpolation, pinned follicles, density bias, label files and tract set
+// operations, styling vectors, per-tract directions, packer knobs and styling, moult, skeleton,
+// expressive controls) is only reachable through a scene file: Session::fromSceneFile.
+struct CoatSetup {
+  std::vector<TractSetup> tracts;                 // empty: one tract "all" over the whole skin
+  // Body axis, head to tail (>= 2 distinct points): feathers point along it (6.3.1) and, with
+  // Ordering::Axis, are layered along it like roof tiles. Empty: the longest axis of the skin's
+  // bounding box, as for a bare mesh.
+  std::vector<std::array<double, 3>> axis;
+  enum class Ordering { Axis, Tracts, Flow };     // layer order for packing (docs/coat.md)
+  Ordering ordering = Ordering::Axis;
+  std::vector<std::string> tractOrder;            // Ordering::Tracts: tract names, bottom layer first
+  enum class Packing { Drape, HeightField };      // docs/packing.md
+  Packing packing = Packing::Drape;
+  uint64_t seed = 1;                              // same skin + set-up + seed = same coat, bit for bit
+};
+
+// Progress of evaluate(): stage name ("load", "distribute", "interpolate", "pack", "mesh") and fraction
+// in [0, 1]. Return false to cancel.
+using Progress = std::function<bool(const std::string& stage, double fraction)>;
+
+// A read-only view of an array the Session owns.
+template <class T>
+struct View {
+  const T* data = nullptr;
+  size_t size = 0;
+  const T& operator[](size_t i) const { return data[i]; }
+  const T* begin() const { return data; }
+  const T* end() const { return data + size; }
+  bool empty() const { return size == 0; }
+};
+
+// The triangles of feather `feather` in Frame::indices: [firstIndex, firstIndex + indexCount).
+struct FeatherRange {
+  uint32_t feather = 0;
+  uint32_t firstIndex = 0, indexCount = 0;
+};
+
+// One evaluated frame. Every view stays valid until the next non-const call on the Session.
+// Feathers are indexed 0..featherCount-1 in a fixed order for the life of the session.
+struct Frame {
+  size_t featherCount = 0;
+  // Per feather.
+  View<uint64_t> follicleKeys;  // stable key of the feather's follicle: the same across poses, times
+                                //   and sessions built from the same skin topology, set-up and seed
+  View<uint32_t> tracts;        // tract index (CoatSetup::tracts order, or the scene's)
+  View<uint8_t> present;        // 0 = moulted out at this time (no triangles)
+  View<double> origins;         // 3 per feather: the follicle on the posed skin
+  View<double> normals;         // 3 per feather: N, unit skin normal
+  View<double> tangents;        // 3 per feather: T, unit feather direction in the tangent plane
+  View<double> binormals;       // 3 per feather: B = N x T (docs/architecture.md "Frames")
+  View<double> elevations;      // radians: the rotation about B the feather was placed at (0 = flat
+                                //   along T); a draped coat is placed flat and bent over the skin
+  // The coat mesh: all present feathers, bottom layer first.
+  View<float> positions;        // 3 per vertex
+  View<float> vertexNormals;    // 3 per vertex, unit
+  View<float> uvs;              // 2 per vertex: feather-global texture coordinates (Streit 7.1.1)
+  View<uint32_t> vertexFeathers;  // feather index per vertex
+  View<uint32_t> indices;       // 3 per triangle
+  View<FeatherRange> ranges;    // one per present feather, bottom layer first
+};
+
+// The independent checker's numbers (pteryla check; docs/packing.md). Unset = not measured.
+struct Metrics {
+  std::optional<size_t> follicles, feathers;
+  std::optional<double> hexFraction, nnCv;                // follicle layout: hexagonal cells, spacing CV
+  std::optional<size_t> intersectingPairs;                // triangle pairs of different feathers
+  std::optional<size_t> intersectingPairsUnpacked;        // ... of the coat before packing
+  std::optional<size_t> intersectingPairsProxy;           // ... of the packed coat meshed like that one
+  std::optional<size_t> skinPenetrations;                 // coat vertices under the skin
+  std::optional<double> coverage;                         // fraction of tract area under feathers
+  std::optional<double> elevationP50, elevationP90;       // degrees
+  std::optional<size_t> fixedFeathers, hiddenFeathers;    // draped coats: trimmed, and left empty
+};
+
+class PTERYLA_API Session {
+ public:
+  // Checks the skin (pteryla::Error naming "positions", "triangles", "vertex 5", "face 17", ...) and the
+  // set-up (its tracts' faces and groups, its feather files) before returning.
+  Session(const SkinArrays& skin, const CoatSetup& setup);
+  // A scene file (docs/scene-format.md) or a bare mesh (.obj/.ply/.off/.stl): the only door through
+  // which the library reads JSON from the caller. Paths inside resolve against the file.
+  static Session fromSceneFile(const std::string& path);
+
+  Session(Session&&) noexcept;
+  Session& operator=(Session&&) noexcept;
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+  ~Session();
+
+  size_t vertexCount() const;  // of the rest skin (what setPose expects)
+  size_t faceCount() const;
+
+  // The posed skin: x, y, z per vertex, the rest skin's vertex count and order, finite. Throws
+  // pteryla::Error ("positions" for a wrong length, "vertex 17" for a bad coordinate) and keeps the
+  // last pose. The pose replaces a scene skeleton's pose at every time.
+  void setPose(const std::vector<double>& positions);
+  void setPose(const float* xyz, size_t vertexCount);
+  void clearPose();  // back to the rest skin (or the scene's skeleton)
+  // Evaluation time (moult, skeleton and controls of a scene file; nothing changes with time otherwise).
+  void setTime(double t);
+  double time() const;
+  // Fraction of barbs meshed, in (0, 1] (Streit 7.1.3). Only the mesh is redone.
+  void setLod(double fraction);
+  double lod() const;
+
+  // Brings the frame up to date. Returns true when done; false when `progress` returned false, which
+  // stops evaluation at once: the session keeps every stage completed before the cancel, frame() is
+  // unavailable until an evaluate() completes, and the next evaluate() carries on from there.
+  [[nodiscard]] bool evaluate(const Progress& progress = {});
+  // The last complete evaluation. Throws pteryla::Error when an input changed since (call evaluate()).
+  const Frame& frame() const;
+  // Runs the independent checker on the current frame at full detail (evaluates first if needed, and
+  // leaves frame() valid). Costs more than an evaluation: it also meshes and checks the unpacked coat.
+  Metrics metrics();
+
+ private:
+  struct Impl;
+  explicit Session(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pteryla

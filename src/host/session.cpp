@@ -1,0 +1,359 @@
+// The host API (include/pteryla/pteryla.hpp): a Session is a pipeline::Pipeline over a skin held in
+// memory, with a typed set-up turned into the scene sections the pipeline already parses (so a typed
+// set-up and the equivalent scene file evaluate to the same coat, bit for bit), and the frame's
+// results handed out as flat views.
+#include "pteryla/pteryla.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/follicles.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/core/json.hpp"
+#include "pteryla/core/paths.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/pipeline/scene.hpp"
+
+namespace pteryla {
+namespace {
+
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float) && sizeof(glm::vec2) == 2 * sizeof(float),
+              "the coat mesh's vectors are handed out as flat float arrays");
+
+// Thrown through the pipeline by the progress callback when the host cancels; caught by evaluate().
+// Stages keep their dirty flag when their computation throws, so nothing half-done is cached.
+struct Cancelled {};
+
+std::string at(const char* array, size_t i) { return std::string(array) + "[" + std::to_string(i) + "]"; }
+
+void requireFinite(double v, const std::string& element, const char* what) {
+  if (!std::isfinite(v)) throw Error(std::string(what) + " must be a finite number", "", element);
+}
+
+Json point(const std::array<double, 3>& p) { return Json::array({p[0], p[1], p[2]}); }
+
+coat::SkinMesh skinFromArrays(const SkinArrays& in) {
+  if (in.positions.empty()) throw Error("the skin has no vertices", "", "positions");
+  if (in.positions.size() % 3 != 0)
+    throw Error("expected 3 values (x, y, z) per vertex, got " + std::to_string(in.positions.size()) + " values", "",
+                "positions");
+  if (in.triangles.empty()) throw Error("the skin has no triangles", "", "triangles");
+  if (in.triangles.size() % 3 != 0)
+    throw Error("expected 3 vertex indices per triangle, got " + std::to_string(in.triangles.size()) + " indices", "",
+                "triangles");
+  const size_t nv = in.positions.size() / 3, nf = in.triangles.size() / 3;
+  if (!in.faceGroups.empty() && in.faceGroups.size() != nf)
+    throw Error("expected one group per face (" + std::to_string(nf) + "), got " + std::to_string(in.faceGroups.size()),
+                "", "faceGroups");
+  for (size_t f = 0; f < in.faceGroups.size(); ++f)
+    if (in.faceGroups[f] < -1 || (in.faceGroups[f] >= 0 && size_t(in.faceGroups[f]) >= in.groupNames.size()))
+      throw Error("group " + std::to_string(in.faceGroups[f]) + " is not -1 or an index into groupNames (" +
+                      std::to_string(in.groupNames.size()) + " names)",
+                  "", at("faceGroups", f));
+  std::vector<glm::dvec3> positions(nv);
+  for (size_t v = 0; v < nv; ++v) positions[v] = {in.positions[3 * v], in.positions[3 * v + 1], in.positions[3 * v + 2]};
+  std::vector<std::array<uint32_t, 3>> faces(nf);
+  for (size_t f = 0; f < nf; ++f) faces[f] = {in.triangles[3 * f], in.triangles[3 * f + 1], in.triangles[3 * f + 2]};
+  coat::MeshLoadOptions o;
+  o.repair = in.repair;
+  // makeSkinMesh checks indices, finiteness, coordinate range, degeneracy, manifoldness and orientation,
+  // naming "vertex v" and "face f" (triangle indices of this array).
+  return coat::makeSkinMesh(std::move(positions), std::move(faces), in.groupNames, in.faceGroups, o);
+}
+
+// The scene a typed set-up stands for (docs/scene-format.md), checked by sceneFromJson and the
+// pipeline's own parsers like any scene file.
+pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
+  Json j = Json::object();
+  j["pteryla"] = 1;
+  j["name"] = "session";
+  j["seed"] = setup.seed;
+  j["mesh"] = "";  // the skin is in memory (Pipeline(Scene, SkinMesh))
+
+  // Feathers: one entry per distinct file, named by its stem (the bundled contour feather is "contour",
+  // as for a bare mesh).
+  std::map<std::string, std::string> nameOfFile;
+  std::set<std::string> names;
+  Json feathers = Json::object();
+  auto featherName = [&](const std::string& file, const std::string& element) {
+    const std::string path =
+        file.empty() ? (std::filesystem::path(dataDirectory()) / "feathers" / "contour.json").string()
+                     : std::filesystem::absolute(file).lexically_normal().string();
+    if (!fileExists(path)) throw Error("feather file not found: " + path, "", element);
+    if (auto it = nameOfFile.find(path); it != nameOfFile.end()) return it->second;
+    const std::string stem = std::filesystem::path(path).stem().string();
+    std::string name = stem;
+    for (int k = 2; names.count(name); ++k) name = stem + "-" + std::to_string(k);
+    names.insert(name);
+    nameOfFile[path] = name;
+    feathers[name] = path;
+    return name;
+  };
+
+  Json tracts = Json::array();
+  std::vector<TractSetup> list = setup.tracts;
+  if (list.empty()) {
+    list.emplace_back();
+    list.back().name = "all";
+  }
+  for (size_t i = 0; i < list.size(); ++i) {
+    const TractSetup& t = list[i];
+    const std::string where = at("tracts", i);
+    Json o = Json::object();
+    o["name"] = t.name;
+    if (!t.groups.empty()) o["groups"] = t.groups;
+    if (!t.faces.empty()) o["faces"] = t.faces;
+    requireFinite(t.density, where + ".density", "density");
+    if (t.density < 0) throw Error("density must not be negative", "", where + ".density");
+    if (t.count > uint64_t(std::numeric_limits<int64_t>::max()))
+      throw Error("count is out of range", "", where + ".count");
+    if (t.count > 0) o["count"] = uint64_t(t.count);
+    else if (t.density > 0) o["density"] = t.density;
+    o["feather"] = featherName(t.featherFile, where + ".featherFile");
+    requireFinite(t.featherScale, where + ".feather_scale", "feather_scale");
+    if (t.featherScale < 0) throw Error("feather_scale must be positive, or 0 for automatic", "", where + ".feather_scale");
+    if (t.featherScale > 0) o["feather_scale"] = t.featherScale;
+    else o["feather_scale"] = "auto";
+    requireFinite(t.featherSpacings, where + ".feather_spacings", "feather_spacings");
+    o["feather_spacings"] = t.featherSpacings;
+    o["relax"] = {{"iterations", t.relaxIterations}};
+    // One feather per tract: nothing is interpolated, so the cheapest parameterization serves.
+    o["parameterization"] = {{"method", "projection"}};
+    tracts.push_back(std::move(o));
+  }
+  j["feathers"] = feathers;
+  j["tracts"] = tracts;
+
+  // The axis is checked here (the pipeline parses directions only when it evaluates them).
+  Json axis = Json::array();
+  for (size_t k = 0; k < setup.axis.size(); ++k) {
+    for (int c = 0; c < 3; ++c) requireFinite(setup.axis[k][c], at("axis", k), "axis points");
+    if (k > 0 && setup.axis[k] == setup.axis[k - 1])
+      throw Error("coincides with the point before it", "", at("axis", k));
+    axis.push_back(point(setup.axis[k]));
+  }
+  if (setup.axis.size() == 1) throw Error("a body axis needs at least two points (head to tail)", "", "axis");
+  if (!axis.empty()) j["directions"] = {{"axis", axis}};
+  switch (setup.ordering) {
+    case CoatSetup::Ordering::Axis:
+      if (!axis.empty()) j["ordering"] = {{"method", "axis"}, {"axis", axis}};
+      break;  // no axis: the bounding-box axis, as for a bare mesh (Scene::fromBareMesh below)
+    case CoatSetup::Ordering::Tracts:
+      j["ordering"] = {{"method", "tracts"}};
+      if (!setup.tractOrder.empty()) j["ordering"]["tracts"] = setup.tractOrder;
+      break;
+    case CoatSetup::Ordering::Flow: j["ordering"] = {{"method", "flow"}}; break;
+  }
+  j["packing"] = {{"method", setup.packing == CoatSetup::Packing::Drape ? "drape" : "height_field"}};
+  pipeline::Scene s = pipeline::sceneFromJson(j, "");
+  // Without an axis, directions and axis ordering follow the skin's longest bounding-box axis.
+  s.fromBareMesh = setup.axis.empty();
+  return s;
+}
+
+}  // namespace
+
+const char* version() { return PTERYLA_VERSION; }
+
+struct Session::Impl {
+  std::unique_ptr<pipeline::Pipeline> pipeline;
+  size_t vertices = 0, faces = 0;
+  bool frameValid = false;
+  Frame frame;
+  std::vector<uint64_t> keys;
+  std::vector<double> origins, normals, tangents, binormals;
+  std::vector<FeatherRange> ranges;
+
+  explicit Impl(std::unique_ptr<pipeline::Pipeline> p) : pipeline(std::move(p)) {
+    // Read the skin, the feathers and the tracts now, so bad input fails here and not at evaluate().
+    const coat::SkinMesh& rest = pipeline->restSkin();
+    vertices = rest.vertexCount();
+    faces = rest.faceCount();
+    pipeline->tracts();
+  }
+
+  void setPose(std::vector<glm::dvec3> positions) {
+    for (size_t v = 0; v < positions.size(); ++v)
+      for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(positions[v][c]))
+          throw Error("coordinate " + std::to_string(c) + " is not a finite number", "", "vertex " + std::to_string(v));
+    pipeline->setSkinPose(std::move(positions));  // also checks the coordinate range
+    frameValid = false;
+  }
+
+  // Points the frame's views at the pipeline's results (and at the flattened frames).
+  void fillFrame() {
+    pipeline::Pipeline& p = *pipeline;
+    const pipeline::CoatMesh& mesh = p.coatMesh();
+    const coat::CoatFeathers& coat = p.feathers();
+    const coat::Follicles& follicles = p.follicles();
+    const std::vector<double>& elevation = p.elevations();
+    const size_t n = coat.size();
+    keys.resize(n);
+    origins.resize(3 * n);
+    normals.resize(3 * n);
+    tangents.resize(3 * n);
+    binormals.resize(3 * n);
+    for (size_t i = 0; i < n; ++i) {
+      keys[i] = follicles.id[coat.follicle[i]];
+      const coat::FeatherFrame& f = coat.frames[i];
+      for (int c = 0; c < 3; ++c) {
+        origins[3 * i + c] = f.origin[c];
+        normals[3 * i + c] = f.normal[c];
+        tangents[3 * i + c] = f.tangent[c];
+        binormals[3 * i + c] = f.binormal[c];
+      }
+    }
+    ranges.resize(mesh.ranges.size());
+    for (size_t k = 0; k < ranges.size(); ++k)
+      ranges[k] = {mesh.ranges[k].feather, mesh.ranges[k].firstIndex, mesh.ranges[k].indexCount};
+    PTERYLA_CHECK(coat.tract.size() == n && coat.present.size() == n && elevation.size() == n,
+                  "per-feather results of different lengths");
+    const TriMesh& m = mesh.mesh;
+    const size_t nv = m.positions.size();
+    PTERYLA_CHECK(m.normals.size() == nv && m.featherId.size() == nv && (m.uvGlobal.empty() || m.uvGlobal.size() == nv),
+                  "coat mesh attributes of different lengths");
+    Frame& fr = frame;
+    fr.featherCount = n;
+    fr.follicleKeys = {keys.data(), n};
+    fr.tracts = {coat.tract.data(), n};
+    fr.present = {coat.present.data(), n};
+    fr.origins = {origins.data(), 3 * n};
+    fr.normals = {normals.data(), 3 * n};
+    fr.tangents = {tangents.data(), 3 * n};
+    fr.binormals = {binormals.data(), 3 * n};
+    fr.elevations = {elevation.data(), n};
+    fr.positions = {nv ? &m.positions[0].x : nullptr, 3 * nv};
+    fr.vertexNormals = {nv ? &m.normals[0].x : nullptr, 3 * nv};
+    fr.uvs = {m.uvGlobal.empty() ? nullptr : &m.uvGlobal[0].x, 2 * m.uvGlobal.size()};
+    fr.vertexFeathers = {m.featherId.data(), nv};
+    fr.indices = {m.indices.data(), m.indices.size()};
+    fr.ranges = {ranges.data(), ranges.size()};
+    frameValid = true;
+  }
+};
+
+Session::Session(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Session::Session(const SkinArrays& skin, const CoatSetup& setup) {
+  coat::SkinMesh mesh = skinFromArrays(skin);
+  impl_ = std::make_unique<Impl>(std::make_unique<pipeline::Pipeline>(sceneFromSetup(setup), std::move(mesh)));
+}
+
+Session Session::fromSceneFile(const std::string& path) {
+  return Session(std::make_unique<Impl>(std::make_unique<pipeline::Pipeline>(pipeline::loadScene(path))));
+}
+
+Session::Session(Session&&) noexcept = default;
+Session& Session::operator=(Session&&) noexcept = default;
+Session::~Session() = default;
+
+size_t Session::vertexCount() const { return impl_->vertices; }
+size_t Session::faceCount() const { return impl_->faces; }
+
+void Session::setPose(const std::vector<double>& positions) {
+  if (positions.size() != 3 * impl_->vertices)
+    throw Error("expected 3 x " + std::to_string(impl_->vertices) + " = " + std::to_string(3 * impl_->vertices) +
+                    " values (the rest skin's vertices), got " + std::to_string(positions.size()),
+                "", "positions");
+  std::vector<glm::dvec3> p(impl_->vertices);
+  for (size_t v = 0; v < p.size(); ++v) p[v] = {positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]};
+  impl_->setPose(std::move(p));
+}
+
+void Session::setPose(const float* xyz, size_t vertexCount) {
+  if (vertexCount != impl_->vertices)
+    throw Error("expected " + std::to_string(impl_->vertices) + " vertices (the rest skin's), got " +
+                    std::to_string(vertexCount),
+                "", "positions");
+  if (!xyz) throw Error("no positions given", "", "positions");
+  std::vector<glm::dvec3> p(vertexCount);
+  for (size_t v = 0; v < p.size(); ++v) p[v] = {xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]};
+  impl_->setPose(std::move(p));
+}
+
+void Session::clearPose() {
+  impl_->pipeline->setSkinPose({});
+  impl_->frameValid = false;
+}
+
+void Session::setTime(double t) {
+  if (!std::isfinite(t)) throw Error("time must be a finite number", "", "time");
+  if (t == impl_->pipeline->time()) return;
+  impl_->pipeline->setTime(t);
+  impl_->frameValid = false;
+}
+double Session::time() const { return impl_->pipeline->time(); }
+
+void Session::setLod(double fraction) {
+  if (!(fraction > 0 && fraction <= 1)) throw Error("level of detail must be in (0, 1]", "", "lod");
+  if (fraction == impl_->pipeline->lod()) return;
+  impl_->pipeline->setLod(fraction);
+  impl_->frameValid = false;
+}
+double Session::lod() const { return impl_->pipeline->lod(); }
+
+bool Session::evaluate(const Progress& progress) {
+  Impl& m = *impl_;
+  m.frameValid = false;
+  // The host's callback sees every report; a false answer unwinds the stage that is running.
+  m.pipeline->setProgress([&progress](const std::string& stage, double fraction) {
+    if (progress && !progress(stage, fraction)) throw Cancelled{};
+    return true;
+  });
+  struct Restore {
+    pipeline::Pipeline& p;
+    ~Restore() { p.setProgress({}); }
+  } restore{*m.pipeline};
+  try {
+    m.fillFrame();
+  } catch (const Cancelled&) {
+    return false;
+  }
+  return true;
+}
+
+const Frame& Session::frame() const {
+  if (!impl_->frameValid)
+    throw Error("no evaluated frame: the inputs changed, or the last evaluate() was cancelled or failed; call evaluate()",
+                "", "frame");
+  return impl_->frame;
+}
+
+Metrics Session::metrics() {
+  Impl& m = *impl_;
+  pipeline::QualityMetrics q;
+  const double lod = m.pipeline->lod();
+  try {
+    q = m.pipeline->check();
+  } catch (...) {
+    m.pipeline->setLod(lod);  // check() meshes at lod 1 and restores the level only when it completes
+    m.frameValid = false;
+    throw;
+  }
+  // check() evaluates the frame and meshes it at full detail: point the views at the frame's own level.
+  m.fillFrame();
+  Metrics r;
+  r.follicles = q.follicles;
+  r.feathers = q.feathers;
+  r.hexFraction = q.hexFraction;
+  r.nnCv = q.nnCv;
+  r.intersectingPairs = q.intersectingPairs;
+  r.intersectingPairsUnpacked = q.intersectingPairsUnpacked;
+  r.intersectingPairsProxy = q.intersectingPairsProxy;
+  r.skinPenetrations = q.skinPenetrations;
+  r.coverage = q.coverage;
+  r.elevationP50 = q.elevationP50;
+  r.elevationP90 = q.elevationP90;
+  r.fixedFeathers = q.fixedFeathers;
+  r.hiddenFeathers = q.hiddenFeathers;
+  return r;
+}
+
+}  // namespace pteryla

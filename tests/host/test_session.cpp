@@ -1,0 +1,418 @@
+// The host API (include/pteryla/pteryla.hpp): a Session over a mesh held in memory.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "../install/consumer/icosphere.hpp"
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/follicles.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/core/json.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/pteryla.hpp"
+
+namespace {
+
+using pteryla::CoatSetup;
+using pteryla::Frame;
+using pteryla::Session;
+using pteryla::SkinArrays;
+
+const std::string kData = PTERYLA_DATA_DIR;
+
+SkinArrays sphereSkin() {
+  const auto ico = pteryla_test::icosphere(3);  // 642 vertices, 1280 faces
+  SkinArrays s;
+  s.positions = ico.positions;
+  s.triangles = ico.triangles;
+  return s;
+}
+
+// Small and quick: 120 follicles, a third of the barbs.
+CoatSetup smallSetup(uint64_t seed = 5) {
+  CoatSetup c;
+  pteryla::TractSetup t;
+  t.name = "body";
+  t.count = 120;
+  c.tracts.push_back(t);
+  c.axis = {{{0, 1.2, 0}}, {{0, -1.2, 0}}};
+  c.seed = seed;
+  return c;
+}
+
+Session evaluated(const SkinArrays& skin, const CoatSetup& setup) {
+  Session s(skin, setup);
+  s.setLod(0.3);
+  EXPECT_TRUE(s.evaluate());
+  return s;
+}
+
+template <class T>
+bool sameBits(pteryla::View<T> a, pteryla::View<T> b) {
+  return a.size == b.size && (a.size == 0 || std::memcmp(a.data, b.data, a.size * sizeof(T)) == 0);
+}
+
+// Every view of two frames, bit for bit.
+void expectIdentical(const Frame& a, const Frame& b) {
+  ASSERT_EQ(a.featherCount, b.featherCount);
+  EXPECT_TRUE(sameBits(a.follicleKeys, b.follicleKeys));
+  EXPECT_TRUE(sameBits(a.tracts, b.tracts));
+  EXPECT_TRUE(sameBits(a.present, b.present));
+  EXPECT_TRUE(sameBits(a.origins, b.origins));
+  EXPECT_TRUE(sameBits(a.normals, b.normals));
+  EXPECT_TRUE(sameBits(a.tangents, b.tangents));
+  EXPECT_TRUE(sameBits(a.binormals, b.binormals));
+  EXPECT_TRUE(sameBits(a.elevations, b.elevations));
+  EXPECT_TRUE(sameBits(a.positions, b.positions));
+  EXPECT_TRUE(sameBits(a.vertexNormals, b.vertexNormals));
+  EXPECT_TRUE(sameBits(a.uvs, b.uvs));
+  EXPECT_TRUE(sameBits(a.vertexFeathers, b.vertexFeathers));
+  EXPECT_TRUE(sameBits(a.indices, b.indices));
+  ASSERT_EQ(a.ranges.size, b.ranges.size);
+  for (size_t k = 0; k < a.ranges.size; ++k) {
+    EXPECT_EQ(a.ranges[k].feather, b.ranges[k].feather);
+    EXPECT_EQ(a.ranges[k].firstIndex, b.ranges[k].firstIndex);
+    EXPECT_EQ(a.ranges[k].indexCount, b.ranges[k].indexCount);
+  }
+}
+
+// Runs f and returns the pteryla::Error it throws (fails the test when it throws nothing).
+template <class F>
+pteryla::Error errorOf(F&& f) {
+  try {
+    f();
+  } catch (const pteryla::Error& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no pteryla::Error thrown";
+  return pteryla::Error("none");
+}
+
+TEST(HostSession, FrameIsConsistent) {
+  Session s = evaluated(sphereSkin(), smallSetup());
+  const Frame& f = s.frame();
+  ASSERT_EQ(f.featherCount, 120u);
+  EXPECT_EQ(f.origins.size, 3 * f.featherCount);
+  EXPECT_EQ(f.elevations.size, f.featherCount);
+  ASSERT_GT(f.indices.size, 0u);
+  EXPECT_EQ(f.indices.size % 3, 0u);
+  const size_t nv = f.positions.size / 3;
+  EXPECT_EQ(f.vertexNormals.size, 3 * nv);
+  EXPECT_EQ(f.vertexFeathers.size, nv);
+  EXPECT_EQ(f.uvs.size, 2 * nv);
+  for (uint32_t i : f.indices) ASSERT_LT(i, nv);
+  for (float x : f.positions) ASSERT_TRUE(std::isfinite(x));
+  for (double x : f.origins) ASSERT_TRUE(std::isfinite(x));
+  // Follicles sit on the unit sphere; frames are orthonormal with B = N x T.
+  for (size_t i = 0; i < f.featherCount; ++i) {
+    const double* o = &f.origins[3 * i];
+    EXPECT_NEAR(std::sqrt(o[0] * o[0] + o[1] * o[1] + o[2] * o[2]), 1.0, 0.02);
+    const double *n = &f.normals[3 * i], *t = &f.tangents[3 * i], *b = &f.binormals[3 * i];
+    EXPECT_NEAR(n[0] * t[0] + n[1] * t[1] + n[2] * t[2], 0.0, 1e-9);
+    EXPECT_NEAR(b[0], n[1] * t[2] - n[2] * t[1], 1e-9);
+    EXPECT_NEAR(b[1], n[2] * t[0] - n[0] * t[2], 1e-9);
+    EXPECT_NEAR(b[2], n[0] * t[1] - n[1] * t[0], 1e-9);
+  }
+  // One range per present feather; each covers triangles of its own feather only.
+  ASSERT_EQ(f.ranges.size, f.featherCount);
+  std::vector<int> seen(f.featherCount, 0);
+  for (const auto& r : f.ranges) {
+    ASSERT_LT(r.feather, f.featherCount);
+    ++seen[r.feather];
+    ASSERT_LE(size_t(r.firstIndex) + r.indexCount, f.indices.size);
+    for (uint32_t k = r.firstIndex; k < r.firstIndex + r.indexCount; ++k)
+      ASSERT_EQ(f.vertexFeathers[f.indices[k]], r.feather);
+  }
+  for (int c : seen) EXPECT_EQ(c, 1);
+  // Keys are distinct.
+  std::vector<uint64_t> keys(f.follicleKeys.begin(), f.follicleKeys.end());
+  std::sort(keys.begin(), keys.end());
+  EXPECT_EQ(std::unique(keys.begin(), keys.end()), keys.end());
+}
+
+TEST(HostSession, SameSeedIsBitIdenticalOtherSeedIsNot) {
+  const SkinArrays skin = sphereSkin();
+  Session a = evaluated(skin, smallSetup(5));
+  Session b = evaluated(skin, smallSetup(5));
+  expectIdentical(a.frame(), b.frame());
+  Session c = evaluated(skin, smallSetup(6));
+  EXPECT_FALSE(sameBits(a.frame().origins, c.frame().origins));
+}
+
+TEST(HostSession, TranslatedPoseTranslatesTheCoat) {
+  const SkinArrays skin = sphereSkin();
+  CoatSetup setup = smallSetup();
+  setup.packing = CoatSetup::Packing::HeightField;
+  Session s = evaluated(skin, setup);
+  const Frame& f0 = s.frame();
+  const std::vector<uint64_t> keys(f0.follicleKeys.begin(), f0.follicleKeys.end());
+  const std::vector<double> origins(f0.origins.begin(), f0.origins.end()), normals(f0.normals.begin(), f0.normals.end());
+  const std::vector<float> coat(f0.positions.begin(), f0.positions.end());
+  const std::vector<uint32_t> indices(f0.indices.begin(), f0.indices.end());
+
+  const double d[3] = {0.75, -0.5, 2.0};
+  std::vector<double> moved = skin.positions;
+  for (size_t k = 0; k < moved.size(); ++k) moved[k] += d[k % 3];
+  s.setPose(moved);
+  EXPECT_THROW(s.frame(), pteryla::Error);  // stale until evaluated
+  ASSERT_TRUE(s.evaluate());
+  const Frame& f1 = s.frame();
+  // The same follicles (not re-distributed), carried along by the skin.
+  ASSERT_EQ(f1.featherCount, keys.size());
+  EXPECT_TRUE(std::equal(keys.begin(), keys.end(), f1.follicleKeys.begin()));
+  for (size_t k = 0; k < origins.size(); ++k) {
+    EXPECT_NEAR(f1.origins[k], origins[k] + d[k % 3], 1e-12);
+    EXPECT_NEAR(f1.normals[k], normals[k], 1e-12);
+  }
+  // The coat moves with it: the same triangles, every vertex shifted by d.
+  ASSERT_EQ(f1.positions.size, coat.size());
+  EXPECT_TRUE(std::equal(indices.begin(), indices.end(), f1.indices.begin()));
+  double worst = 0;
+  for (size_t k = 0; k < coat.size(); ++k) worst = std::max(worst, std::abs(f1.positions[k] - (coat[k] + d[k % 3])));
+  EXPECT_LT(worst, 1e-4) << "largest deviation from the translated coat";
+
+  // Back to rest: the first frame again, bit for bit.
+  s.clearPose();
+  ASSERT_TRUE(s.evaluate());
+  EXPECT_TRUE(std::equal(coat.begin(), coat.end(), s.frame().positions.begin()));
+}
+
+TEST(HostSession, BendingPoseMovesTheCoatAndKeepsFollicles) {
+  const SkinArrays skin = sphereSkin();
+  Session s = evaluated(skin, smallSetup());
+  const std::vector<uint64_t> keys(s.frame().follicleKeys.begin(), s.frame().follicleKeys.end());
+  const std::vector<float> coat(s.frame().positions.begin(), s.frame().positions.end());
+  // Squash the sphere along y (float input, as a DCC hands it over).
+  std::vector<float> squashed(skin.positions.begin(), skin.positions.end());
+  for (size_t v = 0; v < squashed.size() / 3; ++v) squashed[3 * v + 1] *= 0.6f;
+  s.setPose(squashed.data(), squashed.size() / 3);
+  ASSERT_TRUE(s.evaluate());
+  const Frame& f = s.frame();
+  EXPECT_TRUE(std::equal(keys.begin(), keys.end(), f.follicleKeys.begin()));
+  for (size_t i = 0; i < f.featherCount; ++i) EXPECT_LE(std::abs(f.origins[3 * i + 1]), 0.6 + 1e-6);
+  EXPECT_FALSE(std::equal(coat.begin(), coat.end(), f.positions.begin(), f.positions.end()));
+  for (float x : f.positions) ASSERT_TRUE(std::isfinite(x));
+}
+
+TEST(HostSession, BadPosesAreErrorsNamingTheElement) {
+  const SkinArrays skin = sphereSkin();
+  Session s = evaluated(skin, smallSetup());
+  const size_t nv = skin.positions.size() / 3;
+  EXPECT_EQ(s.vertexCount(), nv);
+
+  std::vector<double> shortPose(skin.positions.begin(), skin.positions.end() - 3);
+  pteryla::Error e = errorOf([&] { s.setPose(shortPose); });
+  EXPECT_EQ(e.element(), "positions");
+  EXPECT_NE(e.detail().find(std::to_string(3 * nv)), std::string::npos) << e.what();
+
+  std::vector<double> nanPose = skin.positions;
+  nanPose[3 * 17 + 1] = std::nan("");
+  e = errorOf([&] { s.setPose(nanPose); });
+  EXPECT_EQ(e.element(), "vertex 17");
+
+  std::vector<double> farPose = skin.positions;
+  farPose[3 * 4] = 1e300;
+  e = errorOf([&] { s.setPose(farPose); });
+  EXPECT_EQ(e.element(), "vertex 4");
+
+  std::vector<float> floats(skin.positions.begin(), skin.positions.end());
+  e = errorOf([&] { s.setPose(floats.data(), nv + 1); });
+  EXPECT_EQ(e.element(), "positions");
+  floats[3 * 9] = INFINITY;
+  e = errorOf([&] { s.setPose(floats.data(), nv); });
+  EXPECT_EQ(e.element(), "vertex 9");
+
+  e = errorOf([&] { s.setTime(std::nan("")); });
+  EXPECT_EQ(e.element(), "time");
+  e = errorOf([&] { s.setLod(0); });
+  EXPECT_EQ(e.element(), "lod");
+
+  // A refused pose leaves the session as it was: the frame is still the rest frame.
+  EXPECT_NO_THROW(s.frame());
+  EXPECT_EQ(s.frame().featherCount, 120u);
+}
+
+TEST(HostSession, BadSkinAndSetupAreErrorsNamingTheElement) {
+  const SkinArrays good = sphereSkin();
+  const CoatSetup setup = smallSetup();
+
+  SkinArrays skin = good;
+  skin.positions.pop_back();
+  EXPECT_EQ(errorOf([&] { Session(skin, setup); }).element(), "positions");
+  skin = good;
+  skin.triangles.pop_back();
+  EXPECT_EQ(errorOf([&] { Session(skin, setup); }).element(), "triangles");
+  skin = good;
+  skin.positions[3 * 7 + 2] = std::nan("");
+  EXPECT_EQ(errorOf([&] { Session(skin, setup); }).element(), "vertex 7");
+  skin = good;
+  skin.triangles[3 * 11 + 1] = 100000;
+  EXPECT_EQ(errorOf([&] { Session(skin, setup); }).element(), "face 11");
+  skin = good;
+  skin.faceGroups.assign(3, 0);
+  skin.groupNames = {"back"};
+  EXPECT_EQ(errorOf([&] { Session(skin, setup); }).element(), "faceGroups");
+  skin = good;
+  skin.groupNames = {"back"};
+  skin.faceGroups.assign(good.triangles.size() / 3, 0);
+  skin.faceGroups[5] = 1;
+  EXPECT_EQ(errorOf([&] { Session(skin, setup); }).element(), "faceGroups[5]");
+
+  CoatSetup c = setup;
+  c.tracts[0].groups = {"wing"};  // the skin has no groups
+  EXPECT_EQ(errorOf([&] { Session(good, c); }).element(), "tracts[0].groups[0]");
+  c = setup;
+  c.tracts[0].faces = {3, 999999};
+  EXPECT_EQ(errorOf([&] { Session(good, c); }).element(), "tracts[0].faces[1]");
+  c = setup;
+  c.tracts[0].count = 0;
+  c.tracts[0].density = -2;
+  EXPECT_EQ(errorOf([&] { Session(good, c); }).element(), "tracts[0].density");
+  c = setup;
+  c.tracts[0].featherScale = std::nan("");
+  EXPECT_EQ(errorOf([&] { Session(good, c); }).element(), "tracts[0].feather_scale");
+  c = setup;
+  c.tracts[0].featherFile = "/no/such/feather.json";
+  EXPECT_EQ(errorOf([&] { Session(good, c); }).element(), "tracts[0].featherFile");
+  c = setup;
+  c.tracts.push_back(c.tracts[0]);  // same name twice
+  EXPECT_EQ(errorOf([&] { Session(good, c); }).element(), "tracts[1].name");
+  c = setup;
+  c.axis[1] = {0, 1.2, 0};  // coincides with the first point
+  EXPECT_EQ(errorOf([&] { Session(good, c); }).element(), "axis[1]");
+  c = setup;
+  c.axis.resize(1);
+  EXPECT_EQ(errorOf([&] { Session(good, c); }).element(), "axis");
+  c = setup;
+  c.axis[1][2] = INFINITY;
+  EXPECT_EQ(errorOf([&] { Session(good, c); }).element(), "axis[1]");
+  c = setup;
+  c.ordering = CoatSetup::Ordering::Tracts;
+  c.tractOrder = {"nope"};
+  // Unknown tract names in the order are found when the layers are ordered (evaluate).
+  Session s(good, c);
+  EXPECT_NE(errorOf([&] { (void)s.evaluate(); }).element().find("ordering"), std::string::npos);
+}
+
+TEST(HostSession, CancelStopsAndTheNextEvaluationCompletesIdentically) {
+  const SkinArrays skin = sphereSkin();
+  Session s(skin, smallSetup());
+  s.setLod(0.3);
+  std::vector<std::string> stages;
+  const bool done = s.evaluate([&](const std::string& stage, double) {
+    stages.push_back(stage);
+    return stage != "distribute";  // cancel inside the follicle relaxation
+  });
+  EXPECT_FALSE(done);
+  ASSERT_FALSE(stages.empty());
+  EXPECT_EQ(stages.back(), "distribute");
+  EXPECT_THROW(s.frame(), pteryla::Error);
+  // A cancel in the mesh stage, after distribution completed.
+  EXPECT_FALSE(s.evaluate([](const std::string& stage, double) { return stage != "mesh"; }));
+  ASSERT_TRUE(s.evaluate());
+  Session fresh = evaluated(skin, smallSetup());
+  expectIdentical(s.frame(), fresh.frame());
+}
+
+// A typed set-up is the scene it stands for: the same coat as the equivalent scene file over the
+// same mesh read from disk.
+TEST(HostSession, TypedSetupEqualsTheEquivalentSceneFile) {
+  const pteryla::coat::SkinMesh mesh = pteryla::coat::loadSkinMesh(kData + "/meshes/sphere_250.obj");
+  SkinArrays skin;
+  for (const auto& p : mesh.positions) skin.positions.insert(skin.positions.end(), {p.x, p.y, p.z});
+  for (const auto& f : mesh.faces) skin.triangles.insert(skin.triangles.end(), f.begin(), f.end());
+  CoatSetup c;
+  pteryla::TractSetup t;
+  t.name = "all";
+  t.count = 150;
+  t.featherSpacings = 3.0;
+  c.tracts.push_back(t);
+  c.axis = {{{0, 1.5, 0}}, {{0, -1.5, 0}}};
+  c.packing = CoatSetup::Packing::HeightField;
+  c.seed = 12;
+
+  const std::filesystem::path dir = std::filesystem::path(PTERYLA_BUILD_DIR) / "test_host";
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "typed_equivalent.json").string();
+  const pteryla::Json axis = {{0, 1.5, 0}, {0, -1.5, 0}};
+  const pteryla::Json scene = {
+      {"pteryla", 1},
+      {"seed", 12},
+      {"mesh", kData + "/meshes/sphere_250.obj"},
+      {"feathers", {{"contour", kData + "/feathers/contour.json"}}},
+      {"tracts",
+       {{{"name", "all"}, {"count", 150}, {"feather_spacings", 3.0}, {"parameterization", {{"method", "projection"}}}}}},
+      {"directions", {{"axis", axis}}},
+      {"ordering", {{"method", "axis"}, {"axis", axis}}},
+      {"packing", {{"method", "height_field"}}}};
+  pteryla::writeJsonFile(file, scene);
+
+  Session typed = evaluated(skin, c);
+  Session fromFile = Session::fromSceneFile(file);
+  fromFile.setLod(0.3);
+  ASSERT_TRUE(fromFile.evaluate());
+  expectIdentical(typed.frame(), fromFile.frame());
+}
+
+// fromSceneFile is the pipeline the CLI runs, results unchanged.
+TEST(HostSession, FromSceneFileEqualsThePipeline) {
+  const std::string file = kData + "/scenes/sphere_250.json";
+  Session s = Session::fromSceneFile(file);
+  ASSERT_TRUE(s.evaluate());
+  pteryla::pipeline::Pipeline p(pteryla::pipeline::loadScene(file));
+  const auto& mesh = p.coatMesh();
+  const Frame& f = s.frame();
+  EXPECT_DOUBLE_EQ(s.lod(), p.lod());
+  ASSERT_EQ(f.positions.size, 3 * mesh.mesh.positions.size());
+  EXPECT_EQ(std::memcmp(f.positions.data, mesh.mesh.positions.data(), f.positions.size * sizeof(float)), 0);
+  ASSERT_EQ(f.indices.size, mesh.mesh.indices.size());
+  EXPECT_TRUE(std::equal(f.indices.begin(), f.indices.end(), mesh.mesh.indices.begin()));
+  const std::vector<double>& el = p.elevations();
+  ASSERT_EQ(f.elevations.size, el.size());
+  EXPECT_EQ(std::memcmp(f.elevations.data, el.data(), el.size() * sizeof(double)), 0);
+  const auto& follicles = p.follicles();
+  const auto& coat = p.feathers();
+  for (size_t i = 0; i < f.featherCount; ++i) ASSERT_EQ(f.follicleKeys[i], follicles.id[coat.follicle[i]]);
+}
+
+TEST(HostSession, MetricsMatchTheFrame) {
+  Session s(sphereSkin(), smallSetup());
+  s.setLod(0.3);
+  const pteryla::Metrics m = s.metrics();  // evaluates first
+  ASSERT_TRUE(m.follicles && m.feathers && m.coverage && m.intersectingPairs);
+  EXPECT_EQ(*m.follicles, 120u);
+  EXPECT_EQ(*m.feathers, 120u);
+  EXPECT_GT(*m.coverage, 0.5);
+  ASSERT_TRUE(m.fixedFeathers.has_value());  // a draped coat
+  // The frame is valid afterwards and at the session's level of detail, not the checker's.
+  Session same = evaluated(sphereSkin(), smallSetup());
+  expectIdentical(s.frame(), same.frame());
+}
+
+TEST(HostSession, MissingSceneFileIsAnError) {
+  const pteryla::Error e = errorOf([] { Session::fromSceneFile("/no/such/scene.json"); });
+  EXPECT_EQ(e.file(), "/no/such/scene.json");
+}
+
+TEST(HostDataDirectory, ExplicitSetterWinsAndResets) {
+  const std::string before = pteryla::dataDirectory();
+  EXPECT_TRUE(std::filesystem::is_regular_file(std::filesystem::path(before) / "feathers" / "contour.json")) << before;
+  pteryla::setDataDirectory("/no/such/data");
+  EXPECT_EQ(pteryla::dataDirectory(), "/no/such/data");
+  // The default feather is looked up there.
+  const pteryla::Error e = errorOf([] { Session(sphereSkin(), smallSetup()); });
+  EXPECT_EQ(e.element(), "tracts[0].featherFile");
+  EXPECT_NE(e.detail().find("/no/such/data/feathers/contour.json"), std::string::npos) << e.what();
+  pteryla::setDataDirectory("");
+  EXPECT_EQ(pteryla::dataDirectory(), before);
+}
+
+TEST(HostApi, VersionIsTheProjectVersion) { EXPECT_STREQ(pteryla::version(), PTERYLA_PROJECT_VERSION); }
+
+}  // namespace
