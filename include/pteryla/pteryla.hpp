@@ -1,8 +1,8 @@
 #pragma once
 // The host API: what a program outside this repository (a DCC plug-in, a game tool, a script binding)
-// uses to feather its own mesh. This header and the two it includes (core/error.hpp,
-// core/data_dir.hpp) are what `cmake --install` ships; they use standard C++17 only (no JSON, GL, TBB,
-// CGAL, OpenMesh or GLM types), and the rest of the library stays behind them.
+// uses to feather its own mesh. This header and the three it includes (core/error.hpp,
+// core/data_dir.hpp, export.hpp) are what `cmake --install` ships; they use standard C++17 only (no
+// JSON, GL, TBB, CGAL, OpenMesh or GLM types), and the rest of the library stays behind them.
 //
 // A Session is stateful, in the style of geometry-central's solvers: build it once from the rest skin
 // and a coat set-up, then each frame hand it the posed skin (setPose) and/or a time (setTime),
@@ -25,12 +25,13 @@
 // Errors. Bad input (arrays, set-up, scene file, feather file) throws pteryla::Error with file() (""
 // for in-memory input), element() (where: "positions", "vertex 17", "tracts[2].faces[5]"; set-up
 // fields are named by their scene-format key where they have one, "tracts[0].feather_scale", else by
-// the field, "tracts[0].featherFile") and detail(). A broken
-// invariant inside the library throws pteryla::InternalError. Neither leaves the session unusable:
-// fix the input and call again. The library never calls exit().
+// the field, "tracts[0].featherFile") and detail(). A broken invariant inside the library throws
+// pteryla::InternalError. A call that throws leaves the session as it was, except evaluate() and
+// metrics(), after which frame() is unavailable until an evaluate() completes. The library never
+// calls exit().
 //
-// Threads. A Session is not thread-safe; use one from one thread at a time (it uses TBB inside).
-// Different sessions may run on different threads.
+// Threads. A Session is not thread-safe: use it from one thread at a time (it runs TBB inside).
+// Evaluating separate Sessions concurrently is not tested yet.
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -91,8 +92,8 @@ struct CoatSetup {
   uint64_t seed = 1;                              // same skin + set-up + seed = same coat, bit for bit
 };
 
-// Progress of evaluate(): stage name ("load", "distribute", "interpolate", "pack", "mesh") and fraction
-// in [0, 1]. Return false to cancel.
+// Progress of evaluate(): stage name ("distribute", "interpolate", "pack", "mesh"; the skin and the
+// feathers are read by the constructor) and fraction in [0, 1]. Return false to cancel.
 using Progress = std::function<bool(const std::string& stage, double fraction)>;
 
 // A read-only view of an array the Session owns.
@@ -118,7 +119,7 @@ struct Frame {
   size_t featherCount = 0;
   // Per feather.
   View<uint64_t> follicleKeys;  // stable key of the feather's follicle: the same across poses, times
-                                //   and sessions built from the same skin topology, set-up and seed
+                                //   and sessions built from the same skin, set-up and seed
   View<uint32_t> tracts;        // tract index (CoatSetup::tracts order, or the scene's)
   View<uint8_t> present;        // 0 = moulted out at this time (no triangles)
   View<double> origins;         // 3 per feather: the follicle on the posed skin

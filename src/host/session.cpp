@@ -145,6 +145,12 @@ pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
       if (!axis.empty()) j["ordering"] = {{"method", "axis"}, {"axis", axis}};
       break;  // no axis: the bounding-box axis, as for a bare mesh (Scene::fromBareMesh below)
     case CoatSetup::Ordering::Tracts:
+      // Checked here: the pipeline resolves the names only when it orders the layers (evaluate).
+      for (size_t k = 0; k < setup.tractOrder.size(); ++k) {
+        bool known = false;
+        for (const TractSetup& t : list) known = known || t.name == setup.tractOrder[k];
+        if (!known) throw Error("unknown tract '" + setup.tractOrder[k] + "'", "", at("tractOrder", k));
+      }
       j["ordering"] = {{"method", "tracts"}};
       if (!setup.tractOrder.empty()) j["ordering"]["tracts"] = setup.tractOrder;
       break;
