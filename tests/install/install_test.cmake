@@ -1,5 +1,5 @@
 # Driven by ctest (tests/install/CMakeLists.txt): cmake -DSOURCE_DIR= -DBUILD_DIR= -DWORK_DIR= -DSHARED=
-# -DGENERATOR= -DBUILD_TYPE= -DWERROR= -DCXX= -P install_test.cmake
+# -DGENERATOR= -DBUILD_TYPE= -DWERROR= -DCC= -DCXX= -P install_test.cmake
 # 1. libpteryla.so: this build's, or a PTERYLA_SHARED sub-build's; 2. cmake --install into a fresh
 # prefix; 3. what was installed (headers, library, exports, data, package files); 4. the consumer
 # through find_package(pteryla), and again through pkg-config; both run without PTERYLA_DATA_DIR, so the
@@ -19,6 +19,7 @@ if(SHARED)
 else()
   set(lib_build ${WORK_DIR}/lib)
   run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${lib_build} -G ${GENERATOR} -DCMAKE_BUILD_TYPE=${BUILD_TYPE}
+      -DCMAKE_C_COMPILER=${CC} -DCMAKE_CXX_COMPILER=${CXX}
       -DPTERYLA_SHARED=ON -DPTERYLA_WERROR=${WERROR} -DPTERYLA_BUILD_TESTS=OFF -DPTERYLA_BUILD_VIEWER=OFF
       -DPTERYLA_BUILD_BENCHMARKS=OFF)
 endif()
