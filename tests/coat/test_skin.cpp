@@ -132,6 +132,81 @@ TEST(SkinLoad, RejectsMalformedMeshesNamingTheElement) {
   expectRejected("labels.txt", "", "unsupported mesh format");
 }
 
+// Writes `content` to the build directory and loads it: the mesh, or the Error's text.
+std::string loadText(const std::string& name, const std::string& content, size_t* faces = nullptr) {
+  const std::string path = std::string(PTERYLA_BUILD_DIR) + "/skin_layout_" + name;
+  std::ofstream(path, std::ios::binary) << content;
+  try {
+    const SkinMesh m = loadSkinMesh(path);
+    if (faces) *faces = m.faceCount();
+    return "";
+  } catch (const Error& e) {
+    return e.what();
+  }
+}
+
+// Issue #21 part 7 (fuzz_mesh): layouts that OpenMesh reads differently from what the file says (it
+// looped forever on a PLY version "z"; counts after a misread value allocate gigabytes) are refused
+// before OpenMesh sees them, and the equivalent clean files load.
+TEST(SkinLoad, LayoutsOpenMeshWouldMisreadAreRefused) {
+  const std::string props = "property float x\nproperty float y\nproperty float z\n";
+  const std::string tri = "element vertex 3\n" + props + "element face 1\nproperty list uchar int vertex_indices\n";
+  const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  size_t faces = 0;
+  EXPECT_EQ(loadText("ok.ply", "ply\nformat ascii 1.0\ncomment c\n" + tri + "end_header\n" + body, &faces), "");
+  EXPECT_EQ(faces, 1u);
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"ply\nformat ascii z\n" + tri + "end_header\n" + body, "format"},  // OpenMesh looped forever
+      {"ply\ncomment binary_little_endian 1.0\nformat ascii 1.0\n" + tri + "end_header\n" + body, "right after 'ply'"},
+      {"ply\nformat ascii 1.0\nformat binary_little_endian 1.0\n" + tri + "end_header\n" + body, "second 'format'"},
+      {"ply\nformat ascii 1.0\nobj_info element vertex 99999999\n" + tri + "end_header\n" + body, "obj_info"},
+      {"ply\nformat ascii 1.0\n" + tri + "end_header x\n" + body, "alone"},
+      {"ply\nformat ascii 1.0\nelement vertex 4294967296\n" + props + "end_header\n", "4294967295"},
+      {"ply\nformat ascii 1.0\n" + tri + "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + body,
+       "second 'face'"},
+      {"ply\nformat ascii 1.0\nelement vertex 3\n" + props + "property list uchar float w\nelement face 1\n"
+           "property list uchar int vertex_indices\nend_header\n0 0 0 0\n1 0 0 0\n0 1 0 0\n3 0 1 2\n",
+       "list property 'w'"},
+      {"ply\nformat ascii 1.0\n" + tri + "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1-2 2\n", "'1-2'"},
+      {"ply\nformat ascii 1.0\n" + tri + "end_header\n0 0 0\n1 0 0\n0 1.0.0 0\n3 0 1 2\n", "'1.0.0'"},
+      {"ply\nformat ascii 1.0\n" + tri + "end_header\n0 0 0\n1 0 0\n0 1e39 0\n3 0 1 2\n", "'1e39'"},
+      // Binary data where OpenMesh would start reading it 12 bytes after the last header token.
+      {"ply\nformat binary_little_endian 1.0\n" + tri + "comment last\nend_header\n" + std::string(49, '\0'),
+       "binary data would be read from"},
+      {"OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "alone on the first line"},
+      {"OFF\n# made by hand\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "no comments"},
+      {"OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 4000000000\n3 0 1 2\n", "next face"},
+      // Text where the binary counts go: 0x20312031 vertices.
+      {"OFF BINARY\n1 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "bytes follow"},
+      {"4OFF\n3 1 0\n0 0 0 0\n1 0 0 0\n0 1 0 0\n3 0 1 2\n", "3-D"},
+  };
+  for (const auto& [content, message] : refused) {
+    const std::string what = loadText(content.compare(0, 3, "ply") == 0 ? "refused.ply" : "refused.off", content);
+    EXPECT_NE(what.find(message), std::string::npos) << "'" << message << "' not in '" << what << "' for:\n" << content;
+  }
+  // Binary PLY with CRLF line ends, COFF with colours, NOFF with normals and a binary OFF load.
+  std::string crlf = "ply\r\nformat binary_little_endian 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n"
+                     "property float z\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\nend_header\r\n";
+  const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  crlf.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  crlf += '\3';
+  const int32_t idx[3] = {0, 1, 2};
+  crlf.append(reinterpret_cast<const char*>(idx), sizeof idx);
+  EXPECT_EQ(loadText("crlf.ply", crlf, &faces), "");
+  EXPECT_EQ(faces, 1u);
+  EXPECT_EQ(loadText("colour.off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2 9 9 9\n", &faces), "");
+  EXPECT_EQ(faces, 1u);
+  EXPECT_EQ(loadText("normals.off", "NOFF\n3 1 0\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n", &faces), "");
+  EXPECT_EQ(faces, 1u);
+  std::string boff = "OFF BINARY\n";
+  const uint32_t counts[3] = {3, 1, 0}, face[4] = {3, 0, 1, 2};
+  boff.append(reinterpret_cast<const char*>(counts), sizeof counts);
+  boff.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  boff.append(reinterpret_cast<const char*>(face), sizeof face);
+  EXPECT_EQ(loadText("binary.off", boff, &faces), "");
+  EXPECT_EQ(faces, 1u);
+}
+
 TEST(SkinLoad, RepairDropsBadFacesAndReorients) {
   MeshLoadOptions repair;
   repair.repair = true;
