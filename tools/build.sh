@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Configures and builds pteryla (Release) into ./build. Used by the README's two commands.
+# Configures and builds pteryla (Release, warnings as errors) into ./build. README command 1 uses it;
+# command 2 (tools/test.sh) uses it for the real-mesh corpus tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/bootstrap.sh
 GEN=()
 command -v ninja >/dev/null && GEN=(-G Ninja)
-if [ ! -f build/CMakeCache.txt ]; then
-  cmake -S . -B build "${GEN[@]}" -DCMAKE_BUILD_TYPE=Release ${PTERYLA_CMAKE_ARGS:-} >/dev/null
-fi
+[ -f build/CMakeCache.txt ] && GEN=()
+cmake -S . -B build "${GEN[@]}" -DCMAKE_BUILD_TYPE=Release -DPTERYLA_WERROR=ON ${PTERYLA_CMAKE_ARGS:-} >/dev/null
 cmake --build build -j"$(nproc)"
