@@ -362,12 +362,13 @@ size_t removeFramesFrom(const std::string& dir, uint64_t count) {
 
 // DIR/frames.json from the sidecars of frames [0, count) (all complete).
 void writeManifest(const FramesArgs& a, int w, int h, uint64_t count, const std::vector<nlohmann::json>& sidecars,
-                   const std::string& contactSheet) {
+                   const std::string& contactSheet, const nlohmann::json& golden = nullptr) {
   std::ostringstream m;
   m.precision(17);
   m << "{\n  \"scene\": \"" << jsonEscape(a.scene) << "\",\n  \"from\": " << a.from << ",\n  \"to\": " << a.to
     << ",\n  \"fps\": " << a.fps << ",\n  \"width\": " << w << ",\n  \"height\": " << h << ",\n  \"count\": " << count;
   if (!contactSheet.empty()) m << ",\n  \"contact_sheet\": \"" << jsonEscape(contactSheet) << "\"";
+  if (!golden.is_null()) m << ",\n  \"golden\": " << golden.dump();
   m << ",\n  \"frames\": [";
   for (uint64_t k = 0; k < count; ++k) {
     const nlohmann::json& s = sidecars[k];
@@ -404,6 +405,81 @@ void writeContactSheet(const std::string& path, const std::string& dir, uint64_t
   render::saveImage(path, sheet);
 }
 
+// --golden: frames [lo, hi) of a.out against GOLDEN/frame_NNNN.png. A difference is pictured in
+// a.out/golden_diff/frame_NNNN.png. Returns the manifest's "golden" object.
+struct GoldenReport {
+  size_t compared = 0, failed = 0;
+  std::vector<std::string> problems;  // the first few, for the message
+  nlohmann::json json;
+};
+
+std::string perCent(double f) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g%%", 100.0 * f);
+  return b;
+}
+
+GoldenReport compareWithGolden(const Common& c, const FramesArgs& a, uint64_t lo, uint64_t hi) {
+  GoldenReport r;
+  std::error_code ec;
+  if (!fs::is_directory(a.golden, ec)) throw Error("expected a directory of golden frames", a.golden, "--golden");
+  r.json["dir"] = fs::absolute(a.golden).lexically_normal().string();
+  r.json["tolerance"] = {{"pixel", a.goldenTolerance.pixel},
+                         {"fraction", a.goldenTolerance.fraction},
+                         {"max_error", a.goldenTolerance.maxError}};
+  nlohmann::json failures = nlohmann::json::array();
+  for (uint64_t k = lo; k < hi; ++k) {
+    const std::string name = frameName(k);
+    const fs::path golden = fs::path(a.golden) / name;
+    nlohmann::json f;
+    f["file"] = name;
+    std::string problem;
+    if (!fs::is_regular_file(golden, ec)) {
+      problem = "no golden";
+    } else {
+      const render::Image actual = render::loadImage((fs::path(a.out) / name).string());
+      const render::Image expected = render::loadImage(golden.string());
+      const render::ImageDiff d = render::diffImages(actual, expected, a.goldenTolerance);
+      if (!d.sameSize) {
+        problem = std::to_string(actual.width) + "x" + std::to_string(actual.height) + ", golden " +
+                  std::to_string(expected.width) + "x" + std::to_string(expected.height);
+      } else if (!d.matches) {
+        problem = perCent(d.changedFraction) + " of pixels changed, max error " +
+                  std::to_string(int(std::lround(d.maxError * 255))) + "/255";
+        fs::create_directories(fs::path(a.out) / "golden_diff", ec);
+        render::saveImage((fs::path(a.out) / "golden_diff" / name).string(),
+                          render::differenceImage(actual, expected, a.goldenTolerance));
+      }
+      if (d.sameSize) {
+        f["max_error"] = d.maxError;
+        f["changed_fraction"] = d.changedFraction;
+      }
+    }
+    ++r.compared;
+    if (!problem.empty()) {
+      ++r.failed;
+      f["problem"] = problem;
+      failures.push_back(f);
+      if (r.problems.size() < 5) r.problems.push_back(name + " (" + problem + ")");
+    }
+  }
+  r.json["compared"] = r.compared;
+  r.json["failed"] = failures;
+  if (r.failed) {
+    std::string list;
+    for (const auto& p : r.problems) list += (list.empty() ? "" : ", ") + p;
+    if (r.failed > r.problems.size()) list += ", ...";
+    std::fprintf(stderr, "pteryla: %zu of %zu frames differ from the goldens in %s: %s%s\n", r.failed, r.compared,
+                 a.golden.c_str(), list.c_str(),
+                 fs::exists(fs::path(a.out) / "golden_diff", ec)
+                     ? ("; differences pictured in " + (fs::path(a.out) / "golden_diff").string() + "/").c_str()
+                     : "");
+  } else {
+    info(c, "all " + std::to_string(r.compared) + " frames match the goldens in " + a.golden);
+  }
+  return r;
+}
+
 int assembleFrames(const Common& c, const FramesArgs& a, uint64_t count, const Loaded& l,
                    const std::string& sceneDigest) {
   std::vector<nlohmann::json> sidecars(count);
@@ -427,7 +503,10 @@ int assembleFrames(const Common& c, const FramesArgs& a, uint64_t count, const L
   }
   const size_t removed = removeFramesFrom(a.out, count);
   writeContactSheet((fs::path(a.out) / "contact_sheet.png").string(), a.out, count);
-  writeManifest(a, l.width, l.height, count, sidecars, "contact_sheet.png");
+  GoldenReport golden;
+  if (!a.golden.empty()) golden = compareWithGolden(c, a, 0, count);
+  writeManifest(a, l.width, l.height, count, sidecars, "contact_sheet.png", golden.json);
+  if (golden.failed) return 1;
   info(c, "assembled " + std::to_string(count) + " frames in " + a.out + ": every checksum matches; wrote frames.json" +
               " and contact_sheet.png" +
               (removed ? " (removed " + std::to_string(removed) + " stale frames of an earlier run)" : ""));
@@ -440,6 +519,10 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
   const uint64_t count = frameCount(a);
   const uint64_t tasks = checkChunking(a, count);
   if (a.assemble && a.chunk) throw Error("--assemble checks the whole range; it takes no --chunk/--task", "", "--assemble");
+  if (!a.golden.empty()) {
+    std::error_code ec;
+    if (!fs::is_directory(a.golden, ec)) throw Error("expected a directory of golden frames", a.golden, "--golden");
+  }
   Loaded l = load(c, a);
   const std::string sceneDigest = sha256File(a.scene);
   if (a.assemble) return assembleFrames(c, a, count, l, sceneDigest);
@@ -497,6 +580,7 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
   if (a.chunk) {
     // A chunk touches only its own frames: no stale-frame removal, no manifest (that is --assemble's job).
     endProgress(c);
+    if (!a.golden.empty() && compareWithGolden(c, a, lo, hi).failed) return 1;
     info(c, "chunk " + std::to_string(*a.task) + " of " + std::to_string(tasks) + " (frames " + std::to_string(lo) +
                 "-" + std::to_string(hi - 1) + "): rendered " + std::to_string(todo.size()) + skippedText + " in " +
                 a.out);
@@ -505,11 +589,13 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
   std::error_code ec;
   fs::create_directories(a.out, ec);  // every frame may have been skipped; the directory then exists already
   const size_t removed = removeFramesFrom(a.out, count);
-  writeManifest(a, l.width, l.height, count, sidecars, "");
   endProgress(c);
+  GoldenReport golden;
+  if (!a.golden.empty()) golden = compareWithGolden(c, a, 0, count);
+  writeManifest(a, l.width, l.height, count, sidecars, "", golden.json);
   info(c, "wrote " + std::to_string(todo.size()) + " frames to " + a.out + skippedText +
               (removed ? " (removed " + std::to_string(removed) + " stale frames of an earlier run)" : ""));
-  return 0;
+  return golden.failed ? 1 : 0;
 }
 
 namespace {
@@ -580,6 +666,15 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& a) {
   if (!a.style.empty()) common += " --style " + a.style;
   if (c.maxMemoryGb) common += " --max-memory " + fmt17(*c.maxMemoryGb);
   common += " --quiet";
+  // Goldens are compared once, by the assembly job, over the whole range.
+  std::string goldenArgs;
+  if (!a.golden.empty()) {
+    std::error_code gec;
+    if (!fs::is_directory(a.golden, gec)) throw Error("expected a directory of golden frames", a.golden, "--golden");
+    goldenArgs = " --golden " + shellQuote(fs::absolute(a.golden).lexically_normal().string()) +
+                 " --golden-tolerance " + fmt17(a.goldenTolerance.pixel) + " --golden-fraction " +
+                 fmt17(a.goldenTolerance.fraction) + " --golden-max-error " + fmt17(a.goldenTolerance.maxError);
+  }
   auto header = [&](const std::string& name, const std::string& log) {
     std::string h = "#!/bin/bash\n# Written by `pteryla farm slurm` (docs/farm.md).\n#SBATCH --job-name=" + name +
                     "\n#SBATCH --output=" + dir + "/" + log + "\n#SBATCH --ntasks=1\n";
@@ -594,7 +689,7 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& a) {
       common + " --chunk " + std::to_string(a.farmChunk) + " --task \"$SLURM_ARRAY_TASK_ID\"\n";
   const std::string assembleScript = header("pteryla-assemble", "assemble_%j.log") +
                                      "# Checks every frame's checksum, writes frames.json and contact_sheet.png.\nexec " +
-                                     common + " --assemble\n";
+                                     common + " --assemble" + goldenArgs + "\n";
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw Error("cannot create directory: " + ec.message(), dir, "--out");
@@ -628,6 +723,48 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& a) {
   info(c, "submitted job array " + arrayJob + " (" + std::to_string(tasks) + " tasks) and assembly job " + assembleJob +
               "; output in " + out);
   return 0;
+}
+
+int cmdDiff(const Common& c, const DiffArgs& a) {
+  const render::Image actual = render::loadImage(a.actual);
+  const render::Image expected = render::loadImage(a.expected);
+  const render::ImageDiff d = render::diffImages(actual, expected, a.tolerance);
+  nlohmann::json j;
+  j["actual"] = a.actual;
+  j["golden"] = a.expected;
+  j["width"] = actual.width;
+  j["height"] = actual.height;
+  j["same_size"] = d.sameSize;
+  if (d.sameSize) {
+    j["mean_error"] = d.meanError;
+    j["max_error"] = d.maxError;
+    j["max_at"] = d.maxX >= 0 ? nlohmann::json::array({d.maxX, d.maxY}) : nlohmann::json(nullptr);
+    j["changed_pixels"] = d.changedPixels;
+    j["changed_fraction"] = d.changedFraction;
+  } else {
+    j["golden_width"] = expected.width;
+    j["golden_height"] = expected.height;
+  }
+  j["match"] = d.matches;
+  j["tolerance"] = {{"pixel", a.tolerance.pixel}, {"fraction", a.tolerance.fraction}, {"max_error", a.tolerance.maxError}};
+  std::printf("%s\n", j.dump().c_str());
+  if (!d.sameSize) {
+    info(c, a.actual + " is " + std::to_string(actual.width) + "x" + std::to_string(actual.height) + ", " + a.expected +
+                " is " + std::to_string(expected.width) + "x" + std::to_string(expected.height) + ": differ");
+    return 1;
+  }
+  if (!a.out.empty()) {
+    ensureParentDir(a.out);
+    render::saveImage(a.out, render::differenceImage(actual, expected, a.tolerance));
+  }
+  char line[256];
+  std::snprintf(line, sizeof line, "%zu pixels (%s) changed by more than %.3g/255; max error %d/255",
+                d.changedPixels, perCent(d.changedFraction).c_str(), a.tolerance.pixel * 255.0,
+                int(std::lround(d.maxError * 255.0)));
+  std::string msg = line;
+  if (d.maxX >= 0) msg += " at (" + std::to_string(d.maxX) + "," + std::to_string(d.maxY) + ")";
+  info(c, msg + (d.matches ? ": match" : ": differ"));
+  return d.matches ? 0 : 1;
 }
 
 }  // namespace pteryla::cli

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "cli_support.hpp"
+#include "pteryla/render/image_diff.hpp"
 
 namespace pteryla::cli {
 
@@ -30,12 +31,18 @@ struct FramesArgs : SceneArgs {
   std::optional<int64_t> task;   // 0-based chunk index
   bool force = false;            // re-render frames even when their sidecar says they are complete
   bool assemble = false;         // render nothing: verify every frame, write the manifest and contact sheet
+  std::string golden;            // compare each frame with GOLDEN/frame_NNNN.png (empty: no comparison)
+  render::DiffTolerance goldenTolerance;
 };
 struct FarmArgs : FramesArgs {
   int64_t farmChunk = 10;  // frames per array task
   std::string partition;
   std::string mem;         // Slurm --mem for each task (e.g. 2G); empty = the cluster default
   bool dryRun = false;
+};
+struct DiffArgs {
+  std::string actual, expected, out;  // out: a picture of the difference (empty: none)
+  render::DiffTolerance tolerance;
 };
 struct FeatherArgs {
   std::string file, out;
@@ -52,5 +59,7 @@ int cmdExport(const Common&, const ExportArgs&);
 int cmdFeather(const Common&, const FeatherArgs&);
 int cmdFrames(const Common&, const FramesArgs&);
 int cmdFarmSlurm(const Common&, const FarmArgs&);
+// Exit 0 when the images match within the tolerance, 1 when they differ (or differ in size).
+int cmdDiff(const Common&, const DiffArgs&);
 
 }  // namespace pteryla::cli

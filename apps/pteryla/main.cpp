@@ -24,6 +24,27 @@ void addSceneOptions(CLI::App* sub, SceneArgs& a, bool withSize) {
   if (withSize) sub->add_option("--size", a.size, "Image size WxH; default: the scene's render.size");
 }
 
+void addToleranceOptions(CLI::App* sub, pteryla::render::DiffTolerance& t, const std::string& prefix) {
+  sub->add_option("--" + prefix + "tolerance", t.pixel,
+                  "A pixel changed when a channel differs by more than this, in [0,1] of the 0..255 range "
+                  "(default 5/255 = 0.0196)")
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--" + prefix + "fraction", t.fraction,
+                  "Largest fraction of changed pixels that still matches (default 0.001)")
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--" + prefix + "max-error", t.maxError,
+                  "Largest channel difference anywhere that still matches, in [0,1] (default 64/255 = 0.251)")
+      ->check(CLI::Range(0.0, 1.0));
+}
+
+void addGoldenOptions(CLI::App* sub, FramesArgs& a) {
+  sub->add_option("--golden", a.golden,
+                  "Compare each frame with GOLDEN/frame_NNNN.png as it is rendered (or found complete); a missing "
+                  "or differing golden makes the exit code 1, the manifest lists them and DIR/golden_diff/ "
+                  "pictures each difference (docs/ci.md)");
+  addToleranceOptions(sub, a.goldenTolerance, "golden-");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -102,6 +123,17 @@ int main(int argc, char** argv) {
   cFrames->add_flag("--assemble", frames.assemble,
                     "Render nothing: check that every frame of the range exists with a matching checksum (exit 2 "
                     "naming the missing ones), then write DIR/frames.json and DIR/contact_sheet.png");
+  addGoldenOptions(cFrames, frames);
+
+  DiffArgs diff;
+  auto* cDiff = app.add_subcommand(
+      "diff", "Compare a rendered image with a golden one: print one JSON object (mean_error, max_error, max_at,\n"
+              "changed_pixels, changed_fraction, match) on stdout; exit 0 when they match within the tolerance,\n"
+              "1 when they differ or differ in size, 2 when an image cannot be read (docs/ci.md)");
+  cDiff->add_option("actual", diff.actual, "The image to judge (any format OpenImageIO reads)")->required();
+  cDiff->add_option("golden", diff.expected, "The reference image")->required();
+  cDiff->add_option("--out,-o", diff.out, "Also write a picture of the difference (x8, changed pixels red)");
+  addToleranceOptions(cDiff, diff.tolerance, "");
 
   FarmArgs farm;
   auto* cFarm = app.add_subcommand("farm", "Split a frame range over a cluster scheduler (docs/farm.md)");
@@ -119,6 +151,7 @@ int main(int argc, char** argv) {
   cSlurm->add_option("--chunk", farm.farmChunk, "Frames per array task (default 10)");
   cSlurm->add_option("--partition", farm.partition, "Slurm partition (#SBATCH --partition)");
   cSlurm->add_option("--mem", farm.mem, "Memory per task (#SBATCH --mem, e.g. 2G); default: the cluster's");
+  addGoldenOptions(cSlurm, farm);
   cSlurm->add_flag("--dry-run", farm.dryRun, "Write and print the scripts and the sbatch commands; submit nothing");
   cSlurm->add_flag("--quiet,-q", common.quiet, "No progress or info on stderr");
   cSlurm->add_option("--max-memory", common.maxMemoryGb, memoryHelp);
@@ -159,6 +192,7 @@ int main(int argc, char** argv) {
     if (*cFeather) return cmdFeather(common, feather);
     if (*cFrames) return cmdFrames(common, frames);
     if (*cSlurm) return cmdFarmSlurm(common, farm);
+    if (*cDiff) return cmdDiff(common, diff);
   } catch (const pteryla::Error& e) {
     endProgress(common);
     std::fprintf(stderr, "pteryla: error: %s\n", e.what());
