@@ -23,14 +23,14 @@ TEST(Cli, MissingSceneExits2WithOneLine) {
 }
 
 TEST(Cli, EverySubcommandHasHelp) {
-  for (const char* sub : {"render", "check", "bench", "export", "feather", "frames", "farm slurm"}) {
+  for (const char* sub : {"render", "check", "bench", "export", "feather", "frames", "farm slurm", "diff"}) {
     auto r = runPteryla(std::string(sub) + " --help");
     EXPECT_EQ(r.code, 0) << sub;
     EXPECT_TRUE(contains(r.out, "--quiet")) << sub << r.out;
   }
   auto top = runPteryla("--help");
   EXPECT_EQ(top.code, 0);
-  for (const char* sub : {"render", "check", "bench", "export", "feather", "frames", "farm"}) EXPECT_TRUE(contains(top.out, sub));
+  for (const char* sub : {"render", "check", "bench", "export", "feather", "frames", "farm", "diff"}) EXPECT_TRUE(contains(top.out, sub));
 }
 
 TEST(Cli, UnknownOptionExits2) {
