@@ -214,7 +214,7 @@ int cmdFeather(const Common& c, const FeatherArgs& a) {
     parseSize(a.size, "--size", w, h);
     requireMemory(double(w) * h * kBytesPerPixel, "a " + a.size + " image", "", "--size");
   }
-  const TriMesh mesh = feather::buildFeatherMesh(p, a.age, a.lod);
+  const TriMesh mesh = feather::buildFeatherMesh(p, a.age, a.lod, {}, feather::growthScheduleOf(p));
   if (extensionOf(a.out) != ".png") {
     ensureParentDir(a.out);
     feather::writeMesh(a.out, mesh);

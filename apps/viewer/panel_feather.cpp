@@ -98,7 +98,7 @@ struct FeatherDesigner::Impl {
   FeatherParams preview() const {
     FeatherParams p = params;
     if (haveOther && blend > 0.0f) p = feather::interpolateFeathers(params, otherParams, blend);
-    if (age != 1.0f) p = feather::featherAtAge(p, age);
+    if (age != 1.0f) p = feather::featherAtAge(p, age, feather::growthScheduleOf(p));
     return p;
   }
 

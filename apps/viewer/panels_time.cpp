@@ -42,6 +42,8 @@ bool moultEditor(const char* id, Json& m) {
   num("random", 0.0f, 0.0f, 1.0f);
   num("size_exponent", 0.0f, 0.0f, 8.0f);
   num("boundary_slowdown", 0.0f, 0.0f, 10.0f);
+  num("old_age", 1.0f, 1.0f, 2.0f);    // wear of the old plumage (docs/growth.md)
+  num("wear_time", 0.0f, 0.0f, 100.0f);  // time a renewed feather takes to wear fully
   const std::string seq = m.value("sequence", std::string("centre_out"));
   if (ImGui::BeginCombo("sequence", seq.c_str())) {
     for (int i = 0; i <= int(moult::MoultSequence::Random); ++i)

@@ -16,7 +16,7 @@ std::optional<Stage> earliestChangedStage(const Scene& a, const Scene& b) {
   if (a.meshPath != b.meshPath || a.meshRepair != b.meshRepair || a.feathers != b.feathers ||
       a.fromBareMesh != b.fromBareMesh)
     return Stage::Skin;
-  if (a.tracts != b.tracts) return Stage::Tracts;
+  if (a.tracts != b.tracts || a.growth != b.growth) return Stage::Tracts;  // growth: read with the tracts
   if (a.seed != b.seed) return Stage::Distribute;  // scatter and jitter seeds
   // Directions and ordering are read by the directions stage, packing by the controls stage.
   if (a.directions != b.directions || a.ordering != b.ordering) return Stage::Directions;

@@ -121,6 +121,18 @@ const GrowthSchedule& defaultGrowthSchedule() {
   return s;
 }
 
+const GrowthSchedule& growthScheduleOf(const FeatherParams& p) {
+  return p.growth ? *p.growth : defaultGrowthSchedule();
+}
+
+bool GrowthSchedule::wears() const {
+  for (const GrowthRamp& r : ramps)
+    if ((r.parameter == GrowthParam::WearLength && wearMaxShortening > 0) ||
+        (r.parameter == GrowthParam::WearSplits && wearMaxSplits > 0))
+      return true;
+  return false;
+}
+
 void validateGrowthSchedule(const GrowthSchedule& s, const std::string& file) {
   bool seen[kGrowthParamCount] = {};
   for (size_t i = 0; i < s.ramps.size(); ++i) {

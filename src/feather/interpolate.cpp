@@ -108,6 +108,7 @@ FeatherParams blendFeathers(const std::vector<const FeatherParams*>& feathersIn,
   }
   r.seed = top.seed;
   r.material = top.material;
+  r.growth = top.growth;  // the schedule of the heaviest key feather, as its material
   auto mix = [&](auto field) {
     double acc = 0;
     for (size_t i = 0; i < nf; ++i) acc += w[i] * field(*fs[i]);

@@ -12,6 +12,7 @@
 #include "pteryla/core/atomic_file.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/feather/bezier.hpp"
+#include "pteryla/feather/growth.hpp"
 #include "pteryla/feather/generator.hpp"
 #include "pteryla/feather/silhouette.hpp"
 #include "keys_internal.hpp"
@@ -202,6 +203,13 @@ FeatherParams readImpl(JsonReader& r) {
   if (r.json().contains("material")) p.material = readMaterial(r.object("material"));
   else markKnown(r, "material");
 
+  if (r.json().contains("growth")) {
+    JsonReader g = r.object("growth");
+    p.growth = std::make_shared<const GrowthSchedule>(readGrowthSchedule(g));
+  } else {
+    markKnown(r, "growth");
+  }
+
   if (r.json().contains("afterfeather")) {
     JsonReader a = r.object("afterfeather");
     if (a.json().contains("afterfeather")) a.fail("afterfeather", "an afterfeather cannot have its own afterfeather");
@@ -284,6 +292,7 @@ Json featherToJson(const FeatherParams& p, bool withVersion) {
     if (p.material.baseColor) m["base_color"] = {p.material.baseColor->x, p.material.baseColor->y, p.material.baseColor->z};
     j["material"] = m;
   }
+  if (p.growth) j["growth"] = growthScheduleToJson(*p.growth);
   if (p.afterfeather) j["afterfeather"] = featherToJson(*p.afterfeather, false);
   if (p.generator != "streit") {
     const FeatherGenerator* g = findFeatherGenerator(p.generator);

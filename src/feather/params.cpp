@@ -1,6 +1,8 @@
 // Feather parameters, default key barbs and the key-barb interpolation of Streit 2003, 5.2.2 (eq. 5.1).
 #include "pteryla/feather/params.hpp"
 
+#include "pteryla/feather/growth.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -37,7 +39,8 @@ double FeatherParams::barbLengthAt(int v, double rp) const {
 bool FeatherParams::equalExceptKeyBarbs(const FeatherParams& o) const {
   const bool afterEq = (!afterfeather && !o.afterfeather) ||
                        (afterfeather && o.afterfeather && *afterfeather == *o.afterfeather);
-  return afterEq && name == o.name && generator == o.generator && generatorParams == o.generatorParams &&
+  const bool growthEq = growth == o.growth || (growth && o.growth && *growth == *o.growth);
+  return afterEq && growthEq && name == o.name && generator == o.generator && generatorParams == o.generatorParams &&
          calamusLength == o.calamusLength && calamusWidthRatio == o.calamusWidthRatio &&
          rachisLength == o.rachisLength && rachisWidth == o.rachisWidth &&
          rachisLateralCurvature == o.rachisLateralCurvature &&

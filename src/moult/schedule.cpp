@@ -184,9 +184,19 @@ MoultState moultStateAt(const MoultPlan& plan, size_t i, double t) {
   MoultState s;
   const double phi = (moultFront(plan, t) - plan.order[i]) / plan.window[i];
   const double gap = plan.options.gap;
-  if (!(phi > 0)) return s;  // Old
-  if (phi >= 1) {
+  if (!(phi > 0)) {
+    s.age = plan.options.oldAge;
+    return s;  // Old
+  }
+  // The last feather of the order ends its window exactly when the front stops (phi = 1 up to rounding).
+  if (phi >= 1 - 1e-9) {
     s.phase = MoultPhase::Renewed;
+    const MoultOptions& o = plan.options;
+    if (o.wearTime > 0) {
+      // Mature since the front passed the end of its window: order + window = front = tau * sweep.
+      const double renewedAt = o.start + o.duration * (plan.order[i] + plan.window[i]) / plan.sweep;
+      s.age = 1.0 + std::clamp((t - renewedAt) / o.wearTime, 0.0, 1.0);
+    }
     return s;
   }
   if (phi < gap) {
@@ -285,6 +295,8 @@ MoultOptions readMoultOptions(JsonReader& r, const MoultOptions& defaults) {
   else r.allow("center");
   o.sizeExponent = r.number("size_exponent", o.sizeExponent, 0.0, 8.0);
   o.boundarySlowdown = r.number("boundary_slowdown", o.boundarySlowdown, 0.0, 100.0);
+  o.oldAge = r.number("old_age", o.oldAge, 1.0, 2.0);
+  o.wearTime = r.number("wear_time", o.wearTime, 0.0, 1e12);
   r.finish();
   validate(o, r.file(), r.path());
   return o;
@@ -304,6 +316,8 @@ Json moultOptionsToJson(const MoultOptions& o) {
   if (o.center) j["center"] = Json::array({o.center->x, o.center->y});
   j["size_exponent"] = o.sizeExponent;
   j["boundary_slowdown"] = o.boundarySlowdown;
+  j["old_age"] = o.oldAge;
+  j["wear_time"] = o.wearTime;
   return j;
 }
 

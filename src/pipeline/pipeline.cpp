@@ -71,6 +71,7 @@ struct TractSettings {
   coat::RelaxOptions relax;
   std::vector<glm::dvec3> pinned;
   coat::TractFeatherOptions feathers;
+  std::shared_ptr<const feather::GrowthSchedule> growth;  // the tract's "growth" (null: none)
   std::string element;
 };
 
@@ -111,6 +112,7 @@ struct Pipeline::Impl {
   coat::FeatherLibrary library;
   std::vector<std::string> materialNames;
   std::vector<TractSettings> tractSettings;
+  std::shared_ptr<const feather::GrowthSchedule> sceneGrowth;  // the scene's "growth" (null: none)
   std::vector<coat::Tract> tracts;
   coat::Follicles follicles, posedFollicles;
   std::vector<coat::RelaxResult> relaxResults;
@@ -252,6 +254,13 @@ void Pipeline::Impl::computeSkin() {
 void Pipeline::Impl::computeTracts() {
   tractSettings.clear();
   tracts.clear();
+  // The scene's growth schedule (docs/growth.md), read with the tracts: feathers whose file and tract
+  // give none grow and wear by it.
+  sceneGrowth.reset();
+  if (!scene.growth.empty()) {
+    JsonReader g(scene.growth, scene.file, "growth");
+    sceneGrowth = std::make_shared<const feather::GrowthSchedule>(feather::readGrowthSchedule(g));
+  }
   std::vector<coat::Tract> earlier;
   const double meshArea = rest.totalArea();
   double plannedFollicles = 0;
@@ -322,6 +331,12 @@ void Pipeline::Impl::computeTracts() {
       r.allow("pinned");
     }
     t.feathers = coat::parseTractFeatherOptions(r);
+    if (r.has("growth")) {
+      JsonReader g = r.object("growth");
+      t.growth = std::make_shared<const feather::GrowthSchedule>(feather::readGrowthSchedule(g));
+    } else {
+      r.allow("growth");
+    }
     r.allow("moult");  // read by the time stages
     r.finish();
     tracts.push_back(t.tract);
@@ -417,6 +432,12 @@ void Pipeline::Impl::computeInterpolate() {
     if (s != 1.0)
       for (size_t f = 0; f < coatRest.size(); ++f)
         if (coatRest.tract[f] == i) coat::scaleFeather(coatRest.params[f], s);
+  }
+  // Growth schedules: the tract's, else the feather file's, else the scene's (else the default).
+  for (size_t f = 0; f < coatRest.size(); ++f) {
+    const uint32_t t = coatRest.tract[f];
+    if (t < tractSettings.size() && tractSettings[t].growth) coatRest.params[f].growth = tractSettings[t].growth;
+    else if (!coatRest.params[f].growth) coatRest.params[f].growth = sceneGrowth;
   }
   // Memory of the coat's geometry before packing and meshing it: barbs on both vanes (and afterfeathers)
   // at the current level of detail, about kTrianglesPerBarb triangles each.
@@ -562,10 +583,10 @@ void Pipeline::Impl::computePack() {
   if (anyGrowing) {
     packGrownAge.assign(coatNow.size(), 1.0);
     packCoat = coatNow;
-    const feather::GrowthSchedule& schedule = feather::defaultGrowthSchedule();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, packCoat.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t i = range.begin(); i < range.end(); ++i)
         if (packCoat.present[i] && packCoat.age[i] < 1.0) {
+          const feather::GrowthSchedule& schedule = feather::growthScheduleOf(coatNow.params[i]);
           if (packedAsGrown(packCoat.age[i], schedule)) {
             packCoat.params[i] = feather::featherAtAge(coatNow.params[i], coatNow.age[i], schedule);
             packGrownAge[i] = coatNow.age[i];
@@ -811,7 +832,6 @@ void Pipeline::Impl::computeMesh() {
   std::vector<uint8_t> grown(n, 1);
   std::vector<double> shed(n, 1.0);
   std::vector<uint8_t> regenerated(n, 0);
-  const feather::GrowthSchedule& schedule = feather::defaultGrowthSchedule();
   // Barb curves are a pure function of the packed parameters (and the age while growing), so a feather
   // whose inputs equal those of its cached curves keeps them. A growing feather keeps the mature
   // feather's LOD order (docs/growth.md), so its kept barbs do not change as it opens.
@@ -819,7 +839,11 @@ void Pipeline::Impl::computeMesh() {
     for (size_t i = range.begin(); i < range.end(); ++i) {
       if (!coatNow.present[i]) continue;
       const double age = coatNow.age[i];
-      const bool growing = age < 1.0;
+      const feather::GrowthSchedule& schedule = feather::growthScheduleOf(coatNow.params[i]);
+      // Growing (age < 1), or worn (age > 1 with a schedule that wears): meshed from the feather at its
+      // age, with the mature feather as the reference for texture coordinates and LOD order. A worn
+      // feather is packed mature; its shorter barbs lie within the packed ones.
+      const bool growing = age < 1.0 || (age > 1.0 && schedule.wears());
       // A feather packed as grown (computePack) is meshed from its packed parameters as they are; the
       // mature feather (unpacked) gives its texture coordinates and LOD order. Any other growing feather
       // was packed mature and grows from its packed parameters.

@@ -106,6 +106,7 @@ Scene sceneFromJson(const Json& j, const std::string& file) {
   s.tracts = takeSection(r, "tracts", Json::array());
   s.directions = takeSection(r, "directions", Json::object());
   s.moult = takeSection(r, "moult", Json::object());
+  s.growth = takeSection(r, "growth", Json::object());
   s.skeleton = takeSection(r, "skeleton", Json::object());
   s.controls = takeSection(r, "controls", Json::array());
   s.packing = takeSection(r, "packing", Json::object());
@@ -150,6 +151,7 @@ Json sceneToJson(const Scene& s, const std::string& relativeTo) {
   j["tracts"] = sectionsRelativeTo(s, s.tracts, "tracts", relativeTo);
   if (!s.directions.empty()) j["directions"] = s.directions;
   if (!s.moult.empty()) j["moult"] = s.moult;
+  if (!s.growth.empty()) j["growth"] = s.growth;
   if (!s.skeleton.empty()) j["skeleton"] = sectionsRelativeTo(s, s.skeleton, "skeleton", relativeTo);
   if (!s.controls.empty()) j["controls"] = s.controls;
   if (!s.packing.empty()) j["packing"] = s.packing;

@@ -36,9 +36,10 @@ void validateSections(Scene& s) {
   validateFeathers(s);
   if (!s.tracts.is_array()) throw Error("expected an array of tracts", s.file, "tracts");
   if (!s.controls.is_array()) throw Error("expected an array of controls", s.file, "controls");
-  for (const char* key : {"directions", "moult", "skeleton", "packing", "ordering"}) {
+  for (const char* key : {"directions", "moult", "growth", "skeleton", "packing", "ordering"}) {
     const Json& sec = key == std::string("directions") ? s.directions
                       : key == std::string("moult")    ? s.moult
+                      : key == std::string("growth")   ? s.growth
                       : key == std::string("skeleton") ? s.skeleton
                       : key == std::string("ordering") ? s.ordering
                                                        : s.packing;

@@ -34,7 +34,9 @@ SECTIONS = [
      "`increasing_v` (a sequential band), middle `radial` at constant wave speed (a ring moving out from the "
      "centre), right `random`. The window holds 30% of each strip's feathers; the first 30% of a feather's "
      "window is a gap (bare skin), then it regrows. Regrowing feathers are packed as they are grown at "
-     "their age (docs/moult.md), so pin feathers and opening feathers stay above the skin.",
+     "their age (docs/moult.md), so pin feathers and opening feathers stay above the skin. The old plumage "
+     "is worn (`old_age` 1.8: barbs 24% shorter and more splits, docs/growth.md) beside the fresh new "
+     "feathers.",
      "moult.json", [("moult_t3", 3, "t = 3"), ("moult_t6", 6, "t = 6")], [3, 6], 3),
     ("moult_radial", "Radial moult with and without randomness (Fig 8.5)",
      "`moult_radial.json`: two halves of the patch moult radially from their centres at constant wave speed. "

@@ -197,7 +197,8 @@ def moult_scene():
         "feathers": {"contour": "../feathers/contour.json"},
         # Three strips, one moult sequence each: sequential along the strip (Fig 8.3), a radial wave from
         # the centre (Fig 8.5) and a random order (Fig 8.4 right). Gaps are lost feathers, short ones regrow.
-        "moult": {"start": 0, "duration": 10, "window": 0.3, "gap": 0.3, "seed": 3},
+        # old_age 1.8: the old plumage is worn (shorter barbs, more splits), the renewed feathers fresh (5.2.5).
+        "moult": {"start": 0, "duration": 10, "window": 0.3, "gap": 0.3, "seed": 3, "old_age": 1.8},
         "tracts": [
             dict(name="sequential", faces=strips[0], moult={"sequence": "increasing_v"}, **tract),
             dict(name="radial", faces=strips[1], moult={"sequence": "radial", "pace": "distance"}, **tract),

@@ -60,6 +60,9 @@ struct GrowthRamp {
   Easing easing = Easing::Linear;
   // 0 for age <= start (unless age >= end), 1 for age >= end, eased in between.
   double weight(double age) const;
+  bool operator==(const GrowthRamp& o) const {
+    return parameter == o.parameter && start == o.start && end == o.end && easing == o.easing;
+  }
 };
 
 struct GrowthSchedule {
@@ -67,12 +70,21 @@ struct GrowthSchedule {
   double wearMaxShortening = 0.3;    // fraction of barb length lost at full wear, [0, 1]
   int wearMaxSplits = 6;             // extra splits per vane at full wear
   double sheathBand = 0.05;          // width of the sheath edge along the shaft (fraction of length)
+  bool operator==(const GrowthSchedule& o) const {
+    return ramps == o.ramps && wearMaxShortening == o.wearMaxShortening && wearMaxSplits == o.wearMaxSplits &&
+           sheathBand == o.sheathBand;
+  }
+  bool operator!=(const GrowthSchedule& o) const { return !(*this == o); }
+  // Does any age above 1 differ from age 1 (a wear ramp with an effect)?
+  bool wears() const;
 };
 
 // Thesis schedule (Fig. 8.1): shaft length and width over [0, 0.3]; barb length over [0.3, 0.5];
 // opening and barb angle over [0.5, 0.8] (the sheath sheds over the same window); pin key barbs
 // removed, key barb shapes and rachis curvature over [0.8, 1]; wear over [1, 2].
 const GrowthSchedule& defaultGrowthSchedule();
+// The schedule a feather grows and wears by: its own (FeatherParams::growth) or the default.
+const GrowthSchedule& growthScheduleOf(const FeatherParams& p);
 
 // Throws pteryla::Error (element "growth.ramps[i]...") for bad ranges, duplicate parameters, growth
 // ramps ending after age 1 or wear ramps in effect at age 1.

@@ -23,6 +23,8 @@
 
 namespace pteryla::feather {
 
+struct GrowthSchedule;  // growth.hpp
+
 inline constexpr double kPi = 3.14159265358979323846;
 
 struct KeyBarb {
@@ -113,6 +115,9 @@ struct FeatherParams {
   FeatherMaterial material;
   // Afterfeather: secondary feather at the superior umbilicus (top of the calamus), same parameters.
   std::shared_ptr<const FeatherParams> afterfeather;
+  // Growth and wear schedule (growth.hpp, docs/growth.md) from the feather file's "growth" object, or
+  // the one a scene or tract gives its feathers; null = defaultGrowthSchedule(). Compared by value.
+  std::shared_ptr<const GrowthSchedule> growth;
 
   std::string sourceFile;           // set by loadFeather(); not serialized, ignored by ==
 

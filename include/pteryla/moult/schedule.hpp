@@ -58,6 +58,11 @@ struct MoultOptions {
   std::optional<glm::dvec2> center;  // moult start in the tract's (u,v); default: centre of its (u,v) box
   double sizeExponent = 0;   // w_i = window * (L_i / median L)^sizeExponent, L = feather length
   double boundarySlowdown = 0;  // w_i *= 1 + boundarySlowdown * r_i, r_i in [0,1]: elliptic distance from the centre
+  // Wear (Streit 2003, 5.2.5; growth ages above 1, docs/growth.md): the old plumage's age, in [1, 2]
+  // (1 = as fresh as a new feather), and the time a renewed feather takes to wear from age 1 to 2
+  // (0 = it stays fresh). With both, a moulting coat shows worn old and fresh new feathers side by side.
+  double oldAge = 1;
+  double wearTime = 0;
 };
 
 // One feather's state in the moult at a time t.
@@ -69,7 +74,7 @@ enum class MoultPhase : uint8_t {
 };
 struct MoultState {
   MoultPhase phase = MoultPhase::Old;
-  double age = 1;       // growth age in [0, 1] (1 unless Growing)
+  double age = 1;       // growth age: [0, 1) Growing; Old: options.oldAge; Renewed: 1 + wear, up to 2
   bool present = true;  // false while Lost
 };
 

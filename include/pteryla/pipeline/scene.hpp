@@ -50,6 +50,7 @@ struct Scene {
   Json tracts = Json::array();
   Json directions = Json::object();
   Json moult = Json::object();
+  Json growth = Json::object();     // growth and wear schedule of every feather (docs/growth.md); {} = default
   Json skeleton = Json::object();
   Json controls = Json::array();
   Json packing = Json::object();
