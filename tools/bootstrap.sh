@@ -13,6 +13,7 @@ PACKAGES=(
   libopenimageio-dev libosmesa6-dev libglfw3-dev libgl-dev libimgui-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
+  python3-dev python3-pybind11 python3-numpy python3-pytest blender
 )
 for arg in "$@"; do
   case "$arg" in
