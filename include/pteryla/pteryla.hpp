@@ -111,6 +111,16 @@ struct View {
 struct FeatherRange {
   uint32_t feather = 0;
   uint32_t firstIndex = 0, indexCount = 0;
+  uint32_t material = 0;  // index into Frame::materials
+};
+
+// What a host needs to shade one kind of feather: one per feather definition the coat uses.
+struct Material {
+  std::string name;          // the feather definition's name (its scene key, or its file's stem)
+  std::string texture;       // absolute path of the colour texture, "" = none (use baseColor)
+  std::string alphaTexture;  // absolute path of the alpha texture, "" = none (use Frame::alphas)
+  std::string pattern;       // procedural pattern name, "" = none
+  std::array<float, 3> baseColor{{0.8f, 0.7f, 0.55f}};  // linear RGB
 };
 
 // One evaluated frame. Every view stays valid until the next non-const call on the Session.
@@ -132,9 +142,11 @@ struct Frame {
   View<float> positions;        // 3 per vertex
   View<float> vertexNormals;    // 3 per vertex, unit
   View<float> uvs;              // 2 per vertex: feather-global texture coordinates (Streit 7.1.1)
+  View<float> alphas;           // 1 per vertex: opacity (7.1.2), or empty
   View<uint32_t> vertexFeathers;  // feather index per vertex
   View<uint32_t> indices;       // 3 per triangle
   View<FeatherRange> ranges;    // one per present feather, bottom layer first
+  View<Material> materials;     // indexed by FeatherRange::material
 };
 
 // The independent checker's numbers (pteryla check; docs/packing.md). Unset = not measured.
@@ -190,6 +202,11 @@ class PTERYLA_API Session {
   // Runs the independent checker on the current frame at full detail (evaluates first if needed, and
   // leaves frame() valid). Costs more than an evaluation: it also meshes and checks the unpacked coat.
   Metrics metrics();
+  // Writes the last complete evaluation's coat mesh (frame()) as Wavefront OBJ or PLY, chosen by the
+  // extension of `path` (".obj", ".ply"); PLY carries every vertex attribute (feather/mesh_io.hpp). Throws
+  // pteryla::Error like frame() when there is no evaluated frame, and naming the file when it cannot
+  // be written or the extension is neither.
+  void exportMesh(const std::string& path) const;
 
  private:
   struct Impl;

@@ -17,6 +17,7 @@
 #include "pteryla/coat/skin.hpp"
 #include "pteryla/core/json.hpp"
 #include "pteryla/core/paths.hpp"
+#include "pteryla/feather/mesh_io.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
 
@@ -175,6 +176,7 @@ struct Session::Impl {
   std::vector<uint64_t> keys;
   std::vector<double> origins, normals, tangents, binormals;
   std::vector<FeatherRange> ranges;
+  std::vector<Material> materials;
 
   explicit Impl(std::unique_ptr<pipeline::Pipeline> p) : pipeline(std::move(p)) {
     // Read the skin, the feathers and the tracts now, so bad input fails here and not at evaluate().
@@ -218,12 +220,19 @@ struct Session::Impl {
     }
     ranges.resize(mesh.ranges.size());
     for (size_t k = 0; k < ranges.size(); ++k)
-      ranges[k] = {mesh.ranges[k].feather, mesh.ranges[k].firstIndex, mesh.ranges[k].indexCount};
+      ranges[k] = {mesh.ranges[k].feather, mesh.ranges[k].firstIndex, mesh.ranges[k].indexCount,
+                   mesh.ranges[k].material};
+    materials.resize(mesh.materials.size());
+    for (size_t k = 0; k < materials.size(); ++k) {
+      const pipeline::CoatMaterial& c = mesh.materials[k];
+      materials[k] = {c.name, c.texture, c.alphaTexture, c.pattern, {{c.baseColor.x, c.baseColor.y, c.baseColor.z}}};
+    }
     PTERYLA_CHECK(coat.tract.size() == n && coat.present.size() == n && elevation.size() == n,
                   "per-feather results of different lengths");
     const TriMesh& m = mesh.mesh;
     const size_t nv = m.positions.size();
-    PTERYLA_CHECK(m.normals.size() == nv && m.featherId.size() == nv && (m.uvGlobal.empty() || m.uvGlobal.size() == nv),
+    PTERYLA_CHECK(m.normals.size() == nv && m.featherId.size() == nv && (m.uvGlobal.empty() || m.uvGlobal.size() == nv) &&
+                      (m.alpha.empty() || m.alpha.size() == nv),
                   "coat mesh attributes of different lengths");
     Frame& fr = frame;
     fr.featherCount = n;
@@ -238,9 +247,11 @@ struct Session::Impl {
     fr.positions = {nv ? &m.positions[0].x : nullptr, 3 * nv};
     fr.vertexNormals = {nv ? &m.normals[0].x : nullptr, 3 * nv};
     fr.uvs = {m.uvGlobal.empty() ? nullptr : &m.uvGlobal[0].x, 2 * m.uvGlobal.size()};
+    fr.alphas = {m.alpha.empty() ? nullptr : m.alpha.data(), m.alpha.size()};
     fr.vertexFeathers = {m.featherId.data(), nv};
     fr.indices = {m.indices.data(), m.indices.size()};
     fr.ranges = {ranges.data(), ranges.size()};
+    fr.materials = {materials.data(), materials.size()};
     frameValid = true;
   }
 };
@@ -330,6 +341,11 @@ const Frame& Session::frame() const {
     throw Error("no evaluated frame: the inputs changed, or the last evaluate() was cancelled or failed; call evaluate()",
                 "", "frame");
   return impl_->frame;
+}
+
+void Session::exportMesh(const std::string& path) const {
+  frame();  // throws when there is no evaluated frame
+  feather::writeMesh(path, impl_->pipeline->coatMesh().mesh);
 }
 
 Metrics Session::metrics() {
