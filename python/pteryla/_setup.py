@@ -1,0 +1,109 @@
+"""The dict form of a coat set-up: the scene format's section names (docs/scene-format.md).
+
+    {"seed": 7,
+     "feathers": {"body": "feathers/contour.json"},          # optional: names for feather files
+     "tracts": [{"name": "back", "groups": ["back"], "faces": [...], "count": 200, "density": 0,
+                 "feather": "body" | "covert" | "path/to/file.json", "feather_scale": "auto" | 1.5,
+                 "feather_spacings": 3.5, "relax": {"iterations": 40}}],
+     "directions": {"axis": [[0, 1, 0], [0, -1, 0]]},
+     "ordering": {"method": "axis" | "tracts" | "flow", "tracts": ["back", ...]},
+     "packing": {"method": "drape" | "height_field"}}
+
+A tract's "feather" is a key of "feathers", else a bundled feather's name (data/feathers/<name>.json),
+else a file path. Unknown keys raise pteryla.Error: a typo must not be silently ignored.
+"""
+import os
+
+from ._error import Error
+
+_SECTIONS = {"pteryla", "name", "seed", "feathers", "tracts", "directions", "ordering", "packing"}
+_TRACT_KEYS = {"name", "groups", "faces", "count", "density", "feather", "feather_scale", "feather_spacings",
+               "relax"}
+
+
+def _check_keys(d, allowed, where):
+    if not isinstance(d, dict):
+        raise Error(f"{where}: expected an object (dict)", "", where)
+    for k in d:
+        if k not in allowed:
+            el = f"{where}.{k}" if where else str(k)
+            raise Error(f"{el}: unknown key (expected one of {', '.join(sorted(allowed))})", "", el)
+
+
+def _number(v, where, kind=float):
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or (kind is int and not float(v).is_integer()):
+        raise Error(f"{where}: expected {'an integer' if kind is int else 'a number'}, got {v!r}", "", where)
+    return kind(v)
+
+
+def _feather_file(name, feathers, base, where):
+    if name in feathers:
+        path = feathers[name]
+        return path if os.path.isabs(path) else os.path.join(base, path)
+    from . import data_directory
+    bundled = os.path.join(data_directory(), "feathers", name + ".json")
+    if os.path.isfile(bundled):
+        return bundled
+    path = name if os.path.isabs(name) else os.path.join(base, name)
+    if os.path.isfile(path):
+        return path
+    raise Error(f"{where}: '{name}' is neither a key of 'feathers', a bundled feather nor a file", "", where)
+
+
+def setup_from_dict(d, base_dir=None):
+    """A pteryla.Setup from scene-format sections; relative feather paths resolve against base_dir."""
+    from . import Setup, Tract
+    base = os.getcwd() if base_dir is None else os.fspath(base_dir)
+    _check_keys(d, _SECTIONS, "")
+    feathers = d.get("feathers", {})
+    _check_keys(feathers, set(feathers) if isinstance(feathers, dict) else set(), "feathers")
+    s = Setup()
+    if "seed" in d:
+        seed = _number(d["seed"], "seed", int)
+        if seed < 0:
+            raise Error("seed: must not be negative", "", "seed")
+        s.seed = seed
+    tracts = []
+    for i, t in enumerate(d.get("tracts", [])):
+        where = f"tracts[{i}]"
+        _check_keys(t, _TRACT_KEYS, where)
+        if "name" not in t:
+            raise Error(f"{where}.name: required", "", f"{where}.name")
+        tr = Tract(str(t["name"]))
+        if "groups" in t:
+            tr.groups = [str(g) for g in t["groups"]]
+        if "faces" in t:
+            tr.faces = t["faces"]
+        if "count" in t:
+            c = _number(t["count"], f"{where}.count", int)
+            if c < 0:
+                raise Error(f"{where}.count: must not be negative", "", f"{where}.count")
+            tr.count = c
+        if "density" in t:
+            tr.density = _number(t["density"], f"{where}.density")
+        if "feather" in t:
+            tr.feather_file = _feather_file(str(t["feather"]), feathers, base, f"{where}.feather")
+        if "feather_scale" in t and t["feather_scale"] != "auto":
+            tr.feather_scale = _number(t["feather_scale"], f"{where}.feather_scale")
+        if "feather_spacings" in t:
+            tr.feather_spacings = _number(t["feather_spacings"], f"{where}.feather_spacings")
+        if "relax" in t:
+            _check_keys(t["relax"], {"iterations"}, f"{where}.relax")
+            if "iterations" in t["relax"]:
+                tr.relax_iterations = _number(t["relax"]["iterations"], f"{where}.relax.iterations", int)
+        tracts.append(tr)
+    s.tracts = tracts
+    if "directions" in d:
+        _check_keys(d["directions"], {"axis"}, "directions")
+        s.axis = [tuple(_number(c, "directions.axis", float) for c in p) for p in d["directions"].get("axis", [])]
+    if "ordering" in d:
+        _check_keys(d["ordering"], {"method", "tracts", "axis"}, "ordering")
+        s.ordering = d["ordering"].get("method", "axis")
+        if "tracts" in d["ordering"]:
+            s.tract_order = [str(n) for n in d["ordering"]["tracts"]]
+        if "axis" in d["ordering"] and not s.axis:
+            s.axis = [tuple(float(c) for c in p) for p in d["ordering"]["axis"]]
+    if "packing" in d:
+        _check_keys(d["packing"], {"method"}, "packing")
+        s.packing = d["packing"].get("method", "drape")
+    return s

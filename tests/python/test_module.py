@@ -1,0 +1,264 @@
+"""The Python module against the library: what a broken binding would get wrong."""
+import json
+import os
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import pteryla
+from conftest import DATA, small_setup
+
+
+def evaluated(sphere, setup=None, lod=0.3):
+    s = pteryla.Session(*sphere, small_setup() if setup is None else setup)
+    s.set_lod(lod)
+    assert s.evaluate()
+    return s
+
+
+ARRAYS = ["follicle_keys", "tracts", "present", "origins", "normals", "tangents", "binormals", "elevations",
+          "positions", "vertex_normals", "uvs", "alphas", "vertex_feathers", "triangles", "ranges"]
+
+
+def test_check_matches_the_cli():
+    """The same scene gives the same numbers through the module as through `pteryla check`."""
+    scene = os.path.join(DATA, "scenes", "patch.json")
+    out = subprocess.run([os.environ["PTERYLA_CLI"], "check", scene], check=True, capture_output=True, text=True)
+    cli = json.loads(out.stdout)
+    py = pteryla.Session.from_scene_file(scene).check()
+    assert list(py) == list(cli)
+    assert py["feathers"] > 0
+    for k, v in cli.items():
+        if v is None or isinstance(v, int):
+            assert py[k] == v, k
+        else:
+            assert py[k] == pytest.approx(v, rel=1e-6, abs=1e-9), k
+
+
+def test_shapes_dtypes_and_consistency(sphere):
+    s = evaluated(sphere)
+    f = s.frame()
+    n, nv = f.feather_count, len(f.positions)
+    assert n == 60 and nv > 0
+    expect = {"follicle_keys": (np.uint64, (n,)), "tracts": (np.uint32, (n,)), "present": (np.bool_, (n,)),
+              "origins": (np.float64, (n, 3)), "normals": (np.float64, (n, 3)), "tangents": (np.float64, (n, 3)),
+              "binormals": (np.float64, (n, 3)), "elevations": (np.float64, (n,)),
+              "positions": (np.float32, (nv, 3)), "vertex_normals": (np.float32, (nv, 3)),
+              "uvs": (np.float32, (nv, 2)), "alphas": (np.float32, (nv,)), "vertex_feathers": (np.uint32, (nv,))}
+    for name, (dtype, shape) in expect.items():
+        a = getattr(f, name)
+        assert a.dtype == dtype and a.shape == shape, name
+    assert f.triangles.dtype == np.uint32 and f.triangles.ndim == 2 and f.triangles.shape[1] == 3
+    assert f.triangles.max() < nv
+    assert f.vertex_feathers.max() < n
+    # Follicles sit on the skin (flat triangles inside the unit sphere); frames are orthonormal.
+    r = np.linalg.norm(f.origins, axis=1)
+    assert (r > 0.95).all() and (r < 1 + 1e-6).all()
+    assert np.allclose(np.linalg.norm(f.normals, axis=1), 1.0, atol=1e-6)
+    assert np.allclose(np.cross(f.normals, f.tangents), f.binormals, atol=1e-6)
+    # Ranges partition the index buffer, one per present feather, and name existing materials.
+    r = f.ranges
+    assert r.dtype == np.uint32 and r.shape == (int(f.present.sum()), 4)
+    assert r[:, 2].sum() == f.triangles.size
+    assert set(r[:, 0]) <= set(range(n)) and r[:, 3].max() < len(f.materials)
+    assert f.materials[0]["name"] == "contour" and len(f.materials[0]["base_color"]) == 3
+    tri_feather = f.vertex_feathers[f.triangles[:, 0]]
+    first = r[0]
+    assert (tri_feather[first[1] // 3:(first[1] + first[2]) // 3] == first[0]).all()
+
+
+def test_zero_copy_views_are_guarded(sphere):
+    s = evaluated(sphere)
+    copied = s.frame()
+    view = s.frame(copy=False)
+    for name in ARRAYS:
+        a = getattr(view, name)
+        assert not a.flags.owndata and not a.flags.writeable, name
+        assert np.array_equal(a, getattr(copied, name)), name
+    del a
+    assert getattr(copied, "positions").flags.owndata
+    with pytest.raises(pteryla.Error) as e:
+        s.set_time(1.0)
+    assert e.value.element == "frame"
+    positions = view.positions
+    del view
+    with pytest.raises(pteryla.Error):
+        s.evaluate()  # one array of the view is still alive
+    del positions
+    s.set_lod(0.5)
+    assert s.evaluate()
+
+
+def test_views_keep_the_session_alive(sphere):
+    view = evaluated(sphere).frame(copy=False)  # the session has no other reference
+    expect = view.positions.copy()
+    import gc
+    gc.collect()
+    assert np.array_equal(view.positions, expect)
+
+
+def test_same_seed_same_arrays_other_seed_other_coat(sphere):
+    a = evaluated(sphere, small_setup(seed=11)).frame()
+    b = evaluated(sphere, small_setup(seed=11)).frame()
+    c = evaluated(sphere, small_setup(seed=12)).frame()
+    for name in ARRAYS:
+        assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
+    assert not np.array_equal(a.origins, c.origins)
+
+
+def test_dict_and_typed_setup_agree(sphere):
+    typed = pteryla.Setup(tracts=[pteryla.Tract("body", count=60)], axis=[(0, 1, 0), (0, -1, 0)], seed=5)
+    a = evaluated(sphere, typed).frame()
+    b = evaluated(sphere).frame()
+    assert a.positions.tobytes() == b.positions.tobytes()
+
+
+def test_two_tracts_from_face_groups(sphere):
+    pos, tri = sphere
+    groups = (pos[tri[:, 0], 1] > 0).astype(np.int32)  # 1: upper half, 0: lower half
+    setup = {"seed": 3, "tracts": [{"name": "lower", "groups": ["lower"], "count": 20, "feather": "covert"},
+                                   {"name": "upper", "groups": ["upper"], "count": 30}]}
+    s = pteryla.Session(pos, tri, setup, face_groups=groups, group_names=["lower", "upper"])
+    s.set_lod(0.3)
+    assert s.evaluate()
+    f = s.frame()
+    assert np.bincount(f.tracts).tolist() == [20, 30]
+    assert sorted(m["name"] for m in f.materials) == ["contour", "covert"]
+    # Each tract's follicles lie on its half (a coarse sphere's equator triangles reach ~0.3 across).
+    assert (f.origins[f.tracts == 1][:, 1] > -0.35).all() and (f.origins[f.tracts == 0][:, 1] < 0.35).all()
+    assert f.origins[f.tracts == 1][:, 1].mean() > 0.3 and f.origins[f.tracts == 0][:, 1].mean() < -0.3
+
+
+def test_pose_moves_the_coat_and_keeps_the_follicles(sphere):
+    s = evaluated(sphere)
+    rest = s.frame()
+    pos = sphere[0] + np.array([2.0, 0, 0], np.float32)
+    s.set_pose(pos)
+    assert s.evaluate()
+    moved = s.frame()
+    assert np.array_equal(moved.follicle_keys, rest.follicle_keys)
+    assert np.allclose(moved.origins - rest.origins, [2, 0, 0], atol=1e-5)
+    s.clear_pose()
+    assert s.evaluate()
+    assert np.allclose(s.frame().origins, rest.origins, atol=1e-9)
+
+
+def bad(call, element):
+    with pytest.raises(pteryla.Error) as e:
+        call()
+    assert e.value.element == element, str(e.value)
+    assert e.value.file == ""
+    return e.value
+
+
+def test_bad_arrays_raise_errors_naming_the_element(sphere):
+    pos, tri = sphere
+    bad(lambda: pteryla.Session(pos[:, :2], tri), "positions")
+    bad(lambda: pteryla.Session(pos.astype(np.int32), tri), "positions")
+    bad(lambda: pteryla.Session("not an array", tri), "positions")
+    nan = pos.copy()
+    nan[3, 1] = np.nan
+    bad(lambda: pteryla.Session(nan, tri), "vertex 3")
+    bad(lambda: pteryla.Session(pos, tri.astype(np.float32)), "triangles")
+    bad(lambda: pteryla.Session(pos, tri[:, :2]), "triangles")
+    bad(lambda: pteryla.Session(pos, tri[:0]), "triangles")
+    far = tri.copy()
+    far[7, 2] = len(pos)
+    bad(lambda: pteryla.Session(pos, far), "face 7")
+    neg = tri.astype(np.int64)
+    neg[4, 0] = -1
+    bad(lambda: pteryla.Session(pos, neg), "face 4")
+    bad(lambda: pteryla.Session(pos, tri, face_groups=np.zeros(len(tri), np.int32), group_names=[]),
+        "face_groups[0]")
+    bad(lambda: pteryla.Session(pos, tri, {"tracts": [{"name": "a", "density": -1}]}), "tracts[0].density")
+    bad(lambda: pteryla.Session(pos, tri, {"tracts": [{"name": "a", "faces": [10 ** 6]}]}), "tracts[0].faces[0]")
+    bad(lambda: pteryla.Session(pos, tri, {"tracts": [{"name": "a", "countt": 3}]}), "tracts[0].countt")
+    bad(lambda: pteryla.Session(pos, tri, {"packing": {"method": "tight"}}), "packing.method")
+    s = evaluated(sphere)
+    bad(lambda: s.set_pose(pos[:-1]), "positions")
+    bad(lambda: s.set_pose(nan), "vertex 3")
+    bad(lambda: s.set_lod(0), "lod")
+    assert s.frame().feather_count == 60  # the session survived every refusal
+
+
+def test_scene_file_errors_name_the_file(tmp_path):
+    scene = tmp_path / "broken.json"
+    scene.write_text('{"pteryla": 1, "mesh": "missing.obj"}')
+    with pytest.raises(pteryla.Error) as e:
+        pteryla.Session.from_scene_file(scene)
+    assert "broken.json" in e.value.file or "missing.obj" in e.value.file
+
+
+def test_cancel_then_carry_on(sphere):
+    s = pteryla.Session(*sphere, small_setup())
+    s.set_lod(0.3)
+    stages = []
+
+    def cancel_at_pack(stage, fraction):
+        stages.append(stage)
+        return stage != "pack"
+
+    assert s.evaluate(progress=cancel_at_pack) is False
+    assert "pack" in stages and "mesh" not in stages
+    with pytest.raises(pteryla.Error):
+        s.frame()
+    assert s.evaluate()
+    fresh = evaluated(sphere)
+    assert s.frame().positions.tobytes() == fresh.frame().positions.tobytes()
+
+
+def test_exception_in_progress_cancels_and_is_raised(sphere):
+    s = pteryla.Session(*sphere, small_setup())
+
+    def boom(stage, fraction):
+        raise KeyError("from the callback")
+
+    with pytest.raises(KeyError):
+        s.evaluate(progress=boom)
+    assert s.evaluate()
+
+
+def test_gil_is_released_while_evaluating(sphere):
+    s = pteryla.Session(*sphere, {"seed": 2, "tracts": [{"name": "all", "count": 150}]})
+    s.set_lod(0.3)
+    done = threading.Event()
+    result = {}
+    ticks = 0
+
+    def work():
+        result["ok"] = s.evaluate()
+        done.set()
+
+    t = threading.Thread(target=work)
+    t.start()
+    while not done.is_set():
+        ticks += 1
+        if ticks == 20:
+            with pytest.raises(pteryla.Error) as e:  # the session is busy in the other thread
+                s.set_lod(0.5)
+            assert e.value.element == "session"
+        time.sleep(0.001)
+    t.join()
+    assert result["ok"] and ticks > 20
+
+
+def test_export_writes_the_frame(sphere, tmp_path):
+    s = evaluated(sphere)
+    f = s.frame()
+    s.export(tmp_path / "coat.obj")
+    s.export(str(tmp_path / "coat.ply"))
+    lines = (tmp_path / "coat.obj").read_text().splitlines()
+    assert sum(1 for line in lines if line.startswith("v ")) == len(f.positions)
+    assert sum(1 for line in lines if line.startswith("f ")) == len(f.triangles)
+    assert (tmp_path / "coat.ply").read_bytes().startswith(b"ply\n")
+    with pytest.raises(pteryla.Error) as e:
+        s.export(tmp_path / "coat.xyz")
+    assert "coat.xyz" in e.value.file or "coat.xyz" in str(e.value)
+
+
+def test_version_and_data_directory():
+    assert pteryla.__version__ == pteryla.version() and pteryla.version().count(".") == 2
+    assert os.path.isfile(os.path.join(pteryla.data_directory(), "feathers", "contour.json"))
