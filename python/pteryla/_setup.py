@@ -73,7 +73,12 @@ def setup_from_dict(d, base_dir=None):
         if "groups" in t:
             tr.groups = [str(g) for g in t["groups"]]
         if "faces" in t:
-            tr.faces = t["faces"]
+            try:
+                tr.faces = t["faces"]
+            except Error as e:  # the binding names the row ("faces 3"); name it in the set-up
+                row = e.element.split(" ")[-1] if e.element.startswith("faces ") else ""
+                el = f"{where}.faces[{row}]" if row else f"{where}.faces"
+                raise Error(f"{el}: {e.detail}", "", el, e.detail) from None
         if "count" in t:
             c = _number(t["count"], f"{where}.count", int)
             if c < 0:

@@ -175,6 +175,7 @@ def test_bad_arrays_raise_errors_naming_the_element(sphere):
         "face_groups[0]")
     bad(lambda: pteryla.Session(pos, tri, {"tracts": [{"name": "a", "density": -1}]}), "tracts[0].density")
     bad(lambda: pteryla.Session(pos, tri, {"tracts": [{"name": "a", "faces": [10 ** 6]}]}), "tracts[0].faces[0]")
+    bad(lambda: pteryla.Session(pos, tri, {"tracts": [{"name": "a", "faces": [0, -2]}]}), "tracts[0].faces[1]")
     bad(lambda: pteryla.Session(pos, tri, {"tracts": [{"name": "a", "countt": 3}]}), "tracts[0].countt")
     bad(lambda: pteryla.Session(pos, tri, {"packing": {"method": "tight"}}), "packing.method")
     s = evaluated(sphere)
