@@ -72,6 +72,7 @@ void expectIdentical(const Frame& a, const Frame& b) {
   EXPECT_TRUE(sameBits(a.positions, b.positions));
   EXPECT_TRUE(sameBits(a.vertexNormals, b.vertexNormals));
   EXPECT_TRUE(sameBits(a.uvs, b.uvs));
+  EXPECT_TRUE(sameBits(a.alphas, b.alphas));
   EXPECT_TRUE(sameBits(a.vertexFeathers, b.vertexFeathers));
   EXPECT_TRUE(sameBits(a.indices, b.indices));
   ASSERT_EQ(a.ranges.size, b.ranges.size);
@@ -79,6 +80,7 @@ void expectIdentical(const Frame& a, const Frame& b) {
     EXPECT_EQ(a.ranges[k].feather, b.ranges[k].feather);
     EXPECT_EQ(a.ranges[k].firstIndex, b.ranges[k].firstIndex);
     EXPECT_EQ(a.ranges[k].indexCount, b.ranges[k].indexCount);
+    EXPECT_EQ(a.ranges[k].material, b.ranges[k].material);
   }
 }
 
@@ -391,6 +393,50 @@ TEST(HostSession, MetricsMatchTheFrame) {
   // The frame is valid afterwards and at the session's level of detail, not the checker's.
   Session same = evaluated(sphereSkin(), smallSetup());
   expectIdentical(s.frame(), same.frame());
+}
+
+// What a DCC shades the coat with and hands on: per-vertex alpha, a material per range, the mesh file.
+TEST(HostSession, AlphaMaterialsAndExport) {
+  CoatSetup setup = smallSetup();
+  pteryla::TractSetup covert;
+  covert.name = "covert";
+  covert.count = 40;
+  covert.featherFile = kData + "/feathers/covert.json";
+  const SkinArrays skin = sphereSkin();
+  for (uint32_t f = 0; f < skin.triangles.size() / 3; ++f) {  // upper half: contour, lower: covert
+    double y = 0;
+    for (int k = 0; k < 3; ++k) y += skin.positions[3 * skin.triangles[3 * f + k] + 1];
+    (y > 0 ? setup.tracts[0].faces : covert.faces).push_back(f);
+  }
+  setup.tracts.push_back(covert);
+  Session s(skin, setup);
+  EXPECT_THROW(s.exportMesh(::testing::TempDir() + "/none.obj"), pteryla::Error);  // nothing evaluated
+  s.setLod(0.3);
+  ASSERT_TRUE(s.evaluate());
+  const Frame& f = s.frame();
+  const size_t nv = f.positions.size / 3;
+  ASSERT_EQ(f.alphas.size, nv);
+  for (float a : f.alphas) ASSERT_TRUE(a >= 0 && a <= 1);
+  ASSERT_EQ(f.materials.size, 2u);
+  std::vector<std::string> names = {f.materials[0].name, f.materials[1].name};
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"contour", "covert"}));
+  for (const auto& r : f.ranges) {
+    ASSERT_LT(r.material, f.materials.size);
+    EXPECT_EQ(f.materials[r.material].name, f.tracts[r.feather] == 0 ? "contour" : "covert");
+  }
+  const std::string obj = ::testing::TempDir() + "/pteryla_host_export.obj";
+  s.exportMesh(obj);
+  std::ifstream in(obj);
+  size_t v = 0, t = 0;
+  for (std::string line; std::getline(in, line);) {
+    v += line.rfind("v ", 0) == 0;
+    t += line.rfind("f ", 0) == 0;
+  }
+  EXPECT_EQ(v, nv);
+  EXPECT_EQ(t, f.indices.size / 3);
+  const pteryla::Error e = errorOf([&] { s.exportMesh(::testing::TempDir() + "/coat.xyz"); });
+  EXPECT_NE(std::string(e.what()).find("coat.xyz"), std::string::npos);
 }
 
 TEST(HostSession, MissingSceneFileIsAnError) {
