@@ -121,25 +121,31 @@ def rest_arrays(obj):
     return pos.reshape(-1, 3), tri.reshape(-1, 3)
 
 
+def group_members(obj):
+    """Per vertex group index: bool (n,) of the vertices with a weight above 0. One pass over the mesh."""
+    n = len(obj.data.vertices)
+    members = {g.index: np.zeros(n, bool) for g in obj.vertex_groups}
+    for v in obj.data.vertices:
+        for g in v.groups:
+            if g.weight > 0 and g.group in members:
+                members[g.group][v.index] = True
+    return members
+
+
 def tract_faces(obj, tri):
     """Triangle indices per tract: a triangle goes to the first tract whose group holds its three vertices."""
     settings = obj.pteryla
-    n = len(obj.data.vertices)
     taken = np.zeros(len(tri), bool)
+    members = group_members(obj)
     out = []
-    for i, t in enumerate(settings.tracts):
+    for t in settings.tracts:
         where = f"tract '{t.name}'"
         if not t.vertex_group:
             raise ValueError(f"{where}: choose a vertex group")
         vg = obj.vertex_groups.get(t.vertex_group)
         if vg is None:
             raise ValueError(f"{where}: the vertex group '{t.vertex_group}' does not exist")
-        member = np.zeros(n, bool)
-        for v in obj.data.vertices:
-            for g in v.groups:
-                if g.group == vg.index and g.weight > 0:
-                    member[v.index] = True
-        faces = np.flatnonzero(member[tri].all(axis=1) & ~taken)
+        faces = np.flatnonzero(members[vg.index][tri].all(axis=1) & ~taken)
         if len(faces) == 0:
             raise ValueError(f"{where}: the vertex group '{t.vertex_group}' holds no face (all three vertices "
                              f"of a triangle must be in it, and not taken by an earlier tract)")
@@ -323,16 +329,15 @@ def write_coat(skin, frame):
         mat_index[first // 3:(first + count) // 3] = material
     me.polygons.foreach_set("material_index", mat_index)
     me.polygons.foreach_set("use_smooth", np.ones(len(tris), bool))
-    me.update()
-    me.validate(verbose=False)
+    me.update()  # no validate(): it would drop degenerate feather triangles and break feather_id's alignment
     return obj
 
 
-def evaluate_into_coat(skin, depsgraph=None, report_progress=True):
+def evaluate_into_coat(skin, depsgraph=None, report_progress=True, scene=None):
     """Evaluates the skin's session (posed when a depsgraph is given) and writes the coat. Returns seconds."""
     t0 = time.perf_counter()
     s = session_for(skin)
-    scene = bpy.context.scene
+    scene = scene or bpy.context.scene
     s.set_lod(skin.pteryla.lod)
     s.set_time(scene.frame_current / (scene.render.fps / scene.render.fps_base))
     if depsgraph is not None:
@@ -627,7 +632,8 @@ def on_frame_change(scene, depsgraph=None):
                 continue
             if bpy.data.objects.get(obj.name + "_coat") is None:
                 continue  # not feathered yet: "Feather" first
-            evaluate_into_coat(obj, depsgraph or bpy.context.evaluated_depsgraph_get(), report_progress=False)
+            evaluate_into_coat(obj, depsgraph or bpy.context.evaluated_depsgraph_get(), report_progress=False,
+                               scene=scene)
         except Exception as e:
             obj.pteryla.status = "error: " + _message(e)
             print(f"pteryla: {obj.name}: {_message(e)}", file=sys.stderr)
