@@ -83,9 +83,9 @@ class PterylaTract(bpy.types.PropertyGroup):
                                  description="Faces whose three vertices are all in this group carry the tract")
     feather: EnumProperty(name="Feather", items=_feather_items)
     feather_file: StringProperty(name="File", subtype="FILE_PATH")
-    use_count: BoolProperty(name="Exact count", default=False)
+    use_count: BoolProperty(name="Exact count", default=True)
     count: IntProperty(name="Count", default=100, min=1)
-    density: FloatProperty(name="Density", default=200.0, min=0.0,
+    density: FloatProperty(name="Density", default=20.0, min=0.0,
                            description="Follicles per unit area (object space)")
 
 
