@@ -4,7 +4,7 @@
 # it is preferred over one found first on PATH (pyenv, venv). Pass -DPython3_EXECUTABLE=... to override.
 option(PTERYLA_BUILD_PYTHON "Build the Python module pteryla (needs Python 3 headers and pybind11)" ON)
 set(PTERYLA_PYTHON OFF)
-if(PTERYLA_BUILD_PYTHON)
+if(PTERYLA_BUILD_PYTHON AND NOT PTERYLA_FUZZ)  # a fuzzing build (libFuzzer targets only) has no use for it
   if(NOT DEFINED Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
     set(Python3_EXECUTABLE /usr/bin/python3 CACHE FILEPATH "Python interpreter of the pteryla module")
   endif()
