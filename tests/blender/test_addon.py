@@ -151,6 +151,27 @@ def count_vs_cli(addon, body, coat):
     return scene_path
 
 
+@step("import_round_trip")
+def import_round_trip(addon, body, coat, scene_path):
+    """The exported scene imported back feathers into the same coat (same skin, tracts, seed)."""
+    obj = addon.import_scene(bpy.context, scene_path)
+    try:
+        s, t = obj.pteryla, body.pteryla
+        assert [(x.name, x.vertex_group, x.feather, x.use_count, x.count if x.use_count else x.density)
+                for x in s.tracts] == \
+            [(x.name, x.name, x.feather, x.use_count, x.count if x.use_count else x.density) for x in t.tracts]
+        assert (s.seed, s.ordering, s.packing, s.lod) == (t.seed, t.ordering, t.packing, t.lod)
+        bpy.context.view_layer.objects.active = obj
+        assert bpy.ops.pteryla.feather() == {"FINISHED"}, s.status
+        again = bpy.data.objects[obj.name + "_coat"]
+        assert np.array_equal(coat_positions(again), coat_positions(coat))
+    finally:
+        for o in (bpy.data.objects.get(obj.name + "_coat"), obj):
+            if o is not None:
+                bpy.data.objects.remove(o, do_unlink=True)
+        bpy.context.view_layer.objects.active = body
+
+
 @step("attributes_and_materials")
 def attributes_and_materials(coat):
     me = coat.data
@@ -274,7 +295,8 @@ def main():
     body, rig = make_body()
     add_tracts(body)
     coat = feather(body)
-    count_vs_cli(addon, body, coat)
+    scene_path = count_vs_cli(addon, body, coat)
+    import_round_trip(addon, body, coat, scene_path)
     attributes_and_materials(coat)
     frames_follow(addon, body, coat)
     render(body, rig)
