@@ -217,6 +217,29 @@ def frames_follow(addon, body, coat):
     timings["frame_change_max"] = max(frame_times)
 
 
+@step("curve_axis")
+def curve_axis(body, coat):
+    """A curve as the body axis: the feathers follow it, so the coat changes; none again restores it."""
+    scene = bpy.context.scene
+    scene.frame_set(1)
+    before = coat_positions(coat)
+    curve_data = bpy.data.curves.new("spine", "CURVE")
+    curve_data.dimensions = "3D"
+    spline = curve_data.splines.new("POLY")
+    spline.points.add(2)
+    for p, co in zip(spline.points, [(2.2, 0, 0.3, 1), (0, 0, 0.8, 1), (-2.2, 0, 0.3, 1)]):
+        p.co = co
+    spine = bpy.data.objects.new("spine", curve_data)
+    bpy.context.collection.objects.link(spine)
+    body.pteryla.axis_object = spine
+    bpy.context.view_layer.objects.active = body
+    assert bpy.ops.pteryla.feather() == {"FINISHED"}, body.pteryla.status
+    assert not np.array_equal(coat_positions(coat), before)
+    body.pteryla.axis_object = None
+    assert bpy.ops.pteryla.feather() == {"FINISHED"}, body.pteryla.status
+    assert np.array_equal(coat_positions(coat), before)
+
+
 @step("render")
 def render(body, rig):
     scene = bpy.context.scene
@@ -299,6 +322,7 @@ def main():
     import_round_trip(addon, body, coat, scene_path)
     attributes_and_materials(coat)
     frames_follow(addon, body, coat)
+    curve_axis(body, coat)
     render(body, rig)
     bad_input(addon)
     print("test_addon: timings " + ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))

@@ -94,8 +94,9 @@ class PterylaSettings(bpy.types.PropertyGroup):
     active_tract: IntProperty(default=0)
     seed: IntProperty(name="Seed", default=1, min=0, description="Same mesh, set-up and seed: same coat")
     axis_object: PointerProperty(name="Axis", type=bpy.types.Object,
-                                 description="Empty whose Z axis runs head to tail (none: the longest "
-                                             "bounding-box axis)")
+                                 poll=lambda self, o: o.type in {"EMPTY", "CURVE"},
+                                 description="A curve from head to tail, or an empty whose Z axis runs head "
+                                             "to tail (none: the longest bounding-box axis)")
     ordering: EnumProperty(name="Ordering", items=[("axis", "Axis", "roof tiles along the body axis"),
                                                    ("tracts", "Tracts", "tract by tract, in list order"),
                                                    ("flow", "Flow", "along the feather flow")])
@@ -155,11 +156,24 @@ def tract_faces(obj, tri):
 
 
 def body_axis(obj, pos):
-    """Head-to-tail axis points in object space: the axis empty's Z axis, or the longest bounding-box axis."""
+    """Head-to-tail axis points in object space: a curve's points in order, an empty's Z axis, or the
+    longest bounding-box axis."""
     s = obj.pteryla
-    if s.axis_object is not None:
+    ax = s.axis_object
+    if ax is not None:
         to_local = obj.matrix_world.inverted()
-        m = s.axis_object.matrix_world
+        if ax.type == "CURVE":
+            ev = ax.evaluated_get(bpy.context.evaluated_depsgraph_get())
+            me = ev.to_mesh()
+            try:
+                pts = [tuple(to_local @ (ax.matrix_world @ v.co)) for v in me.vertices]
+            finally:
+                ev.to_mesh_clear()
+            pts = [p for i, p in enumerate(pts) if i == 0 or p != pts[i - 1]]
+            if len(pts) < 2:
+                raise ValueError(f"axis curve '{ax.name}' has fewer than two distinct points")
+            return pts
+        m = ax.matrix_world
         a = to_local @ m.translation
         b = to_local @ (m.translation + m.to_3x3().col[2].normalized())
         return [tuple(a), tuple(b)]
