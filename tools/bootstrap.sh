@@ -14,7 +14,10 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   xvfb xauth
   python3-dev python3-pybind11 python3-numpy python3-pytest blender
+  libtinygltf-dev nodejs
 )
+# npm: a package of its own on Debian 12, bundled with (and conflicting with) NodeSource's nodejs.
+command -v npm >/dev/null 2>&1 || PACKAGES+=(npm)
 for arg in "$@"; do
   case "$arg" in
     --fuzz) PACKAGES+=(clang-14 libclang-rt-14-dev llvm-14) ;;

@@ -23,6 +23,7 @@
 #include "pteryla/core/limits.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/core/sha256.hpp"
+#include "pteryla/exchange/coat_export.hpp"
 #include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/io.hpp"
 #include "pteryla/feather/mesh.hpp"
@@ -194,14 +195,42 @@ int cmdBench(const Common& c, const SceneArgs& a) {
 }
 
 int cmdExport(const Common& c, const ExportArgs& a) {
-  checkOutExtension(a.out, {".obj", ".ply"}, "a mesh");
+  // Everything that can be refused is refused before the scene is evaluated.
+  const exchange::Format fmt = exchange::formatOf(a.out);
+  exchange::ExportOptions opt;
+  opt.as = exchange::coatAsOf(a.as);
+  const bool usd = fmt == exchange::Format::Usda;
+  if (a.asGiven && !usd && opt.as != exchange::CoatAs::Cards)
+    throw Error("--as " + a.as + " needs a .usda file: glTF, OBJ and PLY carry the coat as cards", a.out, "--as");
+  if (a.from.has_value() != a.to.has_value()) throw Error("--from and --to go together", "", a.from ? "--to" : "--from");
+  if (a.from && a.time) throw Error("give either --time or a range --from/--to", "", "--time");
+  if (a.from) opt.times = exchange::frameTimes(*a.from, *a.to, a.fps);
+  opt.fps = a.fps;
+  if (!(a.metersPerUnit > 0 && std::isfinite(a.metersPerUnit))) throw Error("expected a positive number", "", "--meters-per-unit");
+  opt.metersPerUnit = a.metersPerUnit;
+  if ((fmt == exchange::Format::Obj || fmt == exchange::Format::Ply) && opt.times.size() > 1)
+    throw Error("OBJ and PLY hold one frame: export a range as .glb, .gltf or .usda", a.out, "--from");
+  {
+    // An existing directory we may not write into fails now, not after the evaluation.
+    const std::filesystem::path parent = std::filesystem::absolute(a.out).parent_path();
+    std::error_code ec;
+    if (std::filesystem::is_directory(parent, ec) && access(parent.c_str(), W_OK) != 0)
+      throw Error("cannot write into the directory " + parent.string(), a.out, "--out");
+    if (std::filesystem::is_directory(a.out, ec)) throw Error("is a directory", a.out, "--out");
+  }
   Loaded l = load(c, a);
-  TriMesh all = l.pipeline->skinTriMesh();
-  all.append(l.pipeline->coatMesh().mesh);
   ensureParentDir(a.out);  // after evaluation: a failing scene leaves no trace
-  feather::writeMesh(a.out, all);
+  const exchange::ExportResult r = exchange::exportCoat(*l.pipeline, a.out, opt);
   endProgress(c);
-  info(c, "wrote " + a.out + " (" + std::to_string(all.triangleCount()) + " triangles)");
+  std::ostringstream os;
+  os.precision(3);
+  os << "wrote " << a.out << " (" << r.bytes << " bytes, " << r.frames << (r.frames == 1 ? " frame, " : " frames, ")
+     << r.feathers << " feathers";
+  if (usd && opt.as == exchange::CoatAs::Curves) os << ", " << r.curves << " curves";
+  else if (usd && opt.as == exchange::CoatAs::Instances) os << ", " << r.instances << " instances of " << r.prototypes << " prototypes";
+  else os << ", " << r.triangles << " triangles";
+  os << "; " << std::fixed << r.seconds << " s, of which writing " << r.writeSeconds << " s)";
+  info(c, os.str());
   return 0;
 }
 

@@ -22,6 +22,11 @@ struct RenderArgs : SceneArgs {
 };
 struct ExportArgs : SceneArgs {
   std::string out;
+  std::optional<double> from, to;  // a frame range (both or neither)
+  double fps = 24;
+  std::string as = "curves";       // USD coat representation: curves, cards or instances
+  bool asGiven = false;            // --as was on the command line
+  double metersPerUnit = 1.0;
 };
 struct FramesArgs : SceneArgs {
   double from = 0, to = 1, fps = 24;

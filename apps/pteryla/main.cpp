@@ -87,9 +87,25 @@ int main(int argc, char** argv) {
   addSceneOptions(cBench, bench, true);
 
   ExportArgs exportArgs;
-  auto* cExport = app.add_subcommand("export", "Write the coat (and skin) geometry with UVs to .obj or .ply");
+  auto* cExport = app.add_subcommand(
+      "export", "Write the skin and the coat for other tools (docs/export.md), by the extension of --out:\n"
+                ".glb / .gltf  glTF 2.0: skin + vane cards with textures, KHR_materials_anisotropy, per-vertex\n"
+                "              _FEATHER_ID _TRACT _LAYER _AGE; a frame range as a node-animated sequence\n"
+                ".usda         USD: skin Mesh + the coat --as curves (BasisCurves), cards (Mesh) or instances\n"
+                "              (PointInstancer); a frame range as time samples\n"
+                ".obj / .ply   one frame of skin + cards\n"
+                "The file is written to a temporary and renamed: a failed export keeps any previous file.");
   addSceneOptions(cExport, exportArgs, false);
-  cExport->add_option("--out,-o", exportArgs.out, "Output mesh (.obj or .ply)")->required();
+  cExport->add_option("--out,-o", exportArgs.out, "Output file: .glb, .gltf, .usda, .obj or .ply")->required();
+  auto* optFrom = cExport->add_option("--from", exportArgs.from, "Start time of a frame range (with --to; frame k at FROM + k/FPS)");
+  auto* optTo = cExport->add_option("--to", exportArgs.to, "End time of the range (inclusive)");
+  cExport->add_option("--fps", exportArgs.fps, "Frames per unit of time for a range (default 24)");
+  auto* optAs = cExport->add_option("--as", exportArgs.as,
+                                    "USD coat representation: curves (default; rachis + barbs as BasisCurves), cards "
+                                    "(vane Mesh) or instances (PointInstancer over prototype feathers)");
+  cExport->add_option("--meters-per-unit", exportArgs.metersPerUnit, "Scene units in metres (USD metersPerUnit; default 1)");
+  (void)optFrom;
+  (void)optTo;
 
   FeatherArgs feather;
   auto* cFeather = app.add_subcommand("feather", "Build one feather from a feather file: geometry (.obj/.ply) or an image (.png)");
@@ -188,7 +204,10 @@ int main(int argc, char** argv) {
     if (*cRender) return cmdRender(common, render);
     if (*cCheck) return cmdCheck(common, check);
     if (*cBench) return cmdBench(common, bench);
-    if (*cExport) return cmdExport(common, exportArgs);
+    if (*cExport) {
+      exportArgs.asGiven = optAs->count() > 0;
+      return cmdExport(common, exportArgs);
+    }
     if (*cFeather) return cmdFeather(common, feather);
     if (*cFrames) return cmdFrames(common, frames);
     if (*cSlurm) return cmdFarmSlurm(common, farm);
