@@ -90,6 +90,12 @@ tinygltf::Primitive primitive(Builder& b, const TriMesh& m, const std::vector<ui
   std::vector<int64_t> remap(m.positions.size(), -1);
   std::vector<uint32_t> order, idx;
   idx.reserve(tris.size() * 3);
+  if (!feathers) {  // the skin keeps its vertex order (a host's poses and weights index it)
+    for (uint32_t v = 0; v < m.positions.size(); ++v) {
+      remap[v] = v;
+      order.push_back(v);
+    }
+  }
   for (uint32_t t : tris)
     for (int c = 0; c < 3; ++c) {
       const uint32_t v = m.indices[3 * size_t(t) + size_t(c)];

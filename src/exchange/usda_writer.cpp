@@ -184,6 +184,12 @@ void buildMesh(const TriMesh& m, const std::vector<uint32_t>& tris, const Export
                const glm::dvec3* localOrigin = nullptr, const glm::dvec3* axes = nullptr, double invScale = 1) {
   std::map<uint32_t, int64_t> remap;
   std::vector<uint32_t> order;
+  if (!f && !localOrigin) {  // the skin keeps its vertex order (a host's poses and weights index it)
+    for (uint32_t v = 0; v < m.positions.size(); ++v) {
+      remap.emplace(v, int64_t(v));
+      order.push_back(v);
+    }
+  }
   for (uint32_t t : tris) {
     d.counts.push_back(3);
     for (int c = 0; c < 3; ++c) {

@@ -1,0 +1,11 @@
+# Installs tests/export/package-lock.json's packages into DST (a build-tree directory) with `npm ci`.
+find_program(NPM npm)
+if(NOT NPM)
+  message(FATAL_ERROR "npm not found: install nodejs and npm (tools/bootstrap.sh) to validate glTF exports")
+endif()
+file(MAKE_DIRECTORY ${DST})
+file(COPY ${SRC}/package.json ${SRC}/package-lock.json DESTINATION ${DST})
+execute_process(COMMAND ${NPM} ci --no-audit --no-fund --loglevel=error WORKING_DIRECTORY ${DST} RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "npm ci failed (${rc}) in ${DST}")
+endif()
