@@ -162,6 +162,20 @@ struct Metrics {
   std::optional<size_t> fixedFeathers, hiddenFeathers;    // draped coats: trimmed, and left empty
 };
 
+// Export for other tools (docs/export.md); the format follows the extension of the path: .glb, .gltf
+// (glTF 2.0), .usda (USD), .obj, .ply.
+struct ExportSettings {
+  std::string coatAs = "curves";  // USD coat: "curves" (BasisCurves), "cards" (Mesh), "instances" (PointInstancer)
+  std::vector<double> times;      // empty: the session's time; else one frame per time, increasing (not OBJ/PLY)
+  double fps = 24;                // frames per unit of time: the animation timing of `times`
+  double metersPerUnit = 1;       // USD metersPerUnit
+};
+struct ExportSummary {
+  size_t bytes = 0;   // size of the file written
+  size_t frames = 0;
+  double seconds = 0; // evaluating the frames and writing
+};
+
 class PTERYLA_API Session {
  public:
   // Checks the skin (pteryla::Error naming "positions", "triangles", "vertex 5", "face 17", ...) and the
@@ -207,6 +221,12 @@ class PTERYLA_API Session {
   // pteryla::Error like frame() when there is no evaluated frame, and naming the file when it cannot
   // be written or the extension is neither.
   void exportMesh(const std::string& path) const;
+
+  // Writes the coat and the skin at the session's pose to `path` (ExportSettings), evaluating each time
+  // of settings.times (the session's time is kept). The file is written to a temporary and renamed: a
+  // failure throws pteryla::Error naming the file or setting and keeps any previous file. frame() stays
+  // valid if it was.
+  ExportSummary exportTo(const std::string& path, const ExportSettings& settings = {});
 
  private:
   struct Impl;

@@ -87,13 +87,24 @@ struct Attr {
 
 void emit(Out& o, int indent, const Attr& a, const std::vector<double>& codes) {
   const std::string meta = a.meta.empty() ? "" : " (" + a.meta + ")";
-  if (a.values.size() == 1) {
-    o.line(indent, a.decl + " = " + a.values[0] + meta);
+  if (a.values.size() == 1) {  // appended piece by piece: values can be hundreds of megabytes
+    o.s.append(size_t(indent) * 4, ' ');
+    o.s += a.decl;
+    o.s += " = ";
+    o.s += a.values[0];
+    o.s += meta;
+    o.s += '\n';
     return;
   }
   if (!a.meta.empty()) o.line(indent, a.decl + meta);
   o.line(indent, a.decl + ".timeSamples = {");
-  for (size_t k = 0; k < a.values.size(); ++k) o.line(indent + 1, shortest(codes[k]) + ": " + a.values[k] + ",");
+  for (size_t k = 0; k < a.values.size(); ++k) {
+    o.s.append(size_t(indent + 1) * 4, ' ');
+    o.s += shortest(codes[k]);
+    o.s += ": ";
+    o.s += a.values[k];
+    o.s += ",\n";
+  }
   o.line(indent, "}");
 }
 

@@ -18,6 +18,7 @@
 #include "pteryla/core/json.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/feather/mesh_io.hpp"
+#include "pteryla/exchange/coat_export.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
 
@@ -346,6 +347,27 @@ const Frame& Session::frame() const {
 void Session::exportMesh(const std::string& path) const {
   frame();  // throws when there is no evaluated frame
   feather::writeMesh(path, impl_->pipeline->coatMesh().mesh);
+}
+
+ExportSummary Session::exportTo(const std::string& path, const ExportSettings& settings) {
+  Impl& m = *impl_;
+  exchange::ExportOptions opt;
+  opt.as = exchange::coatAsOf(settings.coatAs);
+  for (size_t k = 0; k < settings.times.size(); ++k)
+    if (!std::isfinite(settings.times[k]) || (k > 0 && !(settings.times[k] > settings.times[k - 1])))
+      throw Error("times must be finite and increasing", "", "times[" + std::to_string(k) + "]");
+  opt.times = settings.times;
+  opt.fps = settings.fps;
+  opt.metersPerUnit = settings.metersPerUnit;
+  const bool hadFrame = m.frameValid;
+  m.frameValid = false;
+  const exchange::ExportResult r = exchange::exportCoat(*m.pipeline, path, opt);
+  if (hadFrame) m.fillFrame();  // the export evaluated other times: point the views at this one again
+  ExportSummary out;
+  out.bytes = r.bytes;
+  out.frames = r.frames;
+  out.seconds = r.seconds;
+  return out;
 }
 
 Metrics Session::metrics() {

@@ -19,6 +19,7 @@
 #include "pteryla/feather/mesh.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
+#include "pteryla/pteryla.hpp"
 #include "usda_reader.hpp"
 
 namespace fs = std::filesystem;
@@ -400,4 +401,28 @@ TEST(Export, FailedWriteLeavesNothing) {
   range.times = {0, 1};
   EXPECT_THROW(exchange::exportCoat(*p, outDir() + "/range.obj", range), Error);
   EXPECT_FALSE(fs::exists(outDir() + "/range.obj"));
+}
+
+// The host API's export: the same bytes as the library call for the same scene, frame() kept valid.
+TEST(ExportHost, SessionExportsTheSameCoat) {
+  Session s = Session::fromSceneFile(kTiny);
+  ASSERT_TRUE(s.evaluate());
+  const size_t vertices = s.frame().positions.size;
+  const std::string out = outDir() + "/session_tiny.usda";
+  const ExportSummary r = s.exportTo(out);
+  EXPECT_EQ(r.frames, 1u);
+  EXPECT_EQ(r.bytes, fs::file_size(out));
+  EXPECT_TRUE(slurp(out) == slurp(kGolden));
+  ExportSettings range;
+  range.times = {0.0, 0.5, 1.0};
+  range.coatAs = "instances";
+  EXPECT_EQ(s.exportTo(outDir() + "/session_range.usda", range).frames, 3u);
+  EXPECT_EQ(s.frame().positions.size, vertices);
+  range.times = {1.0, 0.5};
+  try {
+    s.exportTo(outDir() + "/bad.usda", range);
+    FAIL() << "decreasing times accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.element(), "times[1]");
+  }
 }
