@@ -163,6 +163,7 @@ void vaneBarbs(const TriMesh& coat, uint32_t firstIndex, uint32_t indexCount, st
     const size_t n = m + 1;
     const size_t tris = 4 * m;
     if (t + tris > tEnd || idx[3 * (t + 2 * m)] != lo + n) return;  // not the vane layout: stop
+    if (size_t(lo) + 3 * n > coat.positions.size()) return;
     const uint32_t c = lo + uint32_t(n);
     BarbRow barb{c, uint32_t(n), 0};
     for (size_t k = 0; k < n; ++k) {
@@ -191,6 +192,7 @@ void rachisCurve(const TriMesh& coat, uint32_t firstIndex, uint32_t indexCount, 
   const size_t rings = (tris / sides + 1) / 2;
   const uint32_t* idx = coat.indices.data() + firstIndex;
   const uint32_t base = idx[0];
+  if (size_t(base) + rings * (sides + 1) + sides > coat.positions.size()) return;  // not the shaft layout
   for (size_t r = 0; r < rings; ++r) {
     // Stop at the first ring band whose triangles were all trimmed.
     const size_t band = r + 1 < rings ? 2 * sides : sides;
