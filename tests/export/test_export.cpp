@@ -366,9 +366,11 @@ TEST(ExportGltf, FrameRangeIsAFlipbook) {
     EXPECT_EQ(ch.target_node, int(k));
     EXPECT_EQ(ch.target_path, "scale");
     EXPECT_EQ(m.animations[0].samplers[size_t(ch.sampler)].interpolation, "STEP");
-    // Frame k is shown from k / fps on.
+    // Keys from 0 to the end of frame k's interval: k / fps shown, (k + 1) / fps hidden (the last stays).
     const auto& in = m.accessors[size_t(m.animations[0].samplers[size_t(ch.sampler)].input)];
-    EXPECT_DOUBLE_EQ(k == 0 ? in.minValues[0] : in.minValues[0] + 0.0, 0.0);
+    EXPECT_EQ(in.count, k == 0 || k == 2 ? 2u : 3u);
+    EXPECT_DOUBLE_EQ(in.minValues[0], 0.0);
+    EXPECT_DOUBLE_EQ(in.maxValues[0], double(std::min<size_t>(k + 1, 2)) / 4.0);
   }
   EXPECT_EQ(m.nodes[0].scale.size(), 0u);
   EXPECT_EQ(m.nodes[1].scale, std::vector<double>({0.0, 0.0, 0.0}));
