@@ -16,6 +16,7 @@
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -543,13 +544,37 @@ set_pose, clear_pose, set_time, set_lod, check) raise pteryla.Error.)")
           "measured). Evaluates first if needed; costs more than an evaluation.")
       .def(
           "export",
-          [](PySession& s, py::object path) {
-            s.requireIdle("export");
+          [](PySession& s, py::object path, py::object times, double fps, const std::string& coatAs,
+             double metersPerUnit) -> py::object {
             const std::string p = pathFrom(path);
-            withoutGil(s, [&] {
-              s.session->exportMesh(p);
-              return 0;
-            });
+            const std::string ext = std::filesystem::path(p).extension().string();
+            if (times.is_none() && (ext == ".obj" || ext == ".ply") && coatAs == "curves") {
+              s.requireIdle("export");
+              withoutGil(s, [&] {
+                s.session->exportMesh(p);
+                return 0;
+              });
+              return py::none();
+            }
+            // glTF/USD, or a range of times: evaluates other frames, so no view may be alive.
+            s.requireMutable("export");
+            pteryla::ExportSettings settings;
+            settings.coatAs = coatAs;
+            settings.fps = fps;
+            settings.metersPerUnit = metersPerUnit;
+            if (!times.is_none())
+              for (py::handle t : times) settings.times.push_back(py::cast<double>(t));
+            const pteryla::ExportSummary r = withoutGil(s, [&] { return s.session->exportTo(p, settings); });
+            py::dict d;
+            d["bytes"] = r.bytes;
+            d["frames"] = r.frames;
+            d["seconds"] = r.seconds;
+            return std::move(d);
           },
-          py::arg("path"), "Writes the evaluated coat mesh as .obj or .ply (by the extension).");
+          py::arg("path"), py::arg("times") = py::none(), py::arg("fps") = 24.0, py::arg("coat_as") = "curves",
+          py::arg("meters_per_unit") = 1.0,
+          "Writes the coat (and skin) by the extension: .glb/.gltf (glTF 2.0), .usda (USD; coat_as = "
+          "'curves', 'cards' or 'instances'), .obj/.ply. times: a list of increasing times for an animated "
+          "glTF/USD (fps sets their timing); default the session's time. Returns {bytes, frames, seconds} "
+          "for glTF/USD (docs/export.md).");
 }

@@ -260,6 +260,27 @@ def test_export_writes_the_frame(sphere, tmp_path):
     assert "coat.xyz" in e.value.file or "coat.xyz" in str(e.value)
 
 
+def test_export_gltf_and_usd_from_python(sphere, tmp_path):
+    s = evaluated(sphere)
+    before = s.frame().positions.copy()
+    r = s.export(tmp_path / "coat.glb")
+    assert r["frames"] == 1 and r["bytes"] == (tmp_path / "coat.glb").stat().st_size
+    assert (tmp_path / "coat.glb").read_bytes()[:4] == b"glTF"
+    r = s.export(tmp_path / "coat.usda", times=[0.0, 0.5], fps=2.0, coat_as="cards")
+    assert r["frames"] == 2
+    text = (tmp_path / "coat.usda").read_text()
+    assert text.startswith("#usda 1.0") and "timeSamples" in text and "metersPerUnit" in text
+    # The session's own frame is unchanged by the export's other times.
+    assert np.array_equal(s.frame().positions, before)
+    with pytest.raises(pteryla.Error):
+        s.export(tmp_path / "coat.usda", times=[1.0, 0.5])  # not increasing
+    # A live zero-copy view would be overwritten by the export's evaluations: refused.
+    view = s.frame(copy=False)
+    with pytest.raises(pteryla.Error):
+        s.export(tmp_path / "again.glb")
+    del view
+
+
 def test_version_and_data_directory():
     assert pteryla.__version__ == pteryla.version() and pteryla.version().count(".") == 2
     assert os.path.isfile(os.path.join(pteryla.data_directory(), "feathers", "contour.json"))
