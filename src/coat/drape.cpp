@@ -460,7 +460,6 @@ void gatherSamples(Chart& C, const CoatTop& top, double reqRadius) {
     top.near(nd.c, nd.n, reqRadius, [&](uint32_t s) { C.reqSamples.push_back(s); });
     C.reqOffset.push_back(static_cast<uint32_t>(C.reqSamples.size()));
   }
-  std::vector<uint32_t> seen;
   for (int k : C.active) {
     const Node& nd = C.nodes[k];
     const double xa = C.x0 + (k / C.ny) * C.hx, yb = C.y0 + (k % C.ny) * C.hy;
@@ -474,7 +473,6 @@ void gatherSamples(Chart& C, const CoatTop& top, double reqRadius) {
       C.locate(x, y, a, b, u, v);
       for (const Node* c : {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)})
         if (!c->ok || !c->active) return;
-      seen.push_back(s);
       C.under.push_back({s, static_cast<uint16_t>(a), static_cast<uint16_t>(b), static_cast<float>(u), static_cast<float>(v)});
     });
   }
