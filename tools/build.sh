@@ -8,4 +8,5 @@ GEN=()
 command -v ninja >/dev/null && GEN=(-G Ninja)
 [ -f build/CMakeCache.txt ] && GEN=()
 cmake -S . -B build "${GEN[@]}" -DCMAKE_BUILD_TYPE=Release -DPTERYLA_WERROR=ON ${PTERYLA_CMAKE_ARGS:-} >/dev/null
-cmake --build build -j"$(nproc)"
+# PTERYLA_BUILD_TARGETS="a b": only those targets (tools/test.sh builds just the CLI for the corpus).
+cmake --build build -j"$(nproc)" ${PTERYLA_BUILD_TARGETS:+--target $PTERYLA_BUILD_TARGETS}

@@ -1,5 +1,5 @@
 # Driven by ctest (tests/install/CMakeLists.txt): cmake -DSOURCE_DIR= -DBUILD_DIR= -DWORK_DIR= -DSHARED=
-# -DGENERATOR= -DBUILD_TYPE= -DWERROR= -DCC= -DCXX= -P install_test.cmake
+# -DGENERATOR= -DBUILD_TYPE= -DWERROR= -DCC= -DCXX= [-DSANITIZE=address,undefined] -P install_test.cmake
 # 1. libpteryla.so: this build's, or a PTERYLA_SHARED sub-build's; 2. cmake --install into a fresh
 # prefix; 3. what was installed (headers, library, exports, data, package files); 4. the consumer
 # through find_package(pteryla), and again through pkg-config; both run without PTERYLA_DATA_DIR, so the
@@ -16,6 +16,10 @@ endfunction()
 
 if(SHARED)
   set(lib_build ${BUILD_DIR})
+  # A sanitized libpteryla.so (tools/sanitize.sh) needs its runtime in the consumer as well.
+  if(SANITIZE)
+    set(consumer_flags -fsanitize=${SANITIZE})
+  endif()
 else()
   set(lib_build ${WORK_DIR}/lib)
   run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${lib_build} -G ${GENERATOR} -DCMAKE_BUILD_TYPE=${BUILD_TYPE}
@@ -76,7 +80,8 @@ endif()
 
 # The consumer, through the CMake package.
 run(${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/install/consumer -B ${WORK_DIR}/consumer -G ${GENERATOR}
-    -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${prefix})
+    -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${prefix}
+    "-DCMAKE_CXX_FLAGS=${consumer_flags}")
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/consumer)
 run(${CMAKE_COMMAND} -E env --unset=PTERYLA_DATA_DIR --unset=PTERYLA_DATA ${WORK_DIR}/consumer/consumer ${prefix})
 
@@ -91,7 +96,7 @@ if(PKG_CONFIG)
   endif()
   separate_arguments(flags UNIX_COMMAND "${flags}")
   file(MAKE_DIRECTORY ${WORK_DIR}/consumer-pc)
-  run(${CXX} -std=c++17 -O1 -Wall -Wextra -Werror ${SOURCE_DIR}/tests/install/consumer/main.cpp ${flags}
+  run(${CXX} -std=c++17 -O1 -Wall -Wextra -Werror ${consumer_flags} ${SOURCE_DIR}/tests/install/consumer/main.cpp ${flags}
       -Wl,-rpath,${libdir} -o ${WORK_DIR}/consumer-pc/consumer)
   run(${CMAKE_COMMAND} -E env --unset=PTERYLA_DATA_DIR --unset=PTERYLA_DATA ${WORK_DIR}/consumer-pc/consumer ${prefix})
 else()
