@@ -42,25 +42,22 @@ size_t intersectingPairs(const TriMesh& coat, std::vector<uint64_t>* attribution
   if (nt < 2) return 0;
   detail::TriangleBvh bvh;
   bvh.build(coat.positions.data(), coat.indices.data(), nt);
+  std::vector<uint32_t> featherOf(nt);
+  for (size_t t = 0; t < nt; ++t) featherOf[t] = triFeather(coat, t);
+  bvh.setGroups(featherOf.data());  // no pair inside one feather is ever visited
+  // A dual traversal of the BVH against itself, cut into independent node pairs for the threads: each
+  // pair of triangles with overlapping boxes is visited once (t < u), then Moeller's test decides.
+  const std::vector<std::pair<uint32_t, uint32_t>> tasks = bvh.pairTasks(1024);
   tbb::combinable<std::vector<uint64_t>> found;
   const size_t total = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, nt, 256), size_t(0),
+      tbb::blocked_range<size_t>(0, tasks.size(), 1), size_t(0),
       [&](const tbb::blocked_range<size_t>& r, size_t acc) {
         std::vector<uint64_t>* mine = attribution || triangles ? &found.local() : nullptr;
-        for (size_t t = r.begin(); t < r.end(); ++t) {
-          const uint32_t ft = triFeather(coat, t);
-          const dvec3 a0 = bvh.vertex(static_cast<uint32_t>(t), 0), a1 = bvh.vertex(static_cast<uint32_t>(t), 1),
-                      a2 = bvh.vertex(static_cast<uint32_t>(t), 2);
-          float lo[3], hi[3];
-          for (int k = 0; k < 3; ++k) {
-            lo[k] = static_cast<float>(std::min({a0[k], a1[k], a2[k]}));
-            hi[k] = static_cast<float>(std::max({a0[k], a1[k], a2[k]}));
-          }
-          bvh.queryBox(lo, hi, [&](uint32_t u) {
-            if (u <= t) return;
-            const uint32_t fu = triFeather(coat, u);
-            if (fu == ft) return;
-            if (detail::trianglesIntersect(a0, a1, a2, bvh.vertex(u, 0), bvh.vertex(u, 1), bvh.vertex(u, 2))) {
+        for (size_t k = r.begin(); k < r.end(); ++k) {
+          bvh.overlappingPairs(tasks[k], [&](uint32_t t, uint32_t u) {
+            const uint32_t ft = featherOf[t], fu = featherOf[u];
+            if (detail::trianglesIntersect(bvh.vertex(t, 0), bvh.vertex(t, 1), bvh.vertex(t, 2), bvh.vertex(u, 0),
+                                           bvh.vertex(u, 1), bvh.vertex(u, 2))) {
               ++acc;
               if (mine)
                 mine->push_back(triangles ? (uint64_t(t) << 32) | u : (uint64_t(std::min(ft, fu)) << 32) | std::max(ft, fu));

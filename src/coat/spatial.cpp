@@ -9,6 +9,9 @@
 #include <array>
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "pteryla/core/error.hpp"
 
@@ -55,27 +58,32 @@ void PointGrid::build(const glm::dvec3* points, size_t count, double cell) {
 
 namespace {
 
+// A primitive's bounds, kept in slot order and partitioned in place (sequential memory at every level).
 struct PrimInfo {
   Box box;
   glm::dvec3 centroid;
+  uint32_t id;
 };
 
 constexpr int kBins = 16;
 constexpr uint32_t kLeafSize = 4;
 constexpr int kMaxSahDepth = 48;
 
-struct Builder {
-  std::vector<PrimInfo> info;
-  std::vector<uint32_t>& prims;
-  std::vector<TriangleBvh::Node>& nodes;
+// Subtrees at least this large are built in parallel (TBB). The node layout does not depend on it: a
+// node is followed by its left subtree, then its right subtree, exactly as a serial depth-first build.
+constexpr uint32_t kParallelBuild = 8192;
 
-  uint32_t build(uint32_t begin, uint32_t end, int depth) {
+struct Builder {
+  std::vector<PrimInfo>& info;  // slot order
+
+  // Builds the subtree of slots [begin, end) and appends its nodes to `nodes` (indices in `nodes`).
+  uint32_t build(uint32_t begin, uint32_t end, int depth, std::vector<TriangleBvh::Node>& nodes) {
     const uint32_t ni = static_cast<uint32_t>(nodes.size());
     nodes.emplace_back();
     Box bounds, cb;
     for (uint32_t i = begin; i < end; ++i) {
-      bounds.add(info[prims[i]].box);
-      cb.add(info[prims[i]].centroid);
+      bounds.add(info[i].box);
+      cb.add(info[i].centroid);
     }
     for (int k = 0; k < 3; ++k) {
       nodes[ni].lo[k] = static_cast<float>(bounds.lo[k]);
@@ -101,13 +109,13 @@ struct Builder {
       Box binBox[kBins];
       uint32_t binCount[kBins] = {};
       const double scale = kBins / ext[axis];
-      auto binOf = [&](uint32_t p) {
-        const int b = static_cast<int>((info[p].centroid[axis] - cb.lo[axis]) * scale);
+      auto binOf = [&](const PrimInfo& p) {
+        const int b = static_cast<int>((p.centroid[axis] - cb.lo[axis]) * scale);
         return std::min(std::max(b, 0), kBins - 1);
       };
       for (uint32_t i = begin; i < end; ++i) {
-        const int b = binOf(prims[i]);
-        binBox[b].add(info[prims[i]].box);
+        const int b = binOf(info[i]);
+        binBox[b].add(info[i].box);
         ++binCount[b];
       }
       double rightArea[kBins];
@@ -137,23 +145,38 @@ struct Builder {
       if (bestB > 0) {
         const double leafCost = bounds.area() * count;
         if (best >= leafCost && count <= 2 * kLeafSize) return makeLeaf();
-        mid = static_cast<uint32_t>(std::partition(prims.begin() + begin, prims.begin() + end,
-                                                   [&](uint32_t p) { return binOf(p) < bestB; }) -
-                                    prims.begin());
+        mid = static_cast<uint32_t>(std::partition(info.begin() + begin, info.begin() + end,
+                                                   [&](const PrimInfo& p) { return binOf(p) < bestB; }) -
+                                    info.begin());
         split = mid > begin && mid < end;
       }
     }
     if (!split) {
       // Median by (centroid, index): a total order, so the split is deterministic.
       mid = begin + count / 2;
-      std::nth_element(prims.begin() + begin, prims.begin() + mid, prims.begin() + end, [&](uint32_t a, uint32_t b) {
-        const double ca = info[a].centroid[axis], cb2 = info[b].centroid[axis];
-        return ca < cb2 || (ca == cb2 && a < b);
-      });
+      std::nth_element(info.begin() + begin, info.begin() + mid, info.begin() + end,
+                       [&](const PrimInfo& a, const PrimInfo& b) {
+                         const double ca = a.centroid[axis], cb2 = b.centroid[axis];
+                         return ca < cb2 || (ca == cb2 && a.id < b.id);
+                       });
     }
-    build(begin, mid, depth + 1);
-    const uint32_t right = build(mid, end, depth + 1);
-    nodes[ni].first = right;
+    if (count < kParallelBuild) {
+      build(begin, mid, depth + 1, nodes);
+      const uint32_t right = build(mid, end, depth + 1, nodes);
+      nodes[ni].first = right;
+      nodes[ni].count = 0;
+      return ni;
+    }
+    // The two halves own disjoint slot ranges: the right one is built into its own array and
+    // appended after the left one, with its inner nodes' right-child indices moved by the offset.
+    std::vector<TriangleBvh::Node> rightNodes;
+    tbb::parallel_invoke([&] { build(begin, mid, depth + 1, nodes); },
+                         [&] { build(mid, end, depth + 1, rightNodes); });
+    const uint32_t offset = static_cast<uint32_t>(nodes.size());
+    for (TriangleBvh::Node& n : rightNodes)
+      if (n.count == 0) n.first += offset;
+    nodes.insert(nodes.end(), rightNodes.begin(), rightNodes.end());
+    nodes[ni].first = offset;
     nodes[ni].count = 0;
     return ni;
   }
@@ -178,18 +201,79 @@ void TriangleBvh::build(const glm::dvec3* positions, const uint32_t* indices, si
 void TriangleBvh::buildNodes(size_t triangleCount) {
   nodes_.clear();
   prims_.clear();
+  primBoxes_.clear();
+  slotGroup_.clear();
+  nodeGroup_.clear();
   if (triangleCount == 0) return;
   PTERYLA_CHECK(triangleCount < (1u << 31), "too many triangles for the BVH");
-  Builder b{std::vector<PrimInfo>(triangleCount), prims_, nodes_};
-  prims_.resize(triangleCount);
-  for (uint32_t t = 0; t < triangleCount; ++t) {
-    prims_[t] = t;
-    PrimInfo& pi = b.info[t];
-    for (int c = 0; c < 3; ++c) pi.box.add(vertex(t, c));
-    pi.centroid = 0.5 * (pi.box.lo + pi.box.hi);
-  }
+  std::vector<PrimInfo> info(triangleCount);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangleCount, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t < r.end(); ++t) {
+      PrimInfo& pi = info[t];
+      pi.id = static_cast<uint32_t>(t);
+      for (int c = 0; c < 3; ++c) pi.box.add(vertex(static_cast<uint32_t>(t), c));
+      pi.centroid = 0.5 * (pi.box.lo + pi.box.hi);
+    }
+  });
   nodes_.reserve(2 * triangleCount / kLeafSize + 1);
-  b.build(0, static_cast<uint32_t>(triangleCount), 0);
+  Builder{info}.build(0, static_cast<uint32_t>(triangleCount), 0, nodes_);
+  // Each slot's triangle, and its own box (float, rounded outward) for the pair traversal's filter.
+  prims_.resize(triangleCount);
+  primBoxes_.resize(triangleCount);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangleCount, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      prims_[k] = info[k].id;
+      const Box& box = info[k].box;
+      PrimBox& pb = primBoxes_[k];
+      for (int a = 0; a < 3; ++a) {
+        pb.lo[a] = std::nextafter(static_cast<float>(box.lo[a]), -std::numeric_limits<float>::infinity());
+        pb.hi[a] = std::nextafter(static_cast<float>(box.hi[a]), std::numeric_limits<float>::infinity());
+      }
+    }
+  });
+}
+
+void TriangleBvh::setGroups(const uint32_t* groupOfTriangle) {
+  slotGroup_.resize(prims_.size());
+  for (size_t k = 0; k < prims_.size(); ++k) slotGroup_[k] = groupOfTriangle[prims_[k]];
+  // Children follow their parent in nodes_, so one backward sweep sees both before the parent.
+  nodeGroup_.assign(nodes_.size(), kMixed);
+  for (size_t i = nodes_.size(); i-- > 0;) {
+    const Node& n = nodes_[i];
+    uint32_t g;
+    if (n.count > 0) {
+      g = slotGroup_[n.first];
+      for (uint32_t k = 1; k < n.count && g != kMixed; ++k)
+        if (slotGroup_[n.first + k] != g) g = kMixed;
+    } else {
+      g = nodeGroup_[i + 1] == nodeGroup_[n.first] ? nodeGroup_[i + 1] : kMixed;
+    }
+    nodeGroup_[i] = g;
+  }
+}
+
+std::vector<std::pair<uint32_t, uint32_t>> TriangleBvh::pairTasks(size_t minTasks) const {
+  std::vector<std::pair<uint32_t, uint32_t>> tasks;
+  if (nodes_.empty()) return tasks;
+  if (!mixedPair(0, 0)) return tasks;
+  tasks.emplace_back(0, 0);
+  // Breadth-first splitting of node pairs, the same way the traversal splits them, until there are
+  // enough; pairs of leaves stay whole. Deterministic: it depends on the tree only.
+  for (bool grew = true; grew && tasks.size() < minTasks;) {
+    grew = false;
+    std::vector<std::pair<uint32_t, uint32_t>> next;
+    next.reserve(4 * tasks.size());
+    for (const auto& [a, b] : tasks) {
+      if (nodes_[a].count > 0 && nodes_[b].count > 0) {
+        next.emplace_back(a, b);
+      } else {
+        splitPair(a, b, [&](uint32_t x, uint32_t y) { next.emplace_back(x, y); });
+        grew = true;
+      }
+    }
+    tasks.swap(next);
+  }
+  return tasks;
 }
 
 double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <tbb/task_arena.h>
@@ -140,6 +141,38 @@ class TriangleBvh {
       }
     }
   }
+  // Self-overlap (a dual-tree traversal, each unordered pair visited once): calls f(t, u), t < u, for
+  // every pair of distinct triangles whose bounding boxes overlap (and, after setGroups(), whose groups
+  // differ: subtrees of one group are never paired with themselves or each other). pairTasks() cuts the work into at
+  // least minTasks independent node pairs (fewer only when the tree is small); overlappingPairs(task, f)
+  // does one of them. Together they visit each such pair exactly once, in a deterministic order per task.
+  std::vector<std::pair<uint32_t, uint32_t>> pairTasks(size_t minTasks) const;
+  // A group per triangle (e.g. its feather), indexed like the build's triangles; call after build().
+  void setGroups(const uint32_t* groupOfTriangle);
+  template <class F>
+  void overlappingPairs(std::pair<uint32_t, uint32_t> task, F&& f) const {
+    std::vector<std::pair<uint32_t, uint32_t>> stack{task};
+    while (!stack.empty()) {
+      const auto [a, b] = stack.back();
+      stack.pop_back();
+      const Node &na = nodes_[a], &nb = nodes_[b];
+      if (na.count == 0 || nb.count == 0) {
+        splitPair(a, b, [&](uint32_t x, uint32_t y) { stack.emplace_back(x, y); });
+        continue;
+      }
+      // Two leaves, or one leaf with itself: the primitive pairs whose own boxes overlap.
+      for (uint32_t i = 0; i < na.count; ++i) {
+        const uint32_t si = na.first + i;
+        for (uint32_t j = a == b ? i + 1 : 0; j < nb.count; ++j) {
+          const uint32_t sj = nb.first + j;
+          if (!slotGroup_.empty() && slotGroup_[si] == slotGroup_[sj]) continue;
+          if (!boxesOverlap(primBoxes_[si].lo, primBoxes_[si].hi, primBoxes_[sj].lo, primBoxes_[sj].hi)) continue;
+          const uint32_t t = prims_[si], u = prims_[sj];
+          if (t < u) f(t, u); else f(u, t);
+        }
+      }
+    }
+  }
   // Any triangle hit by the ray origin + t dir, t in (tMin, tMax]?
   bool anyHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax) const;
   // Nearest triangle to p (squared distance <= maxDist2); returns -1 when none, else the triangle and
@@ -147,11 +180,51 @@ class TriangleBvh {
   int64_t nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& bary, double& dist2) const;
 
  private:
+  struct PrimBox {
+    float lo[3], hi[3];
+  };
+  static bool boxesOverlap(const float* alo, const float* ahi, const float* blo, const float* bhi) {
+    return alo[0] <= bhi[0] && blo[0] <= ahi[0] && alo[1] <= bhi[1] && blo[1] <= ahi[1] && alo[2] <= bhi[2] &&
+           blo[2] <= ahi[2];
+  }
+  // One step of the dual traversal on an overlapping pair that is not two leaves: emits the child pairs
+  // whose boxes overlap. A node with itself: (left, left), (right, right), (left, right). Two nodes:
+  // the larger inner node (by box area; a leaf is never split) against the other.
+  static constexpr uint32_t kMixed = 0xffffffffu;
+  // Can the pair (a, b) hold two triangles of different groups?
+  bool mixedPair(uint32_t a, uint32_t b) const {
+    if (nodeGroup_.empty()) return true;
+    const uint32_t ga = nodeGroup_[a];
+    return ga == kMixed || (a != b && ga != nodeGroup_[b]);
+  }
+  template <class Emit>
+  void splitPair(uint32_t a, uint32_t b, Emit&& emit) const {
+    const Node& na = nodes_[a];
+    if (a == b) {
+      const uint32_t l = a + 1, r = na.first;
+      if (mixedPair(l, l)) emit(l, l);
+      if (mixedPair(r, r)) emit(r, r);
+      if (mixedPair(l, r) && boxesOverlap(nodes_[l].lo, nodes_[l].hi, nodes_[r].lo, nodes_[r].hi)) emit(l, r);
+      return;
+    }
+    const Node& nb = nodes_[b];
+    auto area = [](const Node& n) {
+      const float dx = n.hi[0] - n.lo[0], dy = n.hi[1] - n.lo[1], dz = n.hi[2] - n.lo[2];
+      return dx * dy + dy * dz + dz * dx;
+    };
+    const bool splitA = nb.count > 0 || (na.count == 0 && area(na) >= area(nb));
+    const uint32_t keep = splitA ? b : a, inner = splitA ? a : b;
+    const Node& k = nodes_[keep];
+    for (uint32_t c : {inner + 1, nodes_[inner].first})
+      if (mixedPair(c, keep) && boxesOverlap(nodes_[c].lo, nodes_[c].hi, k.lo, k.hi)) emit(splitA ? c : keep, splitA ? keep : c);
+  }
   void buildNodes(size_t triangleCount);
   const glm::vec3* posF_ = nullptr;
   const glm::dvec3* posD_ = nullptr;
   const uint32_t* idx_ = nullptr;
   std::vector<Node> nodes_;
+  std::vector<PrimBox> primBoxes_;  // per prims_ slot
+  std::vector<uint32_t> slotGroup_, nodeGroup_;  // setGroups(): per slot; per node (kMixed: several)
   std::vector<uint32_t> prims_;
 };
 
