@@ -411,9 +411,41 @@ const char* paramMethodName(ParamMethod m) {
   return "?";
 }
 
+glm::dvec2 gridDisplacement(const std::vector<GridDistortion>& handles, const glm::dvec2& q) {
+  glm::dvec2 d(0.0);
+  for (const GridDistortion& h : handles) {
+    const glm::dvec2 e = q - h.at;
+    const double s2 = glm::dot(e, e) / (h.radius * h.radius);
+    if (s2 < 1) d += (1 - s2) * (1 - s2) * h.move;
+  }
+  return d;
+}
+
+glm::dvec2 undistortUv(const std::vector<GridDistortion>& handles, const glm::dvec2& g, const std::string& where) {
+  if (handles.empty()) return g;
+  // q = g - D(q) contracts while D's Lipschitz constant is under 1 (one handle: 1.54 |move| / radius).
+  glm::dvec2 q = g;
+  for (int it = 0; it < 200; ++it) {
+    const glm::dvec2 next = g - gridDisplacement(handles, q);
+    const double step = glm::length(next - q);
+    q = next;
+    if (step <= 1e-14 * (1 + glm::length(g))) return q;
+  }
+  throw Error("the grid distortion folds the parameterization near (" + std::to_string(g.x) + ", " +
+                  std::to_string(g.y) + "): overlapping handles move too far (keep each |move| under 0.6 x radius "
+                  "and spread overlapping ones)",
+              "", where);
+}
+
 glm::dvec2 TractParameterization::uvAt(uint32_t face, const glm::dvec3& bary) const {
-  const auto& c = faceUv(face);
-  return bary.x * c[0] + bary.y * c[1] + bary.z * c[2];
+  if (distortion.empty()) {
+    const auto& c = faceUv(face);
+    return bary.x * c[0] + bary.y * c[1] + bary.z * c[2];
+  }
+  const auto it = std::lower_bound(faces.begin(), faces.end(), face);
+  PTERYLA_CHECK(it != faces.end() && *it == face, "face not in the parameterized tract");
+  const auto& c = projectedCornerUv[static_cast<size_t>(it - faces.begin())];
+  return undistortUv(distortion, bary.x * c[0] + bary.y * c[1] + bary.z * c[2], "parameterization.distortion");
 }
 
 const std::array<glm::dvec2, 3>& TractParameterization::faceUv(uint32_t face) const {
@@ -516,6 +548,13 @@ TractParameterization parameterizeTract(const SkinMesh& skin, const Tract& tract
   out.cornerUv.resize(tract.faces.size());
   for (size_t k = 0; k < tract.faces.size(); ++k)
     for (size_t c = 0; c < 3; ++c) out.cornerUv[k][c] = uv[wedges.corner[3 * k + c]];
+  if (!options.distortion.empty()) {
+    out.distortion = options.distortion;
+    out.projectedCornerUv = out.cornerUv;
+    const std::string at = "tracts." + tract.name + ".parameterization.distortion";
+    for (auto& corners : out.cornerUv)
+      for (glm::dvec2& c : corners) c = undistortUv(out.distortion, c, at);
+  }
 
   // Follicles of this tract.
   for (uint32_t i = 0; i < follicles.size(); ++i) {
@@ -553,6 +592,16 @@ ParameterizeOptions parseParameterization(JsonReader& r) {
   o.arapIterations = static_cast<int>(r.integer("arap_iterations", 50, 1, 10000));
   o.autoMaxBackfacing = r.number("auto_max_backfacing", 0.01, 0.0, 1.0);
   o.autoSeams = r.boolean("auto_seams", true);
+  std::vector<JsonReader> handles = r.objects("distortion");
+  for (JsonReader& h : handles) {
+    GridDistortion d;
+    d.at = h.vec2("at");
+    d.move = h.vec2("move");
+    d.radius = h.number("radius", 0.1, 1e-6, 10.0);
+    if (glm::length(d.move) > 0.6 * d.radius) h.fail("move", "must be at most 0.6 x radius (a larger move folds the grid)");
+    h.finish();
+    o.distortion.push_back(d);
+  }
   r.finish();
   return o;
 }

@@ -225,3 +225,61 @@ TEST(Coat2Parameterize, BundledBirdTractsFlattenWithoutFolds) {
   EXPECT_EQ(tracts, 18u);  // the thesis' 18 tracts (9.2.1)
   EXPECT_EQ(cut, 3u);      // ventral and both crural tracts are bands around a hole
 }
+
+TEST(Coat2Parameterize, GridDistortionCarriesTheGridAlongWithTheMove) {
+  // Flat patch seen from above: undistorted (u,v) = (x, y) / 2. One handle moves the grid around
+  // (0.5, 0.25) by (0.06, 0.02) within 0.2: a follicle at g then has the grid coordinate q with
+  // q + D(q) = g, follicles outside the radius keep theirs exactly, and the grid point under the handle's
+  // centre is found where the centre moved to.
+  const SkinMesh grid = makeGridPatch(8, 4, 2.0, 1.0);
+  const std::vector<Tract> tracts{wholeMeshTract(grid)};
+  const Follicles fol = scatterTracts(grid, tracts, 400);
+  ParameterizeOptions o;
+  o.method = ParamMethod::Projection;
+  o.viewDirection = {0, 0, -1};
+  o.up = {0, 1, 0};
+  const TractParameterization plain = parameterizeTract(grid, tracts[0], 0, fol, o);
+  const GridDistortion h{{0.5, 0.25}, {0.06, 0.02}, 0.2};
+  o.distortion = {h};
+  const TractParameterization warped = parameterizeTract(grid, tracts[0], 0, fol, o);
+  ASSERT_EQ(warped.follicles, plain.follicles);
+  size_t moved = 0;
+  for (size_t k = 0; k < plain.follicles.size(); ++k) {
+    const glm::dvec2 g = plain.follicleUv[k], q = warped.follicleUv[k];
+    const glm::dvec2 back = q + gridDisplacement(o.distortion, q);
+    EXPECT_NEAR(back.x, g.x, 1e-12);
+    EXPECT_NEAR(back.y, g.y, 1e-12);
+    if (glm::length(g - h.at) > h.radius + glm::length(h.move)) {
+      EXPECT_EQ(q, g);  // untouched outside the handle
+    } else if (q != g) {
+      ++moved;
+    }
+  }
+  EXPECT_GT(moved, 10u);
+  // The centre's grid point sits at centre + move on the surface.
+  const glm::dvec2 c = undistortUv(o.distortion, h.at + h.move, "test");
+  EXPECT_NEAR(c.x, h.at.x, 1e-12);
+  EXPECT_NEAR(c.y, h.at.y, 1e-12);
+  // Corners are undistorted the same way, so faceUv-based consumers (layer ordering) agree.
+  EXPECT_EQ(warped.projectedCornerUv, plain.cornerUv);
+  EXPECT_NE(warped.cornerUv, plain.cornerUv);
+}
+
+TEST(Coat2Parameterize, GridDistortionIsReadAndFoldsAreRefused) {
+  const Json good = Json::parse(
+      R"({"method": "projection", "distortion": [{"at": [0.5, 0.5], "move": [0.05, 0], "radius": 0.2}]})");
+  JsonReader r(good, "scene.json", "tracts[0].parameterization");
+  const ParameterizeOptions o = parseParameterization(r);
+  ASSERT_EQ(o.distortion.size(), 1u);
+  EXPECT_EQ(o.distortion[0].move, glm::dvec2(0.05, 0));
+  EXPECT_EQ(o.distortion[0].radius, 0.2);
+  // One handle moving further than 0.6 x its radius would fold the grid: refused, naming the key.
+  const Json far = Json::parse(R"({"distortion": [{"at": [0.5, 0.5], "move": [0.2, 0], "radius": 0.2}]})");
+  JsonReader r2(far, "scene.json", "tracts[0].parameterization");
+  const std::string e = errorText([&] { parseParameterization(r2); });
+  EXPECT_NE(e.find("distortion[0]"), std::string::npos) << e;
+  EXPECT_NE(e.find("move"), std::string::npos) << e;
+  // Stacked handles that together fold the grid: an Error, not a wrong answer or a hang.
+  std::vector<GridDistortion> stacked(6, GridDistortion{{0.5, 0.5}, {0.11, 0}, 0.2});
+  EXPECT_THROW(undistortUv(stacked, {0.55, 0.5}, "tracts.t.parameterization.distortion"), Error);
+}

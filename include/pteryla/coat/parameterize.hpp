@@ -39,6 +39,20 @@ namespace pteryla::coat {
 
 enum class ParamMethod { Projection, Lscm, Arap, Auto };
 
+// Grid distortion before projection (6.2.1: "if the surface is not close to planar or some non-linear
+// interpolation of the feathers is desired, distortion of the grid before projection can be used"). One
+// handle moves the parameter grid around `at` by `move`, fading to nothing at `radius` (a smooth bump,
+// (1 - (d/radius)^2)^2), all in the tract's normalised (u,v). The grid point q is displaced to
+// q + D(q) before it is laid on the surface, so a surface point that lands at g gets the grid coordinate
+// q with q + D(q) = g: features of the interpolation (key feathers' influence, ordering rows) are
+// carried along with the move. |move| <= 0.6 radius keeps one handle fold-free; overlapping handles
+// that fold the grid are an Error.
+struct GridDistortion {
+  glm::dvec2 at{0.0};
+  glm::dvec2 move{0.0};
+  double radius = 0.1;
+};
+
 const char* paramMethodName(ParamMethod m);  // "projection", "lscm", "arap", "auto"
 
 struct ParameterizeOptions {
@@ -53,7 +67,14 @@ struct ParameterizeOptions {
   // before a non-disk tract is rejected instead of projected.
   double autoMaxBackfacing = 0.01;
   bool autoSeams = true;        // Auto: cut non-disk genus-0 tracts open along seams (else project/reject)
+  std::vector<GridDistortion> distortion;  // any method; applied to the normalised (u,v)
 };
+
+// The grid displacement D(q) of a set of handles.
+glm::dvec2 gridDisplacement(const std::vector<GridDistortion>& handles, const glm::dvec2& q);
+// The grid coordinate q that the distorted grid places at g (q + D(q) = g), by fixed-point iteration;
+// throws pteryla::Error (naming `where`) when the handles fold the grid there and it does not converge.
+glm::dvec2 undistortUv(const std::vector<GridDistortion>& handles, const glm::dvec2& g, const std::string& where);
 
 struct TractParameterization {
   ParamMethod method = ParamMethod::Projection;  // the method actually used (never Auto)
@@ -61,6 +82,10 @@ struct TractParameterization {
   // vertex agree except across seams (see seamEdges).
   std::vector<uint32_t> faces;
   std::vector<std::array<glm::dvec2, 3>> cornerUv;
+  // With a grid distortion: the corners before it (uvAt interpolates these, then undistorts the point,
+  // so a handle smaller than a face still acts exactly) and the handles. Empty / equal to cornerUv without.
+  std::vector<std::array<glm::dvec2, 3>> projectedCornerUv;
+  std::vector<GridDistortion> distortion;
   // Follicles of the tract (indices into Follicles, ascending) and their (u,v).
   std::vector<uint32_t> follicles;
   std::vector<glm::dvec2> follicleUv;
@@ -100,7 +125,7 @@ std::vector<double> uvFaceAreas(const TractParameterization& param);
 
 // Reads a "parameterization" object: {"method": "auto"|"projection"|"lscm"|"arap",
 // "view_direction": [x,y,z], "up": [x,y,z], "arap_iterations": n, "auto_max_backfacing": f,
-// "auto_seams": bool}.
+// "auto_seams": bool, "distortion": [{"at": [u,v], "move": [du,dv], "radius": r}, ...]}.
 // Calls r.finish() (unknown keys rejected).
 ParameterizeOptions parseParameterization(JsonReader& r);
 
