@@ -571,8 +571,27 @@ void shaftProfile(const LocalFeather& L, double rMax, int bins, bool extend, Scr
 
 struct BarbFit {
   double mu = 0, alpha = 0;
+  double stretch = 1;  // keepBarbArcLength: the flattened barb scaled about its root to its old arc length
   bool resolved = true;
 };
+
+// A key barb's control vertex after flattening mu, stretching about the root cv0 (flattened likewise) by
+// `stretch` and lifting by alpha about the origin.
+inline dvec3 flattenCv(const dvec3& cv, const dvec3& cv0, double mu, double stretch, double ca, double sa) {
+  auto flat = [&](const dvec3& c) { return dvec3(c.x, c.y, c.z + mu * std::max(0.0, -c.z)); };
+  dvec3 f = flat(cv);
+  if (stretch != 1) {  // (exactly the plain flattening otherwise)
+    const dvec3 f0 = flat(cv0);
+    f = f0 + stretch * (f - f0);
+  }
+  return {f.x * ca - f.z * sa, f.y, f.x * sa + f.z * ca};
+}
+
+double curveLength(const std::vector<dvec3>& c) {
+  double l = 0;
+  for (size_t k = 1; k < c.size(); ++k) l += glm::length(c[k] - c[k - 1]);
+  return l;
+}
 
 void bernsteinTable(size_t cvs, size_t samples, Scratch& S) {
   if (S.bernCvs == cvs && S.bernSamples == samples) return;
@@ -595,13 +614,10 @@ void bernsteinTable(size_t cvs, size_t samples, Scratch& S) {
 
 // Samples (s, z) of the key barb in its slicing plane (x = along from the root, z = up, scene units) after
 // flattening mu and lift alpha: control vertices cv in the barb-local unit frame scaled by len.
-void barbSamples(const dvec3* cvs, size_t n, double len, double mu, double alpha, Scratch& S) {
+void barbSamples(const dvec3* cvs, size_t n, double len, double mu, double alpha, Scratch& S, double stretch = 1) {
   S.tmp.resize(n);
   const double ca = std::cos(alpha), sa = std::sin(alpha);
-  for (size_t j = 0; j < n; ++j) {
-    const double z = cvs[j].z + mu * std::max(0.0, -cvs[j].z);
-    S.tmp[j] = {cvs[j].x * ca - z * sa, cvs[j].y, cvs[j].x * sa + z * ca};
-  }
+  for (size_t j = 0; j < n; ++j) S.tmp[j] = flattenCv(cvs[j], cvs[0], mu, stretch, ca, sa);
   // Each sample sums its terms in control-vertex order; the samples run in the inner loop (vectorised).
   const size_t m = S.bernSamples;
   S.cx.assign(m, 0.0);
@@ -673,6 +689,7 @@ BarbFit fitBarb(const dvec3* cvs, size_t n, double len, double sExt, const doubl
   bernsteinTable(n, static_cast<size_t>(4 * nb + 1), S);
   barbSamples(cvs, n, len, 0, 0, S);
   if (clears(S, bh, nb, cell, sRoot)) return fit;
+  const double arcLength = curveLength(S.curve);
   double mu = 0;
   bool feasible = true;
   const size_t m = S.bernSamples;
@@ -699,12 +716,20 @@ BarbFit fitBarb(const dvec3* cvs, size_t n, double len, double sExt, const doubl
     feasible = false;
   }
   fit.mu = mu;
-  if (feasible) {
+  if (o.keepBarbArcLength && mu > 0) {
+    // Thesis 6.4: "during packing arc-length was used to simulate a plausibly correct bending": a barb
+    // that flattens straightens out, so it is scaled about its root back to the arc length it had.
     barbSamples(cvs, n, len, mu, 0, S);
+    const double flat = curveLength(S.curve);
+    if (flat > 1e-12 * len && arcLength > flat) fit.stretch = arcLength / flat;
+  }
+  const double st = fit.stretch;
+  if (feasible) {
+    barbSamples(cvs, n, len, mu, 0, S, st);
     if (clears(S, bh, nb, cell, sRoot)) return fit;
   }
   double lo = 0, hi = o.maxBarbLift;
-  barbSamples(cvs, n, len, mu, hi, S);
+  barbSamples(cvs, n, len, mu, hi, S, st);
   if (!clears(S, bh, nb, cell, sRoot)) {
     fit.alpha = hi;
     fit.resolved = false;
@@ -712,7 +737,7 @@ BarbFit fitBarb(const dvec3* cvs, size_t n, double len, double sExt, const doubl
   }
   for (int it = 0; it < 24; ++it) {
     const double mid = 0.5 * (lo + hi);
-    barbSamples(cvs, n, len, mu, mid, S);
+    barbSamples(cvs, n, len, mu, mid, S, st);
     if (clears(S, bh, nb, cell, sRoot)) hi = mid;
     else lo = mid;
   }
@@ -1217,11 +1242,8 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
         ++st.barbsElevated;
         anyChanged = true;
         const double ca = std::cos(fit.alpha), sa = std::sin(fit.alpha);
-        for (size_t c = 0; c < k.cvCount; ++c) {
-          glm::dvec3& cv = cvs[c];
-          const double z = cv.z + fit.mu * std::max(0.0, -cv.z);
-          cv = {cv.x * ca - z * sa, cv.y, cv.x * sa + z * ca};
-        }
+        const glm::dvec3 cv0 = cvs[0];
+        for (size_t c = 0; c < k.cvCount; ++c) cvs[c] = flattenCv(cvs[c], cv0, fit.mu, fit.stretch, ca, sa);
       }
       if (fit.alpha > 0) ++st.barbsLifted;
       if (!fit.resolved) ++st.barbsUnresolved;

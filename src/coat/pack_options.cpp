@@ -32,6 +32,7 @@ PackOptions parsePackOptions(JsonReader& r) {
   o.heightFieldBins = static_cast<int>(r.integer("height_field_bins", o.heightFieldBins, 4, 4096));
   o.barbFieldBins = static_cast<int>(r.integer("barb_field_bins", o.barbFieldBins, 2, 1024));
   o.maxFlatten = r.number("max_flatten", o.maxFlatten, 0.0, 2.0);
+  o.keepBarbArcLength = r.boolean("keep_barb_arc_length", o.keepBarbArcLength);
   o.maxBarbLift = r.number("max_barb_lift_deg", o.maxBarbLift / kDeg, 0.0, 90.0) * kDeg;
   o.elevateBarbs = r.boolean("elevate_barbs", o.elevateBarbs);
   o.extendShaft = r.boolean("extend_shaft", o.extendShaft);
@@ -63,6 +64,7 @@ Json packOptionsToJson(const PackOptions& o) {
   if (o.heightFieldBins != d.heightFieldBins) j["height_field_bins"] = o.heightFieldBins;
   if (o.barbFieldBins != d.barbFieldBins) j["barb_field_bins"] = o.barbFieldBins;
   if (o.maxFlatten != d.maxFlatten) j["max_flatten"] = o.maxFlatten;
+  if (o.keepBarbArcLength != d.keepBarbArcLength) j["keep_barb_arc_length"] = o.keepBarbArcLength;
   if (o.maxBarbLift != d.maxBarbLift) j["max_barb_lift_deg"] = o.maxBarbLift / kDeg;
   if (o.elevateBarbs != d.elevateBarbs) j["elevate_barbs"] = o.elevateBarbs;
   if (o.extendShaft != d.extendShaft) j["extend_shaft"] = o.extendShaft;

@@ -678,3 +678,55 @@ TEST(PackOptions, WithDefaultSamplingResetsOnlyTheSampling) {
   EXPECT_EQ(d.clearance, 0.003);
   EXPECT_EQ(d.threads, 2);
 }
+
+namespace {
+double keyArcLength(const PackedKeyBarbs& K, size_t key) {
+  const glm::dvec3* cv = K.cvs.data() + K.cvOffset[key];
+  const size_t n = K.cvOffset[key + 1] - K.cvOffset[key];
+  double l = 0;
+  dvec3 prev = feather::bezierPoint(cv, n, 0.0);
+  for (int u = 1; u <= 2000; ++u) {
+    const dvec3 p = feather::bezierPoint(cv, n, u / 2000.0);
+    l += glm::length(p - prev);
+    prev = p;
+  }
+  return l;
+}
+}  // namespace
+
+TEST(Pack, FlattenedBarbsKeepTheirArcLengthWhenAsked) {
+  // Thesis 6.4: packing bends barbs keeping their arc length. A key barb that flattens straightens out
+  // and, flattened alone, gets shorter; with keep_barb_arc_length it is scaled back to the length it had
+  // (the packer's key barbs before any fitting: the same pack with elevate_barbs off).
+  const SphereScene& s = scene();
+  PackOptions plain;
+  plain.elevateBarbs = false;
+  const PackResult ref = pack(s.skin, s.coat, plain);
+  PackOptions flat, kept;
+  kept.keepBarbArcLength = true;
+  const PackResult rf = pack(s.skin, s.coat, flat), rk = pack(s.skin, s.coat, kept);
+  ASSERT_GT(rk.stats.barbsElevated, 50u);
+  EXPECT_EQ(rk.stats.barbsUnresolved, 0u);
+  for (const PackResult* r : {&rf, &rk}) {
+    ASSERT_EQ(r->packedKeys.keyOffset, ref.packedKeys.keyOffset);
+    ASSERT_EQ(r->packedKeys.cvOffset, ref.packedKeys.cvOffset);
+  }
+  size_t shortened = 0, changed = 0;
+  const size_t keys = ref.packedKeys.cvOffset.size() - 1;
+  for (size_t k = 0; k < keys; ++k) {
+    const double l0 = keyArcLength(ref.packedKeys, k);
+    const double lf = keyArcLength(rf.packedKeys, k), lk = keyArcLength(rk.packedKeys, k);
+    if (lf < l0 * (1 - 1e-3)) ++shortened;
+    if (lk != l0) ++changed;
+    EXPECT_NEAR(lk, l0, 2e-3 * l0) << "key barb " << k;  // kept (the packer measures on 65 samples)
+    EXPECT_GE(lk, lf * (1 - 1e-9)) << "key barb " << k;
+  }
+  EXPECT_GT(shortened, 20u);  // without the option, flattening shortens barbs
+  EXPECT_GT(changed, 20u);
+  // Off by default, read and written as packing.keep_barb_arc_length.
+  EXPECT_FALSE(PackOptions{}.keepBarbArcLength);
+  const Json j = packOptionsToJson(kept);
+  EXPECT_EQ(j.at("keep_barb_arc_length"), true);
+  JsonReader r(j, "scene.json", "packing");
+  EXPECT_TRUE(parsePackOptions(r).keepBarbArcLength);
+}

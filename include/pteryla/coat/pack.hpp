@@ -74,6 +74,7 @@ struct PackOptions {
   int heightFieldBins = 48;    // radius bins of the shaft height field
   int barbFieldBins = 16;      // bins along a key barb of its height field
   double maxFlatten = 1.0;     // flattening fraction limit (1 = flat; up to 2 allows reverse curvature)
+  bool keepBarbArcLength = false;  // a flattened key barb is scaled about its root back to its arc length (6.4)
   double maxBarbLift = 1.0;    // radians a key barb may rotate up about its root when flattening is not enough
   bool elevateBarbs = true;    // 6.3.3 barb elevation
   bool extendShaft = true;     // extend the shaft past its tip along the tip tangent to the footprint reach
