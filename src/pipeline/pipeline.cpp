@@ -72,6 +72,8 @@ struct TractSettings {
   std::vector<glm::dvec3> pinned;
   coat::TractFeatherOptions feathers;
   std::shared_ptr<const feather::GrowthSchedule> growth;  // the tract's "growth" (null: none)
+  std::string overlapGroup;  // "overlap_group": tracts of one group share one distribution where they overlap
+  double area = 0;
   std::string element;
 };
 
@@ -179,6 +181,7 @@ struct Pipeline::Impl {
   void computeSkin();
   void computeTracts();
   void computeDistribute();
+  void redistributeOverlaps(uint64_t& nextId);
   void computeInterpolate();
   coat::TractParameterization boxParameterization(uint32_t tract) const;
   void computeDirections();
@@ -302,6 +305,8 @@ void Pipeline::Impl::computeTracts() {
       t.featherScale = r.number("feather_scale", 1.0, 1e-6, 1e6);
     }
     t.featherSpacings = r.number("feather_spacings", t.featherSpacings, 0.1, 100.0);
+    t.area = area;
+    t.overlapGroup = r.string("overlap_group", "");
     t.relax.iterations = 40;
     if (r.has("relax")) {
       JsonReader rr = r.object("relax");
@@ -368,7 +373,78 @@ void Pipeline::Impl::computeDistribute() {
     relaxResults.push_back(f.size() > t.pinned.size() ? coat::relaxFollicles(rest, t.tract, f, ro) : coat::RelaxResult{});
     follicles.append(f);
   }
+  redistributeOverlaps(nextId);
   report(progress, "distribute", 1);
+}
+
+// Thesis 9.2.1: "if the tracts are the same feather type a more uniform distribution is typically desired.
+// This can be accomplished by running the follicle distribution algorithm a second time, on only polygons
+// of multiple tracts." Per overlap_group (in order of first appearance): the faces in two or more of its
+// tracts lose the follicles scattered there (pinned ones stay) and get one distribution at the group's
+// mean density, relaxed on those faces; each new follicle joins the group's tract whose remaining
+// follicle is nearest (the tract it continues). Deterministic in the scene seed and the group's index.
+void Pipeline::Impl::redistributeOverlaps(uint64_t& nextId) {
+  std::vector<std::string> groups;
+  for (const TractSettings& t : tractSettings)
+    if (!t.overlapGroup.empty() && std::find(groups.begin(), groups.end(), t.overlapGroup) == groups.end())
+      groups.push_back(t.overlapGroup);
+  for (size_t g = 0; g < groups.size(); ++g) {
+    std::vector<uint32_t> members;
+    for (size_t i = 0; i < tractSettings.size(); ++i)
+      if (tractSettings[i].overlapGroup == groups[g]) members.push_back(static_cast<uint32_t>(i));
+    if (members.size() < 2) continue;
+    std::vector<uint8_t> cover(rest.faceCount(), 0), isMember(tractSettings.size(), 0);
+    double density = 0;
+    for (uint32_t i : members) {
+      isMember[i] = 1;
+      const TractSettings& t = tractSettings[i];
+      for (uint32_t f : t.tract.faces) cover[f] = static_cast<uint8_t>(std::min(cover[f] + 1, 2));
+      density += t.density > 0 ? t.density : double(t.count) / std::max(t.area, 1e-300);
+    }
+    density /= double(members.size());
+    coat::Tract shared;
+    shared.name = groups[g] + " overlap";
+    for (uint32_t f = 0; f < cover.size(); ++f)
+      if (cover[f] >= 2) shared.faces.push_back(f);
+    if (shared.faces.empty() || !(density > 0)) continue;
+    // The group's follicles off the shared faces (and pinned ones) stay.
+    coat::Follicles kept;
+    kept.reserve(follicles.size());
+    for (size_t k = 0; k < follicles.size(); ++k) {
+      if (isMember[follicles.tract[k]] && cover[follicles.face[k]] >= 2 && !follicles.pinned[k]) continue;
+      kept.push(rest, follicles.face[k], follicles.bary[k], follicles.tract[k], follicles.id[k], follicles.pinned[k]);
+    }
+    coat::ScatterOptions so;
+    so.seed = mix64(scene.seed * 0x9E37u + 0x0E7A0000u + g);
+    so.density.uniform = density;
+    so.tractIndex = members[0];
+    so.firstId = nextId;
+    coat::Follicles fresh = coat::scatterFollicles(rest, shared, so);
+    nextId += fresh.size() + 1;
+    if (fresh.size() > 1) coat::relaxFollicles(rest, shared, fresh, coat::RelaxOptions{});
+    // Each joins the member tract of the nearest remaining follicle (ties: the earlier tract).
+    std::vector<glm::dvec3> sites;
+    std::vector<uint32_t> siteTract;
+    for (size_t k = 0; k < kept.size(); ++k)
+      if (isMember[kept.tract[k]]) {
+        sites.push_back(kept.position[k]);
+        siteTract.push_back(kept.tract[k]);
+      }
+    for (size_t k = 0; k < fresh.size(); ++k) {
+      uint32_t best = members[0];
+      double bestD = std::numeric_limits<double>::infinity();
+      for (size_t s = 0; s < sites.size(); ++s) {
+        const double d = glm::dot(sites[s] - fresh.position[k], sites[s] - fresh.position[k]);
+        if (d < bestD || (d == bestD && siteTract[s] < best)) {
+          bestD = d;
+          best = siteTract[s];
+        }
+      }
+      fresh.tract[k] = best;
+    }
+    kept.append(fresh);
+    follicles = std::move(kept);
+  }
 }
 
 coat::TractParameterization Pipeline::Impl::boxParameterization(uint32_t tract) const {
