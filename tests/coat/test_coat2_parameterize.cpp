@@ -23,6 +23,15 @@ void expectUnitSquare(const TractParameterization& p) {
   EXPECT_NEAR(maxCoord, 1.0, 1e-12);
 }
 
+// The flat patch seen from above (orthographic along -z, y up): (u,v) = (x, y) / 2 on makeGridPatch(8, 4, 2, 1).
+ParameterizeOptions topDown() {
+  ParameterizeOptions o;
+  o.method = ParamMethod::Projection;
+  o.viewDirection = {0, 0, -1};
+  o.up = {0, 1, 0};
+  return o;
+}
+
 std::string errorText(const std::function<void()>& f) {
   try {
     f();
@@ -60,11 +69,7 @@ TEST(Coat2Parameterize, FollicleUvInterpolatesVertexUv) {
   const SkinMesh grid = makeGridPatch(8, 4, 2.0, 1.0);
   const std::vector<Tract> tracts{wholeMeshTract(grid)};
   const Follicles fol = scatterTracts(grid, tracts, 50);
-  ParameterizeOptions o;
-  o.method = ParamMethod::Projection;
-  o.viewDirection = {0, 0, -1};
-  o.up = {0, 1, 0};
-  const TractParameterization p = parameterizeTract(grid, tracts[0], 0, fol, o);
+  const TractParameterization p = parameterizeTract(grid, tracts[0], 0, fol, topDown());
   EXPECT_EQ(p.flippedFaces, 0u);
   EXPECT_NEAR(p.scale, 2.0, 1e-9);
   // Orthographic projection along -z of a flat patch: (u,v) = (x, y) / 2.
@@ -234,10 +239,7 @@ TEST(Coat2Parameterize, GridDistortionCarriesTheGridAlongWithTheMove) {
   const SkinMesh grid = makeGridPatch(8, 4, 2.0, 1.0);
   const std::vector<Tract> tracts{wholeMeshTract(grid)};
   const Follicles fol = scatterTracts(grid, tracts, 400);
-  ParameterizeOptions o;
-  o.method = ParamMethod::Projection;
-  o.viewDirection = {0, 0, -1};
-  o.up = {0, 1, 0};
+  ParameterizeOptions o = topDown();
   const TractParameterization plain = parameterizeTract(grid, tracts[0], 0, fol, o);
   const GridDistortion h{{0.5, 0.25}, {0.06, 0.02}, 0.2};
   o.distortion = {h};
