@@ -217,13 +217,18 @@ void TriangleBvh::buildNodes(size_t triangleCount) {
   });
   nodes_.reserve(2 * triangleCount / kLeafSize + 1);
   Builder{info}.build(0, static_cast<uint32_t>(triangleCount), 0, nodes_);
-  // Each slot's triangle, and its own box (float, rounded outward) for the pair traversal's filter.
   prims_.resize(triangleCount);
-  primBoxes_.resize(triangleCount);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangleCount, 4096), [&](const tbb::blocked_range<size_t>& r) {
+  for (size_t k = 0; k < triangleCount; ++k) prims_[k] = info[k].id;
+}
+
+void TriangleBvh::setGroups(const uint32_t* groupOfTriangle) {
+  // Each slot's own box (float, rounded outward) for the pair traversal's filter: only pair queries use
+  // it, so it is made here rather than with every BVH.
+  primBoxes_.resize(prims_.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, prims_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k < r.end(); ++k) {
-      prims_[k] = info[k].id;
-      const Box& box = info[k].box;
+      Box box;
+      for (int c = 0; c < 3; ++c) box.add(vertex(prims_[k], c));
       PrimBox& pb = primBoxes_[k];
       for (int a = 0; a < 3; ++a) {
         pb.lo[a] = std::nextafter(static_cast<float>(box.lo[a]), -std::numeric_limits<float>::infinity());
@@ -231,9 +236,6 @@ void TriangleBvh::buildNodes(size_t triangleCount) {
       }
     }
   });
-}
-
-void TriangleBvh::setGroups(const uint32_t* groupOfTriangle) {
   slotGroup_.resize(prims_.size());
   for (size_t k = 0; k < prims_.size(); ++k) slotGroup_[k] = groupOfTriangle[prims_[k]];
   // Children follow their parent in nodes_, so one backward sweep sees both before the parent.

@@ -120,34 +120,14 @@ class TriangleBvh {
   bool empty() const { return nodes_.empty(); }
   size_t triangleCount() const { return prims_.size(); }
 
-  // Calls f(triangle) for each triangle whose bounds overlap the box.
-  template <class F>
-  void queryBox(const float lo[3], const float hi[3], F&& f) const {
-    if (nodes_.empty()) return;
-    uint32_t stack[64];
-    int sp = 0;
-    stack[sp++] = 0;
-    while (sp > 0) {
-      const uint32_t ni = stack[--sp];
-      const Node& n = nodes_[ni];
-      if (n.lo[0] > hi[0] || n.hi[0] < lo[0] || n.lo[1] > hi[1] || n.hi[1] < lo[1] || n.lo[2] > hi[2] ||
-          n.hi[2] < lo[2])
-        continue;
-      if (n.count > 0) {
-        for (uint32_t k = 0; k < n.count; ++k) f(prims_[n.first + k]);
-      } else {
-        stack[sp++] = n.first;
-        stack[sp++] = ni + 1;
-      }
-    }
-  }
   // Self-overlap (a dual-tree traversal, each unordered pair visited once): calls f(t, u), t < u, for
   // every pair of distinct triangles whose bounding boxes overlap (and, after setGroups(), whose groups
   // differ: subtrees of one group are never paired with themselves or each other). pairTasks() cuts the work into at
   // least minTasks independent node pairs (fewer only when the tree is small); overlappingPairs(task, f)
   // does one of them. Together they visit each such pair exactly once, in a deterministic order per task.
   std::vector<std::pair<uint32_t, uint32_t>> pairTasks(size_t minTasks) const;
-  // A group per triangle (e.g. its feather), indexed like the build's triangles; call after build().
+  // A group per triangle (e.g. its feather), indexed like the build's triangles. Call after build() and
+  // before pairTasks() / overlappingPairs(), which need it.
   void setGroups(const uint32_t* groupOfTriangle);
   template <class F>
   void overlappingPairs(std::pair<uint32_t, uint32_t> task, F&& f) const {
