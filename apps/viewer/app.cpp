@@ -43,23 +43,26 @@ void closeCallback(GLFWwindow* w) {
 void glfwErrorCallback(int code, const char* what) { std::fprintf(stderr, "pteryla-viewer: GLFW error %d: %s\n", code, what); }
 
 // AddressSanitizer builds only (tools/test.sh). LeakSanitizer checks at exit, after glfwTerminate made
-// libGL unload Mesa's DRI driver (swrast_dri.so under Xvfb, Debian 12). Blocks the driver still held
-// in its globals (a u_mmInit heap: two 56-byte blocks) then lose their root and were reported as leaks
-// at an unmapped address that no suppression can name, and LeakSanitizer's own scan sometimes crashed
-// on the unloaded driver ("Tracer caught signal 11"). Keeping every loaded DRI driver mapped until the
-// process ends (RTLD_NODELETE) keeps those roots: the viewer's tests are clean with no suppression.
-void pinDriDriversForLeakSanitizer() {
+// libGL unload what it loaded for the context: Mesa's DRI driver (swrast_dri.so under Xvfb, Debian 12)
+// and the libraries it pulled in (libGLX_mesa, libglapi, libLLVM ...). Blocks the driver still held in
+// its globals (a u_mmInit heap: two 56-byte blocks) then lost their root and were reported as leaks at
+// an unmapped address that no suppression can name. Worse, a thread's dynamic-TLS slot of an unloaded
+// library still points into freed memory, and LeakSanitizer's stop-the-world tracer crashes reading it
+// ("Tracer caught signal 11", "DTLS 42 at 0x2f2c"; the process then exits 1 instead of its own status:
+// about half of the runs of a script that fails early). Keeping every library loaded at this point
+// mapped until the process ends (RTLD_NODELETE) keeps both the roots and the TLS blocks: called once
+// the context exists and again before glfwTerminate, for whatever was loaded in between.
+void pinLoadedLibrariesForLeakSanitizer() {
 #if defined(__SANITIZE_ADDRESS__)
-  std::vector<std::string> drivers;
+  std::vector<std::string> libraries;
   dl_iterate_phdr(
       [](dl_phdr_info* info, size_t, void* out) {
         const std::string name = info->dlpi_name ? info->dlpi_name : "";
-        if (name.size() > 7 && name.compare(name.size() - 7, 7, "_dri.so") == 0)
-          static_cast<std::vector<std::string>*>(out)->push_back(name);
+        if (name.find(".so") != std::string::npos) static_cast<std::vector<std::string>*>(out)->push_back(name);
         return 0;
       },
-      &drivers);
-  for (const std::string& d : drivers) dlopen(d.c_str(), RTLD_LAZY | RTLD_NOLOAD | RTLD_NODELETE);
+      &libraries);
+  for (const std::string& l : libraries) dlopen(l.c_str(), RTLD_LAZY | RTLD_NOLOAD | RTLD_NODELETE);
 #endif
 }
 
@@ -96,6 +99,7 @@ App::~App() {
     ImGui::DestroyContext();
   }
   if (window_) glfwDestroyWindow(window_);
+  pinLoadedLibrariesForLeakSanitizer();
   glfwTerminate();
 }
 
@@ -119,7 +123,7 @@ bool App::initWindow() {
   glfwSetWindowUserPointer(window_, this);
   glfwSetWindowCloseCallback(window_, closeCallback);
   glfwMakeContextCurrent(window_);
-  pinDriDriversForLeakSanitizer();
+  pinLoadedLibrariesForLeakSanitizer();
   glfwSwapInterval(options_.vsync && !scripted() ? 1 : 0);
   context_ = std::make_unique<GlfwContext>(window_);
   renderer_ = std::make_unique<render::Renderer>(*context_);

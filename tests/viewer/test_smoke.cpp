@@ -127,6 +127,7 @@ TEST(ViewerSmoke, BadScriptExitsWithTwoAndNamesTheLine) {
   const std::string script = dir + "/bad.txt";
   std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\nrelax lots\nquit\n";
   const ViewerRun r = runViewer("--script \"" + script + "\"", dir + "/stderr.txt");
-  EXPECT_EQ(r.code, 2);
-  EXPECT_NE(slurp(dir + "/stderr.txt").find("line 2"), std::string::npos) << slurp(dir + "/stderr.txt");
+  const std::string err = slurp(dir + "/stderr.txt");
+  EXPECT_EQ(r.code, 2) << err;
+  EXPECT_NE(err.find("line 2"), std::string::npos) << err;
 }
