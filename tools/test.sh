@@ -5,7 +5,8 @@
 #     The single-node Slurm test runs there too (bootstrap --slurm installs slurm-wlm and munge).
 #  2. The real-mesh corpus tests (label corpus; only where ../shared/meshes exists) with the Release CLI
 #     (./build, -Werror; only the `pteryla` target is built for them): each feathers 3,000 follicles, too
-#     slow under the sanitizers.
+#     slow under the sanitizers. Only the bare variants: a minimal scene is the same coat (label
+#     corpus_minimal; a unit test holds that), so running it too would double the phase for nothing.
 #  3. Each reader's libFuzzer target for PTERYLA_FUZZ_SECONDS (default 60) s from its seed corpus
 #     (tools/fuzz.sh, clang, ./build-fuzz).
 # PTERYLA_TEST_RELEASE=1 also builds everything in ./build and runs the whole suite there. Each phase
@@ -27,7 +28,7 @@ if [ "${PTERYLA_TEST_RELEASE:-0}" = 1 ]; then
   phase "Release build and suite"
 elif [ -d ../shared/meshes ]; then
   PTERYLA_BUILD_TARGETS=pteryla bash tools/build.sh
-  ctest --test-dir build --output-on-failure -j"$(nproc)" -L corpus
+  ctest --test-dir build --output-on-failure -j"$(nproc)" -L corpus -LE corpus_minimal
   phase "Release CLI and corpus"
 fi
 bash tools/fuzz.sh "${PTERYLA_FUZZ_SECONDS:-60}"

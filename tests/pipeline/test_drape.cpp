@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include "pteryla/coat/coat_feathers.hpp"
@@ -108,6 +109,39 @@ TEST(Drape, BareMeshScenesDrapeAndTheMethodRoundTrips) {
   JsonReader rn(bareOptions, "sphere_250.obj", "packing");
   EXPECT_EQ(coat::parsePackOptions(rn).method, coat::PackMethod::Drape);
   EXPECT_EQ(coat::PackOptions{}.method, coat::PackMethod::Drape);
+}
+
+// The corpus runs each real mesh bare (`pteryla check MESH.obj`) in CI; its "minimal" variant (the mesh
+// plus one direction axis through the bounding box's centre along its longest axis, every other key a
+// default) is the same coat as long as this holds: a bare mesh gets exactly that axis, for the feather
+// directions and for the layer order, and nothing else differs.
+TEST(Drape, ABareMeshIsTheMinimalSceneWithTheLongestBoundingBoxAxis) {
+  const std::string mesh = std::string(PTERYLA_DATA_DIR) + "/meshes/wing.obj";
+  Pipeline bare(loadScene(mesh));
+  const coat::SkinMesh& skin = bare.restSkin();
+  glm::dvec3 lo(1e300), hi(-1e300);
+  for (const glm::dvec3& p : skin.positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const glm::dvec3 extent = hi - lo;
+  const int ax = extent.x >= extent.y && extent.x >= extent.z ? 0 : extent.y >= extent.z ? 1 : 2;
+  glm::dvec3 a = 0.5 * (lo + hi), b = a;
+  a[ax] = lo[ax];
+  b[ax] = hi[ax];
+  Json j = {{"pteryla", 1}, {"mesh", mesh}, {"directions", {{"axis", {{a.x, a.y, a.z}, {b.x, b.y, b.z}}}}}};
+  Pipeline minimal(sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/minimal.json"));
+  const coat::CoatFeathers& fb = bare.feathers();
+  const coat::CoatFeathers& fm = minimal.feathers();
+  ASSERT_GT(fb.size(), 1000u);
+  ASSERT_EQ(fb.size(), fm.size());
+  EXPECT_EQ(fb.layerOrder, fm.layerOrder);
+  size_t differ = 0;
+  for (size_t i = 0; i < fb.size(); ++i)
+    if (glm::length(fb.frames[i].tangent - fm.frames[i].tangent) > 1e-9 ||
+        glm::length(fb.frames[i].origin - fm.frames[i].origin) > 1e-12)
+      ++differ;
+  EXPECT_EQ(differ, 0u);
 }
 
 TEST(Drape, TheGuaranteeHoldsOnABareMeshWithABeakAndCreases) {
