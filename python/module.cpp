@@ -360,10 +360,11 @@ PYBIND11_MODULE(_pteryla, m) {
   py::class_<pteryla::TractSetup>(m, "Tract", R"(A feather tract: a set of skin faces carrying one kind of feather.
 
 Fields (scene-format names in brackets): name, groups, faces, count, density, feather_file [feather],
-feather_scale (0 = auto), feather_spacings, relax_iterations [relax.iterations].)")
+feather_scale (0 = auto), feather_spacings, relax_iterations [relax.iterations], seed (None: derived from
+the Setup's seed; an int re-scatters only this tract).)")
       .def(py::init([](std::string name, std::vector<std::string> groups, py::object faces, size_t count,
                        double density, py::object featherFile, double featherScale, double featherSpacings,
-                       int relaxIterations) {
+                       int relaxIterations, std::optional<uint64_t> seed, bool moult) {
              pteryla::TractSetup t;
              t.name = std::move(name);
              t.groups = std::move(groups);
@@ -375,12 +376,14 @@ feather_scale (0 = auto), feather_spacings, relax_iterations [relax.iterations].
              t.featherScale = featherScale;
              t.featherSpacings = featherSpacings;
              t.relaxIterations = relaxIterations;
+             t.seed = seed;
+             t.moult = moult;
              return t;
            }),
            py::arg("name"), py::kw_only(), py::arg("groups") = std::vector<std::string>{},
            py::arg("faces") = py::none(), py::arg("count") = 0, py::arg("density") = 0.0,
            py::arg("feather_file") = py::none(), py::arg("feather_scale") = 0.0, py::arg("feather_spacings") = 3.5,
-           py::arg("relax_iterations") = 40)
+           py::arg("relax_iterations") = 40, py::arg("seed") = py::none(), py::arg("moult") = true)
       .def_readwrite("name", &pteryla::TractSetup::name)
       .def_readwrite("groups", &pteryla::TractSetup::groups)
       .def_property(
@@ -399,19 +402,53 @@ feather_scale (0 = auto), feather_spacings, relax_iterations [relax.iterations].
       .def_readwrite("feather_scale", &pteryla::TractSetup::featherScale)
       .def_readwrite("feather_spacings", &pteryla::TractSetup::featherSpacings)
       .def_readwrite("relax_iterations", &pteryla::TractSetup::relaxIterations)
+      .def_readwrite("seed", &pteryla::TractSetup::seed,
+                     "This tract's own follicle seed (None: derived from Setup.seed and the tract's index).")
+      .def_readwrite("moult", &pteryla::TractSetup::moult, "False: keeps its feathers when Setup.moult is enabled.")
       .def("__repr__", [](const pteryla::TractSetup& t) {
         return "pteryla.Tract(" + py::repr(py::str(t.name)).cast<std::string>() + ", count=" +
                std::to_string(t.count) + ", density=" + py::repr(py::float_(t.density)).cast<std::string>() + ")";
       });
 
+  py::class_<pteryla::MoultSetup>(m, "Moult", R"(Feather replacement over time (docs/moult.md): a window moves through each
+tract's feathers from start to start + duration; feathers in it are lost, then regrow.
+
+Fields: enabled (False: no moult), start, duration (> 0), window (0, 1], sequence ('centre_out',
+'boundary_in', 'increasing_u', 'radial', 'random', ...), gap [0, 1), random [0, 1], seed.)")
+      .def(py::init([](bool enabled, double start, double duration, double window, std::string sequence, double gap,
+                       double random, uint64_t seed) {
+             pteryla::MoultSetup o;
+             o.enabled = enabled;
+             o.start = start;
+             o.duration = duration;
+             o.window = window;
+             o.sequence = std::move(sequence);
+             o.gap = gap;
+             o.random = random;
+             o.seed = seed;
+             return o;
+           }),
+           py::kw_only(), py::arg("enabled") = true, py::arg("start") = 0.0, py::arg("duration") = 1.0,
+           py::arg("window") = 0.2, py::arg("sequence") = "centre_out", py::arg("gap") = 0.05, py::arg("random") = 0.0,
+           py::arg("seed") = 1)
+      .def_readwrite("enabled", &pteryla::MoultSetup::enabled)
+      .def_readwrite("start", &pteryla::MoultSetup::start)
+      .def_readwrite("duration", &pteryla::MoultSetup::duration)
+      .def_readwrite("window", &pteryla::MoultSetup::window)
+      .def_readwrite("sequence", &pteryla::MoultSetup::sequence)
+      .def_readwrite("gap", &pteryla::MoultSetup::gap)
+      .def_readwrite("random", &pteryla::MoultSetup::random)
+      .def_readwrite("seed", &pteryla::MoultSetup::seed);
+
   py::class_<pteryla::CoatSetup>(m, "Setup", R"(The coat set-up a Session is built from.
 
 tracts: list of Tract (empty: one tract "all" over the whole skin); axis: body axis points, head to
 tail (empty: the longest bounding-box axis); ordering: "axis", "tracts" or "flow"; tract_order: tract
-names bottom layer first (ordering "tracts"); packing: "drape" or "height_field"; seed: int.)")
+names bottom layer first (ordering "tracts"); packing: "drape" or "height_field"; seed: int;
+moult: pteryla.Moult (default: off).)")
       .def(py::init([](std::vector<pteryla::TractSetup> tracts, std::vector<std::array<double, 3>> axis,
                        const std::string& ordering, std::vector<std::string> tractOrder, const std::string& packing,
-                       uint64_t seed) {
+                       uint64_t seed, std::optional<pteryla::MoultSetup> moult) {
              pteryla::CoatSetup c;
              c.tracts = std::move(tracts);
              c.axis = std::move(axis);
@@ -419,11 +456,13 @@ names bottom layer first (ordering "tracts"); packing: "drape" or "height_field"
              c.tractOrder = std::move(tractOrder);
              setPacking(c, packing);
              c.seed = seed;
+             if (moult) c.moult = *moult;
              return c;
            }),
            py::kw_only(), py::arg("tracts") = std::vector<pteryla::TractSetup>{},
            py::arg("axis") = std::vector<std::array<double, 3>>{}, py::arg("ordering") = "axis",
-           py::arg("tract_order") = std::vector<std::string>{}, py::arg("packing") = "drape", py::arg("seed") = 1)
+           py::arg("tract_order") = std::vector<std::string>{}, py::arg("packing") = "drape", py::arg("seed") = 1,
+           py::arg("moult") = py::none())
       .def_readwrite("tracts", &pteryla::CoatSetup::tracts)
       .def_readwrite("axis", &pteryla::CoatSetup::axis)
       .def_property(
@@ -438,7 +477,8 @@ names bottom layer first (ordering "tracts"); packing: "drape" or "height_field"
           },
           &setPacking,
           "'drape' or 'height_field' (docs/packing.md).")
-      .def_readwrite("seed", &pteryla::CoatSetup::seed, "Same skin + set-up + seed = same coat, bit for bit.");
+      .def_readwrite("seed", &pteryla::CoatSetup::seed, "Same skin + set-up + seed = same coat, bit for bit.")
+      .def_readwrite("moult", &pteryla::CoatSetup::moult, "pteryla.Moult (enabled False: no moult).");
 
   py::class_<PyFrame>(m, "Frame", R"(One evaluated frame as numpy arrays.
 
@@ -514,6 +554,18 @@ Session.from_scene_file(path): a scene file (docs/scene-format.md) or a bare mes
           },
           py::arg("t"), "Evaluation time (moult, skeleton and controls of a scene file).")
       .def_property_readonly("time", [](const PySession& s) { return s.session->time(); })
+      .def_property(
+          "pose_mode",
+          [](const PySession& s) { return s.session->poseMode() == pteryla::PoseMode::Follow ? "follow" : "repack"; },
+          [](PySession& s, const std::string& mode) {
+            s.requireMutable("pose_mode");
+            if (mode == "follow") s.session->setPoseMode(pteryla::PoseMode::Follow);
+            else if (mode == "repack") s.session->setPoseMode(pteryla::PoseMode::Repack);
+            else throw pteryla::Error("expected 'repack' or 'follow', got '" + mode + "'", "", "pose_mode");
+          },
+          R"(How set_pose moves the coat: 'repack' (default) re-lays it on the posed skin (a full evaluation
+per pose); 'follow' lays it once on the rest skin (or the scene's skeleton pose) and lets the posed
+skin carry it, elevations and drape fixed as laid (one pass over the vertices per pose).)")
       .def(
           "set_lod",
           [](PySession& s, double f) {

@@ -72,12 +72,29 @@ struct TractSetup {
   double featherScale = 0;          // multiplies every feather length; 0 = "auto": mean length =
   double featherSpacings = 3.5;     //   featherSpacings x the follicle spacing
   int relaxIterations = 40;         // Lloyd relaxation of the follicles (6.1)
+  std::optional<uint64_t> seed;     // this tract's own follicle seed: changing it re-scatters only this
+                                    //   tract; unset = derived from CoatSetup::seed and the tract's index
+  bool moult = true;                // false: this tract keeps its feathers when CoatSetup::moult is enabled
+};
+
+// Feather replacement over time (Streit 2003, 8.2; docs/moult.md, where each key is explained): a window
+// moves through each tract's feathers from `start` to `start + duration`; feathers in it are lost, then
+// regrow. Tracts with TractSetup::moult false keep their feathers.
+struct MoultSetup {
+  bool enabled = false;               // off: no feather is ever lost
+  double start = 0;                   // time the window enters the order
+  double duration = 1;                // time until the last feather is renewed (> 0)
+  double window = 0.2;                // (0, 1]: feathers moulting at once, as a fraction of the tract
+  std::string sequence = "centre_out";  // docs/moult.md: centre_out, boundary_in, increasing_u, radial, random ...
+  double gap = 0.05;                  // [0, 1): fraction of a feather's window with no feather
+  double random = 0;                  // [0, 1]: jitter of the order
+  uint64_t seed = 1;                  // of sequence "random" and the jitter
 };
 
 // The coat set-up a Session is built from. It covers what maps cleanly onto the scene format; the
 // rest (key feathers and interpolation, pinned follicles, density bias, label files and tract set
-// operations, styling vectors, per-tract directions, packer knobs and styling, moult, skeleton,
-// expressive controls) is only reachable through a scene file: Session::fromSceneFile.
+// operations, styling vectors, per-tract directions, packer knobs and styling, per-tract moult
+// schedules, skeleton, expressive controls) is only reachable through a scene file: Session::fromSceneFile.
 struct CoatSetup {
   std::vector<TractSetup> tracts;                 // empty: one tract "all" over the whole skin
   // Body axis, head to tail (>= 2 distinct points): feathers point along it (6.3.1) and, with
@@ -90,11 +107,26 @@ struct CoatSetup {
   enum class Packing { Drape, HeightField };      // docs/packing.md
   Packing packing = Packing::Drape;
   uint64_t seed = 1;                              // same skin + set-up + seed = same coat, bit for bit
+  MoultSetup moult;                               // off by default
 };
 
 // Progress of evaluate(): stage name ("distribute", "interpolate", "pack", "mesh"; the skin and the
 // feathers are read by the constructor) and fraction in [0, 1]. Return false to cancel.
 using Progress = std::function<bool(const std::string& stage, double fraction)>;
+
+// How a pose given to Session::setPose moves the coat.
+enum class PoseMode {
+  // Re-frame, repack and re-drape the coat on the posed skin (Streit 2003, 8.3): the packing's guarantees
+  // hold at every pose; a pose costs a full evaluation of the time stages.
+  Repack,
+  // Lay the coat once on the base skin (the rest skin, or a scene skeleton's pose at the session's time)
+  // and let the posed skin carry it: every coat vertex and follicle keeps its offset in the local frame of
+  // its nearest base-skin point (coat/skin_binding.hpp). Elevations and drape stay as laid on the base
+  // ("fixed elevations"); feathers bend with the skin. A pose costs one pass over the coat's vertices
+  // (docs/architecture.md, "Host API", has the numbers). frame()'s origins, normals, tangents, binormals, positions and
+  // vertexNormals are the carried ones; elevations are the base's.
+  Follow,
+};
 
 // A read-only view of an array the Session owns.
 template <class T>
@@ -200,6 +232,9 @@ class PTERYLA_API Session {
   void setPose(const std::vector<double>& positions);
   void setPose(const float* xyz, size_t vertexCount);
   void clearPose();  // back to the rest skin (or the scene's skeleton)
+  // PoseMode::Repack (default) or Follow. Switching keeps the pose the host gave.
+  void setPoseMode(PoseMode mode);
+  PoseMode poseMode() const;
   // Evaluation time (moult, skeleton and controls of a scene file; nothing changes with time otherwise).
   void setTime(double t);
   double time() const;
@@ -214,7 +249,7 @@ class PTERYLA_API Session {
   // The last complete evaluation. Throws pteryla::Error when an input changed since (call evaluate()).
   const Frame& frame() const;
   // Runs the independent checker on the current frame at full detail (evaluates first if needed, and
-  // leaves frame() valid). Costs more than an evaluation: it also meshes and checks the unpacked coat.
+  // leaves frame() valid). Throws with a PoseMode::Follow pose set (it checks what the pipeline laid). Costs more than an evaluation: it also meshes and checks the unpacked coat.
   Metrics metrics();
   // Writes the last complete evaluation's coat mesh (frame()) as Wavefront OBJ or PLY, chosen by the
   // extension of `path` (".obj", ".ply"); PLY carries every vertex attribute (feather/mesh_io.hpp). Throws
@@ -223,7 +258,8 @@ class PTERYLA_API Session {
   void exportMesh(const std::string& path) const;
 
   // Writes the coat and the skin at the session's pose to `path` (ExportSettings), evaluating each time
-  // of settings.times (the session's time is kept). The file is written to a temporary and renamed: a
+  // of settings.times (the session's time is kept). Not for a PoseMode::Follow pose yet (throws; use
+  // exportMesh for the frame). The file is written to a temporary and renamed: a
   // failure throws pteryla::Error naming the file or setting and keeps any previous file. frame() stays
   // valid if it was.
   ExportSummary exportTo(const std::string& path, const ExportSettings& settings = {});

@@ -30,9 +30,24 @@ class Tract:
     feather_scale: float
     feather_spacings: float
     relax_iterations: int
+    seed: Optional[int]
+    moult: bool
     def __init__(self, name: str, *, groups: Sequence[str] = ..., faces: Optional[npt.ArrayLike] = ...,
                  count: int = ..., density: float = ..., feather_file: Optional[_Path] = ...,
-                 feather_scale: float = ..., feather_spacings: float = ..., relax_iterations: int = ...) -> None: ...
+                 feather_scale: float = ..., feather_spacings: float = ..., relax_iterations: int = ...,
+                 seed: Optional[int] = ..., moult: bool = ...) -> None: ...
+
+class Moult:
+    enabled: bool
+    start: float
+    duration: float
+    window: float
+    sequence: str
+    gap: float
+    random: float
+    seed: int
+    def __init__(self, *, enabled: bool = ..., start: float = ..., duration: float = ..., window: float = ...,
+                 sequence: str = ..., gap: float = ..., random: float = ..., seed: int = ...) -> None: ...
 
 class Setup:
     tracts: List[Tract]
@@ -41,8 +56,10 @@ class Setup:
     tract_order: List[str]
     packing: str  # "drape" | "height_field"
     seed: int
+    moult: Moult
     def __init__(self, *, tracts: Sequence[Tract] = ..., axis: Sequence[Tuple[float, float, float]] = ...,
-                 ordering: str = ..., tract_order: Sequence[str] = ..., packing: str = ..., seed: int = ...) -> None: ...
+                 ordering: str = ..., tract_order: Sequence[str] = ..., packing: str = ..., seed: int = ...,
+                 moult: Optional[Moult] = ...) -> None: ...
 
 class Frame:
     feather_count: int
@@ -77,6 +94,7 @@ class Session:
     def time(self) -> float: ...
     @property
     def lod(self) -> float: ...
+    pose_mode: str  # "repack" | "follow"
     def set_pose(self, positions: npt.ArrayLike) -> None: ...
     def clear_pose(self) -> None: ...
     def set_time(self, t: float) -> None: ...

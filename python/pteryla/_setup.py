@@ -4,10 +4,14 @@
      "feathers": {"body": "feathers/contour.json"},          # optional: names for feather files
      "tracts": [{"name": "back", "groups": ["back"], "faces": [...], "count": 200, "density": 0,
                  "feather": "body" | "covert" | "path/to/file.json", "feather_scale": "auto" | 1.5,
-                 "feather_spacings": 3.5, "relax": {"iterations": 40}}],
+                 "feather_spacings": 3.5, "relax": {"iterations": 40}, "seed": 11}],
      "directions": {"axis": [[0, 1, 0], [0, -1, 0]]},
      "ordering": {"method": "axis" | "tracts" | "flow", "tracts": ["back", ...]},
-     "packing": {"method": "drape" | "height_field"}}
+     "packing": {"method": "drape" | "height_field"},
+     "moult": {"start": 0, "duration": 10, "window": 0.2, "sequence": "centre_out", "gap": 0.05,
+               "random": 0, "seed": 3, "enabled": True}}                # optional; a tract's "moult": False
+
+A "moult" section turns the moult on (docs/moult.md), as in a scene file.
 
 A tract's "feather" is a key of "feathers", else a bundled feather's name (data/feathers/<name>.json),
 else a file path. Unknown keys raise pteryla.Error: a typo must not be silently ignored.
@@ -16,9 +20,10 @@ import os
 
 from ._error import Error
 
-_SECTIONS = {"pteryla", "name", "seed", "feathers", "tracts", "directions", "ordering", "packing"}
+_SECTIONS = {"pteryla", "name", "seed", "feathers", "tracts", "directions", "ordering", "packing", "moult"}
+_MOULT_KEYS = {"enabled", "start", "duration", "window", "sequence", "gap", "random", "seed"}
 _TRACT_KEYS = {"name", "groups", "faces", "count", "density", "feather", "feather_scale", "feather_spacings",
-               "relax"}
+               "relax", "seed", "moult"}
 
 
 def _check_keys(d, allowed, where):
@@ -96,6 +101,15 @@ def setup_from_dict(d, base_dir=None):
             _check_keys(t["relax"], {"iterations"}, f"{where}.relax")
             if "iterations" in t["relax"]:
                 tr.relax_iterations = _number(t["relax"]["iterations"], f"{where}.relax.iterations", int)
+        if "moult" in t:
+            if t["moult"] not in (True, False):
+                raise Error(f"{where}.moult: expected true or false", "", f"{where}.moult")
+            tr.moult = bool(t["moult"])
+        if "seed" in t:
+            seed = _number(t["seed"], f"{where}.seed", int)
+            if seed < 0:
+                raise Error(f"{where}.seed: must not be negative", "", f"{where}.seed")
+            tr.seed = seed
         tracts.append(tr)
     s.tracts = tracts
     if "directions" in d:
@@ -111,4 +125,21 @@ def setup_from_dict(d, base_dir=None):
     if "packing" in d:
         _check_keys(d["packing"], {"method"}, "packing")
         s.packing = d["packing"].get("method", "drape")
+    if "moult" in d:
+        from . import Moult
+        m = d["moult"]
+        _check_keys(m, _MOULT_KEYS, "moult")
+        mo = Moult()
+        for k in ("start", "duration", "window", "gap", "random"):
+            if k in m:
+                setattr(mo, k, _number(m[k], f"moult.{k}"))
+        if "seed" in m:
+            mo.seed = _number(m["seed"], "moult.seed", int)
+        if "sequence" in m:
+            mo.sequence = str(m["sequence"])
+        if "enabled" in m:
+            if m["enabled"] not in (True, False):
+                raise Error("moult.enabled: expected true or false", "", "moult.enabled")
+            mo.enabled = bool(m["enabled"])
+        s.moult = mo
     return s

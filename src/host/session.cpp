@@ -15,12 +15,15 @@
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/follicles.hpp"
 #include "pteryla/coat/skin.hpp"
+#include "pteryla/coat/skin_binding.hpp"
 #include "pteryla/core/json.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/feather/mesh_io.hpp"
+#include "pteryla/moult/schedule.hpp"
 #include "pteryla/exchange/coat_export.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
+#include "pteryla/pipeline/stage_graph.hpp"
 
 namespace pteryla {
 namespace {
@@ -125,6 +128,8 @@ pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
     requireFinite(t.featherSpacings, where + ".feather_spacings", "feather_spacings");
     o["feather_spacings"] = t.featherSpacings;
     o["relax"] = {{"iterations", t.relaxIterations}};
+    if (t.seed) o["seed"] = *t.seed;
+    if (!t.moult) o["moult"] = false;
     // One feather per tract: nothing is interpolated, so the cheapest parameterization serves.
     o["parameterization"] = {{"method", "projection"}};
     tracts.push_back(std::move(o));
@@ -159,6 +164,18 @@ pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
     case CoatSetup::Ordering::Flow: j["ordering"] = {{"method", "flow"}}; break;
   }
   j["packing"] = {{"method", setup.packing == CoatSetup::Packing::Drape ? "drape" : "height_field"}};
+  if (setup.moult.enabled) {
+    const MoultSetup& m = setup.moult;
+    for (const auto& [v, key] : {std::pair{m.start, "start"}, {m.duration, "duration"}, {m.window, "window"},
+                                 {m.gap, "gap"}, {m.random, "random"}})
+      requireFinite(v, std::string("moult.") + key, key);
+    Json mj = {{"start", m.start}, {"duration", m.duration}, {"window", m.window}, {"sequence", m.sequence},
+               {"gap", m.gap}, {"random", m.random}, {"seed", m.seed}};
+    // Checked now, with the scene format's ranges and names (the time stages read it at evaluate()).
+    JsonReader r(mj, "", "moult");
+    moult::readMoultOptions(r);
+    j["moult"] = std::move(mj);
+  }
   pipeline::Scene s = pipeline::sceneFromJson(j, "");
   // Without an axis, directions and axis ordering follow the skin's longest bounding-box axis.
   s.fromBareMesh = setup.axis.empty();
@@ -179,6 +196,17 @@ struct Session::Impl {
   std::vector<FeatherRange> ranges;
   std::vector<Material> materials;
 
+  // PoseMode::Follow: the host's pose is kept here, not given to the pipeline, which lays the coat on its
+  // base skin (rest, or a scene skeleton's pose); the bindings carry that coat onto the pose.
+  PoseMode poseMode = PoseMode::Repack;
+  std::vector<glm::dvec3> followPose;  // empty: no host pose
+  coat::SkinBinding vertexBinding, originBinding;
+  std::vector<glm::dvec3> vertexNormalLocal, normalLocal, tangentLocal, binormalLocal;
+  uint64_t boundMeshEvaluation = ~uint64_t(0);  // the mesh stage's evaluation count when bound
+  coat::SkinMesh followSkin;                    // the base skin's connectivity at the host's pose
+  std::vector<glm::vec3> followPositions, followNormals;
+  std::vector<glm::dvec3> scratch;
+
   explicit Impl(std::unique_ptr<pipeline::Pipeline> p) : pipeline(std::move(p)) {
     // Read the skin, the feathers and the tracts now, so bad input fails here and not at evaluate().
     const coat::SkinMesh& rest = pipeline->restSkin();
@@ -192,8 +220,84 @@ struct Session::Impl {
       for (int c = 0; c < 3; ++c)
         if (!std::isfinite(positions[v][c]))
           throw Error("coordinate " + std::to_string(c) + " is not a finite number", "", "vertex " + std::to_string(v));
-    pipeline->setSkinPose(std::move(positions));  // also checks the coordinate range
+    if (poseMode == PoseMode::Follow) {
+      // The range check the pipeline makes (docs/limits.md), without dirtying its stages.
+      for (size_t v = 0; v < positions.size(); ++v)
+        for (int c = 0; c < 3; ++c)
+          if (std::abs(positions[v][c]) > coat::kMaxMeshCoordinate)
+            throw Error("coordinate " + std::to_string(c) + " is " + std::to_string(positions[v][c]) +
+                            ": pose coordinates must be at most " + std::to_string(coat::kMaxMeshCoordinate) +
+                            " in magnitude",
+                        "", "vertex " + std::to_string(v));
+      followPose = std::move(positions);
+    } else {
+      pipeline->setSkinPose(std::move(positions));  // also checks the coordinate range
+    }
     frameValid = false;
+  }
+
+  uint64_t meshEvaluations() {
+    pipeline::StageGraph& g = pipeline->graph();
+    const auto id = g.find("mesh");
+    return id < 0 ? 0 : g.evaluations(id);
+  }
+
+  // Follow mode: carries the base coat (the pipeline's frame, already in the views' arrays) onto the host's
+  // pose. Binds again only when the mesh stage produced a new coat.
+  void follow() {
+    pipeline::Pipeline& p = *pipeline;
+    const coat::SkinMesh& base = p.posedSkin();
+    const TriMesh& m = p.coatMesh().mesh;
+    const size_t n = keys.size();
+    auto gather = [&](const std::vector<double>& flat) {
+      scratch.resize(n);
+      for (size_t i = 0; i < n; ++i) scratch[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
+      return scratch;
+    };
+    const uint64_t evaluation = meshEvaluations();
+    if (evaluation != boundMeshEvaluation || vertexBinding.size() != m.positions.size() || originBinding.size() != n) {
+      boundMeshEvaluation = ~uint64_t(0);
+      vertexBinding.bind(base, m.positions);
+      vertexNormalLocal = vertexBinding.localDirections(base, m.normals);
+      originBinding.bind(base, gather(origins));
+      normalLocal = originBinding.localDirections(base, gather(normals));
+      tangentLocal = originBinding.localDirections(base, gather(tangents));
+      binormalLocal = originBinding.localDirections(base, gather(binormals));
+      boundMeshEvaluation = evaluation;
+    }
+    if (followSkin.faces.size() != base.faces.size() || followSkin.positions.size() != base.positions.size())
+      followSkin = base;
+    followSkin.positions = followPose;
+    coat::recomputeGeometry(followSkin);
+    vertexBinding.deform(followSkin, followPositions);
+    vertexBinding.carry(followSkin, vertexNormalLocal, followNormals);
+    auto scatter = [&](std::vector<double>& flat) {
+      for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) flat[3 * i + c] = scratch[i][c];
+    };
+    originBinding.deform(followSkin, scratch);
+    scatter(origins);
+    originBinding.carry(followSkin, normalLocal, scratch);
+    scatter(normals);
+    originBinding.carry(followSkin, tangentLocal, scratch);
+    scatter(tangents);
+    originBinding.carry(followSkin, binormalLocal, scratch);
+    scatter(binormals);
+    const size_t nv = followPositions.size();
+    frame.positions = {nv ? &followPositions[0].x : nullptr, 3 * nv};
+    frame.vertexNormals = {nv ? &followNormals[0].x : nullptr, 3 * nv};
+  }
+
+  bool following() const { return poseMode == PoseMode::Follow && !followPose.empty(); }
+
+  // The frame's coat mesh as a TriMesh (exportMesh): the pipeline's, or carried onto a Follow pose.
+  TriMesh frameMesh() {
+    const TriMesh& m = pipeline->coatMesh().mesh;
+    if (!following()) return m;
+    TriMesh out = m;
+    out.positions = followPositions;
+    out.normals = followNormals;
+    return out;
   }
 
   // Points the frame's views at the pipeline's results (and at the flattened frames).
@@ -253,6 +357,7 @@ struct Session::Impl {
     fr.indices = {m.indices.data(), m.indices.size()};
     fr.ranges = {ranges.data(), ranges.size()};
     fr.materials = {materials.data(), materials.size()};
+    if (following()) follow();
     frameValid = true;
   }
 };
@@ -298,8 +403,25 @@ void Session::setPose(const float* xyz, size_t vertexCount) {
 
 void Session::clearPose() {
   impl_->pipeline->setSkinPose({});
+  impl_->followPose.clear();
   impl_->frameValid = false;
 }
+
+void Session::setPoseMode(PoseMode mode) {
+  Impl& m = *impl_;
+  if (mode == m.poseMode) return;
+  // The pose the host gave moves to where the new mode keeps it.
+  if (mode == PoseMode::Follow) {
+    m.followPose = m.pipeline->skinPose();
+    m.pipeline->setSkinPose({});
+  } else {
+    m.pipeline->setSkinPose(std::move(m.followPose));
+    m.followPose.clear();
+  }
+  m.poseMode = mode;
+  m.frameValid = false;
+}
+PoseMode Session::poseMode() const { return impl_->poseMode; }
 
 void Session::setTime(double t) {
   if (!std::isfinite(t)) throw Error("time must be a finite number", "", "time");
@@ -346,11 +468,14 @@ const Frame& Session::frame() const {
 
 void Session::exportMesh(const std::string& path) const {
   frame();  // throws when there is no evaluated frame
-  feather::writeMesh(path, impl_->pipeline->coatMesh().mesh);
+  feather::writeMesh(path, impl_->frameMesh());
 }
 
 ExportSummary Session::exportTo(const std::string& path, const ExportSettings& settings) {
   Impl& m = *impl_;
+  if (m.following())
+    throw Error("exporting a coat carried onto a Follow pose is not supported yet: exportMesh() writes this frame, "
+                "or use PoseMode::Repack", path, "poseMode");
   exchange::ExportOptions opt;
   opt.as = exchange::coatAsOf(settings.coatAs);
   for (size_t k = 0; k < settings.times.size(); ++k)
@@ -372,6 +497,9 @@ ExportSummary Session::exportTo(const std::string& path, const ExportSettings& s
 
 Metrics Session::metrics() {
   Impl& m = *impl_;
+  if (m.following())
+    throw Error("the checker measures the coat the pipeline laid, not one carried onto a Follow pose: clear the "
+                "pose or use PoseMode::Repack to check a pose", "", "poseMode");
   pipeline::QualityMetrics q;
   const double lod = m.pipeline->lod();
   try {

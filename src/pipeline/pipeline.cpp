@@ -9,6 +9,7 @@
 #include <chrono>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <glm/common.hpp>
 #include <cmath>
 #include <cstring>
@@ -73,6 +74,7 @@ struct TractSettings {
   coat::TractFeatherOptions feathers;
   std::shared_ptr<const feather::GrowthSchedule> growth;  // the tract's "growth" (null: none)
   std::string overlapGroup;  // "overlap_group": tracts of one group share one distribution where they overlap
+  std::optional<uint64_t> seed;  // "seed": this tract's own follicle seed (else derived from the scene's)
   double area = 0;
   std::string element;
 };
@@ -307,6 +309,7 @@ void Pipeline::Impl::computeTracts() {
     t.featherSpacings = r.number("feather_spacings", t.featherSpacings, 0.1, 100.0);
     t.area = area;
     t.overlapGroup = r.string("overlap_group", "");
+    if (r.has("seed")) t.seed = r.seed("seed", 0);
     t.relax.iterations = 40;
     if (r.has("relax")) {
       JsonReader rr = r.object("relax");
@@ -356,7 +359,8 @@ void Pipeline::Impl::computeDistribute() {
   for (size_t i = 0; i < tractSettings.size(); ++i) {
     TractSettings& t = tractSettings[i];
     coat::ScatterOptions so;
-    so.seed = mix64(scene.seed * 0x9E37u + i);
+    // A tract's own seed re-scatters only that tract; the others keep their follicles.
+    so.seed = t.seed ? mix64(*t.seed * 0x9E37u + 0x5EED0000u) : mix64(scene.seed * 0x9E37u + i);
     so.density.uniform = t.density;
     so.count = t.count;
     so.tractIndex = static_cast<uint32_t>(i);

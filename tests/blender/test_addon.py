@@ -200,21 +200,74 @@ def frames_follow(addon, body, coat):
     moved = np.linalg.norm(bent - rest, axis=1)
     assert moved.max() > 0.3, moved.max()  # the tip half swung by 40 degrees
     assert "error" not in body.pteryla.status, body.pteryla.status
-    # The library on the same posed arrays gives the coat the add-on wrote.
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    posed = addon.posed_positions(body, depsgraph)
-    pos, tri = addon.rest_arrays(body)
-    s = pteryla.Session(pos, tri, addon.setup_dict(body, pos, tri))
-    s.set_lod(body.pteryla.lod)
-    s.set_time(scene.frame_current / scene.render.fps)
-    s.set_pose(posed)
-    assert s.evaluate()
-    lib = s.frame().positions
+    # The library on the same posed arrays, in the same pose mode, gives the coat the add-on wrote.
+    def library(mode):
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        posed = addon.posed_positions(body, depsgraph)
+        pos, tri = addon.rest_arrays(body)
+        s = pteryla.Session(pos, tri, addon.setup_dict(body, pos, tri))
+        s.set_lod(body.pteryla.lod)
+        s.set_time(scene.frame_current / scene.render.fps)
+        s.pose_mode = mode
+        s.set_pose(posed)
+        assert s.evaluate()
+        return s.frame().positions
+    assert body.pteryla.pose_mode == "follow"  # the default: the laid coat rides the skin
+    lib = library("follow")
     assert lib.shape == bent.shape and np.array_equal(lib, bent), np.abs(lib - bent).max()
+    timings["frame_change_follow_max"] = max(frame_times)
+    # Repack: every pose laid again.
+    body.pteryla.pose_mode = "repack"
+    scene.frame_set(4)
+    t0 = time.perf_counter()
+    scene.frame_set(5)
+    timings["frame_change_repack"] = time.perf_counter() - t0
+    repacked = coat_positions(coat)
+    assert np.linalg.norm(repacked - rest, axis=1).max() > 0.3
+    lib = library("repack")
+    assert lib.shape == repacked.shape and np.array_equal(lib, repacked), np.abs(lib - repacked).max()
+    body.pteryla.pose_mode = "follow"
     # Back at the rest frame the coat is the rest coat again.
     scene.frame_set(1)
     assert np.allclose(coat_positions(coat), rest, atol=1e-6)
-    timings["frame_change_max"] = max(frame_times)
+
+
+@step("tract_seed_and_moult")
+def tract_seed_and_moult(addon, body):
+    """A tract's own seed re-scatters that tract only; the moult toggle takes feathers out mid-moult, not
+    from a tract that opts out, and round-trips through the scene file."""
+    scene = bpy.context.scene
+    scene.frame_set(1)
+
+    def frame():
+        assert bpy.ops.pteryla.feather() == {"FINISHED"}, body.pteryla.status
+        f = addon._sessions["body"][0].frame()
+        return f.origins.copy(), f.tracts.copy(), f.present.copy()
+    o0, tr0, _ = frame()
+    body.pteryla.tracts[0].seed = 12
+    o1, tr1, _ = frame()
+    assert not np.array_equal(o0[tr0 == 0], o1[tr1 == 0])
+    assert np.array_equal(o0[tr0 == 1], o1[tr1 == 1])
+    body.pteryla.tracts[0].seed = -1
+    s = body.pteryla
+    s.moult, s.moult_start, s.moult_duration, s.moult_window = True, 0.0, 0.5, 0.4
+    s.tracts[1].moult = False
+    scene.frame_set(7)  # t = 0.25 s: mid-moult
+    _, tr, present = frame()
+    assert not present[tr == 0].all() and present[tr == 1].all(), (present[tr == 0].mean(), present[tr == 1].mean())
+    path = os.path.join(OUT, "moult.json")
+    written = addon.export_scene(body, path)
+    assert abs(written["moult"]["window"] - 0.4) < 1e-6 and written["tracts"][1]["moult"] is False
+    obj = addon.import_scene(bpy.context, path)
+    try:
+        assert obj.pteryla.moult and obj.pteryla.moult_window == s.moult_window and not obj.pteryla.tracts[1].moult
+    finally:
+        bpy.data.objects.remove(obj, do_unlink=True)
+        bpy.context.view_layer.objects.active = body
+    s.moult = False
+    s.tracts[1].moult = True
+    scene.frame_set(1)
+    frame()
 
 
 @step("curve_axis")
@@ -322,6 +375,7 @@ def main():
     import_round_trip(addon, body, coat, scene_path)
     attributes_and_materials(coat)
     frames_follow(addon, body, coat)
+    tract_seed_and_moult(addon, body)
     curve_axis(body, coat)
     render(body, rig)
     bad_input(addon)

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
 
 #include "../install/consumer/icosphere.hpp"
@@ -200,6 +201,228 @@ TEST(HostSession, BendingPoseMovesTheCoatAndKeepsFollicles) {
   for (size_t i = 0; i < f.featherCount; ++i) EXPECT_LE(std::abs(f.origins[3 * i + 1]), 0.6 + 1e-6);
   EXPECT_FALSE(std::equal(coat.begin(), coat.end(), f.positions.begin(), f.positions.end()));
   for (float x : f.positions) ASSERT_TRUE(std::isfinite(x));
+}
+
+// PoseMode::Follow carries the laid coat with the skin. A rotation plus translation of the whole skin is
+// a rigid motion of every local frame: the carried coat must be exactly the rest coat moved rigidly,
+// its normals rotated, its elevations unchanged, and no evaluation of the time stages needed.
+TEST(HostSession, FollowPoseCarriesTheRestCoatRigidly) {
+  const SkinArrays skin = sphereSkin();
+  Session s = evaluated(skin, smallSetup());
+  s.setPoseMode(pteryla::PoseMode::Follow);
+  ASSERT_TRUE(s.evaluate());
+  const Frame& f0 = s.frame();
+  const std::vector<float> coat(f0.positions.begin(), f0.positions.end()), vn(f0.vertexNormals.begin(), f0.vertexNormals.end());
+  const std::vector<double> origins(f0.origins.begin(), f0.origins.end()), tangents(f0.tangents.begin(), f0.tangents.end());
+  const std::vector<double> elevations(f0.elevations.begin(), f0.elevations.end());
+  const std::vector<uint32_t> indices(f0.indices.begin(), f0.indices.end());
+
+  // The rest pose itself: the same coat (up to rounding through the local frames).
+  s.setPose(skin.positions);
+  ASSERT_TRUE(s.evaluate());
+  for (size_t k = 0; k < coat.size(); ++k) ASSERT_NEAR(s.frame().positions[k], coat[k], 1e-5);
+
+  // Rotate 40 degrees about z, then translate.
+  const double c = std::cos(0.7), sn = std::sin(0.7), d[3] = {0.3, -1.0, 0.5};
+  auto rotate = [&](const double* p, double* out, bool translate) {
+    out[0] = c * p[0] - sn * p[1] + (translate ? d[0] : 0);
+    out[1] = sn * p[0] + c * p[1] + (translate ? d[1] : 0);
+    out[2] = p[2] + (translate ? d[2] : 0);
+  };
+  std::vector<double> moved(skin.positions.size());
+  for (size_t v = 0; v < moved.size() / 3; ++v) rotate(&skin.positions[3 * v], &moved[3 * v], true);
+  s.setPose(moved);
+  EXPECT_THROW(s.frame(), pteryla::Error);  // stale until evaluated
+  ASSERT_TRUE(s.evaluate());
+  const Frame& f1 = s.frame();
+  ASSERT_EQ(f1.positions.size, coat.size());
+  EXPECT_TRUE(std::equal(indices.begin(), indices.end(), f1.indices.begin()));
+  double worstP = 0, worstN = 0, worstO = 0, worstT = 0;
+  for (size_t v = 0; v < coat.size() / 3; ++v) {
+    const double p[3] = {coat[3 * v], coat[3 * v + 1], coat[3 * v + 2]}, n[3] = {vn[3 * v], vn[3 * v + 1], vn[3 * v + 2]};
+    double q[3], m[3];
+    rotate(p, q, true);
+    rotate(n, m, false);
+    for (int k = 0; k < 3; ++k) {
+      worstP = std::max(worstP, std::abs(f1.positions[3 * v + k] - q[k]));
+      worstN = std::max(worstN, std::abs(f1.vertexNormals[3 * v + k] - m[k]));
+    }
+  }
+  for (size_t i = 0; i < f1.featherCount; ++i) {
+    double q[3], t[3];
+    rotate(&origins[3 * i], q, true);
+    rotate(&tangents[3 * i], t, false);
+    for (int k = 0; k < 3; ++k) {
+      worstO = std::max(worstO, std::abs(f1.origins[3 * i + k] - q[k]));
+      worstT = std::max(worstT, std::abs(f1.tangents[3 * i + k] - t[k]));
+    }
+    EXPECT_EQ(f1.elevations[i], elevations[i]);
+  }
+  EXPECT_LT(worstP, 2e-5);
+  EXPECT_LT(worstN, 2e-5);
+  EXPECT_LT(worstO, 1e-9);
+  EXPECT_LT(worstT, 1e-9);
+
+  // A new level of detail is a new coat: bound again, still carried rigidly.
+  s.setLod(0.2);
+  ASSERT_TRUE(s.evaluate());
+  const std::vector<float> moved02(s.frame().positions.begin(), s.frame().positions.end());
+  Session rest = evaluated(skin, smallSetup());
+  rest.setLod(0.2);
+  ASSERT_TRUE(rest.evaluate());
+  ASSERT_EQ(rest.frame().positions.size, moved02.size());
+  double worst02 = 0;
+  for (size_t v = 0; v < moved02.size() / 3; ++v) {
+    const double p[3] = {rest.frame().positions[3 * v], rest.frame().positions[3 * v + 1], rest.frame().positions[3 * v + 2]};
+    double q[3];
+    rotate(p, q, true);
+    for (int k = 0; k < 3; ++k) worst02 = std::max(worst02, std::abs(double(moved02[3 * v + k]) - q[k]));
+  }
+  EXPECT_LT(worst02, 2e-5);
+
+  // What Follow cannot do yet is refused, naming the setting; exportMesh writes the carried frame.
+  EXPECT_THROW(s.metrics(), pteryla::Error);
+  const std::string dir = (std::filesystem::temp_directory_path() / "pteryla_follow").string();
+  std::filesystem::create_directories(dir);
+  EXPECT_THROW(s.exportTo(dir + "/coat.glb"), pteryla::Error);
+  s.exportMesh(dir + "/coat.obj");
+  std::ifstream obj(dir + "/coat.obj");
+  std::string tag;
+  double x, y, z;
+  while (obj >> tag && tag != "v") obj.ignore(1 << 20, '\n');
+  ASSERT_TRUE(obj >> x >> y >> z);
+  EXPECT_NEAR(x, moved02[0], 1e-4);
+  EXPECT_NEAR(y, moved02[1], 1e-4);
+  EXPECT_NEAR(z, moved02[2], 1e-4);
+}
+
+// Switching modes keeps the host's pose: Follow -> Repack gives what a Repack session with that pose gives.
+TEST(HostSession, SwitchingPoseModeKeepsThePose) {
+  const SkinArrays skin = sphereSkin();
+  std::vector<double> squashed = skin.positions;
+  for (size_t v = 0; v < squashed.size() / 3; ++v) squashed[3 * v + 1] *= 0.7;
+  Session repack = evaluated(skin, smallSetup());
+  repack.setPose(squashed);
+  ASSERT_TRUE(repack.evaluate());
+  Session s = evaluated(skin, smallSetup());
+  s.setPoseMode(pteryla::PoseMode::Follow);
+  EXPECT_EQ(s.poseMode(), pteryla::PoseMode::Follow);
+  s.setPose(squashed);
+  ASSERT_TRUE(s.evaluate());
+  // Carried, not repacked: follicles sit on the squashed skin, the elevations are the rest coat's.
+  for (size_t i = 0; i < s.frame().featherCount; ++i) EXPECT_LE(std::abs(s.frame().origins[3 * i + 1]), 0.7 + 1e-6);
+  EXPECT_FALSE(sameBits(s.frame().positions, repack.frame().positions));
+  s.setPoseMode(pteryla::PoseMode::Repack);
+  ASSERT_TRUE(s.evaluate());
+  expectIdentical(s.frame(), repack.frame());
+  // And back: Follow with the same pose as before.
+  s.setPoseMode(pteryla::PoseMode::Follow);
+  ASSERT_TRUE(s.evaluate());
+  EXPECT_FALSE(sameBits(s.frame().positions, repack.frame().positions));
+  s.clearPose();
+  ASSERT_TRUE(s.evaluate());
+  Session rest = evaluated(skin, smallSetup());
+  expectIdentical(s.frame(), rest.frame());
+  // Bad poses are refused in Follow mode too, and the last good pose is kept.
+  std::vector<double> bad = squashed;
+  bad[7] = std::nan("");
+  EXPECT_THROW(s.setPose(bad), pteryla::Error);
+  bad[7] = 1e9;
+  EXPECT_THROW(s.setPose(bad), pteryla::Error);
+  EXPECT_THROW(s.setPose(std::vector<double>(9, 0.0)), pteryla::Error);
+}
+
+// A tract's own seed re-scatters that tract and no other.
+TEST(HostSession, TractSeedRescattersOnlyItsTract) {
+  const SkinArrays skin = sphereSkin();
+  CoatSetup setup;
+  setup.axis = {{{0, 1.2, 0}}, {{0, -1.2, 0}}};
+  pteryla::TractSetup top, bottom;
+  top.name = "top";
+  bottom.name = "bottom";
+  top.count = bottom.count = 60;
+  for (uint32_t f = 0; f < skin.triangles.size() / 3; ++f) {
+    double y = 0;
+    for (int c = 0; c < 3; ++c) y += skin.positions[3 * skin.triangles[3 * f + c] + 1];
+    (y > 0 ? top : bottom).faces.push_back(f);
+  }
+  setup.tracts = {top, bottom};
+  auto originsOf = [](const Session& s, uint32_t tract) {
+    std::vector<double> o;
+    const Frame& f = s.frame();
+    for (size_t i = 0; i < f.featherCount; ++i)
+      if (f.tracts[i] == tract) o.insert(o.end(), &f.origins[3 * i], &f.origins[3 * i] + 3);
+    return o;
+  };
+  Session a = evaluated(skin, setup);
+  setup.tracts[0].seed = 77;
+  Session b = evaluated(skin, setup);
+  Session b2 = evaluated(skin, setup);
+  EXPECT_NE(originsOf(a, 0), originsOf(b, 0));
+  EXPECT_EQ(originsOf(a, 1), originsOf(b, 1));
+  expectIdentical(b.frame(), b2.frame());
+  setup.tracts[0].seed = 78;
+  Session c = evaluated(skin, setup);
+  EXPECT_NE(originsOf(b, 0), originsOf(c, 0));
+}
+
+// The typed moult: off by default; on, the window takes feathers out mid-moult (not before it starts or
+// after it ends), a tract with moult false keeps every feather, and bad values fail at construction.
+TEST(HostSession, MoultWindowTakesFeathersOutOfMoultingTractsOnly) {
+  const SkinArrays skin = sphereSkin();
+  CoatSetup setup;
+  setup.axis = {{{0, 1.2, 0}}, {{0, -1.2, 0}}};
+  pteryla::TractSetup top, bottom;
+  top.name = "top";
+  bottom.name = "bottom";
+  top.count = bottom.count = 60;
+  bottom.moult = false;
+  for (uint32_t f = 0; f < skin.triangles.size() / 3; ++f) {
+    double y = 0;
+    for (int c = 0; c < 3; ++c) y += skin.positions[3 * skin.triangles[3 * f + c] + 1];
+    (y > 0 ? top : bottom).faces.push_back(f);
+  }
+  setup.tracts = {top, bottom};
+  auto missing = [](const Session& s, uint32_t tract) {
+    size_t n = 0;
+    for (size_t i = 0; i < s.frame().featherCount; ++i) n += s.frame().tracts[i] == tract && !s.frame().present[i];
+    return n;
+  };
+  Session off = evaluated(skin, setup);
+  off.setTime(5);
+  ASSERT_TRUE(off.evaluate());
+  EXPECT_EQ(missing(off, 0) + missing(off, 1), 0u);
+
+  setup.moult.enabled = true;
+  setup.moult.start = 2;
+  setup.moult.duration = 6;
+  setup.moult.window = 0.3;
+  setup.moult.gap = 0.5;
+  Session s = evaluated(skin, setup);
+  for (double t : {0.0, 1.9, 8.5}) {
+    s.setTime(t);
+    ASSERT_TRUE(s.evaluate());
+    EXPECT_EQ(missing(s, 0), 0u) << "t = " << t;
+  }
+  s.setTime(5);
+  ASSERT_TRUE(s.evaluate());
+  EXPECT_GT(missing(s, 0), 3u);
+  EXPECT_EQ(missing(s, 1), 0u);
+
+  auto failsAt = [&](const char* element, const std::function<void(CoatSetup&)>& edit) {
+    CoatSetup bad = setup;
+    edit(bad);
+    try {
+      Session x(skin, bad);
+      ADD_FAILURE() << "no error for " << element;
+    } catch (const pteryla::Error& e) {
+      EXPECT_EQ(e.element(), element) << e.what();
+    }
+  };
+  failsAt("moult.window", [](CoatSetup& c) { c.moult.window = 1.5; });
+  failsAt("moult.duration", [](CoatSetup& c) { c.moult.duration = 0; });
+  failsAt("moult.sequence", [](CoatSetup& c) { c.moult.sequence = "sideways"; });
+  failsAt("moult.gap", [](CoatSetup& c) { c.moult.gap = std::nan(""); });
 }
 
 TEST(HostSession, BadPosesAreErrorsNamingTheElement) {

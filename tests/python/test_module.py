@@ -146,6 +146,68 @@ def test_pose_moves_the_coat_and_keeps_the_follicles(sphere):
     assert np.allclose(s.frame().origins, rest.origins, atol=1e-9)
 
 
+def test_follow_pose_carries_the_rest_coat(sphere):
+    """pose_mode 'follow': a rigid motion of the skin moves the laid coat rigidly, elevations kept."""
+    s = evaluated(sphere)
+    rest = s.frame()
+    assert s.pose_mode == "repack"
+    s.pose_mode = "follow"
+    c, sn = np.cos(0.5), np.sin(0.5)
+    rot = np.array([[c, -sn, 0], [sn, c, 0], [0, 0, 1]])
+    s.set_pose(sphere[0] @ rot.T.astype(np.float32) + np.float32(1.5))
+    assert s.evaluate()
+    f = s.frame()
+    assert np.allclose(f.positions, rest.positions @ rot.T + 1.5, atol=5e-5)
+    assert np.allclose(f.vertex_normals, rest.vertex_normals @ rot.T, atol=5e-5)
+    assert np.array_equal(f.elevations, rest.elevations)
+    with pytest.raises(pteryla.Error):
+        s.pose_mode = "sideways"
+    s.pose_mode = "repack"  # keeps the pose: now repacked on it
+    assert s.evaluate()
+    assert np.allclose(s.frame().origins, rest.origins @ rot.T + 1.5, atol=1e-5)
+
+
+def test_tract_seed_rescatters_only_its_tract(sphere):
+    pos, tri = sphere
+    groups = (pos[tri[:, 0], 1] > 0).astype(np.int32)
+
+    def origins(seed):
+        body = {"name": "upper", "groups": ["upper"], "count": 20}
+        if seed is not None:
+            body["seed"] = seed
+        setup = {"seed": 3, "tracts": [{"name": "lower", "groups": ["lower"], "count": 20}, body]}
+        s = pteryla.Session(pos, tri, setup, face_groups=groups, group_names=["lower", "upper"])
+        s.set_lod(0.3)
+        assert s.evaluate()
+        f = s.frame()
+        return f.origins[f.tracts == 0], f.origins[f.tracts == 1]
+
+    lower0, upper0 = origins(None)
+    lower1, upper1 = origins(9)
+    assert np.array_equal(lower0, lower1) and not np.array_equal(upper0, upper1)
+    assert np.array_equal(origins(9)[1], upper1)
+    assert pteryla.Tract("t", seed=4).seed == 4 and pteryla.Tract("t").seed is None
+    bad(lambda: pteryla.Session(pos, tri, {"tracts": [{"name": "t", "seed": -1}]}), "tracts[0].seed")
+
+
+def test_moult_section_and_tract_opt_out(sphere):
+    pos, tri = sphere
+    groups = (pos[tri[:, 0], 1] > 0).astype(np.int32)
+    setup = {"seed": 3, "tracts": [{"name": "lower", "groups": ["lower"], "count": 20, "moult": False},
+                                   {"name": "upper", "groups": ["upper"], "count": 30}],
+             "moult": {"start": 0, "duration": 4, "window": 0.4, "gap": 0.5}}
+    s = pteryla.Session(pos, tri, setup, face_groups=groups, group_names=["lower", "upper"])
+    s.set_lod(0.3)
+    s.set_time(2.0)
+    assert s.evaluate()
+    f = s.frame()
+    assert f.present[f.tracts == 0].all() and not f.present[f.tracts == 1].all()
+    assert isinstance(pteryla.Setup(moult=pteryla.Moult(window=0.3)).moult, pteryla.Moult)
+    kw = {"face_groups": groups, "group_names": ["lower", "upper"]}
+    bad(lambda: pteryla.Session(pos, tri, dict(setup, moult={"window": 2}), **kw), "moult.window")
+    bad(lambda: pteryla.Session(pos, tri, dict(setup, moult={"windw": 0.2}), **kw), "moult.windw")
+
+
 def bad(call, element):
     with pytest.raises(pteryla.Error) as e:
         call()

@@ -87,6 +87,11 @@ class PterylaTract(bpy.types.PropertyGroup):
     count: IntProperty(name="Count", default=100, min=1)
     density: FloatProperty(name="Density", default=20.0, min=0.0,
                            description="Follicles per unit area (object space)")
+    seed: IntProperty(name="Seed", default=-1, min=-1,
+                      description="This tract's own follicle seed: changing it re-scatters only this tract "
+                                  "(-1: derived from the coat's seed)")
+    moult: BoolProperty(name="Moults", default=True,
+                        description="Loses and regrows its feathers when the coat's moult is on")
 
 
 class PterylaSettings(bpy.types.PropertyGroup):
@@ -105,6 +110,25 @@ class PterylaSettings(bpy.types.PropertyGroup):
     lod: FloatProperty(name="Detail", default=0.3, min=0.01, max=1.0, description="Fraction of barbs meshed")
     live: BoolProperty(name="Follow animation", default=True,
                        description="Re-evaluate on frame change with the deformed mesh as the pose")
+    pose_mode: EnumProperty(name="Pose", default="follow",
+                            items=[("follow", "Follow skin", "Lay the coat once on the rest mesh and let the deformed "
+                                    "mesh carry it: fast frames, elevations fixed as laid"),
+                                   ("repack", "Repack", "Re-lay the coat on every deformed pose: slow, the packing's "
+                                    "guarantees hold at every pose")])
+    moult: BoolProperty(name="Moult", default=False,
+                        description="Feathers are lost and regrow in a window moving through each tract")
+    moult_start: FloatProperty(name="Start", default=0.0, description="Time (seconds) the moult begins")
+    moult_duration: FloatProperty(name="Duration", default=10.0, min=1e-3,
+                                  description="Seconds until the last feather is renewed")
+    moult_window: FloatProperty(name="Window", default=0.2, min=0.01, max=1.0,
+                                description="Fraction of a tract's feathers moulting at once")
+    moult_sequence: EnumProperty(name="Sequence", items=[
+        ("centre_out", "Centre out", "from the tract's centre to its boundary"),
+        ("boundary_in", "Boundary in", "from the boundary to the centre"),
+        ("increasing_u", "Along U", "sequentially along the tract (flight feathers)"),
+        ("decreasing_u", "Against U", "sequentially, the other way"),
+        ("radial", "Radial", "a circular wave"),
+        ("random", "Random", "in a seeded random order")])
     status: StringProperty(name="Status", default="")
 
 
@@ -206,13 +230,21 @@ def setup_dict(obj, pos, tri):
             d["count"] = int(t.count)
         else:
             d["density"] = float(t.density)
+        if t.seed >= 0:
+            d["seed"] = int(t.seed)
+        if s.moult and not t.moult:
+            d["moult"] = False
         tracts.append(d)
     names = [t.name for t in s.tracts]
     if len(set(names)) != len(names):
         raise ValueError("tract names must be unique")
     axis = body_axis(obj, pos)
-    return {"seed": int(s.seed), "tracts": tracts, "directions": {"axis": [list(p) for p in axis]},
-            "ordering": {"method": s.ordering}, "packing": {"method": s.packing}}
+    setup = {"seed": int(s.seed), "tracts": tracts, "directions": {"axis": [list(p) for p in axis]},
+             "ordering": {"method": s.ordering}, "packing": {"method": s.packing}}
+    if s.moult:
+        setup["moult"] = {"start": float(s.moult_start), "duration": float(s.moult_duration),
+                          "window": float(s.moult_window), "sequence": s.moult_sequence}
+    return setup
 
 
 def check_mesh(obj, pos, tri):
@@ -353,6 +385,7 @@ def evaluate_into_coat(skin, depsgraph=None, report_progress=True, scene=None):
     s = session_for(skin)
     scene = scene or bpy.context.scene
     s.set_lod(skin.pteryla.lod)
+    s.pose_mode = skin.pteryla.pose_mode
     s.set_time(scene.frame_current / (scene.render.fps / scene.render.fps_base))
     if depsgraph is not None:
         s.set_pose(posed_positions(skin, depsgraph))
@@ -482,6 +515,8 @@ def export_scene(obj, path):
              "ordering": dict(setup["ordering"], **({"axis": setup["directions"]["axis"]}
                                                     if setup["ordering"]["method"] == "axis" else {})),
              "packing": setup["packing"], "render": {"lod": obj.pteryla.lod}}
+    if "moult" in setup:
+        scene["moult"] = setup["moult"]
     with open(path, "w") as f:
         json.dump(scene, f, indent=1)
     return scene
@@ -513,6 +548,16 @@ def import_scene(context, path):
     s.ordering = scene.get("ordering", {}).get("method", "axis")
     s.packing = scene.get("packing", {}).get("method", "drape")
     s.lod = float(scene.get("render", {}).get("lod", s.lod))
+    moult = scene.get("moult")
+    if isinstance(moult, dict) and moult.get("enabled", True):
+        s.moult = True
+        s.moult_start = float(moult.get("start", 0.0))
+        s.moult_duration = float(moult.get("duration", 1.0))
+        s.moult_window = float(moult.get("window", 0.2))
+        seq = moult.get("sequence", "centre_out").replace("center", "centre")
+        if seq not in {i.identifier for i in s.bl_rna.properties["moult_sequence"].enum_items}:
+            raise ValueError(f"{path}: moult.sequence: '{seq}' has no choice in the add-on")
+        s.moult_sequence = seq
     feathers = scene.get("feathers", {})
     bundled = os.path.join(_module().data_directory(), "feathers")
     for i, t in enumerate(scene.get("tracts", [])):
@@ -535,6 +580,10 @@ def import_scene(context, path):
             tr.use_count, tr.count = True, int(t["count"])
         elif "density" in t:
             tr.use_count, tr.density = False, float(t["density"])
+        if "seed" in t:
+            tr.seed = int(t["seed"])
+        if t.get("moult", True) is False:
+            tr.moult = False
     return obj
 
 
@@ -621,12 +670,23 @@ class PTERYLA_PT_feathers(bpy.types.Panel):
                 box.prop(t, "feather_file")
             box.prop(t, "use_count")
             box.prop(t, "count" if t.use_count else "density")
+            box.prop(t, "seed")
+            if s.moult:
+                box.prop(t, "moult")
         col.prop(s, "seed")
         col.prop(s, "axis_object")
         col.prop(s, "ordering")
         col.prop(s, "packing")
         col.prop(s, "lod")
         col.prop(s, "live")
+        col.prop(s, "pose_mode")
+        col.prop(s, "moult")
+        if s.moult:
+            box = col.box()
+            box.prop(s, "moult_start")
+            box.prop(s, "moult_duration")
+            box.prop(s, "moult_window")
+            box.prop(s, "moult_sequence")
         col.operator("pteryla.feather", icon="OUTLINER_OB_CURVES")
         row = col.row(align=True)
         row.operator("pteryla.import_scene", text="Import", icon="IMPORT")
