@@ -1063,12 +1063,26 @@ void Pipeline::editScene(Stage from, const std::function<void(Scene&)>& edit) {
 void Pipeline::invalidate(Stage from) { impl_->graph.invalidate(impl_->id(from)); }
 void Pipeline::setProgress(ProgressFn progress) { impl_->progress = std::move(progress); }
 
+// Whether the time stages read the time (poseSkin: a skeleton; featherAges: a moult; applyControls:
+// controls). Conservative: any such section counts, even one that turns out to be disabled.
+namespace {
+bool timeMatters(const Scene& scene) {
+  auto nonEmpty = [](const Json& j) { return !j.is_null() && !(j.is_object() && j.empty()) && !(j.is_array() && j.empty()); };
+  if (nonEmpty(scene.skeleton) || nonEmpty(scene.controls) || nonEmpty(scene.moult)) return true;
+  for (const Json& t : scene.tracts)
+    if (t.is_object() && t.contains("moult") && t.at("moult") != Json(false)) return true;
+  return false;
+}
+}  // namespace
+
 void Pipeline::setTime(double t) {
   if (!std::isfinite(t)) throw Error("time must be a finite number", "", "--time");
   if (t == impl_->time) return;
   impl_->time = t;
-  // Only stages that depend on time: the skin pose and everything after it.
-  impl_->graph.invalidate(impl_->id(Stage::Pose));
+  // Only stages that depend on time: the skin pose and everything after it, and only when something in
+  // the scene reads the time. A scene with no skeleton, moult or controls is the same coat at every
+  // time, so scrubbing its timeline (a host's frame change) costs nothing.
+  if (timeMatters(impl_->scene)) impl_->graph.invalidate(impl_->id(Stage::Pose));
 }
 double Pipeline::time() const { return impl_->time; }
 

@@ -18,6 +18,7 @@
 #include "pteryla/feather/mesh.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
+#include "pteryla/pipeline/stage_graph.hpp"
 
 using namespace pteryla;
 using pipeline::Pipeline;
@@ -128,6 +129,41 @@ TEST(IncrementalFrames, MoultScrubEqualsFreshEvaluation) {
   EXPECT_GE(partial, 2u);  // frames that packed only part of the coat
   EXPECT_GT(reused, 0u);   // mesh slices copied from the last frame
   EXPECT_GE(keptCurves, 4u);
+}
+
+// A scene with no skeleton, moult or controls is the same coat at every time: changing the time
+// re-evaluates nothing (a host's frame change is free), yet the time is kept, so a moult added later
+// evaluates at it.
+TEST(IncrementalFrames, TimeWithoutTimeDependentSectionsRecomputesNothing) {
+  const pipeline::Scene scene = pipeline::sceneFromJson(patchScene(), kSceneFile);
+  Pipeline p(scene);
+  p.setLod(0.3);
+  const Frame at0 = grab(p);
+  auto evaluations = [&](pipeline::Stage s) { return p.graph().evaluations(p.graph().find(pipeline::stageName(s))); };
+  const uint64_t pose = evaluations(pipeline::Stage::Pose), pack = evaluations(pipeline::Stage::Pack),
+                 mesh = evaluations(pipeline::Stage::Mesh);
+  p.setTime(4.0);
+  EXPECT_EQ(p.time(), 4.0);
+  const Frame at4 = grab(p);
+  EXPECT_EQ(evaluations(pipeline::Stage::Pose), pose);
+  EXPECT_EQ(evaluations(pipeline::Stage::Pack), pack);
+  EXPECT_EQ(evaluations(pipeline::Stage::Mesh), mesh);
+  expectIdentical(at4, fresh(scene, 4.0, 0.3), 4.0);
+  expectIdentical(at4, at0, 4.0);
+
+  p.editScene(pipeline::Stage::Ages, [](pipeline::Scene& s) {
+    s.moult = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "gap": 0.5})");
+  });
+  const Frame moulting = grab(p);
+  pipeline::Scene withMoult = scene;
+  withMoult.moult = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "gap": 0.5})");
+  expectIdentical(moulting, fresh(withMoult, 4.0, 0.3), 4.0);
+  size_t absent = 0;
+  for (uint8_t x : moulting.present) absent += x ? 0 : 1;
+  EXPECT_GT(absent, 0u);
+  // Now time matters: a new time is a new frame.
+  p.setTime(4.5);
+  expectIdentical(grab(p), fresh(withMoult, 4.5, 0.3), 4.5);
 }
 
 // A moult with gaps (feathers leave and return) and a level-of-detail change.
