@@ -440,15 +440,76 @@ Fields: enabled (False: no moult), start, duration (> 0), window (0, 1], sequenc
       .def_readwrite("random", &pteryla::MoultSetup::random)
       .def_readwrite("seed", &pteryla::MoultSetup::seed);
 
+  py::class_<pteryla::ControlSetup>(m, "Control", R"(An expressive control (docs/controls.md): at a skin point, it raises,
+aims, turns, twists and lags the feathers within radius as its keys say.
+
+Control(at, radius, *, name='', falloff=0, tracts=[], keys=[{'t': 0, 'lift': 1}], interpolation='linear',
+seed=1, twist_angle=45, max_lift=90). A key is a dict with 't' and any of 'lift', 'aim', 'direction',
+'random', 'dynamic' (each in [0, 1]) and 'offset' ([x, y, z]). Raises need packing 'height_field'.)")
+      .def(py::init([](std::array<double, 3> at, double radius, std::string name, double falloff,
+                       std::vector<std::string> tracts, py::list keys, std::string interpolation, uint64_t seed,
+                       double twistAngle, double maxLift) {
+             pteryla::ControlSetup c;
+             c.at = at;
+             c.radius = radius;
+             c.name = std::move(name);
+             c.falloff = falloff;
+             c.tracts = std::move(tracts);
+             c.interpolation = std::move(interpolation);
+             c.seed = seed;
+             c.twistAngleDeg = twistAngle;
+             c.maxLiftDeg = maxLift;
+             for (size_t k = 0; k < keys.size(); ++k) {
+               const std::string where = "keys[" + std::to_string(k) + "]";
+               if (!py::isinstance<py::dict>(keys[k])) throw pteryla::Error("expected a dict", "", where);
+               pteryla::ControlKey key;
+               bool haveT = false;
+               for (auto item : keys[k].cast<py::dict>()) {
+                 const std::string name = py::str(item.first);
+                 if (name == "t") {
+                   key.t = item.second.cast<double>();
+                   haveT = true;
+                 } else if (name == "offset") {
+                   key.offset = item.second.cast<std::array<double, 3>>();
+                 } else if (name == "lift") key.lift = item.second.cast<double>();
+                 else if (name == "aim") key.aim = item.second.cast<double>();
+                 else if (name == "direction") key.direction = item.second.cast<double>();
+                 else if (name == "random") key.random = item.second.cast<double>();
+                 else if (name == "dynamic") key.dynamic = item.second.cast<double>();
+                 else
+                   throw pteryla::Error("unknown key (expected t, lift, aim, direction, random, dynamic, offset)", "",
+                                        where + "." + name);
+               }
+               if (!haveT) throw pteryla::Error("a key needs its time 't'", "", where + ".t");
+               c.keys.push_back(key);
+             }
+             return c;
+           }),
+           py::arg("at"), py::arg("radius"), py::kw_only(), py::arg("name") = "", py::arg("falloff") = 0.0,
+           py::arg("tracts") = std::vector<std::string>{}, py::arg("keys") = py::list(),
+           py::arg("interpolation") = "linear", py::arg("seed") = 1, py::arg("twist_angle") = 45.0,
+           py::arg("max_lift") = 90.0)
+      .def_readwrite("name", &pteryla::ControlSetup::name)
+      .def_readwrite("at", &pteryla::ControlSetup::at)
+      .def_readwrite("radius", &pteryla::ControlSetup::radius)
+      .def_readwrite("falloff", &pteryla::ControlSetup::falloff)
+      .def_readwrite("tracts", &pteryla::ControlSetup::tracts)
+      .def_readwrite("interpolation", &pteryla::ControlSetup::interpolation)
+      .def_readwrite("seed", &pteryla::ControlSetup::seed)
+      .def_readwrite("twist_angle", &pteryla::ControlSetup::twistAngleDeg)
+      .def_readwrite("max_lift", &pteryla::ControlSetup::maxLiftDeg)
+      .def_property_readonly("key_count", [](const pteryla::ControlSetup& c) { return c.keys.size(); });
+
   py::class_<pteryla::CoatSetup>(m, "Setup", R"(The coat set-up a Session is built from.
 
 tracts: list of Tract (empty: one tract "all" over the whole skin); axis: body axis points, head to
 tail (empty: the longest bounding-box axis); ordering: "axis", "tracts" or "flow"; tract_order: tract
 names bottom layer first (ordering "tracts"); packing: "drape" or "height_field"; seed: int;
-moult: pteryla.Moult (default: off).)")
+moult: pteryla.Moult (default: off); controls: list of pteryla.Control.)")
       .def(py::init([](std::vector<pteryla::TractSetup> tracts, std::vector<std::array<double, 3>> axis,
                        const std::string& ordering, std::vector<std::string> tractOrder, const std::string& packing,
-                       uint64_t seed, std::optional<pteryla::MoultSetup> moult) {
+                       uint64_t seed, std::optional<pteryla::MoultSetup> moult,
+                       std::vector<pteryla::ControlSetup> controls) {
              pteryla::CoatSetup c;
              c.tracts = std::move(tracts);
              c.axis = std::move(axis);
@@ -457,12 +518,13 @@ moult: pteryla.Moult (default: off).)")
              setPacking(c, packing);
              c.seed = seed;
              if (moult) c.moult = *moult;
+             c.controls = std::move(controls);
              return c;
            }),
            py::kw_only(), py::arg("tracts") = std::vector<pteryla::TractSetup>{},
            py::arg("axis") = std::vector<std::array<double, 3>>{}, py::arg("ordering") = "axis",
            py::arg("tract_order") = std::vector<std::string>{}, py::arg("packing") = "drape", py::arg("seed") = 1,
-           py::arg("moult") = py::none())
+           py::arg("moult") = py::none(), py::arg("controls") = std::vector<pteryla::ControlSetup>{})
       .def_readwrite("tracts", &pteryla::CoatSetup::tracts)
       .def_readwrite("axis", &pteryla::CoatSetup::axis)
       .def_property(
@@ -478,7 +540,8 @@ moult: pteryla.Moult (default: off).)")
           &setPacking,
           "'drape' or 'height_field' (docs/packing.md).")
       .def_readwrite("seed", &pteryla::CoatSetup::seed, "Same skin + set-up + seed = same coat, bit for bit.")
-      .def_readwrite("moult", &pteryla::CoatSetup::moult, "pteryla.Moult (enabled False: no moult).");
+      .def_readwrite("moult", &pteryla::CoatSetup::moult, "pteryla.Moult (enabled False: no moult).")
+      .def_readwrite("controls", &pteryla::CoatSetup::controls, "Expressive controls: list of pteryla.Control.");
 
   py::class_<PyFrame>(m, "Frame", R"(One evaluated frame as numpy arrays.
 
@@ -554,6 +617,21 @@ Session.from_scene_file(path): a scene file (docs/scene-format.md) or a bare mes
           },
           py::arg("t"), "Evaluation time (moult, skeleton and controls of a scene file).")
       .def_property_readonly("time", [](const PySession& s) { return s.session->time(); })
+      .def(
+          "set_fixed_elevations",
+          [](PySession& s, py::handle keys, py::handle elevations) {
+            s.requireMutable("set_fixed_elevations");
+            auto k = py::array_t<uint64_t, py::array::c_style | py::array::forcecast>::ensure(keys);
+            auto e = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(elevations);
+            if (!k || k.ndim() != 1) throw pteryla::Error("expected a 1-D array of follicle keys", "", "follicle_keys");
+            if (!e || e.ndim() != 1) throw pteryla::Error("expected a 1-D array of radians", "", "elevations");
+            std::vector<uint64_t> kv(k.data(), k.data() + k.size());
+            std::vector<double> ev(e.data(), e.data() + e.size());
+            s.session->setFixedElevations(kv, ev);
+          },
+          py::arg("follicle_keys"), py::arg("elevations"),
+          "Fixes these feathers' elevations (radians in [0, pi/2], by Frame.follicle_keys), replacing what "
+          "packing gives them; replaces the whole set (empty arrays: none). Packing 'height_field' only.")
       .def_property(
           "pose_mode",
           [](const PySession& s) { return s.session->poseMode() == pteryla::PoseMode::Follow ? "follow" : "repack"; },
@@ -594,6 +672,25 @@ set_pose, clear_pose, set_time, set_lod, check) raise pteryla.Error.)")
           },
           "The independent checker's numbers as a dict with the keys of `pteryla check` (None = not "
           "measured). Evaluates first if needed; costs more than an evaluation.")
+      .def(
+          "render",
+          [](PySession& s, py::object path, int width, int height, const std::string& style) {
+            const std::string p = pathFrom(path);
+            s.requireMutable("render");
+            pteryla::RenderSettings r;
+            r.width = width;
+            r.height = height;
+            r.style = style;
+            withoutGil(s, [&] {
+              s.session->render(p, r);
+              return 0;
+            });
+          },
+          py::arg("path"), py::arg("width") = 0, py::arg("height") = 0, py::arg("style") = "",
+          "Renders the frame (evaluating first if needed) through Mesa's off-screen OpenGL, as `pteryla render` "
+          "does, to a .png/.jpg/.tif/.exr written through a temporary file. width, height: pixels (0, 0: the "
+          "scene's render.size). style: '' (the scene's), 'shaded' or "
+          "'scratchboard'. Raises pteryla.Error naming the setting or file; not for pose_mode 'follow' with a pose.")
       .def(
           "export",
           [](PySession& s, py::object path, py::object times, double fps, const std::string& coatAs,

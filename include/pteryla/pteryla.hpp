@@ -91,10 +91,35 @@ struct MoultSetup {
   uint64_t seed = 1;                  // of sequence "random" and the jitter
 };
 
+// One key of an expressive control's animation (docs/controls.md): the attributes it sets at time t, each
+// in [0, 1]; each attribute is its own track (unset: no key of that track here).
+struct ControlKey {
+  double t = 0;
+  std::optional<double> lift, aim, direction, random, dynamic;
+  std::optional<std::array<double, 3>> offset;  // displacement of the control off the skin
+};
+
+// An expressive control (Grier 2019, "AnimFur"; docs/controls.md): placed on the skin at `at`, it binds
+// the feathers within `radius` and raises (lift), aims, turns (direction), twists (random) and lags
+// (dynamic) them as its keys say. Raises need a packed coat (CoatSetup::Packing::HeightField: the rest
+// of the coat is packed against the raised feathers); a draped coat takes the turns only.
+struct ControlSetup {
+  std::string name;
+  std::array<double, 3> at{{0, 0, 0}};  // rest coordinates, snapped to the skin
+  double radius = 0;                   // > 0
+  double falloff = 0;                  // [0, 1]: outer fraction of the radius where the weight fades
+  std::vector<std::string> tracts;     // tracts it may bind (empty: any)
+  std::vector<ControlKey> keys;        // at least one
+  std::string interpolation = "linear";  // "linear", "smooth" or "step" between keys
+  uint64_t seed = 1;                   // random twist multipliers
+  double twistAngleDeg = 45;           // twist at random = 1, [0, 180]
+  double maxLiftDeg = 90;              // elevation at lift = 1, [0, 90]
+};
+
 // The coat set-up a Session is built from. It covers what maps cleanly onto the scene format; the
 // rest (key feathers and interpolation, pinned follicles, density bias, label files and tract set
 // operations, styling vectors, per-tract directions, packer knobs and styling, per-tract moult
-// schedules, skeleton, expressive controls) is only reachable through a scene file: Session::fromSceneFile.
+// schedules, skeleton, control springs) is only reachable through a scene file: Session::fromSceneFile.
 struct CoatSetup {
   std::vector<TractSetup> tracts;                 // empty: one tract "all" over the whole skin
   // Body axis, head to tail (>= 2 distinct points): feathers point along it (6.3.1) and, with
@@ -108,6 +133,7 @@ struct CoatSetup {
   Packing packing = Packing::Drape;
   uint64_t seed = 1;                              // same skin + set-up + seed = same coat, bit for bit
   MoultSetup moult;                               // off by default
+  std::vector<ControlSetup> controls;             // expressive controls (none by default)
 };
 
 // Progress of evaluate(): stage name ("distribute", "interpolate", "pack", "mesh"; the skin and the
@@ -208,6 +234,12 @@ struct ExportSummary {
   double seconds = 0; // evaluating the frames and writing
 };
 
+// Session::render: an image of the frame through Mesa's off-screen OpenGL (llvmpipe; no display or GPU).
+struct RenderSettings {
+  int width = 0, height = 0;      // pixels, each in [1, 16384]; 0 and 0 = the scene's render.size (960x720)
+  std::string style;              // "" = the scene's render.style; "shaded" or "scratchboard" (docs/render.md)
+};
+
 class PTERYLA_API Session {
  public:
   // Checks the skin (pteryla::Error naming "positions", "triangles", "vertex 5", "face 17", ...) and the
@@ -232,6 +264,13 @@ class PTERYLA_API Session {
   void setPose(const std::vector<double>& positions);
   void setPose(const float* xyz, size_t vertexCount);
   void clearPose();  // back to the rest skin (or the scene's skeleton)
+  // Fixed elevations (an animator's choice): per follicle key (Frame::follicleKeys), radians in [0, pi/2]
+  // above the skin's tangent plane, replacing what packing would give those feathers (expressive controls
+  // of a scene file still raise on top). Replaces the whole set; empty = none. A packed coat only
+  // (CoatSetup::Packing::HeightField): a draped coat is laid along the skin, and this throws. Throws
+  // pteryla::Error naming "follicleKeys[i]" for a key the coat does not have, "elevations[i]" for a
+  // value out of range, and keeps the last set.
+  void setFixedElevations(const std::vector<uint64_t>& follicleKeys, const std::vector<double>& elevations);
   // PoseMode::Repack (default) or Follow. Switching keeps the pose the host gave.
   void setPoseMode(PoseMode mode);
   PoseMode poseMode() const;
@@ -263,6 +302,13 @@ class PTERYLA_API Session {
   // failure throws pteryla::Error naming the file or setting and keeps any previous file. frame() stays
   // valid if it was.
   ExportSummary exportTo(const std::string& path, const ExportSettings& settings = {});
+
+  // Renders the frame (evaluating first if needed) with the scene's camera (a typed set-up's frames the
+  // skin), lights and feather materials, as `pteryla render` does, and writes it to `path` (.png, .jpg,
+  // .tif, .exr) through a temporary file renamed on success. libOSMesa is loaded on the first call:
+  // without it, or for a bad size, style or path, throws pteryla::Error naming it. Not for a
+  // PoseMode::Follow pose yet (throws). frame() stays valid if it was.
+  void render(const std::string& path, const RenderSettings& settings = {});
 
  private:
   struct Impl;

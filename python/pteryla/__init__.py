@@ -13,8 +13,8 @@ A Python client of the host API (include/pteryla/pteryla.hpp):
 Bad input raises pteryla.Error with .file and .element. docs/blender.md, "Python API".
 """
 from ._error import Error
-from ._pteryla import Frame, Moult, Session, Setup, Tract, data_directory, version
+from ._pteryla import Control, Frame, Moult, Session, Setup, Tract, data_directory, version
 from ._setup import setup_from_dict
 
-__all__ = ["Error", "Frame", "Moult", "Session", "Setup", "Tract", "data_directory", "version", "setup_from_dict"]
+__all__ = ["Control", "Error", "Frame", "Moult", "Session", "Setup", "Tract", "data_directory", "version", "setup_from_dict"]
 __version__ = version()

@@ -49,6 +49,22 @@ class Moult:
     def __init__(self, *, enabled: bool = ..., start: float = ..., duration: float = ..., window: float = ...,
                  sequence: str = ..., gap: float = ..., random: float = ..., seed: int = ...) -> None: ...
 
+class Control:
+    name: str
+    at: Tuple[float, float, float]
+    radius: float
+    falloff: float
+    tracts: List[str]
+    interpolation: str  # "linear" | "smooth" | "step"
+    seed: int
+    twist_angle: float
+    max_lift: float
+    @property
+    def key_count(self) -> int: ...
+    def __init__(self, at: Tuple[float, float, float], radius: float, *, name: str = ..., falloff: float = ...,
+                 tracts: Sequence[str] = ..., keys: Sequence[Dict[str, Any]] = ..., interpolation: str = ...,
+                 seed: int = ..., twist_angle: float = ..., max_lift: float = ...) -> None: ...
+
 class Setup:
     tracts: List[Tract]
     axis: List[Tuple[float, float, float]]
@@ -57,9 +73,10 @@ class Setup:
     packing: str  # "drape" | "height_field"
     seed: int
     moult: Moult
+    controls: List[Control]
     def __init__(self, *, tracts: Sequence[Tract] = ..., axis: Sequence[Tuple[float, float, float]] = ...,
                  ordering: str = ..., tract_order: Sequence[str] = ..., packing: str = ..., seed: int = ...,
-                 moult: Optional[Moult] = ...) -> None: ...
+                 moult: Optional[Moult] = ..., controls: Sequence[Control] = ...) -> None: ...
 
 class Frame:
     feather_count: int
@@ -95,6 +112,7 @@ class Session:
     @property
     def lod(self) -> float: ...
     pose_mode: str  # "repack" | "follow"
+    def set_fixed_elevations(self, follicle_keys: npt.ArrayLike, elevations: npt.ArrayLike) -> None: ...
     def set_pose(self, positions: npt.ArrayLike) -> None: ...
     def clear_pose(self) -> None: ...
     def set_time(self, t: float) -> None: ...
@@ -102,5 +120,6 @@ class Session:
     def evaluate(self, progress: Optional[Callable[[str, float], Optional[bool]]] = ...) -> bool: ...
     def frame(self, copy: bool = ...) -> Frame: ...
     def check(self) -> Dict[str, Optional[Union[int, float]]]: ...
+    def render(self, path: _Path, width: int = 0, height: int = 0, style: str = "") -> None: ...
     def export(self, path: _Path, times: Optional[Sequence[float]] = None, fps: float = 24.0,
                coat_as: str = "curves", meters_per_unit: float = 1.0) -> Optional[Dict[str, float]]: ...

@@ -9,7 +9,9 @@
      "ordering": {"method": "axis" | "tracts" | "flow", "tracts": ["back", ...]},
      "packing": {"method": "drape" | "height_field"},
      "moult": {"start": 0, "duration": 10, "window": 0.2, "sequence": "centre_out", "gap": 0.05,
-               "random": 0, "seed": 3, "enabled": True}}                # optional; a tract's "moult": False
+               "random": 0, "seed": 3, "enabled": True},                # optional; a tract's "moult": False
+     "controls": [{"name": "crest", "at": [0.8, 0.5, 0], "radius": 0.1, "tracts": ["back"],
+                   "keys": [{"t": 0, "lift": 0}, {"t": 1, "lift": 1}]}]}  # docs/controls.md (no "spring")
 
 A "moult" section turns the moult on (docs/moult.md), as in a scene file.
 
@@ -20,7 +22,11 @@ import os
 
 from ._error import Error
 
-_SECTIONS = {"pteryla", "name", "seed", "feathers", "tracts", "directions", "ordering", "packing", "moult"}
+_SECTIONS = {"pteryla", "name", "seed", "feathers", "tracts", "directions", "ordering", "packing", "moult",
+             "controls"}
+_CONTROL_KEYS = {"name", "at", "radius", "falloff", "tracts", "keys", "interpolation", "seed", "twist_angle",
+                 "max_lift", "lift", "aim", "direction", "random", "dynamic", "offset"}
+_ATTRIBUTES = ("lift", "aim", "direction", "random", "dynamic", "offset")
 _MOULT_KEYS = {"enabled", "start", "duration", "window", "sequence", "gap", "random", "seed"}
 _TRACT_KEYS = {"name", "groups", "faces", "count", "density", "feather", "feather_scale", "feather_spacings",
                "relax", "seed", "moult"}
@@ -142,4 +148,32 @@ def setup_from_dict(d, base_dir=None):
                 raise Error("moult.enabled: expected true or false", "", "moult.enabled")
             mo.enabled = bool(m["enabled"])
         s.moult = mo
+    if "controls" in d:
+        from . import Control
+        if not isinstance(d["controls"], list):
+            raise Error("controls: expected a list of controls", "", "controls")
+        controls = []
+        for i, c in enumerate(d["controls"]):
+            where = f"controls[{i}]"
+            _check_keys(c, _CONTROL_KEYS, where)
+            for req in ("at", "radius"):
+                if req not in c:
+                    raise Error(f"{where}.{req}: required", "", f"{where}.{req}")
+            # A constant attribute is a key at t = 0 (docs/controls.md: constants instead of keys).
+            keys = [dict(k) for k in c.get("keys", [])]
+            const = {a: c[a] for a in _ATTRIBUTES if a in c}
+            if const:
+                if keys:
+                    raise Error(f"{where}: give constants or keys, not both", "", where)
+                keys = [dict(t=0, **const)]
+            try:
+                kw = {k: c[k] for k in ("name", "falloff", "tracts", "interpolation", "seed", "twist_angle", "max_lift")
+                      if k in c}
+                controls.append(Control(tuple(_number(x, f"{where}.at") for x in c["at"]),
+                                        _number(c["radius"], f"{where}.radius"), keys=keys, **kw))
+            except Error as e:
+                raise Error(f"{where}.{e.element}: {e.detail}", "", f"{where}.{e.element}") from None
+            except (TypeError, RuntimeError) as e:
+                raise Error(f"{where}: {e}", "", where) from None
+        s.controls = controls
     return s

@@ -19,11 +19,15 @@
 #include "pteryla/core/json.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/feather/mesh_io.hpp"
+#include "pteryla/moult/controls.hpp"
 #include "pteryla/moult/schedule.hpp"
 #include "pteryla/exchange/coat_export.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
 #include "pteryla/pipeline/stage_graph.hpp"
+#include "pteryla/render/image.hpp"
+#include "pteryla/render/osmesa_context.hpp"
+#include "pteryla/render/scene_view.hpp"
 
 namespace pteryla {
 namespace {
@@ -175,6 +179,53 @@ pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
     JsonReader r(mj, "", "moult");
     moult::readMoultOptions(r);
     j["moult"] = std::move(mj);
+  }
+  if (!setup.controls.empty()) {
+    Json controls = Json::array();
+    for (size_t c = 0; c < setup.controls.size(); ++c) {
+      const ControlSetup& in = setup.controls[c];
+      const std::string where = at("controls", c);
+      for (int k = 0; k < 3; ++k) requireFinite(in.at[k], where + ".at", "at");
+      for (const auto& [v, key] : {std::pair{in.radius, "radius"}, {in.falloff, "falloff"},
+                                   {in.twistAngleDeg, "twist_angle"}, {in.maxLiftDeg, "max_lift"}})
+        requireFinite(v, where + "." + key, key);
+      Json o = {{"name", in.name}, {"at", point(in.at)}, {"radius", in.radius}, {"falloff", in.falloff},
+                {"interpolation", in.interpolation}, {"seed", in.seed}, {"twist_angle", in.twistAngleDeg},
+                {"max_lift", in.maxLiftDeg}};
+      if (!in.tracts.empty()) o["tracts"] = in.tracts;
+      if (in.keys.empty()) throw Error("a control needs at least one key", "", where + ".keys");
+      Json keys = Json::array();
+      for (size_t k = 0; k < in.keys.size(); ++k) {
+        const ControlKey& key = in.keys[k];
+        const std::string kw = where + ".keys[" + std::to_string(k) + "]";
+        requireFinite(key.t, kw + ".t", "t");
+        Json kj = {{"t", key.t}};
+        for (const auto& [v, name] : {std::pair{key.lift, "lift"}, {key.aim, "aim"}, {key.direction, "direction"},
+                                      {key.random, "random"}, {key.dynamic, "dynamic"}})
+          if (v) {
+            requireFinite(*v, kw + "." + name, name);
+            kj[name] = *v;
+          }
+        if (key.offset) {
+          for (int i = 0; i < 3; ++i) requireFinite((*key.offset)[i], kw + ".offset", "offset");
+          kj["offset"] = point(*key.offset);
+        }
+        keys.push_back(std::move(kj));
+      }
+      o["keys"] = std::move(keys);
+      controls.push_back(std::move(o));
+    }
+    // Checked now, with the scene format's ranges and names (the controls stage reads them at evaluate()).
+    moult::readControls(controls, "", "controls");
+    for (size_t c = 0; c < setup.controls.size(); ++c)
+      for (size_t k = 0; k < setup.controls[c].tracts.size(); ++k) {
+        bool known = false;
+        for (const TractSetup& t : list) known = known || t.name == setup.controls[c].tracts[k];
+        if (!known)
+          throw Error("unknown tract '" + setup.controls[c].tracts[k] + "'", "",
+                      at("controls", c) + ".tracts[" + std::to_string(k) + "]");
+      }
+    j["controls"] = std::move(controls);
   }
   pipeline::Scene s = pipeline::sceneFromJson(j, "");
   // Without an axis, directions and axis ordering follow the skin's longest bounding-box axis.
@@ -407,6 +458,39 @@ void Session::clearPose() {
   impl_->frameValid = false;
 }
 
+void Session::setFixedElevations(const std::vector<uint64_t>& follicleKeys, const std::vector<double>& elevations) {
+  Impl& m = *impl_;
+  if (follicleKeys.size() != elevations.size())
+    throw Error("expected one elevation per follicle key (" + std::to_string(follicleKeys.size()) + "), got " +
+                    std::to_string(elevations.size()),
+                "", "elevations");
+  if (!follicleKeys.empty()) {
+    const Json& packing = m.pipeline->scene().packing;
+    const std::string method = packing.is_object() && packing.contains("method") && packing["method"].is_string()
+                                   ? packing["method"].get<std::string>()
+                                   : "drape";
+    if (method == "drape")
+      throw Error("fixed elevations need a packed coat (packing height_field): a draped coat is laid along the skin",
+                  "", "packing");
+  }
+  std::map<uint64_t, double> byKey;
+  if (!follicleKeys.empty()) {
+    const coat::Follicles& f = m.pipeline->follicles();  // distributes first if needed
+    std::set<uint64_t> known(f.id.begin(), f.id.end());
+    for (size_t k = 0; k < follicleKeys.size(); ++k) {
+      if (!known.count(follicleKeys[k]))
+        throw Error("no follicle has the key " + std::to_string(follicleKeys[k]), "", at("follicleKeys", k));
+      if (!std::isfinite(elevations[k]) || elevations[k] < 0 || elevations[k] > 1.5707963267948966)
+        throw Error("elevation must be in [0, pi/2] radians, got " + std::to_string(elevations[k]), "",
+                    at("elevations", k));
+      byKey[follicleKeys[k]] = elevations[k];
+    }
+  }
+  if (byKey == m.pipeline->fixedElevations()) return;
+  m.pipeline->setFixedElevations(std::move(byKey));
+  m.frameValid = false;
+}
+
 void Session::setPoseMode(PoseMode mode) {
   Impl& m = *impl_;
   if (mode == m.poseMode) return;
@@ -493,6 +577,35 @@ ExportSummary Session::exportTo(const std::string& path, const ExportSettings& s
   out.frames = r.frames;
   out.seconds = r.seconds;
   return out;
+}
+
+void Session::render(const std::string& path, const RenderSettings& settings) {
+  Impl& m = *impl_;
+  if (m.following())
+    throw Error("rendering a coat carried onto a Follow pose is not supported yet: use PoseMode::Repack", path,
+                "poseMode");
+  const bool sceneSize = settings.width == 0 && settings.height == 0;
+  const int width = sceneSize ? m.pipeline->scene().render.width : settings.width;
+  const int height = sceneSize ? m.pipeline->scene().render.height : settings.height;
+  for (const auto& [v, name] : {std::pair{width, "width"}, {height, "height"}})
+    if (v < 1 || v > 16384) throw Error(std::string(name) + " must be in [1, 16384], got " + std::to_string(v), path, name);
+  if (!settings.style.empty() && settings.style != "shaded" && settings.style != "scratchboard")
+    throw Error("style must be \"\", \"shaded\" or \"scratchboard\", got \"" + settings.style + "\"", path, "style");
+  const bool hadFrame = m.frameValid;
+  m.frameValid = false;
+  try {
+    render::OsMesaContext context(width, height);
+    render::SceneView view(context);
+    const render::Image image = view.render(*m.pipeline, width, height, settings.style);
+    render::saveImage(path, image);
+  } catch (...) {
+    // A failed write (or context) keeps the frame the host had.
+    if (hadFrame) m.fillFrame();
+    throw;
+  }
+  // The view may have set per-feather levels of detail (render.lod_by_screen_size): point the views at
+  // the frame as it is now.
+  if (hadFrame) m.fillFrame();
 }
 
 Metrics Session::metrics() {

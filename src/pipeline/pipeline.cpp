@@ -110,6 +110,7 @@ struct Pipeline::Impl {
 
   std::optional<coat::SkinMesh> memorySkin;  // the rest skin when given in memory (else scene.meshPath)
   std::vector<glm::dvec3> skinPose;          // the caller's posed positions (empty: skeleton / rest)
+  std::map<uint64_t, double> hostElevations;  // setFixedElevations: follicle id -> radians
 
   // Cached stage results.
   coat::SkinMesh rest, posed;
@@ -636,6 +637,11 @@ void Pipeline::Impl::computeControls() {
       throw Error(e.detail(), scene.file, "packing." + e.element());  // "styling[0].ids[3]" is under packing
     }
   }
+  // The caller's fixed elevations win over styling; expressive controls still raise on top of them.
+  if (!hostElevations.empty())
+    for (size_t i = 0; i < coatNow.size(); ++i)
+      if (auto it = hostElevations.find(follicles.id[coatNow.follicle[i]]); it != hostElevations.end())
+        fixedElevation[i] = it->second;
   applyControls(scene, time, posed, posedFollicles, timeState, coatNow, fixedElevation);
 }
 
@@ -1106,6 +1112,17 @@ void Pipeline::setSkinPose(std::vector<glm::dvec3> positions) {
   impl_->graph.invalidate(impl_->id(Stage::Pose));
 }
 const std::vector<glm::dvec3>& Pipeline::skinPose() const { return impl_->skinPose; }
+
+void Pipeline::setFixedElevations(std::map<uint64_t, double> elevations) {
+  for (const auto& [id, e] : elevations)
+    if (!std::isfinite(e) || e < 0 || e > feather::kPi / 2)
+      throw Error("elevation " + std::to_string(e) + " is not in [0, pi/2] radians", "",
+                  "follicle " + std::to_string(id));
+  if (elevations == impl_->hostElevations) return;
+  impl_->hostElevations = std::move(elevations);
+  impl_->graph.invalidate(impl_->id(Stage::Controls));
+}
+const std::map<uint64_t, double>& Pipeline::fixedElevations() const { return impl_->hostElevations; }
 
 void Pipeline::setLod(double f) {
   if (!(f > 0 && f <= 1)) throw Error("level of detail must be in (0, 1]", "", "lod");

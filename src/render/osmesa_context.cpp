@@ -1,14 +1,65 @@
-// Headless OpenGL through Mesa's OSMesa (llvmpipe): the RenderContext used by the CLI and the tests.
+// Headless OpenGL through Mesa's OSMesa (llvmpipe): the RenderContext used by the CLI, the tests and the
+// host API's Session::render.
+//
+// libOSMesa is loaded at run time (dlopen), never linked: no binary or library of pteryla then carries a
+// link to it, so the host library can render and still be loaded into a process that links libGL (a
+// DCC such as Blender) without OSMesa's GL entry points being bound in that process, and a machine
+// without libosmesa6 gets an error naming the library instead of a program that does not start. GL
+// functions come from OSMesaGetProcAddress. The library stays loaded until the process ends (no
+// dlclose: Mesa keeps thread-local state that must outlive every context).
 #include "pteryla/render/osmesa_context.hpp"
 
 #include <GL/osmesa.h>
+#include <dlfcn.h>
 
+#include <mutex>
+#include <type_traits>
 #include <string>
 #include <vector>
 
 #include "pteryla/core/error.hpp"
 
 namespace pteryla::render {
+
+namespace {
+
+struct OsMesaApi {
+  decltype(&OSMesaCreateContextAttribs) createContextAttribs = nullptr;
+  decltype(&OSMesaDestroyContext) destroyContext = nullptr;
+  decltype(&OSMesaMakeCurrent) makeCurrent = nullptr;
+  decltype(&OSMesaPixelStore) pixelStore = nullptr;
+  decltype(&OSMesaGetProcAddress) getProcAddress = nullptr;
+};
+
+const OsMesaApi& osMesa() {
+  static OsMesaApi api;
+  static std::string failure;
+  static std::once_flag once;
+  std::call_once(once, [] {
+    void* lib = nullptr;
+    for (const char* name : {"libOSMesa.so.8", "libOSMesa.so"})
+      if ((lib = dlopen(name, RTLD_NOW | RTLD_LOCAL))) break;
+    if (!lib) {
+      const char* why = dlerror();
+      failure = std::string("cannot load Mesa's off-screen GL library libOSMesa.so.8 (install libosmesa6: "
+                            "tools/bootstrap.sh): ") + (why ? why : "not found");
+      return;
+    }
+    auto sym = [&](auto& fn, const char* name) {
+      fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(dlsym(lib, name));
+      if (!fn && failure.empty()) failure = std::string("libOSMesa has no ") + name + " (Mesa too old?)";
+    };
+    sym(api.createContextAttribs, "OSMesaCreateContextAttribs");
+    sym(api.destroyContext, "OSMesaDestroyContext");
+    sym(api.makeCurrent, "OSMesaMakeCurrent");
+    sym(api.pixelStore, "OSMesaPixelStore");
+    sym(api.getProcAddress, "OSMesaGetProcAddress");
+  });
+  if (!failure.empty()) throw Error(failure);
+  return api;
+}
+
+}  // namespace
 
 struct OsMesaContext::Impl {
   OSMesaContext ctx = nullptr;
@@ -26,34 +77,36 @@ void checkSize(int w, int h) {
 
 OsMesaContext::OsMesaContext(int width, int height) : impl_(std::make_unique<Impl>()) {
   checkSize(width, height);
+  const OsMesaApi& gl = osMesa();
   const int core[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_STENCIL_BITS, 8,
                       OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
                       OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
-  impl_->ctx = OSMesaCreateContextAttribs(core, nullptr);
+  impl_->ctx = gl.createContextAttribs(core, nullptr);
   impl_->core = impl_->ctx != nullptr;
   if (!impl_->ctx) {
     const int compat[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_STENCIL_BITS, 8,
                           OSMESA_PROFILE, OSMESA_COMPAT_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
                           OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
-    impl_->ctx = OSMesaCreateContextAttribs(compat, nullptr);
+    impl_->ctx = gl.createContextAttribs(compat, nullptr);
   }
   if (!impl_->ctx) throw Error("OSMesa could not create an OpenGL 3.3 context (is libosmesa6 installed?)");
   resize(width, height);
 }
 
 OsMesaContext::~OsMesaContext() {
-  if (impl_ && impl_->ctx) OSMesaDestroyContext(impl_->ctx);
+  if (impl_ && impl_->ctx) osMesa().destroyContext(impl_->ctx);
 }
 
 void OsMesaContext::makeCurrent() {
-  if (!OSMesaMakeCurrent(impl_->ctx, impl_->buffer.data(), GL_UNSIGNED_BYTE, impl_->width, impl_->height))
+  const OsMesaApi& gl = osMesa();
+  if (!gl.makeCurrent(impl_->ctx, impl_->buffer.data(), GL_UNSIGNED_BYTE, impl_->width, impl_->height))
     throw Error("OSMesaMakeCurrent failed");
   // Row 0 of the buffer is the bottom row, as glReadPixels reports it.
-  OSMesaPixelStore(OSMESA_Y_UP, 1);
+  gl.pixelStore(OSMESA_Y_UP, 1);
 }
 
 GlProc OsMesaContext::getProcAddress(const char* name) const {
-  return reinterpret_cast<GlProc>(OSMesaGetProcAddress(name));
+  return reinterpret_cast<GlProc>(osMesa().getProcAddress(name));
 }
 
 glm::ivec2 OsMesaContext::framebufferSize() const { return {impl_->width, impl_->height}; }

@@ -425,6 +425,110 @@ TEST(HostSession, MoultWindowTakesFeathersOutOfMoultingTractsOnly) {
   failsAt("moult.gap", [](CoatSetup& c) { c.moult.gap = std::nan(""); });
 }
 
+// Fixed elevations from the host replace what packing gives those feathers, exactly; the others are
+// packed against them; clearing gives the packed coat back bit for bit.
+TEST(HostSession, FixedElevationsReplaceThePackedOnes) {
+  const SkinArrays skin = sphereSkin();
+  CoatSetup setup = smallSetup();
+  setup.packing = CoatSetup::Packing::HeightField;
+  Session s = evaluated(skin, setup);
+  const Frame& f0 = s.frame();
+  const std::vector<uint64_t> keys(f0.follicleKeys.begin(), f0.follicleKeys.end());
+  const std::vector<double> packed(f0.elevations.begin(), f0.elevations.end());
+  const std::vector<float> coat(f0.positions.begin(), f0.positions.end());
+  s.setFixedElevations({keys[3], keys[40], keys[77]}, {0.6, 1.2, 0.0});
+  EXPECT_THROW(s.frame(), pteryla::Error);
+  ASSERT_TRUE(s.evaluate());
+  const Frame& f1 = s.frame();
+  EXPECT_EQ(f1.elevations[3], 0.6);
+  EXPECT_EQ(f1.elevations[40], 1.2);
+  EXPECT_EQ(f1.elevations[77], 0.0);
+  EXPECT_FALSE(std::equal(coat.begin(), coat.end(), f1.positions.begin(), f1.positions.end()));
+  auto elementOf = [&](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const pteryla::Error& e) {
+      return e.element();
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(elementOf([&] { s.setFixedElevations({keys[0], 987654321}, {0.1, 0.1}); }), "follicleKeys[1]");
+  EXPECT_EQ(elementOf([&] { s.setFixedElevations({keys[0]}, {2.0}); }), "elevations[0]");
+  EXPECT_EQ(elementOf([&] { s.setFixedElevations({keys[0]}, {std::nan("")}); }), "elevations[0]");
+  EXPECT_EQ(elementOf([&] { s.setFixedElevations({keys[0]}, {}); }), "elevations");
+  EXPECT_NO_THROW(s.frame());  // the refused calls kept the set and the frame
+  s.setFixedElevations({}, {});
+  ASSERT_TRUE(s.evaluate());
+  EXPECT_TRUE(std::equal(packed.begin(), packed.end(), s.frame().elevations.begin()));
+  EXPECT_TRUE(std::equal(coat.begin(), coat.end(), s.frame().positions.begin()));
+  // A draped coat (the default) is laid along the skin: refused, naming the packing.
+  Session draped = evaluated(skin, smallSetup());
+  EXPECT_EQ(elementOf([&] { draped.setFixedElevations({keys[0]}, {0.3}); }), "packing");
+}
+
+// A typed control raises the feathers it binds to its max_lift at lift 1 (packed coat), is animated by
+// its keys, and bad values fail at construction naming the element.
+TEST(HostSession, TypedControlRaisesTheFeathersItBinds) {
+  const SkinArrays skin = sphereSkin();
+  CoatSetup setup = smallSetup();
+  setup.packing = CoatSetup::Packing::HeightField;
+  pteryla::ControlSetup c;
+  c.name = "crest";
+  c.at = {{0, 0.8, 0.6}};
+  c.radius = 0.45;
+  c.maxLiftDeg = 60;
+  pteryla::ControlKey k0, k1;
+  k0.t = 0;
+  k0.lift = 0.0;
+  k1.t = 1;
+  k1.lift = 1.0;
+  c.keys = {k0, k1};
+  setup.controls = {c};
+  Session s = evaluated(skin, setup);
+  Session still = evaluated(skin, smallSetup());
+  const double target = 60 * 3.14159265358979323846 / 180;
+  auto near = [&](const Frame& f, size_t i) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += (f.origins[3 * i + k] - c.at[k]) * (f.origins[3 * i + k] - c.at[k]);
+    return std::sqrt(d2) < 0.5 * c.radius;
+  };
+  size_t raised = 0, nearCount = 0;
+  s.setTime(1.0);
+  ASSERT_TRUE(s.evaluate());
+  for (size_t i = 0; i < s.frame().featherCount; ++i)
+    if (near(s.frame(), i)) {
+      ++nearCount;
+      raised += s.frame().elevations[i] >= target - 1e-9;
+    }
+  EXPECT_GE(nearCount, 2u);
+  EXPECT_EQ(raised, nearCount);
+  // At t = 0 the lift is 0: nothing is raised to the target.
+  s.setTime(0.0);
+  ASSERT_TRUE(s.evaluate());
+  for (size_t i = 0; i < s.frame().featherCount; ++i) {
+    if (near(s.frame(), i)) {
+      EXPECT_LT(s.frame().elevations[i], target - 1e-3);
+    }
+  }
+
+  auto failsAt = [&](const std::string& element, const std::function<void(CoatSetup&)>& edit) {
+    CoatSetup bad = setup;
+    edit(bad);
+    try {
+      Session x(skin, bad);
+      ADD_FAILURE() << "no error for " << element;
+    } catch (const pteryla::Error& e) {
+      EXPECT_EQ(e.element(), element) << e.what();
+    }
+  };
+  failsAt("controls[0].radius", [](CoatSetup& x) { x.controls[0].radius = 0; });
+  failsAt("controls[0].keys[1].lift", [](CoatSetup& x) { x.controls[0].keys[1].lift = 2.0; });
+  failsAt("controls[0].tracts[0]", [](CoatSetup& x) { x.controls[0].tracts = {"tail"}; });
+  failsAt("controls[0].keys", [](CoatSetup& x) { x.controls[0].keys.clear(); });
+  failsAt("controls[0].interpolation", [](CoatSetup& x) { x.controls[0].interpolation = "bouncy"; });
+  failsAt("controls[0].at", [](CoatSetup& x) { x.controls[0].at[1] = std::nan(""); });
+}
+
 TEST(HostSession, BadPosesAreErrorsNamingTheElement) {
   const SkinArrays skin = sphereSkin();
   Session s = evaluated(skin, smallSetup());

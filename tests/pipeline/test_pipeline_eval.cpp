@@ -40,7 +40,11 @@ TEST(PipelineEval, SameSceneAndSeedGiveTheSameCoatBitForBit) {
 }
 
 TEST(PipelineEval, TimeAndLodEditsDirtyOnlyDownstreamStages) {
-  Pipeline p(smallScene());
+  // A moult makes the coat depend on time (without one a new time recomputes nothing:
+  // IncrementalFrames.TimeWithoutTimeDependentSectionsRecomputesNothing); it starts after t = 3.
+  Scene scene = smallScene();
+  scene.moult = Json::parse(R"({"start": 10, "duration": 1})");
+  Pipeline p(std::move(scene));
   p.coatMesh();
   auto& g = p.graph();
   const auto skin = g.find("skin"), dist = g.find("distribute"), pack = g.find("pack"), mesh = g.find("mesh");

@@ -208,6 +208,95 @@ def test_moult_section_and_tract_opt_out(sphere):
     bad(lambda: pteryla.Session(pos, tri, dict(setup, moult={"windw": 0.2}), **kw), "moult.windw")
 
 
+def png_size(path):
+    with open(path, "rb") as f:
+        head = f.read(24)
+    assert head[:8] == b"\x89PNG\r\n\x1a\n", head[:8]
+    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+
+
+def test_render_matches_the_cli(tmp_path):
+    """Session.render draws what `pteryla render` draws for the same scene file."""
+    scene = os.path.join(DATA, "scenes", "patch.json")
+    s = pteryla.Session.from_scene_file(scene)
+    out = tmp_path / "py.png"
+    s.render(out, width=160, height=120)
+    assert png_size(out) == (160, 120)
+    cli_png = tmp_path / "cli.png"
+    subprocess.run([os.environ["PTERYLA_CLI"], "render", scene, "--out", str(cli_png), "--size", "160x120",
+                    "--quiet"], check=True, capture_output=True, text=True)
+    d = subprocess.run([os.environ["PTERYLA_CLI"], "diff", str(out), str(cli_png)], capture_output=True, text=True)
+    assert d.returncode == 0, d.stdout + d.stderr
+    s.render(tmp_path / "s.png", width=80, height=60, style="scratchboard")
+    assert png_size(tmp_path / "s.png") == (80, 60)
+
+
+def test_render_errors_name_the_setting(sphere, tmp_path):
+    s = evaluated(sphere)
+    for kw, element in (({"width": 0, "height": 10}, "width"), ({"width": 10, "height": 20000}, "height"),
+                        ({"width": -5, "height": 10}, "width"), ({"style": "oil"}, "style")):
+        with pytest.raises(pteryla.Error) as e:
+            s.render(tmp_path / "x.png", **kw)
+        assert e.value.element == element
+    with pytest.raises(pteryla.Error) as e:
+        s.render(tmp_path / "no" / "such" / "dir" / "x.png")
+    assert "x.png" in e.value.file
+    assert not (tmp_path / "no").exists()
+    s.frame()  # still valid after the failures
+    s.render(tmp_path / "ok.png", width=64, height=48)
+    assert png_size(tmp_path / "ok.png") == (64, 48)
+    s.pose_mode = "follow"
+    s.set_pose(sphere[0] * 1.1)
+    with pytest.raises(pteryla.Error) as e:
+        s.render(tmp_path / "f.png")
+    assert e.value.element == "poseMode"
+
+
+def test_fixed_elevations(sphere):
+    setup = dict(small_setup(), packing={"method": "height_field"})
+    s = evaluated(sphere, setup)
+    f = s.frame()
+    keys = f.follicle_keys[[2, 9]]
+    s.set_fixed_elevations(keys, np.array([0.4, 0.9]))
+    assert s.evaluate()
+    assert s.frame().elevations[2] == 0.4 and s.frame().elevations[9] == 0.9
+    bad(lambda: s.set_fixed_elevations(keys, np.array([0.4, 3.0])), "elevations[1]")
+    s.set_fixed_elevations(np.zeros(0, np.uint64), np.zeros(0))
+    assert s.evaluate()
+    assert np.array_equal(s.frame().elevations, f.elevations)
+    draped = evaluated(sphere)
+    bad(lambda: draped.set_fixed_elevations(keys, np.array([0.4, 0.9])), "packing")
+
+
+def test_controls_from_dicts_and_typed(sphere):
+    pos, tri = sphere
+    setup = dict(small_setup(), packing={"method": "height_field"},
+                 controls=[{"name": "crest", "at": [0, 0.8, 0.6], "radius": 0.8, "max_lift": 60,
+                            "keys": [{"t": 0, "lift": 0}, {"t": 1, "lift": 1}]}])
+    s = pteryla.Session(pos, tri, setup)
+    s.set_lod(0.3)
+    s.set_time(1.0)
+    assert s.evaluate()
+    f = s.frame()
+    near = np.linalg.norm(f.origins - np.array([0, 0.8, 0.6]), axis=1) < 0.4
+    assert near.sum() >= 1 and (f.elevations[near] >= np.radians(60) - 1e-9).all()
+    typed = pteryla.Setup(tracts=[pteryla.Tract("body", count=60)], axis=[(0, 1, 0), (0, -1, 0)], seed=5,
+                          packing="height_field",
+                          controls=[pteryla.Control((0, 0.8, 0.6), 0.8, name="crest", max_lift=60,
+                                                    keys=[{"t": 0, "lift": 0}, {"t": 1, "lift": 1}])])
+    t = pteryla.Session(pos, tri, typed)
+    t.set_lod(0.3)
+    t.set_time(1.0)
+    assert t.evaluate()
+    assert np.array_equal(t.frame().elevations, f.elevations)
+    bad(lambda: pteryla.Session(pos, tri, dict(setup, controls=[{"at": [0, 1, 0], "radius": 0.1,
+                                                                 "keys": [{"t": 0, "lfit": 1}]}])),
+        "controls[0].keys[0].lfit")
+    bad(lambda: pteryla.Session(pos, tri, dict(setup, controls=[{"at": [0, 1, 0], "radius": -1, "lift": 1}])),
+        "controls[0].radius")
+    bad(lambda: pteryla.Session(pos, tri, dict(setup, controls=[{"radius": 1, "lift": 1}])), "controls[0].at")
+
+
 def bad(call, element):
     with pytest.raises(pteryla.Error) as e:
         call()

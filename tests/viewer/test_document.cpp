@@ -194,11 +194,19 @@ TEST(Document, OnlyDownstreamStagesRerun) {
   d.update();
   EXPECT_FALSE(d.busy());
   EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 1);
+  // patch.json reads no time (no skeleton, moult or controls): a new time re-runs nothing ...
   const auto pose = evals(pipeline::Stage::Pose);
   d.setTime(0.25);
   ASSERT_TRUE(d.waitIdle());
+  EXPECT_EQ(evals(pipeline::Stage::Pose), pose);
+  // ... and with a moult it re-runs the time stages, never the follicles.
+  d.edit("moult", [](pipeline::Scene& s) { s.moult = Json::parse(R"({"start": 0, "duration": 2})"); });
+  ASSERT_TRUE(d.waitIdle());
+  const auto poseMoult = evals(pipeline::Stage::Pose);
+  d.setTime(0.5);
+  ASSERT_TRUE(d.waitIdle());
   EXPECT_EQ(evals(pipeline::Stage::Distribute), distribute);
-  EXPECT_EQ(evals(pipeline::Stage::Pose), pose + 1);
+  EXPECT_EQ(evals(pipeline::Stage::Pose), poseMoult + 1);
 }
 
 TEST(Document, StageErrorsAreReportedAndUndoRecovers) {

@@ -10,6 +10,7 @@
 // follicles, and a timeline scrub (setTime) re-evaluates pose, ages, controls, pack and mesh only.
 // Results are pure functions of (scene, time, lod): evaluating t=5 then t=2 equals evaluating t=2 fresh.
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -117,6 +118,12 @@ class Pipeline {
   // a wrong count or a non-finite coordinate.
   void setSkinPose(std::vector<glm::dvec3> positions);
   const std::vector<glm::dvec3>& skinPose() const;
+  // Fixed elevations from the caller (a host's animator): follicle id (coat::Follicles::id) -> radians in
+  // [0, pi/2]. They replace what packing and styling would give those feathers (PackOptions::
+  // fixedElevation; controls still raise on top); ids the coat does not have are ignored. A packed
+  // (height_field) coat only: a draped coat is laid along the skin. Dirties controls, pack and mesh.
+  void setFixedElevations(std::map<uint64_t, double> elevations);
+  const std::map<uint64_t, double>& fixedElevations() const;
   void setLod(double fraction);  // (0,1]
   double lod() const;
   // Per-feather levels of detail (indexed like feathers()), each in (0,1], multiplying lod(): feather i
