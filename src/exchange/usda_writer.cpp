@@ -14,7 +14,11 @@
 // Units: upAxis "Y", metersPerUnit from ExportOptions. A frame range authors every attribute that can
 // change as timeSamples keyed by time code = scene time x fps (timeCodesPerSecond = fps). Float text is
 // the shortest decimal that reads back as the same float, so a reader gets the exact values.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <map>
 
@@ -34,8 +38,18 @@ struct Out {
   }
 };
 
-void put(std::string& o, float v) { o += shortest(v); }
-void put(std::string& o, int64_t v) { o += std::to_string(v); }
+// Numbers go straight into the output (no temporary string per value): the cards of a full-detail bird
+// are hundreds of megabytes of text.
+void put(std::string& o, float v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  o.append(buf, r.ptr);
+}
+void put(std::string& o, int64_t v) {
+  char buf[24];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  o.append(buf, r.ptr);
+}
 void put(std::string& o, const glm::vec3& v) {
   o += '(';
   put(o, v.x);
@@ -66,12 +80,34 @@ void put(std::string& o, const Quat& q) {
   put(o, q.z);
   o += ')';
 }
+// "[a, b, ...]". Large arrays are formatted in chunks on every core and joined in order: the same bytes
+// as formatting them one by one.
 template <class T>
 std::string array(const std::vector<T>& v) {
+  constexpr size_t kChunk = 1 << 14;
+  const size_t chunks = (v.size() + kChunk - 1) / kChunk;
+  auto format = [&](size_t c, std::string& o) {
+    const size_t end = std::min(v.size(), (c + 1) * kChunk);
+    for (size_t i = c * kChunk; i < end; ++i) {
+      if (i) o += ", ";
+      put(o, v[i]);
+    }
+  };
   std::string o = "[";
-  for (size_t i = 0; i < v.size(); ++i) {
-    if (i) o += ", ";
-    put(o, v[i]);
+  if (chunks <= 1) {
+    if (chunks == 1) format(0, o);
+  } else {
+    std::vector<std::string> parts(chunks);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t c = r.begin(); c != r.end(); ++c) format(c, parts[c]);
+    });
+    size_t total = 2;
+    for (const std::string& p : parts) total += p.size();
+    o.reserve(total);
+    for (std::string& p : parts) {
+      o += p;
+      std::string().swap(p);
+    }
   }
   o += ']';
   return o;
@@ -193,25 +229,27 @@ struct MeshData {
 // Triangles of `tris` with compacted vertices; per-face feather values when `feathers`.
 void buildMesh(const TriMesh& m, const std::vector<uint32_t>& tris, const ExportFrame* f, const ExportScene* s, MeshData& d,
                const glm::dvec3* localOrigin = nullptr, const glm::dvec3* axes = nullptr, double invScale = 1) {
-  std::map<uint32_t, int64_t> remap;
+  // New vertex index per mesh vertex in first-use order. A flat table when the triangles touch much of the
+  // mesh (the cards of a full-detail bird: millions of vertices), a map for one prototype feather.
+  const bool dense = 3 * tris.size() * 8 >= m.positions.size() || (!f && !localOrigin);
+  std::vector<int64_t> table(dense ? m.positions.size() : 0, -1);
+  std::map<uint32_t, int64_t> sparse;
   std::vector<uint32_t> order;
-  if (!f && !localOrigin) {  // the skin keeps its vertex order (a host's poses and weights index it)
-    for (uint32_t v = 0; v < m.positions.size(); ++v) {
-      remap.emplace(v, int64_t(v));
+  auto indexOf = [&](uint32_t v) {
+    int64_t* slot = dense ? &table[v] : &sparse.try_emplace(v, -1).first->second;
+    if (*slot < 0) {
+      *slot = int64_t(order.size());
       order.push_back(v);
     }
-  }
+    return *slot;
+  };
+  if (!f && !localOrigin)  // the skin keeps its vertex order (a host's poses and weights index it)
+    for (uint32_t v = 0; v < m.positions.size(); ++v) indexOf(v);
+  d.counts.reserve(d.counts.size() + tris.size());
+  d.indices.reserve(d.indices.size() + 3 * tris.size());
   for (uint32_t t : tris) {
     d.counts.push_back(3);
-    for (int c = 0; c < 3; ++c) {
-      const uint32_t v = m.indices[3 * size_t(t) + size_t(c)];
-      auto it = remap.find(v);
-      if (it == remap.end()) {
-        it = remap.emplace(v, int64_t(order.size())).first;
-        order.push_back(v);
-      }
-      d.indices.push_back(it->second);
-    }
+    for (int c = 0; c < 3; ++c) d.indices.push_back(indexOf(m.indices[3 * size_t(t) + size_t(c)]));
     if (f) {
       const FeatherRecord& r = f->feathers[m.featherId.empty() ? 0 : m.featherId[m.indices[3 * size_t(t)]]];
       d.fid.push_back(r.id);
