@@ -223,6 +223,7 @@ PyFrame frameOf(py::object self, bool copy) {
     d["alpha_texture"] = m.alphaTexture;
     d["pattern"] = m.pattern;
     d["base_color"] = py::make_tuple(m.baseColor[0], m.baseColor[1], m.baseColor[2]);
+    d["uv"] = m.uv;
     r.materials.append(d);
   }
   return r;
@@ -550,7 +551,7 @@ origins/normals/tangents/binormals float64 (n, 3), elevations float64 (n,) radia
 Coat mesh (v vertices, t triangles): positions/vertex_normals float32 (v, 3), uvs float32 (v, 2),
 alphas float32 (v,) or (0,), vertex_feathers uint32 (v,), triangles uint32 (t, 3), ranges uint32 (r, 4)
 [feather, first_index, index_count, material] per present feather bottom layer first, materials: list of
-dicts (name, texture, alpha_texture, pattern, base_color).)")
+dicts (name, texture, alpha_texture, pattern, base_color, uv: 'global', 'barb' or 'growth').)")
       .def_readonly("feather_count", &PyFrame::featherCount)
       .def_readonly("follicle_keys", &PyFrame::follicleKeys)
       .def_readonly("tracts", &PyFrame::tracts)

@@ -227,6 +227,15 @@ void drawRenderPanel(PanelContext& ctx) {
           bool ch = ImGui::InputText("texture", &tex, ImGuiInputTextFlags_EnterReturnsTrue);
           ch |= ImGui::InputText("alpha texture", &alpha, ImGuiInputTextFlags_EnterReturnsTrue);
           ch |= ImGui::InputText("pattern", &pattern, ImGuiInputTextFlags_EnterReturnsTrue);
+          // Which texture mapping of Streit 7.1.1 the colour follows (material.uv).
+          static const char* kMappings[] = {"global", "barb", "growth"};
+          int mapping = p.material.uv == "barb" ? 1 : p.material.uv == "growth" ? 2 : 0;
+          if (ImGui::Combo("texture mapping", &mapping, kMappings, 3)) {
+            p.material.uv = kMappings[mapping];
+            ch = true;
+          }
+          if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("global: the whole vane; barb: glued to each barb; growth: the pin-feather cone");
           if (ch) {
             // Relative texture paths were relative to the feather file: make them absolute.
             auto abs = [&](const std::string& t) {

@@ -179,6 +179,8 @@ struct Material {
   std::string alphaTexture;  // absolute path of the alpha texture, "" = none (use Frame::alphas)
   std::string pattern;       // procedural pattern name, "" = none
   std::array<float, 3> baseColor{{0.8f, 0.7f, 0.55f}};  // linear RGB
+  std::string uv = "global";  // which texture coordinates the colour texture uses: "global" (Frame::uvs),
+                              //   "barb" or "growth" (Streit 7.1.1; not in Frame yet: render() uses them)
 };
 
 // One evaluated frame. Every view stays valid until the next non-const call on the Session.

@@ -102,6 +102,7 @@ FeatherMaterial readMaterial(JsonReader r) {
   m.texture = r.string("texture", "");
   m.alphaTexture = r.string("alpha_texture", "");
   m.pattern = r.string("pattern", "");
+  m.uv = r.oneOf("uv", "global", {"global", "barb", "growth"});
   if (r.json().contains("base_color")) {
     const glm::dvec3 c = r.vec3("base_color");
     for (int i = 0; i < 3; ++i)
@@ -290,6 +291,7 @@ Json featherToJson(const FeatherParams& p, bool withVersion) {
     if (!p.material.alphaTexture.empty()) m["alpha_texture"] = p.material.alphaTexture;
     if (!p.material.pattern.empty()) m["pattern"] = p.material.pattern;
     if (p.material.baseColor) m["base_color"] = {p.material.baseColor->x, p.material.baseColor->y, p.material.baseColor->z};
+    if (p.material.uv != "global") m["uv"] = p.material.uv;
     j["material"] = m;
   }
   if (p.growth) j["growth"] = growthScheduleToJson(*p.growth);

@@ -381,7 +381,7 @@ struct Session::Impl {
     materials.resize(mesh.materials.size());
     for (size_t k = 0; k < materials.size(); ++k) {
       const pipeline::CoatMaterial& c = mesh.materials[k];
-      materials[k] = {c.name, c.texture, c.alphaTexture, c.pattern, {{c.baseColor.x, c.baseColor.y, c.baseColor.z}}};
+      materials[k] = {c.name, c.texture, c.alphaTexture, c.pattern, {{c.baseColor.x, c.baseColor.y, c.baseColor.z}}, c.uv};
     }
     PTERYLA_CHECK(coat.tract.size() == n && coat.present.size() == n && elevation.size() == n,
                   "per-feather results of different lengths");

@@ -1042,6 +1042,7 @@ void Pipeline::Impl::computeMesh() {
     m.alphaTexture = resolve(p.material.alphaTexture);
     m.pattern = p.material.pattern;
     if (p.material.baseColor) m.baseColor = glm::vec3(*p.material.baseColor);
+    m.uv = p.material.uv;
     mesh.materials.push_back(m);
   }
   report(progress, "mesh", 1);

@@ -83,6 +83,7 @@ std::vector<FeatherMaterial> sceneMaterials(const pipeline::Scene& scene, const 
     f.baseColor = m.baseColor;
     f.barbules.d = scene.render.brdfD;
     f.barbules.h = scene.render.brdfH;
+    f.colorUv = m.uv == "barb" ? ColorUv::Barb : m.uv == "growth" ? ColorUv::Growth : ColorUv::Global;
     if (!m.texture.empty()) {
       f.colorTexture = m.texture;
       f.baseColor = glm::vec3(1.0f);

@@ -9,6 +9,9 @@
 
 #include "gl_fixture.hpp"
 #include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/core/json.hpp"
+#include "pteryla/feather/io.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/render/osmesa_context.hpp"
 #include "pteryla/render/scene_view.hpp"
@@ -116,4 +119,53 @@ TEST(SceneLod, TexturesKeepTheLookAtFortyFivePercent) {
               "against the full coat also drawn without)\n", withTextures, without, plainVsPlain);
   EXPECT_LT(withTextures, 0.02);
   EXPECT_LT(withTextures, 0.7 * without);
+}
+
+// material.uv (Streit 2003, 7.1.1) picks which texture coordinates the colour pattern follows: the
+// feather file's choice reaches the renderer's material, and each mapping lays the same pattern
+// differently (three different images of one coat), while the default stays "global".
+TEST(SceneMaterials, TextureMappingFollowsTheFeatherFile) {
+  Json feather = readJsonFile(std::string(PTERYLA_DATA_DIR) + "/feathers/contour.json");
+  std::vector<Image> images;
+  for (const char* uv : {"global", "barb", "growth"}) {
+    feather["material"] = {{"pattern", "barred"}, {"base_color", {0.45, 0.33, 0.2}}, {"uv", uv}};
+    pipeline::Scene scene = coatScene(false, 0.5);
+    scene.feathers["contour"] = feather;
+    pipeline::Pipeline p(scene);
+    const std::vector<FeatherMaterial> m = sceneMaterials(p.scene(), p.coatMesh());
+    ASSERT_EQ(m.size(), 1u);
+    EXPECT_EQ(int(m[0].colorUv), std::string(uv) == "global" ? int(ColorUv::Global)
+                                 : std::string(uv) == "barb" ? int(ColorUv::Barb)
+                                                               : int(ColorUv::Growth));
+    EXPECT_EQ(p.coatMesh().materials[0].uv, uv);
+    SceneView view(context());
+    images.push_back(view.render(p, 160, 120, "shaded"));
+  }
+  for (size_t a = 0; a < images.size(); ++a)
+    for (size_t b = a + 1; b < images.size(); ++b) {
+      size_t differ = 0;
+      for (size_t i = 0; i < images[a].rgba.size(); i += 4)
+        differ += std::abs(int(images[a].rgba[i]) - int(images[b].rgba[i])) > 8;
+      EXPECT_GT(differ, 200u) << "mappings " << a << " and " << b << " draw the same image";
+    }
+  // A bad mapping is refused, naming it.
+  feather["material"]["uv"] = "planar";
+  pipeline::Scene bad = coatScene(false, 0.5);
+  bad.feathers["contour"] = feather;
+  try {
+    pipeline::Pipeline p(bad);
+    p.coatMesh();
+    ADD_FAILURE() << "no error for material.uv \"planar\"";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("material.uv"), std::string::npos) << e.what();
+  }
+  // The feather file round-trips the choice, and leaves the default out.
+  feather["material"]["uv"] = "growth";
+  JsonReader fr(feather, "", "feather");
+  const feather::FeatherParams fp = feather::readFeather(fr);
+  EXPECT_EQ(fp.material.uv, "growth");
+  EXPECT_EQ(feather::featherToJson(fp)["material"]["uv"], "growth");
+  feather["material"].erase("uv");
+  JsonReader fr2(feather, "", "feather");
+  EXPECT_FALSE(feather::featherToJson(feather::readFeather(fr2))["material"].contains("uv"));
 }

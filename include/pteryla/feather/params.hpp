@@ -78,9 +78,14 @@ struct FeatherMaterial {
   std::string alphaTexture;   // alpha texture
   std::string pattern;        // procedural pattern name
   std::optional<glm::dvec3> baseColor;  // linear RGB in [0,1]
-  bool empty() const { return texture.empty() && alphaTexture.empty() && pattern.empty() && !baseColor; }
+  // Which texture mapping of Streit 2003, 7.1.1 addresses the colour texture: "global" (the whole vane:
+  // u across, v base to tip; the default), "barb" (glued to each barb: u along it, v across) or
+  // "growth" (the pin-feather cone: u around it, v along the shaft). docs/feather-format.md.
+  std::string uv = "global";
+  bool empty() const { return texture.empty() && alphaTexture.empty() && pattern.empty() && !baseColor && uv == "global"; }
   bool operator==(const FeatherMaterial& o) const {
-    return texture == o.texture && alphaTexture == o.alphaTexture && pattern == o.pattern && baseColor == o.baseColor;
+    return texture == o.texture && alphaTexture == o.alphaTexture && pattern == o.pattern && baseColor == o.baseColor &&
+           uv == o.uv;
   }
 };
 

@@ -48,6 +48,7 @@ struct CoatMaterial {
   std::string name;             // feather definition name
   std::string texture, alphaTexture, pattern;  // absolute paths / pattern name ("" = none)
   glm::vec3 baseColor{0.8f, 0.7f, 0.55f};
+  std::string uv = "global";    // colour texture mapping: "global", "barb" or "growth" (feather material.uv)
 };
 
 struct CoatMesh {
