@@ -47,6 +47,36 @@ CoatSetup smallSetup(uint64_t seed = 5) {
   return c;
 }
 
+// Two tracts of 60 follicles: the upper ("top") and lower ("bottom") halves of the skin.
+CoatSetup topAndBottom(const SkinArrays& skin) {
+  CoatSetup setup;
+  setup.axis = {{{0, 1.2, 0}}, {{0, -1.2, 0}}};
+  pteryla::TractSetup top, bottom;
+  top.name = "top";
+  bottom.name = "bottom";
+  top.count = bottom.count = 60;
+  for (uint32_t f = 0; f < skin.triangles.size() / 3; ++f) {
+    double y = 0;
+    for (int c = 0; c < 3; ++c) y += skin.positions[3 * skin.triangles[3 * f + c] + 1];
+    (y > 0 ? top : bottom).faces.push_back(f);
+  }
+  setup.tracts = {top, bottom};
+  return setup;
+}
+
+// `setup` edited by `edit` must be refused by the Session constructor with pteryla::Error at `element`.
+void expectSetupErrorAt(const SkinArrays& skin, const CoatSetup& setup, const std::string& element,
+                        const std::function<void(CoatSetup&)>& edit) {
+  CoatSetup bad = setup;
+  edit(bad);
+  try {
+    Session x(skin, bad);
+    ADD_FAILURE() << "no error for " << element;
+  } catch (const pteryla::Error& e) {
+    EXPECT_EQ(e.element(), element) << e.what();
+  }
+}
+
 Session evaluated(const SkinArrays& skin, const CoatSetup& setup) {
   Session s(skin, setup);
   s.setLod(0.3);
@@ -335,18 +365,7 @@ TEST(HostSession, SwitchingPoseModeKeepsThePose) {
 // A tract's own seed re-scatters that tract and no other.
 TEST(HostSession, TractSeedRescattersOnlyItsTract) {
   const SkinArrays skin = sphereSkin();
-  CoatSetup setup;
-  setup.axis = {{{0, 1.2, 0}}, {{0, -1.2, 0}}};
-  pteryla::TractSetup top, bottom;
-  top.name = "top";
-  bottom.name = "bottom";
-  top.count = bottom.count = 60;
-  for (uint32_t f = 0; f < skin.triangles.size() / 3; ++f) {
-    double y = 0;
-    for (int c = 0; c < 3; ++c) y += skin.positions[3 * skin.triangles[3 * f + c] + 1];
-    (y > 0 ? top : bottom).faces.push_back(f);
-  }
-  setup.tracts = {top, bottom};
+  CoatSetup setup = topAndBottom(skin);
   auto originsOf = [](const Session& s, uint32_t tract) {
     std::vector<double> o;
     const Frame& f = s.frame();
@@ -370,19 +389,8 @@ TEST(HostSession, TractSeedRescattersOnlyItsTract) {
 // after it ends), a tract with moult false keeps every feather, and bad values fail at construction.
 TEST(HostSession, MoultWindowTakesFeathersOutOfMoultingTractsOnly) {
   const SkinArrays skin = sphereSkin();
-  CoatSetup setup;
-  setup.axis = {{{0, 1.2, 0}}, {{0, -1.2, 0}}};
-  pteryla::TractSetup top, bottom;
-  top.name = "top";
-  bottom.name = "bottom";
-  top.count = bottom.count = 60;
-  bottom.moult = false;
-  for (uint32_t f = 0; f < skin.triangles.size() / 3; ++f) {
-    double y = 0;
-    for (int c = 0; c < 3; ++c) y += skin.positions[3 * skin.triangles[3 * f + c] + 1];
-    (y > 0 ? top : bottom).faces.push_back(f);
-  }
-  setup.tracts = {top, bottom};
+  CoatSetup setup = topAndBottom(skin);
+  setup.tracts[1].moult = false;
   auto missing = [](const Session& s, uint32_t tract) {
     size_t n = 0;
     for (size_t i = 0; i < s.frame().featherCount; ++i) n += s.frame().tracts[i] == tract && !s.frame().present[i];
@@ -409,15 +417,8 @@ TEST(HostSession, MoultWindowTakesFeathersOutOfMoultingTractsOnly) {
   EXPECT_GT(missing(s, 0), 3u);
   EXPECT_EQ(missing(s, 1), 0u);
 
-  auto failsAt = [&](const char* element, const std::function<void(CoatSetup&)>& edit) {
-    CoatSetup bad = setup;
-    edit(bad);
-    try {
-      Session x(skin, bad);
-      ADD_FAILURE() << "no error for " << element;
-    } catch (const pteryla::Error& e) {
-      EXPECT_EQ(e.element(), element) << e.what();
-    }
+  auto failsAt = [&](const std::string& element, const std::function<void(CoatSetup&)>& edit) {
+    expectSetupErrorAt(skin, setup, element, edit);
   };
   failsAt("moult.window", [](CoatSetup& c) { c.moult.window = 1.5; });
   failsAt("moult.duration", [](CoatSetup& c) { c.moult.duration = 0; });
@@ -512,14 +513,7 @@ TEST(HostSession, TypedControlRaisesTheFeathersItBinds) {
   }
 
   auto failsAt = [&](const std::string& element, const std::function<void(CoatSetup&)>& edit) {
-    CoatSetup bad = setup;
-    edit(bad);
-    try {
-      Session x(skin, bad);
-      ADD_FAILURE() << "no error for " << element;
-    } catch (const pteryla::Error& e) {
-      EXPECT_EQ(e.element(), element) << e.what();
-    }
+    expectSetupErrorAt(skin, setup, element, edit);
   };
   failsAt("controls[0].radius", [](CoatSetup& x) { x.controls[0].radius = 0; });
   failsAt("controls[0].keys[1].lift", [](CoatSetup& x) { x.controls[0].keys[1].lift = 2.0; });
