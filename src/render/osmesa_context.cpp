@@ -1,20 +1,27 @@
 // Headless OpenGL through Mesa's OSMesa (llvmpipe): the RenderContext used by the CLI, the tests and the
 // host API's Session::render.
 //
-// libOSMesa is loaded at run time (dlopen), never linked: no binary or library of pteryla then carries a
-// link to it, so the host library can render and still be loaded into a process that links libGL (a
-// DCC such as Blender) without OSMesa's GL entry points being bound in that process, and a machine
-// without libosmesa6 gets an error naming the library instead of a program that does not start. GL
-// functions come from OSMesaGetProcAddress. The library stays loaded until the process ends (no
-// dlclose: Mesa keeps thread-local state that must outlive every context).
+// Two builds of this file (src/render/CMakeLists.txt):
+//  - pteryla_render_osmesa (the CLI, tests, benchmarks) links libOSMesa and calls it directly: the
+//    library is loaded at start-up with the program.
+//  - pteryla_render_osmesa_dl (PTERYLA_OSMESA_DLOPEN; the host library libpteryla.so) loads libOSMesa
+//    with dlopen on the first context and never unloads it, so the host library links no GL at all and
+//    stays loadable next to a DCC's libGL (rendering from Blender's Python works), and a machine without
+//    libosmesa6 gets an error naming the library instead of a host that cannot load pteryla.
+// The executables keep the link: a libOSMesa loaded by dlopen puts Mesa's and LLVM's thread-locals in
+// dynamic TLS, and LeakSanitizer's stop-the-world tracer (GCC 12) sometimes crashes reading those slots
+// at exit ("Tracer caught signal 11"), which turned sanitized CLI tests into flakes.
+// GL functions always come from OSMesaGetProcAddress.
 #include "pteryla/render/osmesa_context.hpp"
 
 #include <GL/osmesa.h>
+#if defined(PTERYLA_OSMESA_DLOPEN)
 #include <dlfcn.h>
+#endif
 
 #include <mutex>
-#include <type_traits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "pteryla/core/error.hpp"
@@ -32,6 +39,11 @@ struct OsMesaApi {
 };
 
 const OsMesaApi& osMesa() {
+#if !defined(PTERYLA_OSMESA_DLOPEN)
+  static const OsMesaApi linked{&OSMesaCreateContextAttribs, &OSMesaDestroyContext, &OSMesaMakeCurrent,
+                                &OSMesaPixelStore, &OSMesaGetProcAddress};
+  return linked;
+#else
   static OsMesaApi api;
   static std::string failure;
   static std::once_flag once;
@@ -57,6 +69,7 @@ const OsMesaApi& osMesa() {
   });
   if (!failure.empty()) throw Error(failure);
   return api;
+#endif
 }
 
 }  // namespace
