@@ -628,7 +628,14 @@ Session.from_scene_file(path): a scene file (docs/scene-format.md) or a bare mes
             if (!e || e.ndim() != 1) throw pteryla::Error("expected a 1-D array of radians", "", "elevations");
             std::vector<uint64_t> kv(k.data(), k.data() + k.size());
             std::vector<double> ev(e.data(), e.data() + e.size());
-            s.session->setFixedElevations(kv, ev);
+            try {
+              s.session->setFixedElevations(kv, ev);
+            } catch (const pteryla::Error& err) {
+              // The host API names its parameter follicleKeys; here it is follicle_keys.
+              const std::string el = err.element();
+              if (el.rfind("follicleKeys", 0) != 0) throw;
+              throw pteryla::Error(err.detail(), err.file(), "follicle_keys" + el.substr(12));
+            }
           },
           py::arg("follicle_keys"), py::arg("elevations"),
           "Fixes these feathers' elevations (radians in [0, pi/2], by Frame.follicle_keys), replacing what "

@@ -261,6 +261,8 @@ def test_fixed_elevations(sphere):
     assert s.evaluate()
     assert s.frame().elevations[2] == 0.4 and s.frame().elevations[9] == 0.9
     bad(lambda: s.set_fixed_elevations(keys, np.array([0.4, 3.0])), "elevations[1]")
+    bad(lambda: s.set_fixed_elevations(np.array([keys[0], 987654321], np.uint64), np.array([0.4, 0.5])),
+        "follicle_keys[1]")
     s.set_fixed_elevations(np.zeros(0, np.uint64), np.zeros(0))
     assert s.evaluate()
     assert np.array_equal(s.frame().elevations, f.elevations)
