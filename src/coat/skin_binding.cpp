@@ -103,24 +103,40 @@ void carryDirections(const SkinMesh& posed, const std::vector<SurfacePoint>& at,
   });
 }
 
-void requireSameSkin(const SkinMesh& posed, const std::vector<SurfacePoint>& at) {
-  for (const SurfacePoint& s : at)
-    if (s.face >= posed.faces.size())
-      throw Error("the posed skin has " + std::to_string(posed.faces.size()) + " faces, fewer than the skin bound to",
-                  posed.file, "face " + std::to_string(s.face));
+void requireSameSkin(const SkinMesh& posed, size_t faceCount) {
+  if (posed.faces.size() != faceCount)
+    throw Error("the posed skin has " + std::to_string(posed.faces.size()) + " faces, the skin bound to " +
+                    std::to_string(faceCount),
+                posed.file, "faces");
 }
 
 }  // namespace
 
-void SkinBinding::bind(const SkinMesh& skin, const std::vector<glm::dvec3>& points) { bindPoints(skin, points, at_, offset_); }
-void SkinBinding::bind(const SkinMesh& skin, const std::vector<glm::vec3>& points) { bindPoints(skin, points, at_, offset_); }
+void SkinBinding::bind(const SkinMesh& skin, const std::vector<glm::dvec3>& points) {
+  bindPoints(skin, points, at_, offset_);
+  faceCount_ = skin.faces.size();
+}
+void SkinBinding::bind(const SkinMesh& skin, const std::vector<glm::vec3>& points) {
+  bindPoints(skin, points, at_, offset_);
+  faceCount_ = skin.faces.size();
+}
+void SkinBinding::bind(const SkinMesh& skin, std::vector<SurfacePoint> onSkin) {
+  for (size_t i = 0; i < onSkin.size(); ++i)
+    if (onSkin[i].face >= skin.faces.size())
+      throw Error("face " + std::to_string(onSkin[i].face) + " is not a face of the skin (" +
+                      std::to_string(skin.faces.size()) + " faces)",
+                  skin.file, "point " + std::to_string(i));
+  at_ = std::move(onSkin);
+  offset_.assign(at_.size(), glm::dvec3(0));
+  faceCount_ = skin.faces.size();
+}
 
 void SkinBinding::deform(const SkinMesh& posed, std::vector<glm::dvec3>& out) const {
-  requireSameSkin(posed, at_);
+  requireSameSkin(posed, faceCount_);
   deformPoints(posed, at_, offset_, out);
 }
 void SkinBinding::deform(const SkinMesh& posed, std::vector<glm::vec3>& out) const {
-  requireSameSkin(posed, at_);
+  requireSameSkin(posed, faceCount_);
   deformPoints(posed, at_, offset_, out);
 }
 
@@ -132,11 +148,11 @@ std::vector<glm::dvec3> SkinBinding::localDirections(const SkinMesh& bindSkin, c
 }
 
 void SkinBinding::carry(const SkinMesh& posed, const std::vector<glm::dvec3>& local, std::vector<glm::dvec3>& out) const {
-  requireSameSkin(posed, at_);
+  requireSameSkin(posed, faceCount_);
   carryDirections(posed, at_, local, out);
 }
 void SkinBinding::carry(const SkinMesh& posed, const std::vector<glm::dvec3>& local, std::vector<glm::vec3>& out) const {
-  requireSameSkin(posed, at_);
+  requireSameSkin(posed, faceCount_);
   carryDirections(posed, at_, local, out);
 }
 

@@ -14,6 +14,7 @@
 
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/follicles.hpp"
+#include "pteryla/coat/pack.hpp"
 #include "pteryla/coat/skin.hpp"
 #include "pteryla/coat/skin_binding.hpp"
 #include "pteryla/core/json.hpp"
@@ -272,14 +273,8 @@ struct Session::Impl {
         if (!std::isfinite(positions[v][c]))
           throw Error("coordinate " + std::to_string(c) + " is not a finite number", "", "vertex " + std::to_string(v));
     if (poseMode == PoseMode::Follow) {
-      // The range check the pipeline makes (docs/limits.md), without dirtying its stages.
-      for (size_t v = 0; v < positions.size(); ++v)
-        for (int c = 0; c < 3; ++c)
-          if (std::abs(positions[v][c]) > coat::kMaxMeshCoordinate)
-            throw Error("coordinate " + std::to_string(c) + " is " + std::to_string(positions[v][c]) +
-                            ": pose coordinates must be at most " + std::to_string(coat::kMaxMeshCoordinate) +
-                            " in magnitude",
-                        "", "vertex " + std::to_string(v));
+      // The pipeline's own check (docs/limits.md), without dirtying its stages.
+      pipeline::checkSkinPose(pipeline->restSkin(), positions);
       followPose = std::move(positions);
     } else {
       pipeline->setSkinPose(std::move(positions));  // also checks the coordinate range
@@ -289,7 +284,7 @@ struct Session::Impl {
 
   uint64_t meshEvaluations() {
     pipeline::StageGraph& g = pipeline->graph();
-    const auto id = g.find("mesh");
+    const auto id = g.find(pipeline::stageName(pipeline::Stage::Mesh));
     return id < 0 ? 0 : g.evaluations(id);
   }
 
@@ -300,7 +295,7 @@ struct Session::Impl {
     const coat::SkinMesh& base = p.posedSkin();
     const TriMesh& m = p.coatMesh().mesh;
     const size_t n = keys.size();
-    auto gather = [&](const std::vector<double>& flat) {
+    auto gather = [&](const std::vector<double>& flat) -> const std::vector<glm::dvec3>& {
       scratch.resize(n);
       for (size_t i = 0; i < n; ++i) scratch[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
       return scratch;
@@ -310,7 +305,12 @@ struct Session::Impl {
       boundMeshEvaluation = ~uint64_t(0);
       vertexBinding.bind(base, m.positions);
       vertexNormalLocal = vertexBinding.localDirections(base, m.normals);
-      originBinding.bind(base, gather(origins));
+      // Follicles are on the skin already: bound by their own (face, barycentric) coordinates.
+      const coat::Follicles& follicles = p.follicles();
+      const coat::CoatFeathers& coat = p.feathers();
+      std::vector<coat::SurfacePoint> onSkin(n);
+      for (size_t i = 0; i < n; ++i) onSkin[i] = {follicles.face[coat.follicle[i]], follicles.bary[coat.follicle[i]]};
+      originBinding.bind(base, std::move(onSkin));
       normalLocal = originBinding.localDirections(base, gather(normals));
       tangentLocal = originBinding.localDirections(base, gather(tangents));
       binormalLocal = originBinding.localDirections(base, gather(binormals));
@@ -465,11 +465,9 @@ void Session::setFixedElevations(const std::vector<uint64_t>& follicleKeys, cons
                     std::to_string(elevations.size()),
                 "", "elevations");
   if (!follicleKeys.empty()) {
-    const Json& packing = m.pipeline->scene().packing;
-    const std::string method = packing.is_object() && packing.contains("method") && packing["method"].is_string()
-                                   ? packing["method"].get<std::string>()
-                                   : "drape";
-    if (method == "drape")
+    const Json packing = m.pipeline->scene().packing.is_null() ? Json::object() : m.pipeline->scene().packing;
+    JsonReader r(packing, m.pipeline->scene().file, "packing");  // the reader keeps a reference
+    if (coat::parsePackOptions(r).method == coat::PackMethod::Drape)
       throw Error("fixed elevations need a packed coat (packing height_field): a draped coat is laid along the skin",
                   "", "packing");
   }

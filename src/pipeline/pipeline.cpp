@@ -1093,21 +1093,23 @@ void Pipeline::setTime(double t) {
 }
 double Pipeline::time() const { return impl_->time; }
 
+void checkSkinPose(const coat::SkinMesh& rest, const std::vector<glm::dvec3>& positions) {
+  const size_t n = rest.positions.size();
+  if (positions.size() != n)
+    throw Error("the pose has " + std::to_string(positions.size()) + " vertices; the skin has " + std::to_string(n) +
+                    " (a pose keeps the skin's topology)",
+                "", "pose");
+  for (size_t v = 0; v < n; ++v)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(positions[v][c]) || std::abs(positions[v][c]) > coat::kMaxMeshCoordinate)
+        throw Error("coordinate " + std::to_string(c) + " is " + std::to_string(positions[v][c]) +
+                        ": pose coordinates must be finite and at most " + std::to_string(coat::kMaxMeshCoordinate) +
+                        " in magnitude",
+                    "", "vertex " + std::to_string(v));
+}
+
 void Pipeline::setSkinPose(std::vector<glm::dvec3> positions) {
-  if (!positions.empty()) {
-    const size_t n = restSkin().positions.size();
-    if (positions.size() != n)
-      throw Error("the pose has " + std::to_string(positions.size()) + " vertices; the skin has " + std::to_string(n) +
-                      " (a pose keeps the skin's topology)",
-                  "", "pose");
-    for (size_t v = 0; v < n; ++v)
-      for (int c = 0; c < 3; ++c)
-        if (!std::isfinite(positions[v][c]) || std::abs(positions[v][c]) > coat::kMaxMeshCoordinate)
-          throw Error("coordinate " + std::to_string(c) + " is " + std::to_string(positions[v][c]) +
-                          ": pose coordinates must be finite and at most " +
-                          std::to_string(coat::kMaxMeshCoordinate) + " in magnitude",
-                      "", "vertex " + std::to_string(v));
-  }
+  if (!positions.empty()) checkSkinPose(restSkin(), positions);
   if (positions == impl_->skinPose) return;
   impl_->skinPose = std::move(positions);
   impl_->graph.invalidate(impl_->id(Stage::Pose));

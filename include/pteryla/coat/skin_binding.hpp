@@ -27,6 +27,8 @@ class SkinBinding {
   // parallel). Throws Error when the skin has no faces.
   void bind(const SkinMesh& skin, const std::vector<glm::dvec3>& points);
   void bind(const SkinMesh& skin, const std::vector<glm::vec3>& points);
+  // Points already on the skin, given by their surface coordinates (follicles): no search, offset 0.
+  void bind(const SkinMesh& skin, std::vector<SurfacePoint> onSkin);
   size_t size() const { return at_.size(); }
   const std::vector<SurfacePoint>& surfacePoints() const { return at_; }
 
@@ -45,6 +47,7 @@ class SkinBinding {
  private:
   std::vector<SurfacePoint> at_;
   std::vector<glm::dvec3> offset_;  // in the bind frame (t, b, n)
+  size_t faceCount_ = 0;            // of the skin bound to: a pose must have as many faces
 };
 
 }  // namespace pteryla::coat

@@ -94,6 +94,11 @@ struct FrameReuse {
   size_t meshReused = 0;            // present feathers whose triangles were copied from the last mesh
 };
 
+// Checks a posed skin given by a caller against the rest skin: one position per rest vertex, each
+// coordinate finite and within coat::kMaxMeshCoordinate. Throws pteryla::Error naming "pose" (a wrong
+// count) or "vertex v". Pipeline::setSkinPose calls it; so does a host that keeps a pose itself.
+void checkSkinPose(const coat::SkinMesh& rest, const std::vector<glm::dvec3>& positions);
+
 class Pipeline {
  public:
   explicit Pipeline(Scene scene, ProgressFn progress = {});
