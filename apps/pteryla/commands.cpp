@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "pteryla/coat/coat_feathers.hpp"
@@ -262,32 +263,38 @@ int cmdFeather(const Common& c, const FeatherArgs& a) {
 //
 // A frame is a pure function of (scene, time), so a range can be split into chunks rendered anywhere.
 // Contract (docs/farm.md): frame k of `--from A --to B --fps N` is at time A + k / N and is written to
-// DIR/frame_NNNN.png (k global, whatever the chunking). Its sidecar DIR/frame_NNNN.png.json is written
-// atomically after the PNG and records the PNG's SHA-256, the render seconds, the host and the parameters
-// that made it; a frame counts as complete only when its sidecar parses, its parameters match this run and
-// the PNG's digest matches. `--chunk K --task I` renders frames [I*K, min((I+1)*K, count)) and touches
-// nothing else; `--assemble` checks every frame and writes DIR/frames.json and DIR/contact_sheet.png.
+// DIR/frame_NNNN.png (k global, whatever the chunking), or with `--export .glb|.gltf|.usda` exported to
+// DIR/frame_NNNN.glb (...). Its sidecar DIR/frame_NNNN.png.json is written atomically after the frame and
+// records the frame file's SHA-256, the seconds, the host and the parameters that made it; a frame counts
+// as complete only when its sidecar parses, its parameters match this run and the file's digest matches.
+// `--chunk K --task I` makes frames [I*K, min((I+1)*K, count)) and touches nothing else; `--assemble`
+// checks every frame and writes DIR/frames.json (and, for PNG frames, DIR/contact_sheet.png).
 
 namespace {
 
 namespace fs = std::filesystem;
 
-// frame_0000.png, frame_0001.png, ...: the name pattern `frames` owns in its directory.
-std::string frameName(uint64_t k) {
+// frame_0000.png, frame_0001.png, ... (or .glb, .gltf, .usda with --export): the name pattern `frames`
+// owns in its directory.
+std::string frameName(uint64_t k, const std::string& ext) {
   char name[64];
-  std::snprintf(name, sizeof name, "frame_%04llu.png", static_cast<unsigned long long>(k));
-  return name;
+  std::snprintf(name, sizeof name, "frame_%04llu", static_cast<unsigned long long>(k));
+  return name + ext;
 }
-std::string sidecarName(uint64_t k) { return frameName(k) + ".json"; }
-// frame_NNNN.png or its sidecar frame_NNNN.png.json.
-bool isFrameName(std::string n, uint64_t& index) {
+std::string sidecarName(uint64_t k, const std::string& ext) { return frameName(k, ext) + ".json"; }
+// frame_NNNN<ext> or its sidecar frame_NNNN<ext>.json.
+bool isFrameName(std::string n, uint64_t& index, const std::string& ext) {
   if (n.size() > 5 && n.compare(n.size() - 5, 5, ".json") == 0) n.resize(n.size() - 5);
-  if (n.size() < 14 || n.compare(0, 6, "frame_") != 0 || n.compare(n.size() - 4, 4, ".png") != 0) return false;
-  const std::string digits = n.substr(6, n.size() - 10);
+  if (n.size() < 10 + ext.size() || n.compare(0, 6, "frame_") != 0 ||
+      n.compare(n.size() - ext.size(), ext.size(), ext) != 0)
+    return false;
+  const std::string digits = n.substr(6, n.size() - 6 - ext.size());
   if (digits.size() < 4 || digits.find_first_not_of("0123456789") != std::string::npos) return false;
   const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), index);
-  return r.ec == std::errc() && frameName(index) == n;
+  return r.ec == std::errc() && frameName(index, ext) == n;
 }
+// The extension of a run's frame files: ".png", or the --export format's.
+std::string frameExt(const FramesArgs& a) { return a.exportExt.empty() ? ".png" : a.exportExt; }
 
 // Shortest decimal that reads back as exactly `v` (so a farm node computes the same frame times).
 std::string fmt17(double v) {
@@ -336,15 +343,22 @@ uint64_t checkChunking(const FramesArgs& a, uint64_t count) {
 
 // What made a frame; a sidecar whose params differ (another scene file, size, LOD, style, seed or time)
 // does not count as complete.
+// An exported frame has no image size or style; its format, --as and --meters-per-unit made it instead.
 nlohmann::json frameParams(const FramesArgs& a, const std::string& sceneDigest, int w, int h, double t) {
   nlohmann::json p;
   p["scene"] = fs::absolute(a.scene).lexically_normal().string();
   p["scene_sha256"] = sceneDigest;
   p["time"] = t;
-  p["width"] = w;
-  p["height"] = h;
+  if (a.exportExt.empty()) {
+    p["width"] = w;
+    p["height"] = h;
+    p["style"] = a.style;
+  } else {
+    p["export"] = a.exportExt;
+    p["as"] = a.as;
+    p["meters_per_unit"] = a.metersPerUnit;
+  }
   p["lod"] = a.lod ? nlohmann::json(*a.lod) : nlohmann::json(nullptr);
-  p["style"] = a.style;
   p["seed"] = a.seed;
   return p;
 }
@@ -355,12 +369,12 @@ struct FrameStatus {
   nlohmann::json sidecar;
 };
 
-FrameStatus checkFrame(const std::string& dir, uint64_t k, const nlohmann::json& params) {
+FrameStatus checkFrame(const std::string& dir, uint64_t k, const std::string& ext, const nlohmann::json& params) {
   FrameStatus s;
-  const fs::path png = fs::path(dir) / frameName(k);
+  const fs::path png = fs::path(dir) / frameName(k, ext);
   std::error_code ec;
   if (!fs::is_regular_file(png, ec)) return s.problem = "missing", s;
-  std::ifstream in(fs::path(dir) / sidecarName(k), std::ios::binary);
+  std::ifstream in(fs::path(dir) / sidecarName(k, ext), std::ios::binary);
   if (!in) return s.problem = "no sidecar", s;
   s.sidecar = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
   const nlohmann::json& j = s.sidecar;
@@ -375,15 +389,17 @@ FrameStatus checkFrame(const std::string& dir, uint64_t k, const nlohmann::json&
 
 // Removes frames (and sidecars) with an index >= count: an earlier, longer run's frames would look like
 // part of this sequence.
-size_t removeFramesFrom(const std::string& dir, uint64_t count) {
+size_t removeFramesFrom(const std::string& dir, uint64_t count, const std::string& ext) {
   size_t removed = 0;
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     uint64_t index = 0;
     const std::string name = entry.path().filename().string();
-    if (entry.is_regular_file() && isFrameName(name, index) && index >= count) {
+    if (entry.is_regular_file() && isFrameName(name, index, ext) && index >= count) {
       std::error_code rm;
-      if (fs::remove(entry.path(), rm) && name.size() > 4 && name.compare(name.size() - 4, 4, ".png") == 0) ++removed;
+      if (fs::remove(entry.path(), rm) && name.size() > ext.size() &&
+          name.compare(name.size() - ext.size(), ext.size(), ext) == 0)
+        ++removed;
     }
   }
   return removed;
@@ -395,13 +411,18 @@ void writeManifest(const FramesArgs& a, int w, int h, uint64_t count, const std:
   std::ostringstream m;
   m.precision(17);
   m << "{\n  \"scene\": \"" << jsonEscape(a.scene) << "\",\n  \"from\": " << a.from << ",\n  \"to\": " << a.to
-    << ",\n  \"fps\": " << a.fps << ",\n  \"width\": " << w << ",\n  \"height\": " << h << ",\n  \"count\": " << count;
+    << ",\n  \"fps\": " << a.fps;
+  if (a.exportExt.empty())
+    m << ",\n  \"width\": " << w << ",\n  \"height\": " << h;
+  else
+    m << ",\n  \"export\": \"" << a.exportExt << "\",\n  \"as\": \"" << jsonEscape(a.as) << "\"";
+  m << ",\n  \"count\": " << count;
   if (!contactSheet.empty()) m << ",\n  \"contact_sheet\": \"" << jsonEscape(contactSheet) << "\"";
   if (!golden.is_null()) m << ",\n  \"golden\": " << golden.dump();
   m << ",\n  \"frames\": [";
   for (uint64_t k = 0; k < count; ++k) {
     const nlohmann::json& s = sidecars[k];
-    m << (k ? ",\n    " : "\n    ") << "{\"file\": \"" << frameName(k) << "\", \"time\": " << a.from + double(k) / a.fps
+    m << (k ? ",\n    " : "\n    ") << "{\"file\": \"" << frameName(k, frameExt(a)) << "\", \"time\": " << a.from + double(k) / a.fps
       << ", \"sha256\": \"" << jsonEscape(s.value("sha256", "")) << "\", \"seconds\": " << jsonNumberOrNull(s.value("seconds", 0.0))
       << ", \"host\": \"" << jsonEscape(s.value("host", "")) << "\"}";
   }
@@ -418,7 +439,7 @@ void writeContactSheet(const std::string& path, const std::string& dir, uint64_t
   int tw = 0, th = 0;
   for (uint64_t i = 0; i < n; ++i) {
     const uint64_t k = n == 1 ? 0 : i * (count - 1) / (n - 1);
-    tiles.push_back(render::fitImage(render::loadImage((fs::path(dir) / frameName(k)).string()), kTile));
+    tiles.push_back(render::fitImage(render::loadImage((fs::path(dir) / frameName(k, ".png")).string()), kTile));
     tw = std::max(tw, tiles.back().width);
     th = std::max(th, tiles.back().height);
   }
@@ -458,13 +479,17 @@ GoldenReport compareWithGolden(const Common& c, const FramesArgs& a, uint64_t lo
                          {"max_error", a.goldenTolerance.maxError}};
   nlohmann::json failures = nlohmann::json::array();
   for (uint64_t k = lo; k < hi; ++k) {
-    const std::string name = frameName(k);
+    const std::string name = frameName(k, frameExt(a));
     const fs::path golden = fs::path(a.golden) / name;
     nlohmann::json f;
     f["file"] = name;
     std::string problem;
     if (!fs::is_regular_file(golden, ec)) {
       problem = "no golden";
+    } else if (!a.exportExt.empty()) {
+      // Exports are deterministic: an exported frame matches its golden byte for byte.
+      if (sha256File((fs::path(a.out) / name).string()) != sha256File(golden.string()))
+        problem = "the file differs from the golden";
     } else {
       const render::Image actual = render::loadImage((fs::path(a.out) / name).string());
       const render::Image expected = render::loadImage(golden.string());
@@ -515,9 +540,10 @@ int assembleFrames(const Common& c, const FramesArgs& a, uint64_t count, const L
   std::vector<std::string> problems;
   size_t bad = 0;
   for (uint64_t k = 0; k < count; ++k) {
-    FrameStatus s = checkFrame(a.out, k, frameParams(a, sceneDigest, l.width, l.height, a.from + double(k) / a.fps));
+    FrameStatus s =
+        checkFrame(a.out, k, frameExt(a), frameParams(a, sceneDigest, l.width, l.height, a.from + double(k) / a.fps));
     if (!s.complete) {
-      if (problems.size() < 10) problems.push_back(frameName(k) + " (" + s.problem + ")");
+      if (problems.size() < 10) problems.push_back(frameName(k, frameExt(a)) + " (" + s.problem + ")");
       ++bad;
     }
     sidecars[k] = std::move(s.sidecar);
@@ -530,21 +556,60 @@ int assembleFrames(const Common& c, const FramesArgs& a, uint64_t count, const L
                     " frames are missing or invalid: " + list + "; rerun their tasks (a rerun renders only these)",
                 a.out, "--assemble");
   }
-  const size_t removed = removeFramesFrom(a.out, count);
-  writeContactSheet((fs::path(a.out) / "contact_sheet.png").string(), a.out, count);
+  const size_t removed = removeFramesFrom(a.out, count, frameExt(a));
+  const bool images = a.exportExt.empty();  // a contact sheet of exported files would need a renderer
+  if (images) writeContactSheet((fs::path(a.out) / "contact_sheet.png").string(), a.out, count);
   GoldenReport golden;
   if (!a.golden.empty()) golden = compareWithGolden(c, a, 0, count);
-  writeManifest(a, l.width, l.height, count, sidecars, "contact_sheet.png", golden.json);
+  writeManifest(a, l.width, l.height, count, sidecars, images ? "contact_sheet.png" : "", golden.json);
   if (golden.failed) return 1;
   info(c, "assembled " + std::to_string(count) + " frames in " + a.out + ": every checksum matches; wrote frames.json" +
-              " and contact_sheet.png" +
+              (images ? " and contact_sheet.png" : "") +
               (removed ? " (removed " + std::to_string(removed) + " stale frames of an earlier run)" : ""));
   return 0;
 }
 
 }  // namespace
 
-int cmdFrames(const Common& c, const FramesArgs& a) {
+namespace {
+
+// --export and what goes with it: refused before the scene is evaluated. Returns the options each
+// frame's export uses (one frame, at the pipeline's time).
+exchange::ExportOptions checkFramesExport(FramesArgs& a) {
+  exchange::ExportOptions opt;
+  if (a.exportExt.empty()) {
+    if (a.asGiven) throw Error("--as chooses how --export .usda carries the coat; PNG frames take no --as", "", "--as");
+    if (a.metersGiven) throw Error("--meters-per-unit applies to --export only", "", "--meters-per-unit");
+    return opt;
+  }
+  std::string ext = a.exportExt;
+  if (ext.front() != '.') ext.insert(ext.begin(), '.');
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
+  if (ext != ".glb" && ext != ".gltf" && ext != ".usda")
+    throw Error("expected .glb, .gltf or .usda (a frame sequence of OBJ or PLY files is not offered: export one "
+                "frame with `pteryla export --time T`), got '" + a.exportExt + "'",
+                "", "--export");
+  a.exportExt = ext;
+  opt.as = exchange::coatAsOf(a.as);
+  if (a.asGiven && ext != ".usda" && opt.as != exchange::CoatAs::Cards)
+    throw Error("--as " + a.as + " needs --export .usda: glTF carries the coat as cards", "", "--as");
+  if (ext != ".usda") a.as = "cards";  // what the file holds, in the sidecars and the manifest
+  if (!(a.metersPerUnit > 0 && std::isfinite(a.metersPerUnit)))
+    throw Error("expected a positive number", "", "--meters-per-unit");
+  opt.metersPerUnit = a.metersPerUnit;
+  opt.fps = a.fps;
+  if (!a.style.empty()) throw Error("--style applies to rendered frames, not to --export", "", "--style");
+  if (!a.size.empty()) throw Error("--size applies to rendered frames, not to --export", "", "--size");
+  return opt;
+}
+
+}  // namespace
+
+int cmdFrames(const Common& c, const FramesArgs& args) {
+  FramesArgs a = args;
+  const exchange::ExportOptions exportOptions = checkFramesExport(a);
+  const bool exporting = !a.exportExt.empty();
+  const std::string ext = frameExt(a);
   const uint64_t count = frameCount(a);
   const uint64_t tasks = checkChunking(a, count);
   if (a.assemble && a.chunk) throw Error("--assemble checks the whole range; it takes no --chunk/--task", "", "--assemble");
@@ -563,7 +628,7 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
   std::vector<nlohmann::json> sidecars(count);
   for (uint64_t k = lo; k < hi; ++k) {
     FrameStatus s;
-    if (!a.force) s = checkFrame(a.out, k, frameParams(a, sceneDigest, l.width, l.height, timeOf(k)));
+    if (!a.force) s = checkFrame(a.out, k, ext, frameParams(a, sceneDigest, l.width, l.height, timeOf(k)));
     if (s.complete)
       sidecars[k] = std::move(s.sidecar);
     else
@@ -571,28 +636,41 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
   }
   const std::string host = hostName();
   if (!todo.empty()) {
-    render::OsMesaContext ctx(l.width, l.height);
-    render::SceneView view(ctx);
+    // Exported frames need no GL context.
+    std::optional<render::OsMesaContext> ctx;
+    std::optional<render::SceneView> view;
+    if (!exporting) {
+      ctx.emplace(l.width, l.height);
+      view.emplace(*ctx);
+    }
     l.pipeline->setProgress({});
     const ProgressFn bar = makeProgress(c);
     for (size_t i = 0; i < todo.size(); ++i) {
       const uint64_t k = todo[i];
       const auto t0 = std::chrono::steady_clock::now();
       l.pipeline->setTime(timeOf(k));
-      const render::Image frame = view.render(*l.pipeline, l.width, l.height, a.style);
-      // The first frame is rendered before the directory exists: a scene that fails creates nothing.
+      render::Image frame;
+      if (!exporting) frame = view->render(*l.pipeline, l.width, l.height, a.style);
+      else l.pipeline->coatMesh();  // evaluate before the directory exists
+      // The first frame is made before the directory exists: a scene that fails creates nothing.
       if (i == 0) {
         std::error_code ec;
         fs::create_directories(a.out, ec);
         if (ec) throw Error("cannot create output directory: " + ec.message(), a.out, "--out");
       }
-      const std::string png = (fs::path(a.out) / frameName(k)).string();
-      const std::string side = (fs::path(a.out) / sidecarName(k)).string();
+      const std::string png = (fs::path(a.out) / frameName(k, ext)).string();
+      const std::string side = (fs::path(a.out) / sidecarName(k, ext)).string();
       std::error_code rm;
-      fs::remove(side, rm);  // a crash between the PNG and its new sidecar must not leave an old, matching one
-      render::saveImage(png, frame);
+      fs::remove(side, rm);  // a crash between the frame and its new sidecar must not leave an old, matching one
+      if (exporting) {
+        // The pipeline is already at this frame's time: exportCoat samples it there (the same file as
+        // `pteryla export --time T`).
+        exchange::exportCoat(*l.pipeline, png, exportOptions);
+      } else {
+        render::saveImage(png, frame);
+      }
       nlohmann::json s;
-      s["file"] = frameName(k);
+      s["file"] = frameName(k, ext);
       s["frame"] = k;
       s["time"] = timeOf(k);
       s["sha256"] = sha256File(png);
@@ -611,18 +689,18 @@ int cmdFrames(const Common& c, const FramesArgs& a) {
     endProgress(c);
     if (!a.golden.empty() && compareWithGolden(c, a, lo, hi).failed) return 1;
     info(c, "chunk " + std::to_string(*a.task) + " of " + std::to_string(tasks) + " (frames " + std::to_string(lo) +
-                "-" + std::to_string(hi - 1) + "): rendered " + std::to_string(todo.size()) + skippedText + " in " +
+                "-" + std::to_string(hi - 1) + "): " + (exporting ? "exported " : "rendered ") + std::to_string(todo.size()) + skippedText + " in " +
                 a.out);
     return 0;
   }
   std::error_code ec;
   fs::create_directories(a.out, ec);  // every frame may have been skipped; the directory then exists already
-  const size_t removed = removeFramesFrom(a.out, count);
+  const size_t removed = removeFramesFrom(a.out, count, ext);
   endProgress(c);
   GoldenReport golden;
   if (!a.golden.empty()) golden = compareWithGolden(c, a, 0, count);
   writeManifest(a, l.width, l.height, count, sidecars, "", golden.json);
-  info(c, "wrote " + std::to_string(todo.size()) + " frames to " + a.out + skippedText +
+  info(c, std::string(exporting ? "exported " : "wrote ") + std::to_string(todo.size()) + " frames to " + a.out + skippedText +
               (removed ? " (removed " + std::to_string(removed) + " stale frames of an earlier run)" : ""));
   return golden.failed ? 1 : 0;
 }
@@ -662,7 +740,9 @@ std::string runCapture(const std::string& cmd, const std::string& what) {
 
 }  // namespace
 
-int cmdFarmSlurm(const Common& c, const FarmArgs& a) {
+int cmdFarmSlurm(const Common& c, const FarmArgs& args) {
+  FarmArgs a = args;
+  checkFramesExport(a);  // normalises a.exportExt
   const uint64_t count = frameCount(a);
   if (a.farmChunk < 1) throw Error("expected a number of frames >= 1, got " + std::to_string(a.farmChunk), "", "--chunk");
   if (a.lod && !(*a.lod > 0 && *a.lod <= 1)) throw Error("expected a fraction in (0, 1], got " + std::to_string(*a.lod), "", "--lod");
@@ -693,6 +773,11 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& a) {
   if (!a.size.empty()) common += " --size " + shellQuote(a.size);
   if (!a.seed.empty()) common += " --seed " + a.seed;
   if (!a.style.empty()) common += " --style " + a.style;
+  if (!a.exportExt.empty()) {
+    common += " --export " + a.exportExt;
+    if (a.asGiven) common += " --as " + shellQuote(a.as);
+    if (a.metersGiven) common += " --meters-per-unit " + fmt17(a.metersPerUnit);
+  }
   if (c.maxMemoryGb) common += " --max-memory " + fmt17(*c.maxMemoryGb);
   common += " --quiet";
   // Goldens are compared once, by the assembly job, over the whole range.

@@ -38,6 +38,13 @@ struct FramesArgs : SceneArgs {
   bool assemble = false;         // render nothing: verify every frame, write the manifest and contact sheet
   std::string golden;            // compare each frame with GOLDEN/frame_NNNN.png (empty: no comparison)
   render::DiffTolerance goldenTolerance;
+  // --export .glb|.gltf|.usda: each frame is exported (exchange::exportCoat at that time) to
+  // DIR/frame_NNNN<ext> instead of rendered; empty = PNG frames.
+  std::string exportExt;
+  std::string as = "curves";     // USD coat representation (--as)
+  bool asGiven = false;
+  double metersPerUnit = 1.0;
+  bool metersGiven = false;
 };
 struct FarmArgs : FramesArgs {
   int64_t farmChunk = 10;  // frames per array task

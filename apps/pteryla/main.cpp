@@ -41,8 +41,22 @@ void addGoldenOptions(CLI::App* sub, FramesArgs& a) {
   sub->add_option("--golden", a.golden,
                   "Compare each frame with GOLDEN/frame_NNNN.png as it is rendered (or found complete); a missing "
                   "or differing golden makes the exit code 1, the manifest lists them and DIR/golden_diff/ "
-                  "pictures each difference (docs/ci.md)");
+                  "pictures each difference (docs/ci.md). Exported frames (--export) must equal their golden "
+                  "byte for byte");
   addToleranceOptions(sub, a.goldenTolerance, "golden-");
+}
+
+// --export, --as, --meters-per-unit of `frames` and `farm slurm`.
+void addFrameExportOptions(CLI::App* sub, FramesArgs& a) {
+  sub->add_option("--export", a.exportExt,
+                  "Export each frame instead of rendering it: .glb, .gltf or .usda, written to DIR/frame_NNNN.glb "
+                  "... (the same file as `pteryla export --time T`; docs/export.md)");
+  sub->add_option_function<std::string>(
+      "--as", [&a](const std::string& v) { a.as = v, a.asGiven = true; },
+      "With --export .usda: the coat as curves (default), cards or instances");
+  sub->add_option_function<double>(
+      "--meters-per-unit", [&a](double v) { a.metersPerUnit = v, a.metersGiven = true; },
+      "With --export: scene units in metres (USD metersPerUnit; default 1)");
 }
 
 }  // namespace
@@ -119,11 +133,12 @@ int main(int argc, char** argv) {
   FramesArgs frames;
   auto* cFrames = app.add_subcommand(
       "frames", "Render a time range to a PNG sequence DIR/frame_0000.png ... (frame k at time FROM + k/FPS; at\n"
-                "most 100000 frames), each with a sidecar frame_NNNN.png.json (SHA-256, seconds, host) written after\n"
-                "it. Frames whose sidecar matches are skipped, so a rerun redoes only missing or corrupt ones.\n"
-                "A whole-range run writes the manifest DIR/frames.json and removes frame_NNNN.png files of an\n"
-                "earlier, longer run. --chunk K --task I renders only chunk I (0-based) of K frames and touches\n"
-                "nothing else; --assemble then checks every frame and writes the manifest and\n"
+                "most 100000 frames), or with --export .glb|.gltf|.usda export each frame to DIR/frame_0000.glb ...\n"
+                "Each frame gets a sidecar frame_NNNN.png.json (SHA-256, seconds, host) written after it. Frames\n"
+                "whose sidecar matches are skipped, so a rerun redoes only missing or corrupt ones.\n"
+                "A whole-range run writes the manifest DIR/frames.json and removes frame_NNNN files of an\n"
+                "earlier, longer run. --chunk K --task I makes only chunk I (0-based) of K frames and touches\n"
+                "nothing else; --assemble then checks every frame and writes the manifest and (PNG frames)\n"
                 "DIR/contact_sheet.png (docs/farm.md)");
   addSceneOptions(cFrames, frames, true);
   cFrames->add_option("--from", frames.from, "Start time")->required();
@@ -139,6 +154,7 @@ int main(int argc, char** argv) {
   cFrames->add_flag("--assemble", frames.assemble,
                     "Render nothing: check that every frame of the range exists with a matching checksum (exit 2 "
                     "naming the missing ones), then write DIR/frames.json and DIR/contact_sheet.png");
+  addFrameExportOptions(cFrames, frames);
   addGoldenOptions(cFrames, frames);
 
   DiffArgs diff;
@@ -167,6 +183,7 @@ int main(int argc, char** argv) {
   cSlurm->add_option("--chunk", farm.farmChunk, "Frames per array task (default 10)");
   cSlurm->add_option("--partition", farm.partition, "Slurm partition (#SBATCH --partition)");
   cSlurm->add_option("--mem", farm.mem, "Memory per task (#SBATCH --mem, e.g. 2G); default: the cluster's");
+  addFrameExportOptions(cSlurm, farm);
   addGoldenOptions(cSlurm, farm);
   cSlurm->add_flag("--dry-run", farm.dryRun, "Write and print the scripts and the sbatch commands; submit nothing");
   cSlurm->add_flag("--quiet,-q", common.quiet, "No progress or info on stderr");
