@@ -43,7 +43,8 @@ struct ExportScene {
   double metersPerUnit = 1;
 };
 
-// Writers: build the whole file in memory and hand it to AtomicFile. They return the bytes written.
+// Writers, through AtomicFile; they return the bytes written. glTF builds the whole file in memory; USD
+// streams it (formatted attribute by attribute, large arrays chunk by chunk).
 size_t writeGltf(const ExportScene& s, const std::string& path, bool binary);
 struct UsdCounts {
   size_t curves = 0, instances = 0, prototypes = 0;

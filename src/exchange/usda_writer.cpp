@@ -20,6 +20,8 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <map>
 
 #include "frames.hpp"
@@ -29,96 +31,135 @@
 namespace pteryla::exchange::detail {
 namespace {
 
+// Formatted text in pieces, in order: a large array is formatted in chunks and written chunk by chunk,
+// never joined into one string.
+struct Text {
+  std::vector<std::string> parts;
+};
+
+// The file as it is written: small text gathers in a buffer, large pieces go straight to the file. Nothing
+// of the size of the whole file is ever held in memory.
 struct Out {
+  AtomicFile& file;
   std::string s;
+  size_t bytes = 0;
+  explicit Out(AtomicFile& f) : file(f) {}
+  void flush() {
+    if (s.empty()) return;
+    file.write(s);
+    bytes += s.size();
+    s.clear();
+  }
+  void flushIfFull() {
+    if (s.size() >= (size_t(1) << 20)) flush();
+  }
   void line(int indent, const std::string& text) {
     s.append(size_t(indent) * 4, ' ');
     s += text;
     s += '\n';
+    flushIfFull();
+  }
+  void append(const std::string& text) {
+    if (text.size() < (size_t(1) << 16)) {
+      s += text;
+      flushIfFull();
+      return;
+    }
+    flush();
+    file.write(text);
+    bytes += text.size();
+  }
+  void append(const Text& t) {
+    for (const std::string& p : t.parts) append(p);
   }
 };
 
-// Numbers go straight into the output (no temporary string per value): the cards of a full-detail bird
-// are hundreds of megabytes of text.
-void put(std::string& o, float v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  o.append(buf, r.ptr);
-}
-void put(std::string& o, int64_t v) {
-  char buf[24];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  o.append(buf, r.ptr);
-}
-void put(std::string& o, const glm::vec3& v) {
-  o += '(';
-  put(o, v.x);
-  o += ", ";
-  put(o, v.y);
-  o += ", ";
-  put(o, v.z);
-  o += ')';
-}
-void put(std::string& o, const glm::vec2& v) {
-  o += '(';
-  put(o, v.x);
-  o += ", ";
-  put(o, v.y);
-  o += ')';
-}
+// Numbers are formatted straight into a preallocated buffer (no temporary string per value): the cards of
+// a full-detail bird are hundreds of megabytes of text. fmt() writes at most kMaxChars<T> characters.
 struct Quat {
   float w, x, y, z;
 };
-void put(std::string& o, const Quat& q) {
-  o += '(';
-  put(o, q.w);
-  o += ", ";
-  put(o, q.x);
-  o += ", ";
-  put(o, q.y);
-  o += ", ";
-  put(o, q.z);
-  o += ')';
+template <class T> constexpr size_t kMaxChars = 0;
+template <> constexpr size_t kMaxChars<float> = 16;    // shortest round-trip float: "-1.1754944e-38"
+template <> constexpr size_t kMaxChars<int64_t> = 20;  // "-9223372036854775808"
+template <> constexpr size_t kMaxChars<glm::vec2> = 2 + 2 * 16 + 2;
+template <> constexpr size_t kMaxChars<glm::vec3> = 2 + 3 * 16 + 4;
+template <> constexpr size_t kMaxChars<Quat> = 2 + 4 * 16 + 6;
+
+char* fmt(char* p, float v) { return std::to_chars(p, p + kMaxChars<float>, v).ptr; }
+char* fmt(char* p, int64_t v) { return std::to_chars(p, p + kMaxChars<int64_t>, v).ptr; }
+template <size_t N>
+char* tuple(char* p, const float (&c)[N]) {
+  *p++ = '(';
+  for (size_t i = 0; i < N; ++i) {
+    if (i) *p++ = ',', *p++ = ' ';
+    p = fmt(p, c[i]);
+  }
+  *p++ = ')';
+  return p;
 }
-// "[a, b, ...]". Large arrays are formatted in chunks on every core and joined in order: the same bytes
-// as formatting them one by one.
+char* fmt(char* p, const glm::vec2& v) { return tuple(p, {v.x, v.y}); }
+char* fmt(char* p, const glm::vec3& v) { return tuple(p, {v.x, v.y, v.z}); }
+char* fmt(char* p, const Quat& q) { return tuple(p, {q.w, q.x, q.y, q.z}); }
+
 template <class T>
-std::string array(const std::vector<T>& v) {
+void put(std::string& o, const T& v) {
+  static_assert(kMaxChars<T> > 0, "no fmt() bound for this type");
+  char buf[kMaxChars<T>];
+  o.append(buf, fmt(buf, v));
+}
+
+// "[a, b, ...]". Large arrays are formatted in chunks on every core, kept in order: the same bytes as
+// formatting them one by one. A value equal (bit for bit: -0 is not 0) to the one before it copies its
+// text, which makes per-face colours, ids and counts cheap.
+template <class T>
+Text array(const std::vector<T>& v) {
+  static_assert(kMaxChars<T> > 0, "no fmt() bound for this type");
   constexpr size_t kChunk = 1 << 14;
   const size_t chunks = (v.size() + kChunk - 1) / kChunk;
   auto format = [&](size_t c, std::string& o) {
-    const size_t end = std::min(v.size(), (c + 1) * kChunk);
-    for (size_t i = c * kChunk; i < end; ++i) {
-      if (i) o += ", ";
-      put(o, v[i]);
+    const size_t begin = c * kChunk, end = std::min(v.size(), (c + 1) * kChunk);
+    const size_t at = o.size();
+    o.resize(at + (end - begin) * (kMaxChars<T> + 2));
+    char* const base = o.data();
+    char* p = base + at;
+    const char* prev = nullptr;
+    size_t prevLength = 0;
+    for (size_t i = begin; i < end; ++i) {
+      if (i) *p++ = ',', *p++ = ' ';
+      if (prev && std::memcmp(&v[i], &v[i - 1], sizeof(T)) == 0) {
+        std::memcpy(p, prev, prevLength);
+        prev = p;
+        p += prevLength;
+      } else {
+        prev = p;
+        p = fmt(p, v[i]);
+        prevLength = size_t(p - prev);
+      }
     }
+    o.resize(size_t(p - base));
   };
-  std::string o = "[";
+  Text t;
+  t.parts.resize(std::max<size_t>(1, chunks));
+  t.parts.front() = "[";
   if (chunks <= 1) {
-    if (chunks == 1) format(0, o);
+    if (chunks == 1) format(0, t.parts.front());
   } else {
-    std::vector<std::string> parts(chunks);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t c = r.begin(); c != r.end(); ++c) format(c, parts[c]);
+      for (size_t c = r.begin(); c != r.end(); ++c) format(c, t.parts[c]);
     });
-    size_t total = 2;
-    for (const std::string& p : parts) total += p.size();
-    o.reserve(total);
-    for (std::string& p : parts) {
-      o += p;
-      std::string().swap(p);
-    }
   }
-  o += ']';
-  return o;
+  t.parts.back() += ']';
+  return t;
 }
 
 // One attribute over the frames: a default value for one frame, timeSamples for several. `meta` is the
-// attribute's metadata text ("interpolation = \"vertex\"") or empty.
+// attribute's metadata text ("interpolation = \"vertex\"") or empty. Values are formatted when written,
+// so only one attribute's text is alive at a time.
 struct Attr {
   std::string decl;  // "point3f[] points"
   std::string meta;
-  std::vector<std::string> values;  // per frame
+  std::vector<std::function<Text()>> values;  // per frame
 };
 
 void emit(Out& o, int indent, const Attr& a, const std::vector<double>& codes) {
@@ -127,9 +168,10 @@ void emit(Out& o, int indent, const Attr& a, const std::vector<double>& codes) {
     o.s.append(size_t(indent) * 4, ' ');
     o.s += a.decl;
     o.s += " = ";
-    o.s += a.values[0];
+    o.append(a.values[0]());
     o.s += meta;
     o.s += '\n';
+    o.flushIfFull();
     return;
   }
   if (!a.meta.empty()) o.line(indent, a.decl + meta);
@@ -138,13 +180,14 @@ void emit(Out& o, int indent, const Attr& a, const std::vector<double>& codes) {
     o.s.append(size_t(indent + 1) * 4, ' ');
     o.s += shortest(codes[k]);
     o.s += ": ";
-    o.s += a.values[k];
+    o.append(a.values[k]());
     o.s += ",\n";
+    o.flushIfFull();
   }
   o.line(indent, "}");
 }
 
-std::string extentOf(const std::vector<glm::vec3>& p, const std::vector<float>* widths) {
+Text extentOf(const std::vector<glm::vec3>& p, const std::vector<float>* widths) {
   glm::vec3 lo(0.0f), hi(0.0f);
   for (size_t i = 0; i < p.size(); ++i) {
     const float r = widths ? 0.5f * (*widths)[i] : 0.0f;
@@ -323,10 +366,11 @@ double featherLength(const ExportFrame& f, const pipeline::CoatDrawRange& r) {
   return len;
 }
 
+// The attributes refer to `d`, which must outlive their emit().
 void meshAttrs(std::vector<Attr>& attrs, const std::vector<MeshData>& d, bool perFeather) {
   auto add = [&](const std::string& decl, const std::string& meta, auto get) {
     Attr a{decl, meta, {}};
-    for (const MeshData& m : d) a.values.push_back(get(m));
+    for (const MeshData& m : d) a.values.push_back([&m, get] { return get(m); });
     attrs.push_back(std::move(a));
   };
   add("float3[] extent", "", [](const MeshData& m) { return extentOf(m.points, nullptr); });
@@ -346,10 +390,11 @@ void meshAttrs(std::vector<Attr>& attrs, const std::vector<MeshData>& d, bool pe
   }
 }
 
+// The attributes refer to `d`, which must outlive their emit().
 void curveAttrs(std::vector<Attr>& attrs, const std::vector<Curves>& d) {
   auto add = [&](const std::string& decl, const std::string& meta, auto get) {
     Attr a{decl, meta, {}};
-    for (const Curves& c : d) a.values.push_back(get(c));
+    for (const Curves& c : d) a.values.push_back([&c, get] { return get(c); });
     attrs.push_back(std::move(a));
   };
   add("float3[] extent", "", [](const Curves& c) { return extentOf(c.points, &c.widths); });
@@ -383,7 +428,8 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
   const size_t nf = s.frames.size();
   std::vector<double> codes;
   for (const auto& f : s.frames) codes.push_back(f.time * s.fps);
-  Out o;
+  AtomicFile file(path);
+  Out o(file);
   o.line(0, "#usda 1.0");
   o.line(0, "(");
   o.line(1, "defaultPrim = \"pteryla\"");
@@ -544,16 +590,16 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
         lv.push_back(r.layer);
         av.push_back(r.age);
       }
-      ids.values.push_back(array(idv));
-      proto.values.push_back(array(protoOf));
-      pos.values.push_back(array(pv));
-      ori.values.push_back(array(qv));
-      scl.values.push_back(array(sv));
-      inv.values.push_back(array(invisible));
-      fid.values.push_back(array(fv));
-      tract.values.push_back(array(tv));
-      layer.values.push_back(array(lv));
-      age.values.push_back(array(av));
+      ids.values.push_back([t = array(idv)] { return t; });
+      proto.values.push_back([t = array(protoOf)] { return t; });
+      pos.values.push_back([t = array(pv)] { return t; });
+      ori.values.push_back([t = array(qv)] { return t; });
+      scl.values.push_back([t = array(sv)] { return t; });
+      inv.values.push_back([t = array(invisible)] { return t; });
+      fid.values.push_back([t = array(fv)] { return t; });
+      tract.values.push_back([t = array(tv)] { return t; });
+      layer.values.push_back([t = array(lv)] { return t; });
+      age.values.push_back([t = array(av)] { return t; });
     }
     for (const Attr* a : {&ids, &inv, &ori, &pos, &fid, &tract, &layer, &age, &proto, &scl}) emit(o, 3, *a, codes);
     o.line(0, "");
@@ -584,10 +630,9 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
   }
   o.line(1, "}");
   o.line(0, "}");
-  AtomicFile file(path);
-  file.write(o.s);
+  o.flush();
   file.commit();
-  return o.s.size();
+  return o.bytes;
 }
 
 }  // namespace pteryla::exchange::detail

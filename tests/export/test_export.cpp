@@ -7,6 +7,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +21,7 @@
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
 #include "pteryla/pteryla.hpp"
+#include "../../src/exchange/frames.hpp"
 #include "usda_reader.hpp"
 
 namespace fs = std::filesystem;
@@ -172,6 +174,41 @@ TEST(ExportUsd, GoldenReadsBackExactly) {
       EXPECT_EQ(std::string(buf, r.ptr), x.text);
     }
   }
+}
+
+// The writer formats arrays in chunks in parallel and copies the text of a value equal to the one before
+// it. Every float must still read back bit for bit, across chunk boundaries (16384 values), for repeats,
+// for -0 next to 0 (equal as floats, different texts), denormals and the extremes.
+TEST(ExportUsd, ArraysReadBackBitExactly) {
+  const float special[] = {0.0f, -0.0f, -0.0f, 0.0f, 0.0f, 1.0f / 3.0f, 1.0f / 3.0f, -1.17549435e-38f,
+                           1.4e-45f, -1.4e-45f, 3.40282347e38f, -3.40282347e38f, 1e-7f, 123456.789f};
+  exchange::detail::ExportScene scene;
+  exchange::detail::ExportFrame frame;
+  const size_t n = 40000;  // three chunks
+  for (size_t i = 0; i < n; ++i) {
+    const float a = special[i % std::size(special)], b = special[(i / 3) % std::size(special)];
+    frame.skin.positions.push_back(i % 5 == 0 ? glm::vec3(a, b, -a) : glm::vec3(float(i) * 0.001f, a, b));
+  }
+  frame.skin.normals.assign(n, glm::vec3(0, 0, 1));
+  for (uint32_t i = 0; i + 2 < n; i += 3) frame.skin.indices.insert(frame.skin.indices.end(), {i, i + 1, i + 2});
+  scene.frames.push_back(frame);
+  const std::string path = outDir() + "/special_numbers.usda";
+  exchange::detail::UsdCounts counts;
+  const size_t bytes = exchange::detail::writeUsda(scene, path, exchange::CoatAs::Cards, 1, counts);
+  const std::string text = slurp(path);
+  EXPECT_EQ(bytes, text.size());
+  const usda::Layer l = usda::read(text);
+  const auto& pts = prim(l, {"pteryla", "skin"}).attr("points").value.items;
+  ASSERT_EQ(pts.size(), n);
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const float expected = frame.skin.positions[i][c], actual = asFloat(pts[i].items[size_t(c)]);
+      ASSERT_EQ(std::memcmp(&expected, &actual, sizeof(float)), 0) << "vertex " << i << " component " << c << ": "
+                                                                  << pts[i].items[size_t(c)].text;
+    }
+  const auto& idx = prim(l, {"pteryla", "skin"}).attr("faceVertexIndices").value.items;
+  ASSERT_EQ(idx.size(), frame.skin.indices.size());
+  for (size_t i = 0; i < idx.size(); ++i) ASSERT_EQ(idx[i].text, std::to_string(frame.skin.indices[i])) << i;
 }
 
 TEST(ExportUsd, CurvesPerFeather) {
