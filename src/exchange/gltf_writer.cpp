@@ -8,13 +8,39 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <ostream>
 #include <sstream>
+#include <streambuf>
 
 #include "frames.hpp"
 #include "pteryla/core/atomic_file.hpp"
 #include "pteryla/core/error.hpp"
 
 namespace pteryla::exchange::detail {
+namespace {
+
+// An output stream buffer that appends to an AtomicFile, unbuffered: tinygltf writes the JSON and the
+// binary chunk in a few large pieces.
+struct FileStreamBuf : std::streambuf {
+  AtomicFile& file;
+  size_t bytes = 0;
+  explicit FileStreamBuf(AtomicFile& f) : file(f) {}
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    file.write(s, size_t(n));
+    bytes += size_t(n);
+    return n;
+  }
+  int_type overflow(int_type c) override {
+    if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
+    const char ch = traits_type::to_char_type(c);
+    file.write(&ch, 1);
+    ++bytes;
+    return c;
+  }
+};
+
+}  // namespace
+
 namespace {
 
 constexpr double kAnisotropyStrength = 0.8;  // barbs: strong, along the tangent
@@ -310,15 +336,17 @@ size_t writeGltf(const ExportScene& s, const std::string& path, bool binary) {
   assetExtras["pteryla"] = tinygltf::Value(std::move(pteryla));
   model.asset.extras = tinygltf::Value(std::move(assetExtras));
 
-  tinygltf::TinyGLTF writer;
-  std::ostringstream os;
-  if (!writer.WriteGltfSceneToStream(&model, os, /*prettyPrint=*/!binary, binary))
-    throw Error("the glTF serializer failed", path);
-  const std::string bytes = os.str();
+  // Serialized straight into the temporary file: no copy of the buffer in a string stream. A failed write
+  // throws from AtomicFile; badbit in the mask lets that exception out of the ostream unchanged.
   AtomicFile file(path);
-  file.write(bytes);
+  FileStreamBuf buf(file);
+  std::ostream os(&buf);
+  os.exceptions(std::ios::badbit);
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToStream(&model, os, /*prettyPrint=*/!binary, binary) || !os)
+    throw Error("the glTF serializer failed", path);
   file.commit();
-  return bytes.size();
+  return buf.bytes;
 }
 
 }  // namespace pteryla::exchange::detail

@@ -334,6 +334,14 @@ TEST(Robust, FailedWritesKeepTheOldFile) {
     expectBadInput(rf, {feather});
     EXPECT_EQ(readAll(feather), old) << ext;
   }
+  // glTF and USD stream into the temporary file (usda attribute by attribute): a write that fails half-way
+  // still keeps the old file.
+  for (const char* ext : {".glb", ".gltf", ".usda"}) {
+    const std::string out = writeFile(d + "/coat" + ext, old);
+    const auto r = runShell("trap \"\" XFSZ; ulimit -f 8;", 120, "export " + kData + "/scenes/patch.json -o " + out);
+    expectBadInput(r, {out});
+    EXPECT_EQ(readAll(out), old) << ext;
+  }
   EXPECT_EQ(temporaries(d), 0);
   // Without the limit the same commands replace the file.
   const auto r = run(120, "render " + kData + "/scenes/patch.json --size 64x64 -o " + d + "/image.png");
