@@ -169,6 +169,15 @@ void drawRenderPanel(PanelContext& ctx) {
   float amb = static_cast<float>(s.render.ambient);
   if (ImGui::SliderFloat("Ambient", &amb, 0.0f, 1.0f))
     guarded(ctx, [&] { doc.edit("ambient", [&](Scene& sc) { sc.render.ambient = amb; }); });
+  bool shadows = s.render.shadows;
+  if (ImGui::Checkbox("Shadows", &shadows))
+    guarded(ctx, [&] { doc.edit("shadows", [&](Scene& sc) { sc.render.shadows = shadows; }); });
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("The first light casts the coat's and the skin's shadows (render.shadows)");
+  if (shadows) {
+    float strength = static_cast<float>(s.render.shadowStrength);
+    if (ImGui::SliderFloat("Shadow strength", &strength, 0.0f, 1.0f))
+      guarded(ctx, [&] { doc.edit("shadow strength", [&](Scene& sc) { sc.render.shadowStrength = strength; }); });
+  }
 
   if (ImGui::TreeNode("Lights")) {
     for (size_t i = 0; i < s.lights.size(); ++i) {

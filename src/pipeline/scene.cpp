@@ -69,6 +69,8 @@ RenderSpec readRender(JsonReader r) {
   s.background = color(r, "background", s.background);
   s.skinColor = color(r, "skin_color", s.skinColor);
   s.ambient = r.number("ambient", s.ambient, 0.0, 1.0);
+  s.shadows = r.boolean("shadows", s.shadows);
+  s.shadowStrength = r.number("shadow_strength", s.shadowStrength, 0.0, 1.0);
   if (r.has("brdf")) {
     JsonReader b = r.object("brdf");
     s.brdfD = b.number("d", s.brdfD, 1e-3, 20.0);
@@ -170,7 +172,8 @@ Json sceneToJson(const Scene& s, const std::string& relativeTo) {
   const RenderSpec& rs = s.render;
   j["render"] = {{"size", {rs.width, rs.height}}, {"lod", rs.lod}, {"lod_by_screen_size", rs.lodByScreenSize},
                  {"style", rs.style}, {"background", vec(rs.background)}, {"skin_color", vec(rs.skinColor)},
-                 {"ambient", rs.ambient}, {"brdf", {{"d", rs.brdfD}, {"h", rs.brdfH}}}};
+                 {"ambient", rs.ambient}, {"shadows", rs.shadows}, {"shadow_strength", rs.shadowStrength},
+                 {"brdf", {{"d", rs.brdfD}, {"h", rs.brdfH}}}};
   return j;
 }
 

@@ -69,6 +69,10 @@
   X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers)                   \
   X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                         \
   X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer)         \
+  X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)               \
+  X(PFNGLDRAWBUFFERPROC, DrawBuffer)                                   \
+  X(PFNGLPOLYGONOFFSETPROC, PolygonOffset)                             \
+  X(PFNGLUNIFORM4FPROC, Uniform4f)                                     \
   X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus)           \
   X(PFNGLGENRENDERBUFFERSPROC, GenRenderbuffers)                       \
   X(PFNGLDELETERENDERBUFFERSPROC, DeleteRenderbuffers)                 \

@@ -14,6 +14,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
 #include <tbb/blocked_range.h>
@@ -60,8 +61,23 @@ struct Target {
 struct Renderer::Impl {
   RenderContext& ctx;
   GlApi gl;
-  Program skinProg, coatVertexProg, coatFragmentProg;
+  Program skinProg, coatVertexProg, coatFragmentProg, depthProg;
   GpuMesh skin, coat;
+  // The key light's shadow map (RenderSettings::shadows) and what it was drawn from: it is drawn again
+  // only when one of these changes. shadowEbo holds every coat index (the coat's own EBO is rewritten
+  // each frame with the camera's surviving triangles).
+  struct Shadow {
+    GLuint fbo = 0, depthTex = 0, ebo = 0;
+    size_t eboBytes = 0;
+    int size = 0;
+    bool valid = false;       // the map matches skin, coat and materials (cleared when they change)
+    glm::vec3 lightDir{0.0f};
+    bool alphaTexture = true;
+    glm::mat4 viewProj{1.0f};
+    float texelWorld = 0.0f;  // scene units per texel
+  } shadow;
+  glm::vec3 skinLo{0.0f}, skinHi{0.0f};
+  bool hasSkinBounds = false;
   std::vector<FeatherDrawRange> ranges;
   std::vector<glm::vec4> rangeSpheres;  // per range: bounding sphere (centre, radius) for culling
   std::vector<glm::vec3> rangeBoxes;    // per range: lo, hi (2 entries) for occlusion culling
@@ -223,6 +239,132 @@ struct Renderer::Impl {
     gl.DeleteBuffers(kAttrCount, m.vbo);
     if (m.ebo) gl.DeleteBuffers(1, &m.ebo);
     m = GpuMesh();
+  }
+
+  void releaseShadow() {
+    if (shadow.fbo) gl.DeleteFramebuffers(1, &shadow.fbo);
+    if (shadow.depthTex) gl.DeleteTextures(1, &shadow.depthTex);
+    if (shadow.ebo) gl.DeleteBuffers(1, &shadow.ebo);
+    shadow = Shadow();
+  }
+
+  // Bounds of everything that casts or receives shadows: the skin and the coat's feathers.
+  bool shadowBounds(glm::vec3& lo, glm::vec3& hi) const {
+    bool any = false;
+    if (hasSkinBounds && skin.indexCount > 0) lo = skinLo, hi = skinHi, any = true;
+    for (size_t i = 0; i < ranges.size(); ++i) {
+      if (ranges[i].indexCount == 0) continue;
+      lo = any ? glm::min(lo, rangeBoxes[2 * i]) : rangeBoxes[2 * i];
+      hi = any ? glm::max(hi, rangeBoxes[2 * i + 1]) : rangeBoxes[2 * i + 1];
+      any = true;
+    }
+    return any;
+  }
+
+  // Draws the depth map of the skin and the alpha-tested coat seen from the key light (unit direction
+  // toward the light), orthographic over the bounding sphere of both; keeps the previous map when
+  // nothing it depends on changed. Leaves the caller's framebuffer and viewport bound.
+  bool updateShadowMap(const glm::vec3& toLight, const RenderSettings& s) {
+    glm::vec3 lo(0.0f), hi(0.0f);
+    if (!shadowBounds(lo, hi)) return false;
+    const int size = std::clamp(s.shadowMapSize, 64, 8192);
+    if (shadow.valid && shadow.size == size && shadow.lightDir == toLight && shadow.alphaTexture == s.useAlphaTexture)
+      return false;
+    // The caller's framebuffer and viewport, before anything here binds another.
+    GLint previous = 0, viewport[4] = {};
+    gl.GetIntegerv(GL_FRAMEBUFFER_BINDING, &previous);
+    gl.GetIntegerv(GL_VIEWPORT, viewport);
+    if (shadow.size != size || !shadow.fbo) {
+      if (shadow.fbo) gl.DeleteFramebuffers(1, &shadow.fbo);
+      if (shadow.depthTex) gl.DeleteTextures(1, &shadow.depthTex);
+      gl.GenTextures(1, &shadow.depthTex);
+      gl.BindTexture(GL_TEXTURE_2D, shadow.depthTex);
+      gl.TexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, size, size, 0, GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+      gl.GenFramebuffers(1, &shadow.fbo);
+      gl.BindFramebuffer(GL_FRAMEBUFFER, shadow.fbo);
+      gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, shadow.depthTex, 0);
+      gl.DrawBuffer(GL_NONE);
+      gl.ReadBuffer(GL_NONE);
+      if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw Error("cannot create a " + std::to_string(size) + "x" + std::to_string(size) + " shadow map", {},
+                    "shadowMapSize");
+      shadow.size = size;
+    }
+    const glm::vec3 centre = 0.5f * (lo + hi);
+    const float radius = std::max(0.5f * glm::length(hi - lo), 1e-6f);
+    const glm::vec3 up = std::abs(toLight.y) < 0.95f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+    const glm::mat4 lightView = glm::lookAt(centre + toLight * (2.0f * radius), centre, up);
+    const glm::mat4 lightProj = glm::ortho(-radius, radius, -radius, radius, 0.5f * radius, 3.5f * radius);
+    shadow.viewProj = lightProj * lightView;
+    shadow.texelWorld = 2.0f * radius / float(size);
+
+    gl.BindFramebuffer(GL_FRAMEBUFFER, shadow.fbo);
+    gl.Viewport(0, 0, size, size);
+    gl.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    gl.DepthMask(GL_TRUE);
+    gl.ClearDepth(1.0);
+    gl.Clear(GL_DEPTH_BUFFER_BIT);
+    gl.Enable(GL_DEPTH_TEST);
+    gl.DepthFunc(GL_LEQUAL);
+    gl.Disable(GL_BLEND);
+    gl.Enable(GL_POLYGON_OFFSET_FILL);
+    gl.PolygonOffset(1.5f, 2.0f);
+    const Program& p = depthProg;
+    gl.UseProgram(p.id);
+    gl.UniformMatrix4fv(U(p, "uLightViewProj"), 1, GL_FALSE, glm::value_ptr(shadow.viewProj));
+    gl.Uniform1i(U(p, "uColorTex"), 0);
+    gl.Uniform1i(U(p, "uAlphaTex"), 1);
+    gl.Uniform1i(U(p, "uUseAlphaTex"), s.useAlphaTexture ? 1 : 0);
+    gl.ActiveTexture(GL_TEXTURE0);
+    gl.BindTexture(GL_TEXTURE_2D, white);
+    gl.ActiveTexture(GL_TEXTURE1);
+    gl.BindTexture(GL_TEXTURE_2D, white);
+    if (skin.indexCount > 0) {  // opaque
+      gl.Uniform1f(U(p, "uAlphaCut"), 0.0f);
+      gl.Uniform1i(U(p, "uColorUv"), 0);
+      gl.BindVertexArray(skin.vao);
+      applyDefaults(skin);
+      drawIndices(0, skin.indexCount);
+    }
+    if (coat.indexCount > 0 && !ranges.empty()) {
+      gl.Uniform1f(U(p, "uAlphaCut"), 0.5f);
+      gl.BindVertexArray(coat.vao);
+      applyDefaults(coat);
+      gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, shadow.ebo);
+      // Runs of consecutive feathers of one material, each drawn from the full index list.
+      size_t i = 0;
+      while (i < ranges.size()) {
+        const uint32_t material = ranges[i].material;
+        const size_t first = ranges[i].firstIndex;
+        size_t last = first + ranges[i].indexCount, j = i + 1;
+        while (j < ranges.size() && ranges[j].material == material && ranges[j].firstIndex == last)
+          last += ranges[j].indexCount, ++j;
+        if (last > first && material < materials.size()) {
+          const GpuMaterial& m = materials[material];
+          gl.ActiveTexture(GL_TEXTURE0);
+          gl.BindTexture(GL_TEXTURE_2D, m.colorTex);
+          gl.ActiveTexture(GL_TEXTURE1);
+          gl.BindTexture(GL_TEXTURE_2D, m.alphaTex);
+          gl.Uniform1i(U(p, "uColorUv"), static_cast<int>(m.desc.colorUv));
+          drawIndices(first, last - first);
+        }
+        i = j;
+      }
+    }
+    gl.Disable(GL_POLYGON_OFFSET_FILL);
+    gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(previous));
+    gl.Viewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+    shadow.valid = true;
+    shadow.lightDir = toLight;
+    shadow.alphaTexture = s.useAlphaTexture;
+    return true;
   }
 
   void releaseTarget() {
@@ -518,19 +660,26 @@ Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(contex
   const char* perVertex = "#version 330 core\n#define PER_FRAGMENT 0\n";
   const char* perFragment = "#version 330 core\n#define PER_FRAGMENT 1\n";
   using namespace shaders;
-  const std::initializer_list<const char*> common = {"uViewProj", "uColorUv", "uIsCoat", "uEye", "uAmbient",
-                                                      "uLightCount", "uLightDir", "uLightColor"};
+  const std::initializer_list<const char*> common = {
+      "uViewProj",      "uColorUv",  "uIsCoat",        "uEye",        "uAmbient",        "uLightCount",
+      "uLightDir",      "uLightColor", "uLightViewProj", "uShadowLightDir", "uShadowNormalOffset", "uShadowMap",
+      "uShadows",       "uShadowStrength", "uShadowTexel"};
   const std::initializer_list<const char*> coat = {
       "uViewProj", "uColorUv", "uIsCoat", "uEye", "uAmbient", "uLightCount", "uLightDir", "uLightColor",
       "uColorTex", "uAlphaTex", "uBrdfTex", "uUseAlphaTex", "uUseBrdf", "uBaseColor", "uSheathColor",
-      "uBarbuleCosSin", "uSpecular", "uConeInv2s2", "uTranslucency"};
+      "uBarbuleCosSin", "uSpecular", "uConeInv2s2", "uTranslucency", "uLightViewProj", "uShadowLightDir",
+      "uShadowNormalOffset", "uShadowMap", "uShadows", "uShadowStrength", "uShadowTexel"};
   r.skinProg = r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshVertex}),
-                      r.compile(GL_FRAGMENT_SHADER, {perFragment, kSkinFragment}), common);
+                      r.compile(GL_FRAGMENT_SHADER, {perFragment, kShadowLookup, kSkinFragment}), common);
   r.skinProg.loc["uSkinColor"] = r.gl.GetUniformLocation(r.skinProg.id, "uSkinColor");
   r.coatVertexProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kCoatShading, kMeshVertex}),
-                            r.compile(GL_FRAGMENT_SHADER, {perVertex, kCoatFragment}), coat);
-  r.coatFragmentProg = r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshVertex}),
-                              r.compile(GL_FRAGMENT_SHADER, {perFragment, kCoatShading, kCoatFragment}), coat);
+                            r.compile(GL_FRAGMENT_SHADER, {perVertex, kShadowLookup, kCoatFragment}), coat);
+  r.coatFragmentProg =
+      r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshVertex}),
+             r.compile(GL_FRAGMENT_SHADER, {perFragment, kCoatShading, kShadowLookup, kCoatFragment}), coat);
+  r.depthProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kDepthVertex}),
+                       r.compile(GL_FRAGMENT_SHADER, {perVertex, kDepthFragment}),
+                       {"uLightViewProj", "uColorUv", "uColorTex", "uAlphaTex", "uUseAlphaTex", "uAlphaCut"});
   r.white = r.makeTexture(Image(1, 1, 255, 255, 255, 255), false, GL_REPEAT, GL_REPEAT);
   setMaterials({});
 }
@@ -548,6 +697,8 @@ Renderer::~Renderer() {
   r.releaseMesh(r.skin);
   r.releaseMesh(r.coat);
   r.releaseTarget();
+  r.releaseShadow();
+  r.gl.DeleteProgram(r.depthProg.id);
   r.gl.DeleteProgram(r.skinProg.id);
   r.gl.DeleteProgram(r.coatVertexProg.id);
   r.gl.DeleteProgram(r.coatFragmentProg.id);
@@ -556,6 +707,8 @@ Renderer::~Renderer() {
 void Renderer::setSkin(const TriMesh& skin) {
   Impl& r = *impl_;
   r.ctx.makeCurrent();
+  r.shadow.valid = false;
+  r.hasSkinBounds = skin.bounds(r.skinLo, r.skinHi);
   if (!skin.normals.empty() || skin.positions.empty()) {
     r.upload(r.skin, skin, nullptr, true);
     return;
@@ -599,9 +752,36 @@ void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>&
                       std::to_string(f.indexCount),
                   {}, el + ".partCount");
   }
+  {
+    // Ranges may come in any order but must not share indices: each frame's surviving triangles are
+    // written into a buffer the size of the coat's index list.
+    std::vector<std::pair<uint32_t, size_t>> byFirst;
+    for (size_t i = 0; i < ranges.size(); ++i)
+      if (ranges[i].indexCount > 0) byFirst.push_back({ranges[i].firstIndex, i});
+    std::sort(byFirst.begin(), byFirst.end());
+    for (size_t k = 1; k < byFirst.size(); ++k) {
+      const FeatherDrawRange& prev = ranges[byFirst[k - 1].second];
+      if (size_t(prev.firstIndex) + prev.indexCount > byFirst[k].first) {
+        const size_t a = std::min(byFirst[k - 1].second, byFirst[k].second), b = std::max(byFirst[k - 1].second, byFirst[k].second);
+        throw Error("feather draw range overlaps ranges[" + std::to_string(a) + "] (each triangle belongs to one feather)",
+                    {}, "ranges[" + std::to_string(b) + "]");
+      }
+    }
+  }
   Impl& r = *impl_;
   r.ctx.makeCurrent();
   r.upload(r.coat, coat, nullptr, false);
+  r.shadow.valid = false;
+  if (!r.shadow.ebo) r.gl.GenBuffers(1, &r.shadow.ebo);
+  {
+    // The shadow pass draws every triangle from its own static index buffer. Bound with the coat's VAO
+    // unbound, so the VAO keeps its own element buffer.
+    r.gl.BindVertexArray(0);
+    r.gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, r.shadow.ebo);
+    r.gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(n * sizeof(uint32_t)),
+                    n ? coat.indices.data() : nullptr, GL_STATIC_DRAW);
+    r.shadow.eboBytes = n * sizeof(uint32_t);
+  }
   r.coatPositions = coat.positions;
   r.coatIndices = coat.indices;
   r.ranges = ranges;
@@ -675,6 +855,7 @@ void Renderer::setMaterials(const std::vector<FeatherMaterial>& materials) {
   }
   r.ctx.makeCurrent();
   r.releaseMaterials();
+  r.shadow.valid = false;
   for (auto& [path, img] : files) {
     const bool isAlpha = std::any_of(materials.begin(), materials.end(),
                                      [&](const FeatherMaterial& m) { return m.alphaTexture == path; });
@@ -714,6 +895,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     dirs[i] = len > 0.0f ? lights[i].direction / len : glm::vec3(0.0f, 0.0f, 1.0f);
     colors[i] = lights[i].color;
   }
+  bool shadowsOn = false;
   auto setCommon = [&](const Program& p) {
     gl.UseProgram(p.id);
     gl.UniformMatrix4fv(r.U(p, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
@@ -726,7 +908,31 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     }
     gl.Uniform1i(r.U(p, "uColorUv"), 0);
     gl.Uniform1i(r.U(p, "uIsCoat"), &p == &r.skinProg ? 0 : 1);
+    gl.Uniform1i(r.U(p, "uShadows"), shadowsOn ? 1 : 0);
+    gl.Uniform1i(r.U(p, "uShadowMap"), 3);
+    if (shadowsOn) {
+      gl.UniformMatrix4fv(r.U(p, "uLightViewProj"), 1, GL_FALSE, glm::value_ptr(r.shadow.viewProj));
+      gl.Uniform3f(r.U(p, "uShadowLightDir"), dirs[0].x, dirs[0].y, dirs[0].z);
+      gl.Uniform1f(r.U(p, "uShadowNormalOffset"), 1.5f * r.shadow.texelWorld);
+      gl.Uniform1f(r.U(p, "uShadowStrength"), std::clamp(s.shadowStrength, 0.0f, 1.0f));
+      gl.Uniform1f(r.U(p, "uShadowTexel"), 1.0f / float(r.shadow.size));
+    } else {
+      const glm::mat4 identity(1.0f);
+      gl.UniformMatrix4fv(r.U(p, "uLightViewProj"), 1, GL_FALSE, glm::value_ptr(identity));
+      gl.Uniform3f(r.U(p, "uShadowLightDir"), 0.0f, 0.0f, 1.0f);
+      gl.Uniform1f(r.U(p, "uShadowNormalOffset"), 0.0f);
+    }
   };
+
+  // The key light's shadow map first (it binds its own framebuffer and restores the caller's).
+  if (s.shadows && lightCount > 0 && (s.drawCoat || s.drawSkin)) {
+    gl.Viewport(0, 0, s.width, s.height);
+    stats_.shadowMapRendered = r.updateShadowMap(dirs[0], s);
+    shadowsOn = r.shadow.valid;
+  }
+  gl.ActiveTexture(GL_TEXTURE3);
+  gl.BindTexture(GL_TEXTURE_2D, shadowsOn ? r.shadow.depthTex : 0);
+  gl.ActiveTexture(GL_TEXTURE0);
 
   gl.Viewport(0, 0, s.width, s.height);
   gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);

@@ -67,6 +67,8 @@ RenderSettings sceneSettings(const pipeline::Scene& scene, int width, int height
   s.background = glm::vec4(v3(scene.render.background), 1.0f);
   s.ambient = glm::vec3(static_cast<float>(scene.render.ambient));
   s.skinColor = v3(scene.render.skinColor);
+  s.shadows = scene.render.shadows;
+  s.shadowStrength = static_cast<float>(scene.render.shadowStrength);
   return s;
 }
 

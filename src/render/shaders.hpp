@@ -36,13 +36,18 @@ float projectedAngle(vec3 dir, vec3 T, vec3 B, out float len) {
   return len > 1e-5 ? fastAcos(dot(B, p) / len) : 0.5 * kPi;
 }
 
-// Returns the irradiance factor for the albedo (rgb of `diffuse`) and the specular radiance.
-void shadeCoat(vec3 pos, vec3 normal, vec3 tangent, out vec3 diffuse, out vec3 spec) {
+// Returns the irradiance factor for the albedo (rgb of `diffuse`) and the specular radiance: from the
+// ambient and lights 1..3 in diffuse / spec, from light 0 (the key light, which casts the shadows) in
+// keyDiffuse / keySpec, to be scaled by its visibility.
+void shadeCoat(vec3 pos, vec3 normal, vec3 tangent, out vec3 diffuse, out vec3 spec, out vec3 keyDiffuse,
+               out vec3 keySpec) {
   vec3 V = normalize(uEye - pos);
   vec3 N = normalize(normal);
   if (dot(N, V) < 0.0) N = -N;
   diffuse = uAmbient;
   spec = vec3(0.0);
+  keyDiffuse = vec3(0.0);
+  keySpec = vec3(0.0);
   vec3 T = tangent - dot(tangent, N) * N;
   float lenT = length(T);
   bool aniso = uUseBrdf != 0 && lenT > 1e-4;
@@ -56,10 +61,11 @@ void shadeCoat(vec3 pos, vec3 normal, vec3 tangent, out vec3 diffuse, out vec3 s
   for (int i = 0; i < uLightCount; ++i) {
     vec3 L = uLightDir[i];
     float nl = dot(N, L);
+    vec3 d = vec3(0.0), sp = vec3(0.0);
     if (nl <= 0.0) {
-      diffuse += uLightColor[i] * (uTranslucency * -nl);
+      d = uLightColor[i] * (uTranslucency * -nl);
     } else if (!aniso) {
-      diffuse += uLightColor[i] * nl;
+      d = uLightColor[i] * nl;
     } else {
       float lenL0, lenL1, lenV;
       vec3 B0 = cross(Tb0, N), B1 = cross(Tb1, N);
@@ -68,11 +74,38 @@ void shadeCoat(vec3 pos, vec3 normal, vec3 tangent, out vec3 diffuse, out vec3 s
       vec2 ds0 = textureLod(uBrdfTex, c0, 0.0).rg;
       vec2 ds1 = textureLod(uBrdfTex, c1, 0.0).rg;
       float a0 = dot(L, Tb0) + dot(V, Tb0), a1 = dot(L, Tb1) + dot(V, Tb1);
-      diffuse += uLightColor[i] * (0.5 * (lenL0 * ds0.r + lenL1 * ds1.r));
-      spec += uLightColor[i] * (0.5 * uSpecular *
-              (lenL0 * ds0.g * exp(-a0 * a0 * uConeInv2s2) + lenL1 * ds1.g * exp(-a1 * a1 * uConeInv2s2)));
+      d = uLightColor[i] * (0.5 * (lenL0 * ds0.r + lenL1 * ds1.r));
+      sp = uLightColor[i] * (0.5 * uSpecular *
+           (lenL0 * ds0.g * exp(-a0 * a0 * uConeInv2s2) + lenL1 * ds1.g * exp(-a1 * a1 * uConeInv2s2)));
+    }
+    if (i == 0) {
+      keyDiffuse = d;
+      keySpec = sp;
+    } else {
+      diffuse += d;
+      spec += sp;
     }
   }
+}
+)GLSL";
+
+// The key light's shadow map (renderer.cpp: an orthographic depth map of the skin and the alpha-tested
+// coat from light 0). vShadowPos is the fragment's light clip position, pushed off its surface along the
+// normal in the vertex shader. Four bilinear depth comparisons (hardware PCF) half a texel apart give a
+// soft edge about two texels wide. Returns the key light's visibility in [1 - uShadowStrength, 1].
+inline constexpr const char* kShadowLookup = R"GLSL(
+uniform sampler2DShadow uShadowMap;
+uniform int uShadows;
+uniform float uShadowStrength;
+uniform float uShadowTexel;
+float keyVisibility(vec4 shadowPos) {
+  if (uShadows == 0) return 1.0;
+  vec3 p = shadowPos.xyz / shadowPos.w * 0.5 + 0.5;
+  if (p.x <= 0.0 || p.y <= 0.0 || p.x >= 1.0 || p.y >= 1.0 || p.z >= 1.0) return 1.0;
+  float h = 0.5 * uShadowTexel;
+  float lit = 0.25 * (texture(uShadowMap, vec3(p.xy + vec2(-h, -h), p.z)) + texture(uShadowMap, vec3(p.xy + vec2(h, -h), p.z)) +
+                      texture(uShadowMap, vec3(p.xy + vec2(-h, h), p.z)) + texture(uShadowMap, vec3(p.xy + vec2(h, h), p.z)));
+  return 1.0 - uShadowStrength * (1.0 - lit);
 }
 )GLSL";
 
@@ -90,7 +123,11 @@ layout(location = 8) in float aBarbCount;
 uniform mat4 uViewProj;
 uniform int uColorUv;
 uniform int uIsCoat;
+uniform mat4 uLightViewProj;
+uniform vec3 uShadowLightDir;
+uniform float uShadowNormalOffset;
 out vec3 vPos;
+out vec4 vShadowPos;
 out vec3 vNormal;
 out vec2 vUvColor;
 out vec2 vUvAlpha;
@@ -101,6 +138,8 @@ out vec3 vTangent;
 #else
 out vec3 vDiffuse;
 out vec3 vSpec;
+out vec3 vKeyDiffuse;
+out vec3 vKeySpec;
 #endif
 void main() {
   vPos = aPos;
@@ -113,18 +152,26 @@ void main() {
   vTangent = aTangent;
 #else
   if (uIsCoat != 0) {
-    shadeCoat(aPos, aNormal, aTangent, vDiffuse, vSpec);
+    shadeCoat(aPos, aNormal, aTangent, vDiffuse, vSpec, vKeyDiffuse, vKeySpec);
   } else {
     vDiffuse = vec3(0.0);
     vSpec = vec3(0.0);
+    vKeyDiffuse = vec3(0.0);
+    vKeySpec = vec3(0.0);
   }
 #endif
+  // Off the surface toward the key light's side (a vane is lit from either side), so the surface does
+  // not shadow itself.
+  vec3 n = normalize(aNormal);
+  vec3 offset = (dot(n, uShadowLightDir) >= 0.0 ? n : -n) * uShadowNormalOffset;
+  vShadowPos = uLightViewProj * vec4(aPos + offset, 1.0);
   gl_Position = uViewProj * vec4(aPos, 1.0);
 }
 )GLSL";
 
 inline constexpr const char* kSkinFragment = R"GLSL(
 in vec3 vPos;
+in vec4 vShadowPos;
 in vec3 vNormal;
 uniform vec3 uEye;
 uniform vec3 uSkinColor;
@@ -138,7 +185,8 @@ void main() {
   vec3 N = normalize(vNormal);
   if (dot(N, V) < 0.0) N = -N;
   vec3 light = uAmbient;
-  for (int i = 0; i < uLightCount; ++i) light += uLightColor[i] * max(dot(N, uLightDir[i]), 0.0);
+  for (int i = 0; i < uLightCount; ++i)
+    light += uLightColor[i] * max(dot(N, uLightDir[i]), 0.0) * (i == 0 ? keyVisibility(vShadowPos) : 1.0);
   oColor = vec4(uSkinColor * light, 1.0);
 }
 )GLSL";
@@ -146,6 +194,7 @@ void main() {
 // Colour pattern x base colour, barb alpha mask repeated barbCount times, sheath blend (8.1).
 inline constexpr const char* kCoatFragment = R"GLSL(
 in vec3 vPos;
+in vec4 vShadowPos;
 in vec3 vNormal;
 in vec2 vUvColor;
 in vec2 vUvAlpha;
@@ -156,6 +205,8 @@ in vec3 vTangent;
 #else
 in vec3 vDiffuse;
 in vec3 vSpec;
+in vec3 vKeyDiffuse;
+in vec3 vKeySpec;
 #endif
 uniform sampler2D uColorTex;
 uniform sampler2D uAlphaTex;
@@ -171,12 +222,57 @@ void main() {
   if (a < 0.5 / 255.0) discard;
   vec3 albedo = mix(uBaseColor * tex.rgb, uSheathColor, vSheath);
 #if PER_FRAGMENT
-  vec3 diffuse, spec;
-  shadeCoat(vPos, vNormal, vTangent, diffuse, spec);
+  vec3 diffuse, spec, keyDiffuse, keySpec;
+  shadeCoat(vPos, vNormal, vTangent, diffuse, spec, keyDiffuse, keySpec);
 #else
-  vec3 diffuse = vDiffuse, spec = vSpec;
+  vec3 diffuse = vDiffuse, spec = vSpec, keyDiffuse = vKeyDiffuse, keySpec = vKeySpec;
 #endif
+  float visible = keyVisibility(vShadowPos);
+  diffuse += keyDiffuse * visible;
+  spec += keySpec * visible;
   oColor = vec4(albedo * diffuse + spec * (1.0 - vSheath), a);
+}
+)GLSL";
+
+// The shadow map pass: light clip positions; the coat's fragments are kept where the feather is opaque
+// enough (the same alpha as the colour pass, thresholded at uAlphaCut), so barbs cast barb-shaped shadows.
+inline constexpr const char* kDepthVertex = R"GLSL(
+layout(location = 0) in vec3 aPos;
+layout(location = 3) in vec2 aUvGlobal;
+layout(location = 4) in vec2 aUvBarb;
+layout(location = 5) in vec2 aUvGrowth;
+layout(location = 6) in float aAlpha;
+layout(location = 7) in float aSheath;
+layout(location = 8) in float aBarbCount;
+uniform mat4 uLightViewProj;
+uniform int uColorUv;
+out vec2 vUvColor;
+out vec2 vUvAlpha;
+out float vAlpha;
+out float vSheath;
+void main() {
+  vUvColor = uColorUv == 1 ? aUvBarb : (uColorUv == 2 ? aUvGrowth : aUvGlobal);
+  vUvAlpha = vec2(aUvBarb.x * max(aBarbCount, 1.0), aUvBarb.y);
+  vAlpha = aAlpha;
+  vSheath = clamp(aSheath, 0.0, 1.0);
+  gl_Position = uLightViewProj * vec4(aPos, 1.0);
+}
+)GLSL";
+
+inline constexpr const char* kDepthFragment = R"GLSL(
+in vec2 vUvColor;
+in vec2 vUvAlpha;
+in float vAlpha;
+in float vSheath;
+uniform sampler2D uColorTex;
+uniform sampler2D uAlphaTex;
+uniform int uUseAlphaTex;
+uniform float uAlphaCut;
+void main() {
+  float a = vAlpha * texture(uColorTex, vUvColor).a;
+  if (uUseAlphaTex != 0) a *= texture(uAlphaTex, vUvAlpha).r;
+  a = mix(a, 1.0, vSheath);
+  if (a < uAlphaCut) discard;
 }
 )GLSL";
 

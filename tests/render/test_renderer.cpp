@@ -445,6 +445,20 @@ TEST(Renderer, MissingOrUnreadableTextureNamesTheFile) {
   EXPECT_NO_THROW(r.renderImage(frontCamera(), kFrontLight, flatSettings(16)));
 }
 
+TEST(Renderer, RejectsOverlappingRanges) {
+  Renderer r(context());
+  TriMesh m = quad({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  m.append(quad({0, 0, 1}, {1, 0, 0}, {0, 1, 0}));
+  // A range over both quads and one over the second: each triangle would be drawn twice.
+  try {
+    r.setCoat(m, {whole(m, 0), whole(m, 6)});
+    FAIL() << "overlapping ranges accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.element(), "ranges[1]");
+    EXPECT_NE(std::string(e.what()).find("overlaps ranges[0]"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Renderer, RejectsInvalidRangesAndMeshes) {
   Renderer r(context());
   const TriMesh q = quad({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
@@ -566,4 +580,111 @@ TEST(Renderer, SubpixelCullingDropsTrianglesThatCoverNoPixelCentreWithoutChangin
     EXPECT_EQ(on.occludedTriangles, off.occludedTriangles);
     EXPECT_EQ(meanAbsoluteError(culled, all), 0.0) << size << " px";
   }
+}
+
+// ------------------------------------------------------------------ key light shadows (#29)
+namespace {
+
+// Feather A lies flat at z = 0 over x in [-1, 0.5]; feather B lies 0.1 above it over x in [0, 1.5]. The
+// key light comes from +x, 26.6 degrees above the plane, so B's left edge (x = 0) casts a shadow on A's
+// exposed part over x in [-0.2, 0]. The camera looks straight down: world x maps to pixel columns exactly.
+struct Overlap {
+  TriMesh lower = quad({-0.25f, 0, 0}, {0.75f, 0, 0}, {0, 0.5f, 0});
+  TriMesh upper;
+  std::vector<Light> lights{Light{glm::vec3(1.0f, 0.0f, 0.5f), glm::vec3(1.0f)}};
+  static constexpr int kSize = 256;
+  explicit Overlap(float upperAlpha = 1.0f) : upper(quad({0.75f, 0, 0.1f}, {0.75f, 0, 0}, {0, 0.5f, 0}, upperAlpha)) {}
+  RenderSettings settings(bool shadows, bool perFragment = false) const {
+    RenderSettings s = flatSettings(kSize);
+    s.ambient = glm::vec3(0.2f);
+    s.shadows = shadows;
+    s.shadowStrength = 1.0f;
+    s.brdfPerFragment = perFragment;
+    s.useAlphaTexture = false;
+    return s;
+  }
+  // The two quads of `coat` (lower, then upper) as two feathers in that layer order.
+  static std::vector<FeatherDrawRange> twoFeathers(const TriMesh& coat) {
+    std::vector<FeatherDrawRange> r{whole(coat, 0), whole(coat, 6)};
+    r[0].indexCount = 6;
+    return r;
+  }
+  // Mean red channel over world x in [x0, x1], y in [-0.3, 0.3].
+  static double band(const Image& img, float x0, float x1) {
+    const float half = 5.0f * std::tan(20.0f * 3.14159265f / 180.0f);
+    auto px = [&](float x) { return int(std::lround((x / half * 0.5f + 0.5f) * kSize)); };
+    double sum = 0;
+    int n = 0;
+    for (int y = px(-0.3f); y < px(0.3f); ++y)
+      for (int x = px(x0); x < px(x1); ++x) sum += img.pixel(x, y)[0], ++n;
+    return sum / std::max(n, 1);
+  }
+};
+
+}  // namespace
+
+TEST(RendererShadows, AnOverlappingFeatherDarkensTheExposedEdgeBelowIt) {
+  for (const bool perFragment : {false, true}) {
+    Renderer r(context());
+    r.setMaterials({lambert({1, 1, 1})});
+    const Overlap o;
+    TriMesh coat = o.lower;
+    coat.append(o.upper);
+    r.setCoat(coat, Overlap::twoFeathers(coat));
+    const Image off = r.renderImage(frontCamera(), o.lights, o.settings(false, perFragment));
+    const Image on = r.renderImage(frontCamera(), o.lights, o.settings(true, perFragment));
+    // Just under B's edge, in its shadow, against the exposed middle of the same feather.
+    const double edgeOn = Overlap::band(on, -0.16f, -0.04f), openOn = Overlap::band(on, -0.9f, -0.5f);
+    const double edgeOff = Overlap::band(off, -0.16f, -0.04f), openOff = Overlap::band(off, -0.9f, -0.5f);
+    EXPECT_NEAR(edgeOff, openOff, 0.02 * openOff) << "without shadows the flat feather is evenly lit";
+    EXPECT_NEAR(openOn, openOff, 0.02 * openOff) << "the exposed part is not in shadow";
+    EXPECT_LT(edgeOn, 0.6 * openOn) << "perFragment " << perFragment;
+    // Beyond the shadow's reach (x < -0.2) A is lit again.
+    EXPECT_NEAR(Overlap::band(on, -0.45f, -0.3f), openOn, 0.02 * openOn);
+  }
+}
+
+TEST(RendererShadows, FeathersShadowTheSkinAndTransparentOnesCastNone) {
+  Renderer r(context());
+  r.setMaterials({lambert({1, 1, 1})});
+  const Overlap o;
+  RenderSettings s = o.settings(true);
+  s.skinColor = glm::vec3(1.0f);
+  r.setSkin(o.lower);  // A as skin: feathers shadow the body too
+  r.setCoat(o.upper, {whole(o.upper)});
+  Image img = r.renderImage(frontCamera(), o.lights, s);
+  EXPECT_LT(Overlap::band(img, -0.16f, -0.04f), 0.6 * Overlap::band(img, -0.9f, -0.5f));
+
+  // A feather below the alpha cut (0.5) casts no shadow: shadows follow what the colour pass shows.
+  const Overlap faint(0.3f);
+  r.setSkin(TriMesh());
+  TriMesh coat = faint.lower;
+  coat.append(faint.upper);
+  r.setCoat(coat, Overlap::twoFeathers(coat));
+  img = r.renderImage(frontCamera(), faint.lights, s);
+  EXPECT_NEAR(Overlap::band(img, -0.16f, -0.04f), Overlap::band(img, -0.9f, -0.5f), 0.02 * Overlap::band(img, -0.9f, -0.5f));
+}
+
+TEST(RendererShadows, TheMapIsDrawnAgainOnlyWhenWhatCastsItChanges) {
+  Renderer r(context());
+  r.setMaterials({lambert({1, 1, 1})});
+  const Overlap o;
+  TriMesh coat = o.lower;
+  coat.append(o.upper);
+  r.setCoat(coat, Overlap::twoFeathers(coat));
+  const Image first = r.renderImage(frontCamera(), o.lights, o.settings(true));
+  EXPECT_TRUE(r.lastStats().shadowMapRendered);
+  Camera moved = frontCamera(4.0f);  // a new view: the light's map is still valid
+  r.renderImage(moved, o.lights, o.settings(true));
+  EXPECT_FALSE(r.lastStats().shadowMapRendered);
+  const Image again = r.renderImage(frontCamera(), o.lights, o.settings(true));
+  EXPECT_FALSE(r.lastStats().shadowMapRendered);
+  EXPECT_EQ(first.rgba, again.rgba);
+  r.renderImage(frontCamera(), {Light{glm::vec3(-1.0f, 0.0f, 0.5f), glm::vec3(1.0f)}}, o.settings(true));
+  EXPECT_TRUE(r.lastStats().shadowMapRendered) << "another key light direction";
+  r.setCoat(coat, Overlap::twoFeathers(coat));
+  r.renderImage(frontCamera(), {Light{glm::vec3(-1.0f, 0.0f, 0.5f), glm::vec3(1.0f)}}, o.settings(true));
+  EXPECT_TRUE(r.lastStats().shadowMapRendered) << "a new coat";
+  r.renderImage(frontCamera(), o.lights, o.settings(false));
+  EXPECT_FALSE(r.lastStats().shadowMapRendered);
 }

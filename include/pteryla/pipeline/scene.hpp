@@ -34,6 +34,8 @@ struct RenderSpec {
   glm::dvec3 skinColor{0.78, 0.62, 0.52};
   double brdfD = 1.0, brdfH = 0.0;  // Poulin-Fournier barbule spacing and floor height
   double ambient = 0.35;
+  bool shadows = true;          // the first light casts coat and skin shadows (render::RenderSettings::shadows)
+  double shadowStrength = 0.8;  // [0,1]: share of the key light removed in full shadow
 };
 
 struct Scene {

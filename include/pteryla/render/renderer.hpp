@@ -118,6 +118,15 @@ struct RenderSettings {
   // Minified colour and alpha textures: true samples the nearest texel of the nearest mip level
   // (about 20% faster on llvmpipe); false filters bilinearly within it. Magnification is bilinear.
   bool fastTextureFiltering = true;
+  // Coat self-shadowing: light 0 (the key light) casts shadows of the skin and the coat onto both, from
+  // an orthographic depth map over their bounds (shadowMapSize texels on a side). Feathers are
+  // alpha-tested into the map (the colour pass's alpha, kept above 0.5), so barbs cast barb-shaped
+  // shadows. In full shadow the key light is scaled by 1 - shadowStrength (the rest stands for the
+  // light the coat scatters). The map is re-rendered only when the skin, coat, materials, key light
+  // direction or these settings change. Scenes turn it on by default (render.shadows).
+  bool shadows = false;
+  int shadowMapSize = 2048;       // [64, 8192]
+  float shadowStrength = 0.8f;    // [0, 1]
 };
 
 struct RenderStats {
@@ -130,6 +139,7 @@ struct RenderStats {
   size_t occludedTriangles = 0;  // triangles of drawn feathers skipped: behind the skin (runs of a few
                                  // barbs, then single triangles) or outside the view
   size_t subpixelTriangles = 0;  // triangles of drawn feathers skipped for covering no pixel centre
+  bool shadowMapRendered = false;  // the shadow map was (re)drawn for this frame (false: reused or off)
 };
 
 class Renderer {
