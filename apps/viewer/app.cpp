@@ -447,7 +447,10 @@ std::vector<float> App::viewKey() const {
                           float(view_.showSkin), float(view_.showCoat), float(view_.wireframe), float(s.render.ambient),
                           float(s.render.background.x), float(s.render.background.y), float(s.render.background.z),
                           float(s.render.skinColor.x), float(s.render.skinColor.y), float(s.render.skinColor.z),
-                          float(s.render.shadows), float(s.render.shadowStrength)};
+                          float(s.render.shadows), float(s.render.shadowStrength), float(s.render.msaa),
+                          float(s.render.exposure), float(s.render.tone == "filmic"), float(s.render.lightRig == "studio"),
+                          float(s.render.ground), float(s.render.groundColor.x), float(s.render.groundColor.y),
+                          float(s.render.groundColor.z)};
   for (const auto& l : s.lights)
     for (float v : {float(l.direction.x), float(l.direction.y), float(l.direction.z), float(l.color.x), float(l.color.y),
                     float(l.color.z), float(l.intensity)})
@@ -484,6 +487,7 @@ void App::renderView() {
   settings.drawCoat = view_.showCoat;
   settings.subpixelCulling = !view_.wireframe;  // a wireframe draws the edges of triangles that cover no centre
   settings.shadows = settings.shadows && !view_.wireframe;  // the map would be drawn in lines too
+  if (moving) settings.msaaSamples = 0;  // multisampling costs most of a frame on llvmpipe: only at rest
   // The navigation coat shows every k-th feather: colour the skin like the coat looked (the mean of
   // the last full view) so the body reads as feathered rather than bare while the camera moves.
   if (nav && navSkinColor_.x >= 0.0f) settings.skinColor = navSkinColor_;

@@ -178,6 +178,29 @@ void drawRenderPanel(PanelContext& ctx) {
     if (ImGui::SliderFloat("Shadow strength", &strength, 0.0f, 1.0f))
       guarded(ctx, [&] { doc.edit("shadow strength", [&](Scene& sc) { sc.render.shadowStrength = strength; }); });
   }
+  int rig = s.render.lightRig == "studio" ? 1 : 0;
+  const char* rigs[] = {"scene lights", "studio (key, fill, rim)"};
+  if (ImGui::Combo("Lighting", &rig, rigs, 2))
+    guarded(ctx, [&] { doc.edit("lighting", [&](Scene& sc) { sc.render.lightRig = rig == 1 ? "studio" : "scene"; }); });
+  int tone = s.render.tone == "filmic" ? 1 : 0;
+  const char* tones[] = {"linear", "filmic"};
+  if (ImGui::Combo("Tone curve", &tone, tones, 2))
+    guarded(ctx, [&] { doc.edit("tone curve", [&](Scene& sc) { sc.render.tone = tone == 1 ? "filmic" : "linear"; }); });
+  float exposure = static_cast<float>(s.render.exposure);
+  if (ImGui::SliderFloat("Exposure (stops)", &exposure, -4.0f, 4.0f, "%.2f"))
+    guarded(ctx, [&] { doc.edit("exposure", [&](Scene& sc) { sc.render.exposure = exposure; }); });
+  bool ground = s.render.ground;
+  if (ImGui::Checkbox("Ground", &ground))
+    guarded(ctx, [&] { doc.edit("ground", [&](Scene& sc) { sc.render.ground = ground; }); });
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("A plane under the model that takes its contact shadow (render.ground)");
+  if (ground) colour("Ground colour", s.render.groundColor, [](Scene& sc, const glm::dvec3& c) { sc.render.groundColor = c; });
+  int msaa = s.render.msaa == 8 ? 3 : s.render.msaa == 4 ? 2 : s.render.msaa == 2 ? 1 : 0;
+  const char* samples[] = {"off", "2x", "4x", "8x"};
+  if (ImGui::Combo("Anti-aliasing", &msaa, samples, 4))
+    guarded(ctx, [&] { doc.edit("anti-aliasing", [&](Scene& sc) { sc.render.msaa = msaa == 0 ? 0 : 1 << msaa; }); });
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Multisampling (render.msaa); off while the camera moves");
+  if (ImGui::Button("Neutral background"))
+    guarded(ctx, [&] { doc.edit("background", [&](Scene& sc) { sc.render.background = glm::dvec3(0.5, 0.5, 0.5); }); });
 
   if (ImGui::TreeNode("Lights")) {
     for (size_t i = 0; i < s.lights.size(); ++i) {

@@ -71,6 +71,14 @@ RenderSpec readRender(JsonReader r) {
   s.ambient = r.number("ambient", s.ambient, 0.0, 1.0);
   s.shadows = r.boolean("shadows", s.shadows);
   s.shadowStrength = r.number("shadow_strength", s.shadowStrength, 0.0, 1.0);
+  const double msaa = r.number("msaa", s.msaa, 0.0, 8.0);
+  if (msaa != 0 && msaa != 2 && msaa != 4 && msaa != 8) r.fail("msaa", "expected 0 (off), 2, 4 or 8 samples");
+  s.msaa = int(msaa);
+  s.exposure = r.number("exposure", s.exposure, -8.0, 8.0);
+  s.tone = r.oneOf("tone", s.tone, {"linear", "filmic"});
+  s.lightRig = r.oneOf("light_rig", s.lightRig, {"scene", "studio"});
+  s.ground = r.boolean("ground", s.ground);
+  s.groundColor = color(r, "ground_color", s.groundColor);
   if (r.has("brdf")) {
     JsonReader b = r.object("brdf");
     s.brdfD = b.number("d", s.brdfD, 1e-3, 20.0);
@@ -173,6 +181,8 @@ Json sceneToJson(const Scene& s, const std::string& relativeTo) {
   j["render"] = {{"size", {rs.width, rs.height}}, {"lod", rs.lod}, {"lod_by_screen_size", rs.lodByScreenSize},
                  {"style", rs.style}, {"background", vec(rs.background)}, {"skin_color", vec(rs.skinColor)},
                  {"ambient", rs.ambient}, {"shadows", rs.shadows}, {"shadow_strength", rs.shadowStrength},
+                 {"msaa", rs.msaa}, {"exposure", rs.exposure}, {"tone", rs.tone}, {"light_rig", rs.lightRig},
+                 {"ground", rs.ground}, {"ground_color", vec(rs.groundColor)},
                  {"brdf", {{"d", rs.brdfD}, {"h", rs.brdfH}}}};
   return j;
 }

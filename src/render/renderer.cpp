@@ -62,7 +62,8 @@ struct Renderer::Impl {
   RenderContext& ctx;
   GlApi gl;
   Program skinProg, coatVertexProg, coatFragmentProg, depthProg;
-  GpuMesh skin, coat;
+  GpuMesh skin, coat, ground;
+  std::vector<float> groundKey;  // what the ground quad was built from
   // The key light's shadow map (RenderSettings::shadows) and what it was drawn from: it is drawn again
   // only when one of these changes. shadowEbo holds every coat index (the coat's own EBO is rewritten
   // each frame with the camera's surviving triangles).
@@ -300,7 +301,8 @@ struct Renderer::Impl {
     const float radius = std::max(0.5f * glm::length(hi - lo), 1e-6f);
     const glm::vec3 up = std::abs(toLight.y) < 0.95f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
     const glm::mat4 lightView = glm::lookAt(centre + toLight * (2.0f * radius), centre, up);
-    const glm::mat4 lightProj = glm::ortho(-radius, radius, -radius, radius, 0.5f * radius, 3.5f * radius);
+    // Far enough behind the model for a ground plane's contact shadow under a low light.
+    const glm::mat4 lightProj = glm::ortho(-radius, radius, -radius, radius, 0.5f * radius, 12.0f * radius);
     shadow.viewProj = lightProj * lightView;
     shadow.texelWorld = 2.0f * radius / float(size);
 
@@ -663,12 +665,12 @@ Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(contex
   const std::initializer_list<const char*> common = {
       "uViewProj",      "uColorUv",  "uIsCoat",        "uEye",        "uAmbient",        "uLightCount",
       "uLightDir",      "uLightColor", "uLightViewProj", "uShadowLightDir", "uShadowNormalOffset", "uShadowMap",
-      "uShadows",       "uShadowStrength", "uShadowTexel"};
+      "uShadows",       "uShadowStrength", "uShadowTexel", "uExposureScale", "uFilmic"};
   const std::initializer_list<const char*> coat = {
       "uViewProj", "uColorUv", "uIsCoat", "uEye", "uAmbient", "uLightCount", "uLightDir", "uLightColor",
       "uColorTex", "uAlphaTex", "uBrdfTex", "uUseAlphaTex", "uUseBrdf", "uBaseColor", "uSheathColor",
       "uBarbuleCosSin", "uSpecular", "uConeInv2s2", "uTranslucency", "uLightViewProj", "uShadowLightDir",
-      "uShadowNormalOffset", "uShadowMap", "uShadows", "uShadowStrength", "uShadowTexel"};
+      "uShadowNormalOffset", "uShadowMap", "uShadows", "uShadowStrength", "uShadowTexel", "uExposureScale", "uFilmic"};
   r.skinProg = r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshVertex}),
                       r.compile(GL_FRAGMENT_SHADER, {perFragment, kShadowLookup, kSkinFragment}), common);
   r.skinProg.loc["uSkinColor"] = r.gl.GetUniformLocation(r.skinProg.id, "uSkinColor");
@@ -696,6 +698,7 @@ Renderer::~Renderer() {
   r.gl.DeleteTextures(1, &r.white);
   r.releaseMesh(r.skin);
   r.releaseMesh(r.coat);
+  r.releaseMesh(r.ground);
   r.releaseTarget();
   r.releaseShadow();
   r.gl.DeleteProgram(r.depthProg.id);
@@ -909,6 +912,8 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     gl.Uniform1i(r.U(p, "uColorUv"), 0);
     gl.Uniform1i(r.U(p, "uIsCoat"), &p == &r.skinProg ? 0 : 1);
     gl.Uniform1i(r.U(p, "uShadows"), shadowsOn ? 1 : 0);
+    gl.Uniform1f(r.U(p, "uExposureScale"), std::exp2(std::clamp(s.exposure, -16.0f, 16.0f)));
+    gl.Uniform1i(r.U(p, "uFilmic"), s.filmic ? 1 : 0);
     gl.Uniform1i(r.U(p, "uShadowMap"), 3);
     if (shadowsOn) {
       gl.UniformMatrix4fv(r.U(p, "uLightViewProj"), 1, GL_FALSE, glm::value_ptr(r.shadow.viewProj));
@@ -955,6 +960,40 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     r.drawIndices(0, r.skin.indexCount);
     ++stats_.drawCalls;
     stats_.triangles += r.skin.indexCount / 3;
+  }
+  // The ground: a square 8 model radii wide centred under the model, drawn like the skin (it takes the
+  // key light's shadow; it is not in the shadow map, so it casts none).
+  glm::vec3 modelLo(0.0f), modelHi(0.0f);
+  if (s.ground && r.shadowBounds(modelLo, modelHi) && glm::length(s.groundNormal) > 0.0f) {
+    const glm::vec3 n = glm::normalize(s.groundNormal);
+    const glm::vec3 c = 0.5f * (modelLo + modelHi);
+    const float radius = std::max(0.5f * glm::length(modelHi - modelLo), 1e-6f);
+    float lowest = std::numeric_limits<float>::max();
+    for (int k = 0; k < 8; ++k)
+      lowest = std::min(lowest, glm::dot(glm::vec3(k & 1 ? modelHi.x : modelLo.x, k & 2 ? modelHi.y : modelLo.y,
+                                                   k & 4 ? modelHi.z : modelLo.z), n));
+    const glm::vec3 centre = c - (glm::dot(c, n) - lowest) * n;
+    const std::vector<float> key = {centre.x, centre.y, centre.z, n.x, n.y, n.z, radius};
+    if (key != r.groundKey) {
+      const glm::vec3 a = glm::normalize(std::abs(n.x) < 0.9f ? glm::cross(n, glm::vec3(1, 0, 0)) : glm::cross(n, glm::vec3(0, 1, 0)));
+      const glm::vec3 b = glm::cross(n, a);
+      TriMesh g;
+      const float h = 4.0f * radius;
+      for (const glm::vec2 q : {glm::vec2(-1, -1), glm::vec2(1, -1), glm::vec2(1, 1), glm::vec2(-1, 1)}) {
+        g.positions.push_back(centre + h * (q.x * a + q.y * b));
+        g.normals.push_back(n);
+      }
+      g.indices = {0, 1, 2, 0, 2, 3};
+      r.upload(r.ground, g, nullptr, true);
+      r.groundKey = key;
+    }
+    setCommon(r.skinProg);
+    gl.Uniform3f(r.U(r.skinProg, "uSkinColor"), s.groundColor.r, s.groundColor.g, s.groundColor.b);
+    gl.BindVertexArray(r.ground.vao);
+    r.applyDefaults(r.ground);
+    r.drawIndices(0, r.ground.indexCount);
+    ++stats_.drawCalls;
+    stats_.triangles += 2;
   }
   // The skin's depth, reduced to a grid of per-tile maxima, lets whole feathers hidden behind the
   // body skip rasterisation (conservative: a feather is dropped only if its bounding sphere's nearest

@@ -51,6 +51,24 @@ Camera sceneCamera(const pipeline::Scene& scene, const TriMesh& skin, const TriM
 
 std::vector<Light> sceneLights(const pipeline::Scene& scene) {
   std::vector<Light> out;
+  if (scene.render.lightRig == "studio") {
+    // Key, fill and rim around the camera's view: the key from the upper left of the camera (it casts
+    // the shadows), a cool fill from the right at about a third, and a rim from behind and above that
+    // outlines the silhouette.
+    const pipeline::CameraSpec& c = scene.camera;
+    glm::vec3 view = c.autoFrame ? v3(c.viewDir) : v3(c.target - c.eye);
+    if (!(glm::length(view) > 0.0f)) view = glm::vec3(0, 0, -1);
+    view = glm::normalize(view);
+    glm::vec3 up = v3(c.up);
+    glm::vec3 right = glm::cross(view, up);
+    if (!(glm::length(right) > 1e-6f)) right = glm::cross(view, std::abs(view.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
+    right = glm::normalize(right);
+    up = glm::cross(right, view);
+    out.push_back({glm::normalize(-0.6f * view + 0.8f * up - 0.5f * right), glm::vec3(1.0f, 0.96f, 0.90f)});
+    out.push_back({glm::normalize(-0.7f * view + 0.8f * right - 0.1f * up), glm::vec3(0.30f, 0.32f, 0.36f)});
+    out.push_back({glm::normalize(0.8f * view + 0.6f * up), glm::vec3(0.70f, 0.70f, 0.70f)});
+    return out;
+  }
   for (const auto& l : scene.lights) {
     Light x;
     x.direction = -v3(l.direction);  // scene: direction the light travels; renderer: toward the light
@@ -69,6 +87,12 @@ RenderSettings sceneSettings(const pipeline::Scene& scene, int width, int height
   s.skinColor = v3(scene.render.skinColor);
   s.shadows = scene.render.shadows;
   s.shadowStrength = static_cast<float>(scene.render.shadowStrength);
+  s.msaaSamples = scene.render.msaa;
+  s.exposure = static_cast<float>(scene.render.exposure);
+  s.filmic = scene.render.tone == "filmic";
+  s.ground = scene.render.ground;
+  s.groundNormal = glm::vec3(scene.camera.up);
+  s.groundColor = v3(scene.render.groundColor);
   return s;
 }
 

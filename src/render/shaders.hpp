@@ -107,6 +107,16 @@ float keyVisibility(vec4 shadowPos) {
                       texture(uShadowMap, vec3(p.xy + vec2(-h, h), p.z)) + texture(uShadowMap, vec3(p.xy + vec2(h, h), p.z)));
   return 1.0 - uShadowStrength * (1.0 - lit);
 }
+
+// Exposure and tone curve (RenderSettings::exposure, filmic), applied to skin and feather colours before
+// blending. Filmic: Narkowicz's fit of the ACES reference curve.
+uniform float uExposureScale;
+uniform int uFilmic;
+vec3 toneMap(vec3 c) {
+  c *= uExposureScale;
+  if (uFilmic != 0) c = clamp((c * (2.51 * c + 0.03)) / (c * (2.43 * c + 0.59) + 0.14), 0.0, 1.0);
+  return c;
+}
 )GLSL";
 
 // Shared by skin and coat. Attribute locations match renderer.cpp's Attr enum.
@@ -187,7 +197,7 @@ void main() {
   vec3 light = uAmbient;
   for (int i = 0; i < uLightCount; ++i)
     light += uLightColor[i] * max(dot(N, uLightDir[i]), 0.0) * (i == 0 ? keyVisibility(vShadowPos) : 1.0);
-  oColor = vec4(uSkinColor * light, 1.0);
+  oColor = vec4(toneMap(uSkinColor * light), 1.0);
 }
 )GLSL";
 
@@ -230,7 +240,7 @@ void main() {
   float visible = keyVisibility(vShadowPos);
   diffuse += keyDiffuse * visible;
   spec += keySpec * visible;
-  oColor = vec4(albedo * diffuse + spec * (1.0 - vSheath), a);
+  oColor = vec4(toneMap(albedo * diffuse + spec * (1.0 - vSheath)), a);
 }
 )GLSL";
 

@@ -688,3 +688,70 @@ TEST(RendererShadows, TheMapIsDrawnAgainOnlyWhenWhatCastsItChanges) {
   r.renderImage(frontCamera(), o.lights, o.settings(false));
   EXPECT_FALSE(r.lastStats().shadowMapRendered);
 }
+
+// ------------------------------------------------------------------ tone and ground (#29 item 3)
+
+// A white Lambert quad facing a unit front light, no ambient: linear output is the light, 2^exposure
+// scales it, and the filmic curve maps it through Narkowicz's ACES fit.
+TEST(RendererTone, ExposureAndFilmicCurveFollowTheirFormulas) {
+  Renderer r(context());
+  const TriMesh q = quad({0, 0, 0}, {0.6f, 0, 0}, {0, 0.6f, 0});
+  r.setCoat(q, {whole(q)});
+  r.setMaterials({lambert({1, 1, 1})});
+  auto value = [&](float exposure, bool filmic, float light) {
+    RenderSettings s = flatSettings(32);
+    s.exposure = exposure;
+    s.filmic = filmic;
+    return int(centre(r.renderImage(frontCamera(), {Light{{0, 0, 1}, glm::vec3(light)}}, s))[0]);
+  };
+  auto aces = [](double x) { return std::clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0); };
+  EXPECT_NEAR(value(0.0f, false, 0.5f), 128, 1);
+  EXPECT_NEAR(value(-1.0f, false, 0.5f), 64, 1);
+  EXPECT_EQ(value(1.0f, false, 0.75f), 255);  // linear clips
+  for (const float light : {0.1f, 0.5f, 1.0f, 2.0f}) EXPECT_NEAR(value(0.0f, true, light), 255 * aces(light), 1.5) << light;
+  EXPECT_LT(value(0.0f, true, 2.0f), 255);  // filmic keeps highlights below white
+}
+
+// A feather floating above the ground, lit from straight above: the ground under it is in its shadow,
+// the ground beside it is lit, and without `ground` the background shows there.
+TEST(RendererTone, TheGroundTakesTheModelsContactShadow) {
+  Renderer r(context());
+  r.setMaterials({lambert({1, 1, 1})});
+  // A horizontal feather 0.3 above the ground, which touches the lowest point of the bounds: a tiny
+  // second feather at y = 0 sets it.
+  TriMesh coat = quad({0, 0.3f, 0}, {0.3f, 0, 0}, {0, 0, 0.3f});
+  coat.append(quad({1.2f, 0.0f, 1.2f}, {0.01f, 0, 0}, {0, 0, 0.01f}));
+  std::vector<FeatherDrawRange> ranges{whole(coat, 0), whole(coat, 6)};
+  ranges[0].indexCount = 6;
+  r.setCoat(coat, ranges);
+  Camera cam;
+  cam.eye = {0.0f, 4.0f, 0.01f};
+  cam.target = {0, 0, 0};
+  cam.up = {0, 0, -1};
+  cam.zNear = 0.1f;
+  RenderSettings s = flatSettings(128);
+  s.background = {0, 0, 1, 1};
+  s.ambient = glm::vec3(0.1f);
+  s.shadows = true;
+  s.shadowStrength = 1.0f;
+  s.ground = true;
+  s.groundNormal = {0, 1, 0};
+  s.groundColor = glm::vec3(1.0f);
+  const std::vector<Light> fromAbove{Light{{0.0f, 1.0f, 0.0f}, glm::vec3(1.0f)}};
+  const Image img = r.renderImage(cam, fromAbove, s);
+  // Lit from above the shadow hides under the feather; tilted, it shows beside it.
+  const std::vector<Light> tilted{Light{glm::normalize(glm::vec3(1.0f, 2.0f, 0.0f)), glm::vec3(1.0f)}};
+  const Image t = r.renderImage(cam, tilted, s);
+  // The shadow is cast toward -x by 0.3 / 2 = 0.15 beyond the feather's edge at x = -0.3: sample x = -0.38.
+  auto at = [&](const Image& im, float x, float z) {
+    const glm::vec4 q = cam.projection(1.0f) * cam.view() * glm::vec4(x, 0.0f, z, 1.0f);
+    const int px = int((q.x / q.w * 0.5f + 0.5f) * 128), py = int((1.0f - (q.y / q.w * 0.5f + 0.5f)) * 128);
+    return int(im.pixel(px, py)[0]);
+  };
+  EXPECT_LT(at(t, -0.38f, 0.0f), at(t, -0.9f, 0.0f) / 2) << "contact shadow next to the feather";
+  EXPECT_GT(at(img, -0.9f, 0.0f), 200) << "lit ground";
+  s.ground = false;
+  const Image none = r.renderImage(cam, tilted, s);
+  EXPECT_EQ(at(none, -0.9f, 0.0f), 0) << "background (blue) without a ground";
+  EXPECT_EQ(int(none.pixel(64, 127)[2]), 255);
+}

@@ -171,3 +171,68 @@ TEST(SceneMaterials, TextureMappingFollowsTheFeatherFile) {
   JsonReader fr2(feather, "", "feather");
   EXPECT_FALSE(feather::featherToJson(feather::readFeather(fr2))["material"].contains("uv"));
 }
+
+// render.* keys of #29: read, checked (the element named), written back; the studio rig's three lights
+// sit where a look-dev user expects them around the camera (key above and on the camera's side, fill
+// on the other side, rim behind).
+TEST(SceneLook, RenderKeysRoundTripAndBadValuesNameTheKey) {
+  pipeline::Scene s = coatScene(false);
+  EXPECT_TRUE(s.render.shadows);
+  EXPECT_EQ(s.render.msaa, 4);
+  EXPECT_EQ(s.render.tone, "linear");
+  Json j = pipeline::sceneToJson(s, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
+  j["render"]["msaa"] = 8;
+  j["render"]["tone"] = "filmic";
+  j["render"]["exposure"] = -0.5;
+  j["render"]["light_rig"] = "studio";
+  j["render"]["ground"] = true;
+  j["render"]["ground_color"] = {0.5, 0.4, 0.3};
+  j["render"]["shadows"] = false;
+  j["render"]["shadow_strength"] = 0.25;
+  const pipeline::Scene t = pipeline::sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
+  EXPECT_EQ(t.render.msaa, 8);
+  EXPECT_EQ(t.render.tone, "filmic");
+  EXPECT_EQ(t.render.exposure, -0.5);
+  EXPECT_EQ(t.render.lightRig, "studio");
+  EXPECT_TRUE(t.render.ground);
+  EXPECT_EQ(t.render.groundColor, glm::dvec3(0.5, 0.4, 0.3));
+  EXPECT_FALSE(t.render.shadows);
+  EXPECT_EQ(t.render.shadowStrength, 0.25);
+  EXPECT_EQ(pipeline::sceneToJson(t, std::string(PTERYLA_DATA_DIR) + "/scene_test.json")["render"], j["render"]);
+  const RenderSettings rs = sceneSettings(t, 64, 64);
+  EXPECT_EQ(rs.msaaSamples, 8);
+  EXPECT_TRUE(rs.filmic);
+  EXPECT_FALSE(rs.shadows);
+  EXPECT_TRUE(rs.ground);
+  for (const auto& [key, value] : std::vector<std::pair<std::string, Json>>{
+           {"msaa", 3}, {"exposure", 9}, {"tone", "aces"}, {"light_rig", "three"}, {"shadow_strength", 1.5},
+           {"shadows", "yes"}, {"ground_color", {2, 0, 0}}}) {
+    Json bad = j;
+    bad["render"][key] = value;
+    try {
+      pipeline::sceneFromJson(bad, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
+      ADD_FAILURE() << key << " accepted " << value.dump();
+    } catch (const Error& e) {
+      EXPECT_NE(e.element().find("render." + key), std::string::npos) << key << ": " << e.element();
+    }
+  }
+}
+
+TEST(SceneLook, StudioRigPutsKeyFillAndRimAroundTheCamera) {
+  pipeline::Scene s = coatScene(false);
+  s.render.lightRig = "studio";
+  const glm::vec3 view = glm::normalize(glm::vec3(s.camera.target - s.camera.eye));
+  const glm::vec3 up = glm::vec3(s.camera.up);
+  const glm::vec3 right = glm::normalize(glm::cross(view, up));
+  const std::vector<Light> l = sceneLights(s);
+  ASSERT_EQ(l.size(), 3u);
+  auto dir = [&](int i) { return glm::normalize(l[size_t(i)].direction); };  // toward the light
+  EXPECT_LT(glm::dot(dir(0), view), 0.0f) << "key on the camera's side";
+  EXPECT_GT(glm::dot(dir(0), up), 0.3f) << "key above";
+  EXPECT_LT(glm::dot(dir(0), right), 0.0f) << "key from the left";
+  EXPECT_GT(glm::dot(dir(1), right), 0.3f) << "fill from the right";
+  EXPECT_LT(glm::length(l[1].color), 0.6f * glm::length(l[0].color)) << "fill weaker than key";
+  EXPECT_GT(glm::dot(dir(2), view), 0.3f) << "rim from behind";
+  s.render.lightRig = "scene";
+  EXPECT_EQ(sceneLights(s).size(), s.lights.size());
+}

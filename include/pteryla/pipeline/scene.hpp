@@ -36,6 +36,12 @@ struct RenderSpec {
   double ambient = 0.35;
   bool shadows = true;          // the first light casts coat and skin shadows (render::RenderSettings::shadows)
   double shadowStrength = 0.8;  // [0,1]: share of the key light removed in full shadow
+  int msaa = 4;                 // multisampling of rendered images: 0 (off), 2, 4 or 8 samples
+  double exposure = 0.0;        // stops, [-8, 8]: colours are scaled by 2^exposure before the tone curve
+  std::string tone = "linear";  // linear (clamp) | filmic (a smooth shoulder instead of clipping)
+  std::string lightRig = "scene";  // scene: `lights` | studio: key, fill and rim set from the camera
+  bool ground = false;          // a ground plane under the model that receives its shadow
+  glm::dvec3 groundColor{0.72, 0.72, 0.70};
 };
 
 struct Scene {

@@ -127,6 +127,17 @@ struct RenderSettings {
   bool shadows = false;
   int shadowMapSize = 2048;       // [64, 8192]
   float shadowStrength = 0.8f;    // [0, 1]
+  // Tone: skin and feather colours are scaled by 2^exposure, then clamped (linear) or passed through a
+  // filmic curve (Narkowicz's fit of the ACES reference: a toe, and a shoulder instead of clipping),
+  // before blending. The background is drawn as given.
+  float exposure = 0.0f;          // stops
+  bool filmic = false;
+  // A ground plane (opaque, Lambert, groundColor) facing groundNormal and touching the lowest point of
+  // the skin's and coat's bounding box along it, drawn around the model: it receives the key light's
+  // shadow (a contact shadow under the bird) and casts none.
+  bool ground = false;
+  glm::vec3 groundNormal{0.0f, 1.0f, 0.0f};
+  glm::vec3 groundColor{0.72f, 0.72f, 0.70f};
 };
 
 struct RenderStats {
