@@ -59,10 +59,12 @@ void PointGrid::build(const glm::dvec3* points, size_t count, double cell) {
 namespace {
 
 // A primitive's bounds, kept in slot order and partitioned in place (sequential memory at every level).
+// Its centroid is the box centre, recomputed where needed (the same arithmetic, a smaller record).
 struct PrimInfo {
   Box box;
-  glm::dvec3 centroid;
   uint32_t id;
+  double centroid(int axis) const { return 0.5 * (box.lo[axis] + box.hi[axis]); }
+  glm::dvec3 centroid() const { return 0.5 * (box.lo + box.hi); }
 };
 
 constexpr int kBins = 16;
@@ -73,18 +75,32 @@ constexpr int kMaxSahDepth = 48;
 // node is followed by its left subtree, then its right subtree, exactly as a serial depth-first build.
 constexpr uint32_t kParallelBuild = 8192;
 
+// A node's primitive bounds and centroid bounds. Unions of boxes are exact (min / max), so bounds a
+// parent gathered from its bins are the very values a pass over the child's primitives would give.
+struct NodeBounds {
+  Box bounds, centroids;
+};
+
 struct Builder {
   std::vector<PrimInfo>& info;  // slot order
 
   // Builds the subtree of slots [begin, end) and appends its nodes to `nodes` (indices in `nodes`).
-  uint32_t build(uint32_t begin, uint32_t end, int depth, std::vector<TriangleBvh::Node>& nodes) {
+  // `known`: the subtree's bounds when the parent has them (an SAH split), else computed here.
+  uint32_t build(uint32_t begin, uint32_t end, int depth, std::vector<TriangleBvh::Node>& nodes,
+                 const NodeBounds* known = nullptr) {
     const uint32_t ni = static_cast<uint32_t>(nodes.size());
     nodes.emplace_back();
-    Box bounds, cb;
-    for (uint32_t i = begin; i < end; ++i) {
-      bounds.add(info[i].box);
-      cb.add(info[i].centroid);
+    NodeBounds nb;
+    if (known) {
+      nb = *known;
+    } else {
+      for (uint32_t i = begin; i < end; ++i) {
+        nb.bounds.add(info[i].box);
+        nb.centroids.add(info[i].centroid());
+      }
     }
+    const Box& bounds = nb.bounds;
+    const Box& cb = nb.centroids;
     for (int k = 0; k < 3; ++k) {
       nodes[ni].lo[k] = static_cast<float>(bounds.lo[k]);
       nodes[ni].hi[k] = static_cast<float>(bounds.hi[k]);
@@ -105,17 +121,20 @@ struct Builder {
     if (ext.z > ext[axis]) axis = 2;
     uint32_t mid = begin;
     bool split = false;
+    NodeBounds childBounds[2];
+    bool childKnown = false;
     if (ext[axis] > 0 && depth < kMaxSahDepth) {
-      Box binBox[kBins];
+      Box binBox[kBins], binCentroids[kBins];
       uint32_t binCount[kBins] = {};
       const double scale = kBins / ext[axis];
       auto binOf = [&](const PrimInfo& p) {
-        const int b = static_cast<int>((p.centroid[axis] - cb.lo[axis]) * scale);
+        const int b = static_cast<int>((p.centroid(axis) - cb.lo[axis]) * scale);
         return std::min(std::max(b, 0), kBins - 1);
       };
       for (uint32_t i = begin; i < end; ++i) {
         const int b = binOf(info[i]);
         binBox[b].add(info[i].box);
+        binCentroids[b].add(info[i].centroid());
         ++binCount[b];
       }
       double rightArea[kBins];
@@ -149,6 +168,14 @@ struct Builder {
                                                    [&](const PrimInfo& p) { return binOf(p) < bestB; }) -
                                     info.begin());
         split = mid > begin && mid < end;
+        if (split) {
+          for (int b = 0; b < kBins; ++b) {
+            NodeBounds& c = childBounds[b < bestB ? 0 : 1];
+            c.bounds.add(binBox[b]);
+            c.centroids.add(binCentroids[b]);
+          }
+          childKnown = true;
+        }
       }
     }
     if (!split) {
@@ -156,13 +183,15 @@ struct Builder {
       mid = begin + count / 2;
       std::nth_element(info.begin() + begin, info.begin() + mid, info.begin() + end,
                        [&](const PrimInfo& a, const PrimInfo& b) {
-                         const double ca = a.centroid[axis], cb2 = b.centroid[axis];
+                         const double ca = a.centroid(axis), cb2 = b.centroid(axis);
                          return ca < cb2 || (ca == cb2 && a.id < b.id);
                        });
     }
+    const NodeBounds* leftKnown = childKnown ? &childBounds[0] : nullptr;
+    const NodeBounds* rightKnown = childKnown ? &childBounds[1] : nullptr;
     if (count < kParallelBuild) {
-      build(begin, mid, depth + 1, nodes);
-      const uint32_t right = build(mid, end, depth + 1, nodes);
+      build(begin, mid, depth + 1, nodes, leftKnown);
+      const uint32_t right = build(mid, end, depth + 1, nodes, rightKnown);
       nodes[ni].first = right;
       nodes[ni].count = 0;
       return ni;
@@ -170,8 +199,8 @@ struct Builder {
     // The two halves own disjoint slot ranges: the right one is built into its own array and
     // appended after the left one, with its inner nodes' right-child indices moved by the offset.
     std::vector<TriangleBvh::Node> rightNodes;
-    tbb::parallel_invoke([&] { build(begin, mid, depth + 1, nodes); },
-                         [&] { build(mid, end, depth + 1, rightNodes); });
+    tbb::parallel_invoke([&] { build(begin, mid, depth + 1, nodes, leftKnown); },
+                         [&] { build(mid, end, depth + 1, rightNodes, rightKnown); });
     const uint32_t offset = static_cast<uint32_t>(nodes.size());
     for (TriangleBvh::Node& n : rightNodes)
       if (n.count == 0) n.first += offset;
@@ -212,7 +241,6 @@ void TriangleBvh::buildNodes(size_t triangleCount) {
       PrimInfo& pi = info[t];
       pi.id = static_cast<uint32_t>(t);
       for (int c = 0; c < 3; ++c) pi.box.add(vertex(static_cast<uint32_t>(t), c));
-      pi.centroid = 0.5 * (pi.box.lo + pi.box.hi);
     }
   });
   nodes_.reserve(2 * triangleCount / kLeafSize + 1);
@@ -222,20 +250,7 @@ void TriangleBvh::buildNodes(size_t triangleCount) {
 }
 
 void TriangleBvh::setGroups(const uint32_t* groupOfTriangle) {
-  // Each slot's own box (float, rounded outward) for the pair traversal's filter: only pair queries use
-  // it, so it is made here rather than with every BVH.
-  primBoxes_.resize(prims_.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, prims_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k < r.end(); ++k) {
-      Box box;
-      for (int c = 0; c < 3; ++c) box.add(vertex(prims_[k], c));
-      PrimBox& pb = primBoxes_[k];
-      for (int a = 0; a < 3; ++a) {
-        pb.lo[a] = std::nextafter(static_cast<float>(box.lo[a]), -std::numeric_limits<float>::infinity());
-        pb.hi[a] = std::nextafter(static_cast<float>(box.hi[a]), std::numeric_limits<float>::infinity());
-      }
-    }
-  });
+  makePrimBoxes();
   slotGroup_.resize(prims_.size());
   for (size_t k = 0; k < prims_.size(); ++k) slotGroup_[k] = groupOfTriangle[prims_[k]];
   // Children follow their parent in nodes_, so one backward sweep sees both before the parent.
@@ -252,6 +267,23 @@ void TriangleBvh::setGroups(const uint32_t* groupOfTriangle) {
     }
     nodeGroup_[i] = g;
   }
+}
+
+void TriangleBvh::makePrimBoxes() {
+  // Each slot's own box (float, rounded outward) for the pair traversal's filter: only pair queries use
+  // it, so it is made here rather than with every BVH.
+  primBoxes_.resize(prims_.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, prims_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      Box box;
+      for (int c = 0; c < 3; ++c) box.add(vertex(prims_[k], c));
+      PrimBox& pb = primBoxes_[k];
+      for (int a = 0; a < 3; ++a) {
+        pb.lo[a] = std::nextafter(static_cast<float>(box.lo[a]), -std::numeric_limits<float>::infinity());
+        pb.hi[a] = std::nextafter(static_cast<float>(box.hi[a]), std::numeric_limits<float>::infinity());
+      }
+    }
+  });
 }
 
 std::vector<std::pair<uint32_t, uint32_t>> TriangleBvh::pairTasks(size_t minTasks) const {
@@ -294,40 +326,6 @@ double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a
   return glm::dot(e2, q) * inv;
 }
 
-bool TriangleBvh::anyHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax) const {
-  if (nodes_.empty()) return false;
-  glm::dvec3 inv;
-  for (int k = 0; k < 3; ++k) inv[k] = dir[k] != 0 ? 1.0 / dir[k] : std::copysign(1e300, dir[k] == 0 ? 1.0 : dir[k]);
-  uint32_t stack[128];
-  int sp = 0;
-  stack[sp++] = 0;
-  while (sp > 0) {
-    const Node& n = nodes_[stack[--sp]];
-    double t0 = tMin, t1 = tMax;
-    bool miss = false;
-    for (int k = 0; k < 3 && !miss; ++k) {
-      double ta = (n.lo[k] - origin[k]) * inv[k], tb = (n.hi[k] - origin[k]) * inv[k];
-      if (ta > tb) std::swap(ta, tb);
-      t0 = std::max(t0, ta);
-      t1 = std::min(t1, tb);
-      miss = t0 > t1;
-    }
-    if (miss) continue;
-    if (n.count > 0) {
-      for (uint32_t k = 0; k < n.count; ++k) {
-        const uint32_t t = prims_[n.first + k];
-        const double h = rayTriangle(origin, dir, vertex(t, 0), vertex(t, 1), vertex(t, 2));
-        if (h > tMin && h <= tMax) return true;
-      }
-    } else {
-      const uint32_t ni = static_cast<uint32_t>(&n - nodes_.data());
-      stack[sp++] = n.first;
-      stack[sp++] = ni + 1;
-    }
-  }
-  return false;
-}
-
 namespace {
 
 double boxDist2(const TriangleBvh::Node& n, const glm::dvec3& p) {
@@ -345,13 +343,14 @@ int64_t TriangleBvh::nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& b
   int64_t best = -1;
   double bestD = maxDist2;
   if (nodes_.empty()) return best;
-  uint32_t stack[128];
+  // Nodes with their box distance, computed once (when the parent ranks its children).
+  std::pair<uint32_t, double> stack[128];
   int sp = 0;
-  stack[sp++] = 0;
+  stack[sp++] = {0u, boxDist2(nodes_[0], p)};
   while (sp > 0) {
-    const uint32_t ni = stack[--sp];
+    const auto [ni, nd] = stack[--sp];
     const Node& n = nodes_[ni];
-    if (boxDist2(n, p) > bestD) continue;
+    if (nd > bestD) continue;
     if (n.count > 0) {
       for (uint32_t k = 0; k < n.count; ++k) {
         const uint32_t t = prims_[n.first + k];
@@ -371,11 +370,11 @@ int64_t TriangleBvh::nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& b
       const double dl = boxDist2(nodes_[l], p), dr = boxDist2(nodes_[r], p);
       // Push the farther child first so the nearer one is visited next.
       if (dl <= dr) {
-        stack[sp++] = r;
-        stack[sp++] = l;
+        stack[sp++] = {r, dr};
+        stack[sp++] = {l, dl};
       } else {
-        stack[sp++] = l;
-        stack[sp++] = r;
+        stack[sp++] = {l, dl};
+        stack[sp++] = {r, dr};
       }
     }
   }

@@ -1,12 +1,14 @@
 #pragma once
 // Spatial helpers shared by packing and the coat checker (internal to pteryla_coat):
 //  - PointGrid: uniform grid over points (counting-sort CSR, deterministic), box queries;
-//  - TriangleBvh: binned-SAH bounding volume hierarchy over triangles, box / ray / nearest queries;
+//  - TriangleBvh: binned-SAH bounding volume hierarchy over triangles, self-pair / tree-pair / ray /
+//    nearest queries;
 //  - trianglesIntersect: Moeller's interval test (J. Graphics Tools 2(2), 1997) in double precision
 //    with a separate 2D test for coplanar triangles.
 #include <glm/common.hpp>
 #include <glm/vec3.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -102,6 +104,10 @@ class PointGrid {
   std::vector<uint32_t> offsets_, items_;
 };
 
+// Ray / triangle (Moeller-Trumbore); returns t or a negative value.
+double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,
+                   const glm::dvec3& c);
+
 // BVH over triangles given as positions + index triples (float, like TriMesh).
 class TriangleBvh {
  public:
@@ -153,8 +159,58 @@ class TriangleBvh {
       }
     }
   }
+  // Pairs between two BVHs (e.g. two feathers'): calls f(t, u), t of this BVH and u of `other` (indices
+  // as each was built), once for every pair whose boxes overlap. Both need makePrimBoxes() first.
+  template <class F>
+  void overlappingPairs(const TriangleBvh& other, F&& f) const {
+    if (nodes_.empty() || other.nodes_.empty()) return;
+    std::vector<std::pair<uint32_t, uint32_t>> stack;
+    if (boxesOverlap(nodes_[0].lo, nodes_[0].hi, other.nodes_[0].lo, other.nodes_[0].hi)) stack.emplace_back(0, 0);
+    while (!stack.empty()) {
+      const auto [a, b] = stack.back();
+      stack.pop_back();
+      const Node &na = nodes_[a], &nb = other.nodes_[b];
+      if (na.count > 0 && nb.count > 0) {
+        for (uint32_t i = 0; i < na.count; ++i) {
+          const PrimBox& pa = primBoxes_[na.first + i];
+          for (uint32_t j = 0; j < nb.count; ++j) {
+            const PrimBox& pb = other.primBoxes_[nb.first + j];
+            if (boxesOverlap(pa.lo, pa.hi, pb.lo, pb.hi)) f(prims_[na.first + i], other.prims_[nb.first + j]);
+          }
+        }
+        continue;
+      }
+      // Split the larger inner node (a leaf is never split).
+      const bool splitA = nb.count > 0 || (na.count == 0 && area(na) >= area(nb));
+      if (splitA) {
+        for (uint32_t c : {a + 1, na.first})
+          if (boxesOverlap(nodes_[c].lo, nodes_[c].hi, nb.lo, nb.hi)) stack.emplace_back(c, b);
+      } else {
+        for (uint32_t c : {b + 1, nb.first})
+          if (boxesOverlap(na.lo, na.hi, other.nodes_[c].lo, other.nodes_[c].hi)) stack.emplace_back(a, c);
+      }
+    }
+  }
+  // Each slot's own box for the pair queries (setGroups() makes them too).
+  void makePrimBoxes();
+  // The bounds of everything in the BVH (float, rounded outward); false when empty.
+  bool bounds(glm::vec3& lo, glm::vec3& hi) const {
+    if (nodes_.empty()) return false;
+    lo = glm::vec3(nodes_[0].lo[0], nodes_[0].lo[1], nodes_[0].lo[2]);
+    hi = glm::vec3(nodes_[0].hi[0], nodes_[0].hi[1], nodes_[0].hi[2]);
+    return true;
+  }
   // Any triangle hit by the ray origin + t dir, t in (tMin, tMax]?
-  bool anyHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax) const;
+  bool anyHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax) const {
+    return anyLeafHit(origin, dir, tMin, tMax, [&](uint32_t t) {
+      const double h = rayTriangle(origin, dir, vertex(t, 0), vertex(t, 1), vertex(t, 2));
+      return h > tMin && h <= tMax;
+    });
+  }
+  // The traversal of anyHit() with another test for what a leaf holds: true as soon as hit(t) is true
+  // for a primitive t in a leaf the ray meets.
+  template <class H>
+  bool anyLeafHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax, H&& hit) const;
   // Nearest triangle to p (squared distance <= maxDist2); returns -1 when none, else the triangle and
   // writes the closest point's barycentric coordinates.
   int64_t nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& bary, double& dist2) const;
@@ -163,6 +219,10 @@ class TriangleBvh {
   struct PrimBox {
     float lo[3], hi[3];
   };
+  static float area(const Node& n) {
+    const float dx = n.hi[0] - n.lo[0], dy = n.hi[1] - n.lo[1], dz = n.hi[2] - n.lo[2];
+    return dx * dy + dy * dz + dz * dx;
+  }
   static bool boxesOverlap(const float* alo, const float* ahi, const float* blo, const float* bhi) {
     return alo[0] <= bhi[0] && blo[0] <= ahi[0] && alo[1] <= bhi[1] && blo[1] <= ahi[1] && alo[2] <= bhi[2] &&
            blo[2] <= ahi[2];
@@ -188,10 +248,6 @@ class TriangleBvh {
       return;
     }
     const Node& nb = nodes_[b];
-    auto area = [](const Node& n) {
-      const float dx = n.hi[0] - n.lo[0], dy = n.hi[1] - n.lo[1], dz = n.hi[2] - n.lo[2];
-      return dx * dy + dy * dz + dz * dx;
-    };
     const bool splitA = nb.count > 0 || (na.count == 0 && area(na) >= area(nb));
     const uint32_t keep = splitA ? b : a, inner = splitA ? a : b;
     const Node& k = nodes_[keep];
@@ -208,12 +264,40 @@ class TriangleBvh {
   std::vector<uint32_t> prims_;
 };
 
+template <class H>
+bool TriangleBvh::anyLeafHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax, H&& hit) const {
+  if (nodes_.empty()) return false;
+  glm::dvec3 inv;
+  for (int k = 0; k < 3; ++k) inv[k] = dir[k] != 0 ? 1.0 / dir[k] : std::copysign(1e300, dir[k] == 0 ? 1.0 : dir[k]);
+  uint32_t stack[128];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const Node& n = nodes_[stack[--sp]];
+    double t0 = tMin, t1 = tMax;
+    bool miss = false;
+    for (int k = 0; k < 3 && !miss; ++k) {
+      double ta = (n.lo[k] - origin[k]) * inv[k], tb = (n.hi[k] - origin[k]) * inv[k];
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+      miss = t0 > t1;
+    }
+    if (miss) continue;
+    if (n.count > 0) {
+      for (uint32_t k = 0; k < n.count; ++k)
+        if (hit(prims_[n.first + k])) return true;
+    } else {
+      const uint32_t ni = static_cast<uint32_t>(&n - nodes_.data());
+      stack[sp++] = n.first;
+      stack[sp++] = ni + 1;
+    }
+  }
+  return false;
+}
+
 // Do the closed triangles (a0,a1,a2) and (b0,b1,b2) share a point? Degenerate triangles never intersect.
 bool trianglesIntersect(const glm::dvec3& a0, const glm::dvec3& a1, const glm::dvec3& a2, const glm::dvec3& b0,
                         const glm::dvec3& b1, const glm::dvec3& b2);
-
-// Ray / triangle (Moeller-Trumbore); returns t or a negative value.
-double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,
-                   const glm::dvec3& c);
 
 }  // namespace pteryla::coat::detail
