@@ -1,7 +1,7 @@
 // Independent interpenetration and coverage check of a feather coat at full geometry (Streit 2003, 6.3.4
 // and 9.1.2 state the packing's goal: no feather-skin or feather-feather interpenetration; Figure 9.17
 // shows where the height-field method can fail). Uses only the coat's triangles and the skin:
-// Moeller's triangle-triangle test over a BVH, pseudo-normal signed distance (Baerentzen & Aanaes, "Signed
+// Moeller's triangle-triangle test between the BVHs of feathers whose bounds meet, pseudo-normal signed distance (Baerentzen & Aanaes, "Signed
 // distance computation using the angle weighted pseudonormal", IEEE TVCG 11(3), 2005), and ray casting
 // along the skin normal for coverage.
 #include "pteryla/coat/check.hpp"
@@ -10,12 +10,12 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
 #include "pteryla/core/error.hpp"
@@ -34,45 +34,154 @@ uint32_t triFeather(const TriMesh& m, size_t t) {
   return m.featherId.empty() ? 0u : m.featherId[m.indices[3 * t]];
 }
 
+// Reports `fraction` of the check (scaled into [lo, hi]) on the calling thread; false = stop.
+struct Progress {
+  const ProgressFn* fn = nullptr;
+  double lo = 0, hi = 1;
+  bool operator()(double fraction) const {
+    return !fn || report(*fn, "check", lo + (hi - lo) * std::clamp(fraction, 0.0, 1.0));
+  }
+  Progress part(double a, double b) const { return {fn, lo + (hi - lo) * a, lo + (hi - lo) * b}; }
+};
+
+// Parallel work over [0, n) cut into batches, with a progress report after each: a cancelled check
+// stops within one batch. Returns false when cancelled.
+template <class F>
+bool batched(size_t n, size_t grain, const Progress& progress, F&& f) {
+  const size_t batches = progress.fn ? std::min<size_t>(32, std::max<size_t>(1, n / std::max<size_t>(1, 4 * grain))) : 1;
+  for (size_t b = 0; b < batches; ++b) {
+    const size_t begin = n * b / batches, end = n * (b + 1) / batches;
+    if (begin < end) tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, grain), f);
+    if (!progress(double(b + 1) / double(batches))) return false;
+  }
+  return true;
+}
+
+// The coat's triangles grouped by feather, a BVH per feather (small trees, built in parallel) and one
+// over the feathers' bounds; shared by the pair search and the coverage rays. Intersecting pairs are
+// searched only between feathers whose bounds meet, tree against tree: exactly the triangle pairs of
+// different feathers whose boxes overlap, the candidates a single BVH over the coat would give.
+struct CoatBvh {
+  const TriMesh& coat;
+  std::vector<uint32_t> order;     // triangles by feather (ascending within one)
+  std::vector<uint32_t> begin;     // per group: its first slot in order; groups.size() + 1 entries
+  std::vector<uint32_t> featherOf; // per group
+  std::vector<uint32_t> indices;   // order's index triples, each feather's contiguous
+  std::vector<detail::TriangleBvh> trees;
+  std::vector<glm::dvec3> boxCorners;  // per group lo, hi: the feather tree's bounds
+  std::vector<uint32_t> boxIndices;    // (lo, hi, lo): a "triangle" whose box is the feather's bounds
+  detail::TriangleBvh top;
+
+  explicit CoatBvh(const TriMesh& m) : coat(m) {
+    const size_t nt = m.triangleCount();
+    order.resize(nt);
+    std::vector<uint32_t> f(nt);
+    for (size_t t = 0; t < nt; ++t) {
+      f[t] = triFeather(m, t);
+      order[t] = static_cast<uint32_t>(t);
+    }
+    // The coat mesh keeps each feather's triangles together; anything else is sorted by feather.
+    bool grouped = true;
+    {
+      std::vector<uint32_t> runs;  // the feather of each run of equal feathers
+      for (size_t t = 0; t < nt; ++t)
+        if (t == 0 || f[t] != f[t - 1]) runs.push_back(f[t]);
+      std::sort(runs.begin(), runs.end());
+      grouped = std::adjacent_find(runs.begin(), runs.end()) == runs.end();
+    }
+    if (!grouped) std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return f[a] < f[b]; });
+    for (size_t k = 0; k < nt; ++k)
+      if (k == 0 || f[order[k]] != f[order[k - 1]]) {
+        begin.push_back(static_cast<uint32_t>(k));
+        featherOf.push_back(f[order[k]]);
+      }
+    begin.push_back(static_cast<uint32_t>(nt));
+    indices.resize(3 * nt);
+    for (size_t k = 0; k < nt; ++k)
+      for (int c = 0; c < 3; ++c) indices[3 * k + c] = m.indices[3 * static_cast<size_t>(order[k]) + c];
+    const size_t ng = featherOf.size();
+    trees.resize(ng);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ng, 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t g = r.begin(); g < r.end(); ++g) {
+        trees[g].build(m.positions.data(), indices.data() + 3 * static_cast<size_t>(begin[g]), begin[g + 1] - begin[g]);
+        trees[g].makePrimBoxes();
+      }
+    });
+    boxCorners.resize(2 * ng);
+    boxIndices.resize(3 * ng);
+    for (size_t g = 0; g < ng; ++g) {
+      glm::vec3 lo(0), hi(0);
+      trees[g].bounds(lo, hi);  // a group has a triangle
+      boxCorners[2 * g] = glm::dvec3(lo);
+      boxCorners[2 * g + 1] = glm::dvec3(hi);
+      const uint32_t i = static_cast<uint32_t>(2 * g);
+      boxIndices[3 * g] = i;
+      boxIndices[3 * g + 1] = i + 1;
+      boxIndices[3 * g + 2] = i;
+    }
+    top.build(boxCorners.data(), boxIndices.data(), ng);
+    top.makePrimBoxes();
+  }
+  size_t groups() const { return featherOf.size(); }
+  uint32_t triangle(size_t group, uint32_t local) const { return order[begin[group] + local]; }
+  // Pairs of groups whose bounds meet (g < h), sorted.
+  std::vector<std::pair<uint32_t, uint32_t>> meetingGroups() const {
+    std::vector<std::pair<uint32_t, uint32_t>> out;
+    top.overlappingPairs(top, [&](uint32_t g, uint32_t h) {
+      if (g < h) out.emplace_back(g, h);
+    });
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+  bool anyHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax) const {
+    return top.anyLeafHit(origin, dir, tMin, tMax, [&](uint32_t g) { return trees[g].anyHit(origin, dir, tMin, tMax); });
+  }
+  glm::dvec3 vertex(uint32_t t, int c) const { return dvec3(coat.positions[coat.indices[3 * static_cast<size_t>(t) + c]]); }
+};
+
 // Counts intersecting triangle pairs of different feathers; with `attribution`, also lists the feather
-// pair of every intersecting triangle pair (as (a << 32 | b), a < b, unsorted).
-size_t intersectingPairs(const TriMesh& coat, std::vector<uint64_t>* attribution = nullptr,
-                         std::vector<uint64_t>* triangles = nullptr) {
-  const size_t nt = coat.triangleCount();
-  if (nt < 2) return 0;
-  detail::TriangleBvh bvh;
-  bvh.build(coat.positions.data(), coat.indices.data(), nt);
-  std::vector<uint32_t> featherOf(nt);
-  for (size_t t = 0; t < nt; ++t) featherOf[t] = triFeather(coat, t);
-  bvh.setGroups(featherOf.data());  // no pair inside one feather is ever visited
-  // A dual traversal of the BVH against itself, cut into independent node pairs for the threads: each
-  // pair of triangles with overlapping boxes is visited once (t < u), then Moeller's test decides.
-  const std::vector<std::pair<uint32_t, uint32_t>> tasks = bvh.pairTasks(1024);
+// pair of every intersecting triangle pair (as (a << 32 | b), a < b, unsorted). nullopt = cancelled.
+std::optional<size_t> intersectingPairs(const CoatBvh& cb, std::vector<uint64_t>* attribution = nullptr,
+                                        std::vector<uint64_t>* triangles = nullptr, const Progress& progress = {}) {
+  // Feathers whose bounds meet, then each such pair's trees against each other: every pair of triangles
+  // of different feathers with overlapping boxes is visited once, and Moeller's test (always on the
+  // lower triangle index first) decides.
+  const std::vector<std::pair<uint32_t, uint32_t>> tasks = cb.meetingGroups();
   tbb::combinable<std::vector<uint64_t>> found;
-  const size_t total = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, tasks.size(), 1), size_t(0),
-      [&](const tbb::blocked_range<size_t>& r, size_t acc) {
-        std::vector<uint64_t>* mine = attribution || triangles ? &found.local() : nullptr;
-        for (size_t k = r.begin(); k < r.end(); ++k) {
-          bvh.overlappingPairs(tasks[k], [&](uint32_t t, uint32_t u) {
-            const uint32_t ft = featherOf[t], fu = featherOf[u];
-            if (detail::trianglesIntersect(bvh.vertex(t, 0), bvh.vertex(t, 1), bvh.vertex(t, 2), bvh.vertex(u, 0),
-                                           bvh.vertex(u, 1), bvh.vertex(u, 2))) {
-              ++acc;
-              if (mine)
-                mine->push_back(triangles ? (uint64_t(t) << 32) | u : (uint64_t(std::min(ft, fu)) << 32) | std::max(ft, fu));
-            }
-          });
+  tbb::combinable<size_t> count([] { return size_t(0); });
+  const bool done = batched(tasks.size(), 16, progress, [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<uint64_t>* mine = attribution || triangles ? &found.local() : nullptr;
+    size_t acc = 0;
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const auto [g, h] = tasks[k];
+      const uint32_t fg = cb.featherOf[g], fh = cb.featherOf[h];
+      const uint64_t featherKey = (uint64_t(std::min(fg, fh)) << 32) | std::max(fg, fh);
+      cb.trees[g].overlappingPairs(cb.trees[h], [&](uint32_t a, uint32_t b) {
+        uint32_t t = cb.triangle(g, a), u = cb.triangle(h, b);
+        if (u < t) std::swap(t, u);
+        if (detail::trianglesIntersect(cb.vertex(t, 0), cb.vertex(t, 1), cb.vertex(t, 2), cb.vertex(u, 0),
+                                       cb.vertex(u, 1), cb.vertex(u, 2))) {
+          ++acc;
+          if (mine) mine->push_back(triangles ? (uint64_t(t) << 32) | u : featherKey);
         }
-        return acc;
-      },
-      [](size_t a, size_t b) { return a + b; });
+      });
+    }
+    count.local() += acc;
+  });
+  if (!done) return std::nullopt;
   if (std::vector<uint64_t>* out = triangles ? triangles : attribution) {
     out->clear();
     found.combine_each([&](const std::vector<uint64_t>& v) { out->insert(out->end(), v.begin(), v.end()); });
     if (triangles) std::sort(out->begin(), out->end());
   }
-  return total;
+  return count.combine([](size_t a, size_t b) { return a + b; });
+}
+
+size_t intersectingPairs(const TriMesh& coat, std::vector<uint64_t>* attribution = nullptr,
+                         std::vector<uint64_t>* triangles = nullptr) {
+  if (coat.triangleCount() < 2) return 0;
+  const CoatBvh cb(coat);
+  return *intersectingPairs(cb, attribution, triangles);
 }
 
 std::vector<FeatherPairCount> groupPairs(std::vector<uint64_t>& keys) {
@@ -138,13 +247,15 @@ SkinSign buildSign(const SkinMesh& s) {
 
 // Coat vertices inside (below) the skin: the nearest skin point's angle-weighted pseudo-normal points
 // away from the vertex; vertices within their feather's base radius and within tol of the skin are not.
+// Empty when cancelled.
 std::vector<uint8_t> insideSkin(const SkinMesh& skin, const SkinSign& sign, const TriMesh& coat, const CheckOptions& o,
-                          double tol) {
+                                double tol, const Progress& progress = {}) {
   detail::TriangleBvh sb;
   sb.build(skin.positions.data(), sign.flat.data(), skin.faces.size());
   const size_t nv = coat.positions.size();
   std::vector<uint8_t> bad(nv, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, nv, 512), [&](const tbb::blocked_range<size_t>& r) {
+  const bool done = batched(nv, 512, progress, [&](const tbb::blocked_range<size_t>& r) {
+    int64_t last = -1;  // the previous vertex's nearest face: a neighbour's, usually near this one's
     for (size_t v = r.begin(); v < r.end(); ++v) {
       const dvec3 p(coat.positions[v]);
       if (!o.featherOrigins.empty() && !coat.featherId.empty()) {
@@ -153,7 +264,18 @@ std::vector<uint8_t> insideSkin(const SkinMesh& skin, const SkinSign& sign, cons
       }
       glm::dvec3 bary;
       double d2 = 0;
-      const int64_t f = sb.nearest(p, std::numeric_limits<double>::infinity(), bary, d2);
+      // The distance to the last vertex's face bounds the search (nearest() computes it the same way,
+      // keeps faces at exactly that distance and breaks ties by index), so the answer is the one of
+      // an unbounded search, found sooner.
+      double bound = std::numeric_limits<double>::infinity();
+      if (last >= 0) {
+        const auto& t = skin.faces[static_cast<size_t>(last)];
+        const dvec3 d = closestPointOnTriangle(p, skin.positions[t[0]], skin.positions[t[1]], skin.positions[t[2]]) - p;
+        bound = glm::dot(d, d);
+      }
+      int64_t f = sb.nearest(p, bound, bary, d2);
+      if (f < 0 && last >= 0) f = sb.nearest(p, std::numeric_limits<double>::infinity(), bary, d2);
+      last = f;
       if (f < 0 || d2 <= tol * tol) continue;
       const auto& t = skin.faces[static_cast<size_t>(f)];
       const dvec3 q = bary.x * skin.positions[t[0]] + bary.y * skin.positions[t[1]] + bary.z * skin.positions[t[2]];
@@ -173,6 +295,7 @@ std::vector<uint8_t> insideSkin(const SkinMesh& skin, const SkinSign& sign, cons
       if (glm::dot(p - q, n) < 0) bad[v] = 1;
     }
   });
+  if (!done) bad.clear();
   return bad;
 }
 
@@ -184,6 +307,22 @@ size_t countIntersectingPairs(const TriMesh& coat, int threads) {
     return arena.execute([&] { return intersectingPairs(coat); });
   }
   return intersectingPairs(coat);
+}
+
+std::optional<size_t> countIntersectingPairs(const TriMesh& coat, const ProgressFn& progress, int threads) {
+  std::optional<size_t> n;
+  detail::inArena(threads, [&] {
+    const Progress whole{progress ? &progress : nullptr, 0, 1};
+    if (!whole(0)) return;
+    if (coat.triangleCount() < 2) {
+      n = whole(1) ? std::optional<size_t>(0) : std::nullopt;
+      return;
+    }
+    const CoatBvh cb(coat);
+    if (!whole.part(0, 0.4)(1)) return;
+    n = intersectingPairs(cb, nullptr, nullptr, whole.part(0.4, 1));
+  });
+  return n;
 }
 
 std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat) {
@@ -221,23 +360,42 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
     throw Error("featherOrigins and featherBaseRadius differ in size", {}, "featherBaseRadius");
   CheckResult res;
   res.coatTriangles = coat.triangleCount();
+  const bool skinParts = (o.penetrations || o.coverage) && !skin.faces.empty();
+  const bool coverage = skinParts && o.coverage && o.coverageSamples > 0;
+  // Progress over the parts by their rough cost (one BVH over the coat for the pairs and the coverage
+  // rays, the pair search, one nearest-skin query per coat vertex, the rays).
+  const double wBuild = o.intersections || coverage ? 3 : 0, wPairs = o.intersections ? 4 : 0;
+  const double wPen = skinParts && o.penetrations ? 3 : 0, wCov = coverage ? 1 : 0;
+  const double wAll = std::max(1.0, wBuild + wPairs + wPen + wCov);
+  const Progress whole{o.progress ? &o.progress : nullptr, 0, 1};
+  double at = 0;
+  auto next = [&](double w) {
+    const Progress p = whole.part(at / wAll, (at + w) / wAll);
+    at += w;
+    return p;
+  };
   auto body = [&] {
+    if (!whole(0)) return;
+    std::optional<CoatBvh> cb;
+    if (o.intersections || coverage) {
+      cb.emplace(coat);
+      if (!next(wBuild)(1)) return;
+    }
     if (o.intersections) {
-      if (o.attribute) {
-        std::vector<uint64_t> keys;
-        res.intersectingPairs = intersectingPairs(coat, &keys);
-        res.featherPairs = groupPairs(keys);
-      } else {
-        res.intersectingPairs = intersectingPairs(coat);
-      }
+      std::vector<uint64_t> keys;
+      const std::optional<size_t> pairs = intersectingPairs(*cb, o.attribute ? &keys : nullptr, nullptr, next(wPairs));
+      if (!pairs) return;
+      res.intersectingPairs = *pairs;
+      if (o.attribute) res.featherPairs = groupPairs(keys);
     }
     const double diag = diagonal(skin);
     const double tol = o.skinTolerance > 0 ? o.skinTolerance : 1e-6 * diag;
-    if ((o.penetrations || o.coverage) && !skin.faces.empty()) {
+    if (skinParts) {
       const SkinSign sign = buildSign(skin);
       if (o.penetrations) {
         const size_t nv = coat.positions.size();
-        const std::vector<uint8_t> bad = insideSkin(skin, sign, coat, o, tol);
+        const std::vector<uint8_t> bad = insideSkin(skin, sign, coat, o, tol, next(wPen));
+        if (bad.size() != nv) return;
         res.samplePoints = nv;
         std::vector<uint8_t> featherBad;
         for (size_t v = 0; v < nv; ++v) {
@@ -254,7 +412,7 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
         for (uint32_t f = 0; f < featherBad.size(); ++f)
           if (featherBad[f]) res.penetratingFeathers.push_back(f);
       }
-      if (o.coverage && o.coverageSamples > 0) {
+      if (coverage) {
         std::vector<uint32_t> faces = tractFaces;
         if (faces.empty())
           for (uint32_t f = 0; f < skin.faces.size(); ++f) faces.push_back(f);
@@ -264,15 +422,14 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
           acc += skin.faceAreas[faces[k]];
           cdf[k] = acc;
         }
-        detail::TriangleBvh cb;
-        cb.build(coat.positions.data(), coat.indices.data(), coat.triangleCount());
+        const CoatBvh& bvh = *cb;
         const double off = o.rayOffset > 0 ? o.rayOffset : 1e-6 * diag;
         const double tMax = o.maxRayDistance > 0 ? o.maxRayDistance : std::numeric_limits<double>::infinity();
         const size_t ns = acc > 0 ? o.coverageSamples : 0;
         std::atomic<size_t> covered{0};
         std::vector<std::atomic<uint32_t>> faceSamples(o.attribute ? skin.faces.size() : 0),
             faceUncovered(o.attribute ? skin.faces.size() : 0);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, ns, 256), [&](const tbb::blocked_range<size_t>& r) {
+        const bool done = batched(ns, 256, next(wCov), [&](const tbb::blocked_range<size_t>& r) {
           size_t hits = 0;
           for (size_t s = r.begin(); s < r.end(); ++s) {
             const double x = hashUniform(o.seed, s, 0) * acc;
@@ -284,7 +441,7 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
             const dvec3 bary(1 - a - b, a, b);
             const dvec3 p = pointAt(skin, f, bary);
             const dvec3 n = normalAt(skin, f, bary);
-            const bool hit = cb.anyHit(p + off * skin.faceNormals[f], n, 0.0, tMax);
+            const bool hit = bvh.anyHit(p + off * skin.faceNormals[f], n, 0.0, tMax);
             if (hit) ++hits;
             if (o.attribute) {
               faceSamples[f].fetch_add(1, std::memory_order_relaxed);
@@ -293,6 +450,7 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
           }
           covered += hits;
         });
+        if (!done) return;
         if (o.attribute) {
           res.faceSamples.resize(skin.faces.size());
           res.faceUncovered.resize(skin.faces.size());
@@ -306,13 +464,10 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
         res.coverage = ns > 0 ? static_cast<double>(res.coveredSamples) / ns : 0.0;
       }
     }
+    res.complete = true;
   };
-  if (o.threads >= 1) {
-    tbb::task_arena arena(o.threads);
-    arena.execute(body);
-  } else {
-    body();
-  }
+  detail::inArena(o.threads, body);
+  if (res.complete) whole(1);
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

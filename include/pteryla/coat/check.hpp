@@ -2,7 +2,8 @@
 // An independent check of a packed coat at full geometry (it does not trust the packer, Streit 2003,
 // 6.3.4 / 9.1.2 claims "no feather-model or feather-feather interpenetrations"):
 //  - intersecting_pairs: pairs of triangles of different feathers that intersect (BVH + Moeller's
-//    triangle-triangle test in double precision, parallel);
+//    triangle-triangle test in double precision, parallel; one BVH over the coat serves the pair search
+//    and the coverage rays, and subtrees of one feather are never paired);
 //  - skin_penetrations: coat vertices (barb and shaft samples) below the skin: the sign of the offset to
 //    the nearest skin point against the angle-weighted pseudo-normal of the nearest feature, which is
 //    "inside" for closed meshes and "below the local surface" for open ones (points whose nearest skin
@@ -12,10 +13,12 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/skin.hpp"
+#include "pteryla/core/progress.hpp"
 #include "pteryla/core/trimesh.hpp"
 
 namespace pteryla::coat {
@@ -37,6 +40,11 @@ struct CheckOptions {
   // Diagnostics: also list which feathers the intersecting pairs and skin penetrations belong to
   // (CheckResult::featherPairs, featherPenetrations). The counts are the same either way.
   bool attribute = false;
+  // Called on the calling thread with ("check", fraction of the work done), several times per part
+  // (the pair search, the skin test, the coverage rays). Returning false stops the check within a
+  // fraction of a part: the result then has complete = false and holds only the parts finished.
+  // An exception thrown by it leaves check() the same way.
+  ProgressFn progress;
 };
 
 // Intersecting triangle pairs between two feathers (a < b): `pairs` of their triangles intersect.
@@ -54,6 +62,7 @@ struct CheckResult {
   double coverage = 0;                     // [0,1]
   size_t coverageSamples = 0, coveredSamples = 0;
   double seconds = 0;
+  bool complete = false;                   // false: CheckOptions::progress asked to stop
   // CheckOptions::attribute only: per pair of feathers the intersecting triangle pairs (sorted by a, b;
   // the counts sum to intersectingPairs), and per featherId the penetrating vertices (sums to
   // skinPenetrations; sized to the largest featherId + 1).
@@ -69,6 +78,8 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
 
 // Only the intersecting pair count.
 size_t countIntersectingPairs(const TriMesh& coat, int threads = 0);
+// The same with progress ("check", as CheckOptions::progress): nullopt when the callback asked to stop.
+std::optional<size_t> countIntersectingPairs(const TriMesh& coat, const ProgressFn& progress, int threads = 0);
 // The intersecting pairs per pair of feathers (FeatherPairCount, sorted; counts sum to
 // countIntersectingPairs).
 std::vector<FeatherPairCount> intersectingFeatherPairs(const TriMesh& coat, int threads = 0);
