@@ -118,6 +118,13 @@ std::string jsonEscape(const std::string& in) {
 }
 
 std::string jsonCountOrNull(const std::optional<size_t>& v) { return v ? std::to_string(*v) : "null"; }
+// [a, b, ...]: null when `known` is false (the metric was not computed).
+std::string jsonIdsOrNull(bool known, const std::vector<uint32_t>& ids) {
+  if (!known) return "null";
+  std::string out = "[";
+  for (size_t k = 0; k < ids.size(); ++k) out += (k ? ", " : "") + std::to_string(ids[k]);
+  return out + "]";
+}
 
 }  // namespace
 
@@ -144,13 +151,16 @@ int cmdCheck(const Common& c, const SceneArgs& a) {
   std::printf(
       "{\"follicles\": %s, \"hex_fraction\": %s, \"nn_cv\": %s, \"feathers\": %s, \"intersecting_pairs\": %s, "
       "\"intersecting_pairs_unpacked\": %s, \"intersecting_pairs_proxy\": %s, \"skin_penetrations\": %s, \"coverage\": %s, "
-      "\"elevation_p50\": %s, \"elevation_p90\": %s, \"fixed_feathers\": %s, \"hidden_feathers\": %s}\n",
+      "\"elevation_p50\": %s, \"elevation_p90\": %s, \"fixed_feathers\": %s, \"hidden_feathers\": %s, "
+      "\"intersecting_feathers\": %s, \"penetrating_feathers\": %s}\n",
       jsonCountOrNull(m.follicles).c_str(), jsonNumberOrNull(m.hexFraction).c_str(), jsonNumberOrNull(m.nnCv).c_str(),
       jsonCountOrNull(m.feathers).c_str(), jsonCountOrNull(m.intersectingPairs).c_str(),
       jsonCountOrNull(m.intersectingPairsUnpacked).c_str(), jsonCountOrNull(m.intersectingPairsProxy).c_str(),
       jsonCountOrNull(m.skinPenetrations).c_str(), jsonNumberOrNull(m.coverage).c_str(),
       jsonNumberOrNull(m.elevationP50).c_str(), jsonNumberOrNull(m.elevationP90).c_str(),
-      jsonCountOrNull(m.fixedFeathers).c_str(), jsonCountOrNull(m.hiddenFeathers).c_str());
+      jsonCountOrNull(m.fixedFeathers).c_str(), jsonCountOrNull(m.hiddenFeathers).c_str(),
+      jsonIdsOrNull(m.intersectingPairs.has_value(), m.intersectingFeathers).c_str(),
+      jsonIdsOrNull(m.skinPenetrations.has_value(), m.penetratingFeathers).c_str());
   return 0;
 }
 

@@ -90,7 +90,9 @@ int main(int argc, char** argv) {
       "check", "Print one JSON object of quality metrics on stdout: follicles, hex_fraction, nn_cv, feathers,\n"
                "intersecting_pairs, intersecting_pairs_unpacked (every feather at 10 degrees, unflattened),\n"
                "intersecting_pairs_proxy, skin_penetrations, coverage, elevation_p50, elevation_p90 (degrees),\n"
-               "fixed_feathers, hidden_feathers (draped coats) (null = not computed)");
+               "fixed_feathers, hidden_feathers (draped coats), intersecting_feathers and penetrating_feathers\n"
+               "(the feathers, by index, with a triangle crossing another feather's or a vertex under the skin)\n"
+               "(null = not computed)");
   addSceneOptions(cCheck, check, false);
 
   SceneArgs bench;

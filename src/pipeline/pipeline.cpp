@@ -172,6 +172,11 @@ struct Pipeline::Impl {
   // Unplaced positions, normals and tangents of mesh.mesh's vertices (and spares).
   std::vector<glm::vec3> localPos, localNrm, localTan, spareLocalPos, spareLocalNrm, spareLocalTan;
   size_t meshReused = 0;            // feathers copied from the last mesh
+  // check(): the last unpacked proxy coat and its intersecting pair count. The unpacked coat comes from
+  // the input alone, so checks after edits that leave it as it was (packing, pose-free edits, LOD)
+  // reuse the count instead of searching the same mesh again.
+  TriMesh lastUnpacked;
+  std::optional<size_t> lastUnpackedPairs;
 
   Stage stageOf(StageGraph::Id id) const {
     for (int i = 0; i < 10; ++i)
@@ -1196,6 +1201,8 @@ QualityMetrics Pipeline::check() {
   size_t present = 0;
   for (auto p : coat.present) present += p ? 1 : 0;
   m.feathers = present;
+  // How steeply feathers rise: the packed elevations, or for a draped coat its rise over the skin.
+  const bool draped = impl_->packOptions.method == coat::PackMethod::Drape;
   // The independent checker (coat/check.hpp) on the coat at full geometry, and on the same coat before
   // packing: every feather at the packed coat's median elevation with its unpacked key barbs.
   const double savedLod = impl_->lod;
@@ -1205,16 +1212,36 @@ QualityMetrics Pipeline::check() {
   for (const auto& t : impl_->tracts) tractFaces.insert(tractFaces.end(), t.faces.begin(), t.faces.end());
   std::sort(tractFaces.begin(), tractFaces.end());
   tractFaces.erase(std::unique(tractFaces.begin(), tractFaces.end()), tractFaces.end());
+  // Progress "check" over its parts: the checker (pairs, skin, coverage) to 75%, then the proxy coats'
+  // pair counts. A callback returning false stops it: the metrics not computed yet stay empty.
+  bool stopped = false;
+  auto part = [&](double lo, double hi) -> ProgressFn {
+    return [this, lo, hi, &stopped](const std::string&, double x) {
+      if (!report(impl_->progress, "check", lo + (hi - lo) * x)) stopped = true;
+      return !stopped;
+    };
+  };
   coat::CheckOptions co;
   co.seed = impl_->scene.seed;
+  co.attribute = true;  // which feathers intersect or penetrate (the counts are the same either way)
+  co.progress = part(0, 0.75);
   coat::setFeatherBases(co, impl_->coatNow, impl_->packOptions.baseAllowance);
-  report(impl_->progress, "check", 0);
   const coat::CheckResult r = coat::check(impl_->posed, tractFaces, full, co);
+  if (!r.complete) {
+    setLod(savedLod);
+    return m;
+  }
   m.intersectingPairs = r.intersectingPairs;
   m.skinPenetrations = r.skinPenetrations;
   m.coverage = r.coverage;
-  // How steeply feathers rise: the packed elevations, or for a draped coat its rise over the skin.
-  const bool draped = impl_->packOptions.method == coat::PackMethod::Drape;
+  for (const coat::FeatherPairCount& p : r.featherPairs) {
+    m.intersectingFeathers.push_back(p.a);
+    m.intersectingFeathers.push_back(p.b);
+  }
+  std::sort(m.intersectingFeathers.begin(), m.intersectingFeathers.end());
+  m.intersectingFeathers.erase(std::unique(m.intersectingFeathers.begin(), m.intersectingFeathers.end()),
+                               m.intersectingFeathers.end());
+  m.penetratingFeathers = r.penetratingFeathers;
   const std::vector<double>& elevation = draped ? impl_->drape.elevation : impl_->packed->elevation;
   std::vector<double> el;
   for (size_t i = 0; i < impl_->coatNow.size(); ++i)
@@ -1228,16 +1255,28 @@ QualityMetrics Pipeline::check() {
     m.fixedFeathers = impl_->drape.stats.trimmedFeathers;
     m.hiddenFeathers = impl_->drape.stats.hiddenFeathers;
   }
-  // The unpacked coat, from the input alone: every feather at kUnpackedElevationDeg with its own key barbs.
-  const std::vector<double> flat(impl_->coatNow.size(), kUnpackedElevationDeg * feather::kPi / 180.0);
-  const TriMesh unpacked = coat::proxyCoatMesh(impl_->coatNow, flat, impl_->coatNow.params);
   if (!draped) {
     const TriMesh packedProxy = coat::proxyCoatMesh(impl_->coatNow, impl_->packed->elevation,
                                                     coat::allPackedParams(*impl_->packedCoat, *impl_->packed));
-    m.intersectingPairsProxy = coat::countIntersectingPairs(packedProxy);
+    m.intersectingPairsProxy = coat::countIntersectingPairs(packedProxy, part(0.75, 0.85));
+    if (!m.intersectingPairsProxy) {
+      setLod(savedLod);
+      return m;
+    }
   }
-  m.intersectingPairsUnpacked = coat::countIntersectingPairs(unpacked);
-  report(impl_->progress, "check", 1);
+  // The unpacked coat, from the input alone: every feather at kUnpackedElevationDeg with its own key barbs.
+  const std::vector<double> flat(impl_->coatNow.size(), kUnpackedElevationDeg * feather::kPi / 180.0);
+  TriMesh unpacked = coat::proxyCoatMesh(impl_->coatNow, flat, impl_->coatNow.params);
+  Impl& im = *impl_;
+  if (im.lastUnpackedPairs && unpacked.positions == im.lastUnpacked.positions &&
+      unpacked.indices == im.lastUnpacked.indices && unpacked.featherId == im.lastUnpacked.featherId) {
+    m.intersectingPairsUnpacked = im.lastUnpackedPairs;
+    report(impl_->progress, "check", 1);
+  } else {
+    m.intersectingPairsUnpacked = coat::countIntersectingPairs(unpacked, part(draped ? 0.75 : 0.85, 1));
+    im.lastUnpackedPairs = m.intersectingPairsUnpacked;
+    im.lastUnpacked = std::move(unpacked);
+  }
   setLod(savedLod);
   return m;
 }

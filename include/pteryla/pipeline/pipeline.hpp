@@ -69,7 +69,10 @@ struct QualityMetrics {
   std::optional<double> elevationP50, elevationP90;
   // Draped coats: feathers the drape's guarantees trimmed (material over a later follicle, off or inside
   // the skin) and feathers left with no triangle.
-  std::optional<size_t> fixedFeathers, hiddenFeathers;
+  std::optional<size_t> fixedFeathers, hiddenFeathers;  // Which feathers (indices into Pipeline::feathers(), the coat mesh's featherId) have a triangle that
+  // intersects another feather's, and which have a vertex under the skin; ascending, each set with
+  // intersectingPairs / skinPenetrations (empty when those are 0 or not computed).
+  std::vector<uint32_t> intersectingFeathers, penetratingFeathers;
 };
 
 // The unpacked coat `check` compares against: every feather at this elevation (degrees) with its own,
@@ -149,7 +152,9 @@ class Pipeline {
   const CoatMesh& coatMesh();
   TriMesh skinTriMesh();
 
-  // Runs the independent checker (and an unpacked evaluation for intersecting_pairs_unpacked).
+  // Runs the independent checker (and an unpacked evaluation for intersecting_pairs_unpacked) on the
+  // coat at full detail. Reports progress "check" through its parts; when the progress callback
+  // returns false it stops early and returns the metrics computed so far (the rest empty).
   QualityMetrics check();
 
   FrameReuse frameReuse() const;
