@@ -53,7 +53,12 @@ class CellBuilder {
       hi = glm::max(hi, p);
     }
     const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z, 0.0});
-    const double h = std::max(spacing, extent / 1.0e6);
+    // Cells of about the follicles' own spacing (points on a surface spanning `extent`), even when the
+    // spacing asked for is far smaller (a small tract's spacing measured over every follicle): the
+    // neighbour search is exact whatever the cell size, but tiny cells make it walk thousands of empty
+    // shells per follicle.
+    const double own = f.size() > 0 ? 0.5 * extent / std::sqrt(static_cast<double>(f.size())) : 0.0;
+    const double h = std::max({spacing, extent / 1.0e6, own});
     grid_ = detail::CellGrid(lo - glm::dvec3(2 * h), h > 0 ? h : 1.0);
     grid_.build(f.position.data(), f.size());
   }
