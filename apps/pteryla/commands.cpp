@@ -164,7 +164,7 @@ int cmdCheck(const Common& c, const SceneArgs& a) {
   return 0;
 }
 
-int cmdBench(const Common& c, const SceneArgs& a) {
+int cmdBench(const Common& c, const BenchArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   Loaded l = load(c, a);
   Pipeline& p = *l.pipeline;
@@ -194,14 +194,31 @@ int cmdBench(const Common& c, const SceneArgs& a) {
   const double frameSecs = std::chrono::duration<double>(std::chrono::steady_clock::now() - f0).count();
   p.setTime(t);
   p.coatMesh();
+  // --check: what `pteryla check` adds once the scene has evaluated: the mesh at full detail, then the
+  // checker on it (pairs, skin, coverage, the proxy coats' pairs).
+  std::string checkJson;
+  if (a.check) {
+    const double lod = p.lod();
+    const auto m0 = std::chrono::steady_clock::now();
+    p.setLod(1.0);
+    p.coatMesh();
+    const auto c0 = std::chrono::steady_clock::now();
+    p.check();
+    const auto c1 = std::chrono::steady_clock::now();
+    p.setLod(lod);
+    char buf[96];
+    std::snprintf(buf, sizeof buf, ", \"check_mesh\": %.6f, \"check\": %.6f",
+                  std::chrono::duration<double>(c0 - m0).count(), std::chrono::duration<double>(c1 - c0).count());
+    checkJson = buf;
+  }
   endProgress(c);
   std::printf(
       "{\"load\": %.6f, \"distribute\": %.6f, \"interpolate\": %.6f, \"pack\": %.6f, \"pack_repeat\": %.6f, "
       "\"mesh\": %.6f, \"render\": %.6f, "
       "\"frame\": %.6f, \"triangles\": %zu, \"feathers\": %zu, \"width\": %d, \"height\": %d, \"lod\": %.4f, "
-      "\"peak_rss_mb\": %.1f}\n",
+      "\"peak_rss_mb\": %.1f%s}\n",
       load, distribute, interpolate, packSecs, packRepeat, meshSecs, renderSecs, frameSecs, p.coatMesh().mesh.triangleCount(), p.coatMesh().ranges.size(),
-      l.width, l.height, p.lod(), peakRssMb());
+      l.width, l.height, p.lod(), peakRssMb(), checkJson.c_str());
   return 0;
 }
 

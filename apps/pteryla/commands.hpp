@@ -16,6 +16,9 @@ struct SceneArgs {
   std::string size;  // "WxH" or empty for the scene's render size
 };
 
+struct BenchArgs : SceneArgs {
+  bool check = false;  // also time the checker (check_mesh, check)
+};
 struct RenderArgs : SceneArgs {
   std::string out;
   std::string style;  // empty = scene's style
@@ -66,7 +69,7 @@ struct FeatherArgs {
 // Each returns the process exit code; bad input throws pteryla::Error (main maps it to exit 2).
 int cmdRender(const Common&, const RenderArgs&);
 int cmdCheck(const Common&, const SceneArgs&);
-int cmdBench(const Common&, const SceneArgs&);
+int cmdBench(const Common&, const BenchArgs&);
 int cmdExport(const Common&, const ExportArgs&);
 int cmdFeather(const Common&, const FeatherArgs&);
 int cmdFrames(const Common&, const FramesArgs&);

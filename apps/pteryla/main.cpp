@@ -95,12 +95,14 @@ int main(int argc, char** argv) {
                "(null = not computed)");
   addSceneOptions(cCheck, check, false);
 
-  SceneArgs bench;
+  BenchArgs bench;
   auto* cBench = app.add_subcommand(
       "bench", "Print one JSON object of per-stage seconds of the first evaluation (load, distribute,\n"
                "interpolate, pack, mesh, render), pack_repeat (best of 3 more full packs, warm memory), frame\n"
-               "(a timeline step), triangles and peak_rss_mb on stdout");
+               "(a timeline step), triangles and peak_rss_mb on stdout; with --check also check_mesh (meshing\n"
+               "at full detail) and check (`pteryla check`'s measurement of that mesh)");
   addSceneOptions(cBench, bench, true);
+  cBench->add_flag("--check", bench.check, "Also time the checker: the mesh at full detail, then Pipeline::check");
 
   ExportArgs exportArgs;
   auto* cExport = app.add_subcommand(

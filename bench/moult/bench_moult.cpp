@@ -3,14 +3,19 @@
 //   bird:       data/scenes/bird.json with a moult added (skipped if the scene is missing), optionally
 //               bent wings and lift controls (a crest and a chest)
 //   synthetic:  bird.obj, one tract of 3,000 contour feathers, moult + bent wings
-// Also the moult schedule, skinning and controls on their own.
+// Also the moult schedule, skinning and controls on their own, and the coat checker on the bird at full
+// detail (CheckBird: part 0 the checker on the coat mesh, part 1 the unpacked proxy coat's pair count).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "pteryla/coat/check.hpp"
 #include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/pack.hpp"
 #include "pteryla/coat/skin.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
@@ -177,5 +182,50 @@ void BM_SkinBird(benchmark::State& state) {
   state.counters["vertices"] = double(rest.vertexCount());
 }
 BENCHMARK(BM_SkinBird)->Unit(benchmark::kMicrosecond);
+
+// The checker on the bundled bird at full detail (what `pteryla check` runs after meshing at LOD 1; the
+// pipeline is evaluated once for both parts): part 0 coat::check (intersecting pairs, skin penetrations,
+// coverage) on the coat mesh, part 1 the unpacked proxy coat built and its pairs counted.
+void BM_CheckBird(benchmark::State& state) {
+  static std::unique_ptr<pipeline::Pipeline> p;
+  const std::string path = kData + "/scenes/bird.json";
+  if (!fileExists(path)) {
+    state.SkipWithError("data/scenes/bird.json not found");
+    return;
+  }
+  if (!p) {
+    p = std::make_unique<pipeline::Pipeline>(pipeline::loadScene(path));
+    p->setLod(1.0);
+    p->coatMesh();
+  }
+  const coat::CoatFeathers& c = p->feathers();
+  const TriMesh& mesh = p->coatMesh().mesh;
+  std::vector<uint32_t> tractFaces;
+  for (const auto& t : p->tracts()) tractFaces.insert(tractFaces.end(), t.faces.begin(), t.faces.end());
+  std::sort(tractFaces.begin(), tractFaces.end());
+  tractFaces.erase(std::unique(tractFaces.begin(), tractFaces.end()), tractFaces.end());
+  coat::CheckOptions o;
+  o.seed = p->scene().seed;
+  o.attribute = true;  // as Pipeline::check
+  coat::setFeatherBases(o, c, coat::PackOptions{}.baseAllowance);
+  const std::vector<double> flat(c.size(), pipeline::kUnpackedElevationDeg * 3.14159265358979323846 / 180.0);
+  size_t pairs = 0, triangles = 0;
+  for (auto _ : state) {
+    if (state.range(0) == 0) {
+      const coat::CheckResult r = coat::check(p->posedSkin(), tractFaces, mesh, o);
+      pairs = r.intersectingPairs;
+      triangles = mesh.triangleCount();
+      state.counters["coverage"] = r.coverage;
+    } else {
+      const TriMesh unpacked = coat::proxyCoatMesh(c, flat, c.params);
+      pairs = coat::countIntersectingPairs(unpacked);
+      triangles = unpacked.triangleCount();
+    }
+    benchmark::DoNotOptimize(pairs);
+  }
+  state.counters["triangles"] = double(triangles);
+  state.counters["pairs"] = double(pairs);
+}
+BENCHMARK(BM_CheckBird)->Arg(0)->Arg(1)->ArgName("part")->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime()->Iterations(3);
 
 }  // namespace
