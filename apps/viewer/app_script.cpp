@@ -90,9 +90,10 @@ void App::scriptStep() {
       bool* flag = w == "designer" ? &view_.showDesigner : w == "json" ? &view_.showJsonInspector : w == "help" ? &view_.showHelp
                  : w == "panels" ? nullptr : w == "follicles" ? &view_.showFollicles : w == "directions" ? &view_.showDirections
                  : w == "tract" ? &view_.showTract : w == "wireframe" ? &view_.wireframe : w == "coat" ? &view_.showCoat
-                 : w == "skin" ? &view_.showSkin : w == "navigation" ? &view_.forceNavigation : nullptr;
+                 : w == "skin" ? &view_.showSkin : w == "navigation" ? &view_.forceNavigation
+                 : w == "problems" ? &view_.showProblems : nullptr;
       if (w == "panels") view_.hidePanels = !on;
-      else if (!flag) throw Error("unknown view item '" + w + "' (designer, json, help, panels, follicles, directions, tract, wireframe, coat, skin, navigation)", file, "line " + std::to_string(c.line));
+      else if (!flag) throw Error("unknown view item '" + w + "' (designer, json, help, panels, follicles, directions, tract, wireframe, coat, skin, navigation, problems)", file, "line " + std::to_string(c.line));
       else *flag = on;
       scriptWaitFrames_ = 1;
     } else if (c.verb == "click" || c.verb == "drag") {

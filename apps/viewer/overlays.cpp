@@ -109,6 +109,26 @@ void drawOverlays(ImDrawList* dl, PanelContext& ctx) {
     }
   }
 
+  // The last check's offending feathers (the metrics are dropped on every edit, so they are this coat's):
+  // a red shaft for a feather crossing another, a magenta ring for one under the skin.
+  if (v.showProblems && ctx.doc.metrics()) {
+    const pipeline::QualityMetrics& m = *ctx.doc.metrics();
+    auto mark = [&](uint32_t i, ImU32 col, bool ring) {
+      if (i >= snap.featherOrigin.size()) return;
+      if (i < snap.featherNormal.size() && !proj.facing(snap.featherOrigin[i], snap.featherNormal[i])) return;
+      ImVec2 a, b;
+      if (!proj(snap.featherOrigin[i], a)) return;
+      if (ring) {
+        dl->AddCircle(a, 6.0f, col, 12, 2.0f);
+      } else {
+        dl->AddCircleFilled(a, 3.5f, col);
+        if (proj(snap.featherOrigin[i] + snap.featherTangent[i] * arrowLen * 0.6f, b)) dl->AddLine(a, b, col, 2.5f);
+      }
+    };
+    for (uint32_t i : m.intersectingFeathers) mark(i, IM_COL32(235, 40, 40, 235), false);
+    for (uint32_t i : m.penetratingFeathers) mark(i, IM_COL32(230, 40, 230, 235), true);
+  }
+
   // Key feathers: by follicle id, or at a point.
   if (v.showKeys && !snap.follicle.empty()) {
     std::unordered_map<uint64_t, size_t> byId;

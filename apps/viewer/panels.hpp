@@ -48,6 +48,7 @@ struct ViewState {
   bool showCoat = true, showSkin = true, wireframe = false;
   bool showFollicles = false, showDirections = false, showTract = false, showKeys = true;
   bool showVectors = true, showBrushes = true, showControls = true;
+  bool showProblems = true;  // after a check: the feathers it found crossing another or under the skin
   int selectedTract = 0;
   int selectedFollicle = -1;
   int selectedControl = -1;

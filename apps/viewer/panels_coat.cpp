@@ -77,6 +77,10 @@ void metricsTable(const std::optional<pipeline::QualityMetrics>& m) {
   cnt("intersecting pairs (unpacked)", m->intersectingPairsUnpacked);
   cnt("skin penetrations", m->skinPenetrations);
   num("coverage", m->coverage);
+  if (m->intersectingPairs) cnt("feathers crossing another", m->intersectingFeathers.size());
+  if (m->skinPenetrations) cnt("feathers under the skin", m->penetratingFeathers.size());
+  if (!m->intersectingFeathers.empty() || !m->penetratingFeathers.empty())
+    ImGui::TextDisabled("View > Problems marks them");
 }
 
 }  // namespace

@@ -94,6 +94,10 @@ void drawViewPanel(PanelContext& ctx) {
   ImGui::Checkbox("Directions", &v.showDirections);
   ImGui::SameLine();
   ImGui::Checkbox("Tract", &v.showTract);
+  ImGui::SameLine();
+  ImGui::Checkbox("Problems", &v.showProblems);
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("after Check: feathers crossing another feather (red) or with a vertex under the skin (magenta)");
   ImGui::Checkbox("Keys", &v.showKeys);
   ImGui::SameLine();
   ImGui::Checkbox("Vectors", &v.showVectors);

@@ -269,7 +269,7 @@ const char* scriptHelp() {
   ui PANEL WIDGET [VALUE]        use a panel's widget as a user would (docs/viewer.md lists them)
   autosave                       write the recovery file now (the scene must have unsaved changes)
   crash                          end the process at once, without clean-up (tests recovery)
-  show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin|navigation on|off
+  show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin|navigation|problems on|off
 )";
 }
 

@@ -245,6 +245,12 @@ TEST(Document, CheckRunsTheCheckerAndKeepsTheViewLod) {
   ASSERT_TRUE(d.waitIdle());
   ASSERT_TRUE(d.metrics().has_value());
   EXPECT_EQ(d.metrics()->follicles.value_or(0), 24u);
+  // View > Problems marks the offending feathers: Pipeline::check's, indices into the snapshot's feathers.
+  const pipeline::QualityMetrics ref = pipeline::Pipeline(smallPatch()).check();
+  ASSERT_GT(ref.intersectingPairs.value_or(0), 0u);  // the small patch's coat crosses
+  EXPECT_EQ(d.metrics()->intersectingFeathers, ref.intersectingFeathers);
+  EXPECT_FALSE(d.metrics()->intersectingFeathers.empty());
+  for (uint32_t i : d.metrics()->intersectingFeathers) EXPECT_LT(i, d.snapshot().featherOrigin.size());
   auto& g = d.idlePipeline()->graph();
   EXPECT_FALSE(g.dirty(g.find("mesh")));
   EXPECT_DOUBLE_EQ(d.idlePipeline()->lod(), d.lod());
