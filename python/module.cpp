@@ -249,6 +249,8 @@ py::dict metricsDict(const pteryla::Metrics& m) {
   d["elevation_p90"] = orNone(m.elevationP90);
   d["fixed_feathers"] = orNone(m.fixedFeathers);
   d["hidden_feathers"] = orNone(m.hiddenFeathers);
+  d["intersecting_feathers"] = m.intersectingPairs ? py::cast(m.intersectingFeathers) : py::none();
+  d["penetrating_feathers"] = m.skinPenetrations ? py::cast(m.penetratingFeathers) : py::none();
   return d;
 }
 

@@ -220,6 +220,9 @@ struct Metrics {
   std::optional<double> coverage;                         // fraction of tract area under feathers
   std::optional<double> elevationP50, elevationP90;       // degrees
   std::optional<size_t> fixedFeathers, hiddenFeathers;    // draped coats: trimmed, and left empty
+  // The feathers (Frame indices) with a triangle crossing another feather's, and with a vertex under the
+  // skin; ascending (empty when intersectingPairs / skinPenetrations is 0 or unset).
+  std::vector<uint32_t> intersectingFeathers, penetratingFeathers;
 };
 
 // Export for other tools (docs/export.md); the format follows the extension of the path: .glb, .gltf

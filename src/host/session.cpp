@@ -636,6 +636,8 @@ Metrics Session::metrics() {
   r.elevationP90 = q.elevationP90;
   r.fixedFeathers = q.fixedFeathers;
   r.hiddenFeathers = q.hiddenFeathers;
+  r.intersectingFeathers = q.intersectingFeathers;
+  r.penetratingFeathers = q.penetratingFeathers;
   return r;
 }
 

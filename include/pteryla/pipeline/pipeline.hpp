@@ -69,7 +69,8 @@ struct QualityMetrics {
   std::optional<double> elevationP50, elevationP90;
   // Draped coats: feathers the drape's guarantees trimmed (material over a later follicle, off or inside
   // the skin) and feathers left with no triangle.
-  std::optional<size_t> fixedFeathers, hiddenFeathers;  // Which feathers (indices into Pipeline::feathers(), the coat mesh's featherId) have a triangle that
+  std::optional<size_t> fixedFeathers, hiddenFeathers;
+  // Which feathers (indices into Pipeline::feathers(), the coat mesh's featherId) have a triangle that
   // intersects another feather's, and which have a vertex under the skin; ascending, each set with
   // intersectingPairs / skinPenetrations (empty when those are 0 or not computed).
   std::vector<uint32_t> intersectingFeathers, penetratingFeathers;
