@@ -711,6 +711,16 @@ TEST(HostSession, MetricsMatchTheFrame) {
   EXPECT_EQ(*m.feathers, 120u);
   EXPECT_GT(*m.coverage, 0.5);
   ASSERT_TRUE(m.fixedFeathers.has_value());  // a draped coat
+  // The offending feathers are present frame feathers, ascending, one list per nonzero count.
+  EXPECT_EQ(m.intersectingFeathers.empty(), *m.intersectingPairs == 0);
+  EXPECT_EQ(m.penetratingFeathers.empty(), m.skinPenetrations.value_or(0) == 0);
+  for (const auto* ids : {&m.intersectingFeathers, &m.penetratingFeathers}) {
+    EXPECT_TRUE(std::is_sorted(ids->begin(), ids->end()));
+    for (uint32_t i : *ids) {
+      ASSERT_LT(i, s.frame().featherCount);
+      EXPECT_TRUE(s.frame().present[i]);
+    }
+  }
   // The frame is valid afterwards and at the session's level of detail, not the checker's.
   Session same = evaluated(sphereSkin(), smallSetup());
   expectIdentical(s.frame(), same.frame());
