@@ -72,7 +72,9 @@ struct CoatBvh {
   std::vector<uint32_t> boxIndices;    // (lo, hi, lo): a "triangle" whose box is the feather's bounds
   detail::TriangleBvh top;
 
-  explicit CoatBvh(const TriMesh& m) : coat(m) {
+  bool complete = true;  // false: the progress callback stopped the build (the trees are unusable)
+
+  explicit CoatBvh(const TriMesh& m, const Progress& progress = {}) : coat(m) {
     const size_t nt = m.triangleCount();
     order.resize(nt);
     std::vector<uint32_t> f(nt);
@@ -101,12 +103,13 @@ struct CoatBvh {
       for (int c = 0; c < 3; ++c) indices[3 * k + c] = m.indices[3 * static_cast<size_t>(order[k]) + c];
     const size_t ng = featherOf.size();
     trees.resize(ng);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, ng, 4), [&](const tbb::blocked_range<size_t>& r) {
+    complete = batched(ng, 4, progress, [&](const tbb::blocked_range<size_t>& r) {
       for (size_t g = r.begin(); g < r.end(); ++g) {
         trees[g].build(m.positions.data(), indices.data() + 3 * static_cast<size_t>(begin[g]), begin[g + 1] - begin[g]);
         trees[g].makePrimBoxes();
       }
     });
+    if (!complete) return;
     boxCorners.resize(2 * ng);
     boxIndices.resize(3 * ng);
     for (size_t g = 0; g < ng; ++g) {
@@ -318,8 +321,8 @@ std::optional<size_t> countIntersectingPairs(const TriMesh& coat, const Progress
       n = whole(1) ? std::optional<size_t>(0) : std::nullopt;
       return;
     }
-    const CoatBvh cb(coat);
-    if (!whole.part(0, 0.4)(1)) return;
+    const CoatBvh cb(coat, whole.part(0, 0.4));
+    if (!cb.complete) return;
     n = intersectingPairs(cb, nullptr, nullptr, whole.part(0.4, 1));
   });
   return n;
@@ -378,8 +381,8 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
     if (!whole(0)) return;
     std::optional<CoatBvh> cb;
     if (o.intersections || coverage) {
-      cb.emplace(coat);
-      if (!next(wBuild)(1)) return;
+      cb.emplace(coat, next(wBuild));
+      if (!cb->complete) return;
     }
     if (o.intersections) {
       std::vector<uint64_t> keys;

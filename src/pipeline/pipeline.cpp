@@ -1183,15 +1183,28 @@ TriMesh Pipeline::skinTriMesh() { return coat::toTriMesh(posedSkin()); }
 
 QualityMetrics Pipeline::check() {
   QualityMetrics m;
+  // Progress "check" over its parts: the tracts' distribution to 10%, the checker (pairs, skin,
+  // coverage) to 75%, then the proxy coats' pair counts. A callback returning false stops it: the
+  // metrics not computed yet stay empty.
+  bool stopped = false;
+  auto part = [&](double lo, double hi) -> ProgressFn {
+    return [this, lo, hi, &stopped](const std::string&, double x) {
+      if (!report(impl_->progress, "check", lo + (hi - lo) * x)) stopped = true;
+      return !stopped;
+    };
+  };
   const auto& f = follicles();
   m.follicles = f.size();
   double hexSum = 0, cvSum = 0;
   size_t interior = 0;
+  const ProgressFn tractsDone = part(0, 0.1);
+  if (!tractsDone("check", 0)) return m;
   for (size_t i = 0; i < impl_->tracts.size(); ++i) {
     const auto d = coat::measureDistribution(impl_->rest, impl_->tracts[i], f);
     hexSum += d.hexFraction * double(d.interior);
     cvSum += d.nnCv * double(d.interior);
     interior += d.interior;
+    if (!tractsDone("check", double(i + 1) / double(impl_->tracts.size()))) return m;
   }
   if (interior > 0) {
     m.hexFraction = hexSum / double(interior);
@@ -1212,19 +1225,10 @@ QualityMetrics Pipeline::check() {
   for (const auto& t : impl_->tracts) tractFaces.insert(tractFaces.end(), t.faces.begin(), t.faces.end());
   std::sort(tractFaces.begin(), tractFaces.end());
   tractFaces.erase(std::unique(tractFaces.begin(), tractFaces.end()), tractFaces.end());
-  // Progress "check" over its parts: the checker (pairs, skin, coverage) to 75%, then the proxy coats'
-  // pair counts. A callback returning false stops it: the metrics not computed yet stay empty.
-  bool stopped = false;
-  auto part = [&](double lo, double hi) -> ProgressFn {
-    return [this, lo, hi, &stopped](const std::string&, double x) {
-      if (!report(impl_->progress, "check", lo + (hi - lo) * x)) stopped = true;
-      return !stopped;
-    };
-  };
   coat::CheckOptions co;
   co.seed = impl_->scene.seed;
   co.attribute = true;  // which feathers intersect or penetrate (the counts are the same either way)
-  co.progress = part(0, 0.75);
+  co.progress = part(0.1, 0.75);
   coat::setFeatherBases(co, impl_->coatNow, impl_->packOptions.baseAllowance);
   const coat::CheckResult r = coat::check(impl_->posed, tractFaces, full, co);
   if (!r.complete) {
