@@ -1214,7 +1214,6 @@ QualityMetrics Pipeline::check() {
   size_t present = 0;
   for (auto p : coat.present) present += p ? 1 : 0;
   m.feathers = present;
-  // How steeply feathers rise: the packed elevations, or for a draped coat its rise over the skin.
   const bool draped = impl_->packOptions.method == coat::PackMethod::Drape;
   // The independent checker (coat/check.hpp) on the coat at full geometry, and on the same coat before
   // packing: every feather at the packed coat's median elevation with its unpacked key barbs.
@@ -1246,6 +1245,7 @@ QualityMetrics Pipeline::check() {
   m.intersectingFeathers.erase(std::unique(m.intersectingFeathers.begin(), m.intersectingFeathers.end()),
                                m.intersectingFeathers.end());
   m.penetratingFeathers = r.penetratingFeathers;
+  // How steeply feathers rise: the packed elevations, or for a draped coat its rise over the skin.
   const std::vector<double>& elevation = draped ? impl_->drape.elevation : impl_->packed->elevation;
   std::vector<double> el;
   for (size_t i = 0; i < impl_->coatNow.size(); ++i)

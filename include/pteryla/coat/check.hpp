@@ -1,9 +1,10 @@
 #pragma once
 // An independent check of a packed coat at full geometry (it does not trust the packer, Streit 2003,
 // 6.3.4 / 9.1.2 claims "no feather-model or feather-feather interpenetrations"):
-//  - intersecting_pairs: pairs of triangles of different feathers that intersect (BVH + Moeller's
-//    triangle-triangle test in double precision, parallel; one BVH over the coat serves the pair search
-//    and the coverage rays, and subtrees of one feather are never paired);
+//  - intersecting_pairs: pairs of triangles of different feathers that intersect (a BVH per feather and
+//    one over the feathers' bounds, shared with the coverage rays; only feathers whose bounds meet are
+//    searched, tree against tree, which visits every pair of their triangles with overlapping boxes;
+//    Moeller's triangle-triangle test in double precision, parallel);
 //  - skin_penetrations: coat vertices (barb and shaft samples) below the skin: the sign of the offset to
 //    the nearest skin point against the angle-weighted pseudo-normal of the nearest feature, which is
 //    "inside" for closed meshes and "below the local surface" for open ones (points whose nearest skin
@@ -41,7 +42,7 @@ struct CheckOptions {
   // (CheckResult::featherPairs, featherPenetrations). The counts are the same either way.
   bool attribute = false;
   // Called on the calling thread with ("check", fraction of the work done), several times per part
-  // (the pair search, the skin test, the coverage rays). Returning false stops the check within a
+  // (the feather trees, the pair search, the skin test, the coverage rays). Returning false stops the check within a
   // fraction of a part: the result then has complete = false and holds only the parts finished.
   // An exception thrown by it leaves check() the same way.
   ProgressFn progress;
