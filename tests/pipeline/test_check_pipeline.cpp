@@ -1,7 +1,8 @@
 // Pipeline::check on a real small scene (data/scenes/patch.json with 24 feathers, at full detail) against a
 // reference without trees: the intersecting pairs of the coat mesh and of the unpacked proxy coat, and the
 // feathers they belong to; progress "check" moves through the parts, and a callback returning false
-// stops the check early without changing what a complete check reports afterwards.
+// stops the check early (as does one that throws, the way the viewer and the host session cancel)
+// without changing what a complete check reports afterwards.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -130,4 +131,28 @@ TEST(PipelineCheck, ProgressMovesAndStoppingLeavesTheNextCheckWhole) {
   EXPECT_EQ(again.skinPenetrations, full.skinPenetrations);
   EXPECT_EQ(again.coverage, full.coverage);
   EXPECT_EQ(again.intersectingFeathers, full.intersectingFeathers);
+}
+
+TEST(PipelineCheck, AThrowingCallbackLeavesTheCheckAndTheNextOneIsWhole) {
+  // The viewer and the host session cancel by throwing from the progress callback.
+  struct Cancelled {};
+  bool cancel = false;
+  bool thrown = false;
+  Pipeline p(patch(), [&](const std::string& stage, double f) {
+    if (cancel && stage == "check" && f > 0.5) {
+      thrown = true;
+      throw Cancelled{};
+    }
+    return true;
+  });
+  const QualityMetrics full = p.check();
+  cancel = true;
+  EXPECT_THROW(p.check(), Cancelled);
+  EXPECT_TRUE(thrown);
+  cancel = false;
+  const QualityMetrics again = p.check();
+  EXPECT_EQ(again.intersectingPairs, full.intersectingPairs);
+  EXPECT_EQ(again.intersectingPairsUnpacked, full.intersectingPairsUnpacked);
+  EXPECT_EQ(again.skinPenetrations, full.skinPenetrations);
+  EXPECT_EQ(again.coverage, full.coverage);
 }
