@@ -156,6 +156,9 @@ def write_markdown(results):
         "`ctest -L scenes` checks that every scene evaluates, stays near its body and is free of skin "
         "penetrations.",
         "",
+        "How these scenes look beside the thesis' own figures (bird, sphere, wing, moult), and what still",
+        "falls short, is written up in [look.md](look.md).",
+        "",
         "Columns: `feathers` present at that time; `skin_penetrations` coat vertices below the skin at full "
         "geometry (0 = none); `intersecting_pairs` triangle pairs of different feathers that cross, after "
         "packing and (`unpacked`) with every feather at the median elevation; `coverage` fraction of the "
