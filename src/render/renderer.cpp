@@ -671,15 +671,15 @@ Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(contex
       "uColorTex", "uAlphaTex", "uBrdfTex", "uUseAlphaTex", "uUseBrdf", "uBaseColor", "uSheathColor",
       "uBarbuleCosSin", "uSpecular", "uConeInv2s2", "uTranslucency", "uLightViewProj", "uShadowLightDir",
       "uShadowNormalOffset", "uShadowMap", "uShadows", "uShadowStrength", "uShadowTexel", "uExposureScale", "uFilmic"};
-  r.skinProg = r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshVertex}),
+  r.skinProg = r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshAttributes, kMeshVertex}),
                       r.compile(GL_FRAGMENT_SHADER, {perFragment, kShadowLookup, kSkinFragment}), common);
   r.skinProg.loc["uSkinColor"] = r.gl.GetUniformLocation(r.skinProg.id, "uSkinColor");
-  r.coatVertexProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kCoatShading, kMeshVertex}),
+  r.coatVertexProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kCoatShading, kMeshAttributes, kMeshVertex}),
                             r.compile(GL_FRAGMENT_SHADER, {perVertex, kShadowLookup, kCoatFragment}), coat);
   r.coatFragmentProg =
-      r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshVertex}),
+      r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshAttributes, kMeshVertex}),
              r.compile(GL_FRAGMENT_SHADER, {perFragment, kCoatShading, kShadowLookup, kCoatFragment}), coat);
-  r.depthProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kDepthVertex}),
+  r.depthProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kMeshAttributes, kDepthVertex}),
                        r.compile(GL_FRAGMENT_SHADER, {perVertex, kDepthFragment}),
                        {"uLightViewProj", "uColorUv", "uColorTex", "uAlphaTex", "uUseAlphaTex", "uAlphaCut"});
   r.white = r.makeTexture(Image(1, 1, 255, 255, 255, 255), false, GL_REPEAT, GL_REPEAT);
@@ -951,16 +951,18 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   gl.Disable(GL_BLEND);
   gl.Disable(GL_DITHER);
 
-  // Skin first, writing depth (7.2).
-  if (s.drawSkin && r.skin.indexCount > 0) {
+  // Opaque, Lambert, writing depth: the skin and the ground.
+  auto drawOpaque = [&](const GpuMesh& mesh, const glm::vec3& colour) {
     setCommon(r.skinProg);
-    gl.Uniform3f(r.U(r.skinProg, "uSkinColor"), s.skinColor.r, s.skinColor.g, s.skinColor.b);
-    gl.BindVertexArray(r.skin.vao);
-    r.applyDefaults(r.skin);
-    r.drawIndices(0, r.skin.indexCount);
+    gl.Uniform3f(r.U(r.skinProg, "uSkinColor"), colour.r, colour.g, colour.b);
+    gl.BindVertexArray(mesh.vao);
+    r.applyDefaults(mesh);
+    r.drawIndices(0, mesh.indexCount);
     ++stats_.drawCalls;
-    stats_.triangles += r.skin.indexCount / 3;
-  }
+    stats_.triangles += mesh.indexCount / 3;
+  };
+  // Skin first, writing depth (7.2).
+  if (s.drawSkin && r.skin.indexCount > 0) drawOpaque(r.skin, s.skinColor);
   // The ground: a square 8 model radii wide centred under the model, drawn like the skin (it takes the
   // key light's shadow; it is not in the shadow map, so it casts none).
   glm::vec3 modelLo(0.0f), modelHi(0.0f);
@@ -987,13 +989,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       r.upload(r.ground, g, nullptr, true);
       r.groundKey = key;
     }
-    setCommon(r.skinProg);
-    gl.Uniform3f(r.U(r.skinProg, "uSkinColor"), s.groundColor.r, s.groundColor.g, s.groundColor.b);
-    gl.BindVertexArray(r.ground.vao);
-    r.applyDefaults(r.ground);
-    r.drawIndices(0, r.ground.indexCount);
-    ++stats_.drawCalls;
-    stats_.triangles += 2;
+    drawOpaque(r.ground, s.groundColor);
   }
   // The skin's depth, reduced to a grid of per-tile maxima, lets whole feathers hidden behind the
   // body skip rasterisation (conservative: a feather is dropped only if its bounding sphere's nearest

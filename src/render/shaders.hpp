@@ -119,8 +119,8 @@ vec3 toneMap(vec3 c) {
 }
 )GLSL";
 
-// Shared by skin and coat. Attribute locations match renderer.cpp's Attr enum.
-inline constexpr const char* kMeshVertex = R"GLSL(
+// Vertex attributes of every vertex shader. Locations match renderer.cpp's Attr enum.
+inline constexpr const char* kMeshAttributes = R"GLSL(
 layout(location = 0) in vec3 aPos;
 layout(location = 1) in vec3 aNormal;
 layout(location = 2) in vec3 aTangent;
@@ -130,6 +130,10 @@ layout(location = 5) in vec2 aUvGrowth;
 layout(location = 6) in float aAlpha;
 layout(location = 7) in float aSheath;
 layout(location = 8) in float aBarbCount;
+)GLSL";
+
+// Shared by skin and coat (after kMeshAttributes).
+inline constexpr const char* kMeshVertex = R"GLSL(
 uniform mat4 uViewProj;
 uniform int uColorUv;
 uniform int uIsCoat;
@@ -247,13 +251,6 @@ void main() {
 // The shadow map pass: light clip positions; the coat's fragments are kept where the feather is opaque
 // enough (the same alpha as the colour pass, thresholded at uAlphaCut), so barbs cast barb-shaped shadows.
 inline constexpr const char* kDepthVertex = R"GLSL(
-layout(location = 0) in vec3 aPos;
-layout(location = 3) in vec2 aUvGlobal;
-layout(location = 4) in vec2 aUvBarb;
-layout(location = 5) in vec2 aUvGrowth;
-layout(location = 6) in float aAlpha;
-layout(location = 7) in float aSheath;
-layout(location = 8) in float aBarbCount;
 uniform mat4 uLightViewProj;
 uniform int uColorUv;
 out vec2 vUvColor;

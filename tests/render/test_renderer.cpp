@@ -609,6 +609,12 @@ struct Overlap {
     r[0].indexCount = 6;
     return r;
   }
+  // Uploads both feathers as the coat of `r`.
+  void upload(Renderer& r) const {
+    TriMesh coat = lower;
+    coat.append(upper);
+    r.setCoat(coat, twoFeathers(coat));
+  }
   // Mean red channel over world x in [x0, x1], y in [-0.3, 0.3].
   static double band(const Image& img, float x0, float x1) {
     const float half = 5.0f * std::tan(20.0f * 3.14159265f / 180.0f);
@@ -628,9 +634,7 @@ TEST(RendererShadows, AnOverlappingFeatherDarkensTheExposedEdgeBelowIt) {
     Renderer r(context());
     r.setMaterials({lambert({1, 1, 1})});
     const Overlap o;
-    TriMesh coat = o.lower;
-    coat.append(o.upper);
-    r.setCoat(coat, Overlap::twoFeathers(coat));
+    o.upload(r);
     const Image off = r.renderImage(frontCamera(), o.lights, o.settings(false, perFragment));
     const Image on = r.renderImage(frontCamera(), o.lights, o.settings(true, perFragment));
     // Just under B's edge, in its shadow, against the exposed middle of the same feather.
@@ -658,9 +662,7 @@ TEST(RendererShadows, FeathersShadowTheSkinAndTransparentOnesCastNone) {
   // A feather below the alpha cut (0.5) casts no shadow: shadows follow what the colour pass shows.
   const Overlap faint(0.3f);
   r.setSkin(TriMesh());
-  TriMesh coat = faint.lower;
-  coat.append(faint.upper);
-  r.setCoat(coat, Overlap::twoFeathers(coat));
+  faint.upload(r);
   img = r.renderImage(frontCamera(), faint.lights, s);
   EXPECT_NEAR(Overlap::band(img, -0.16f, -0.04f), Overlap::band(img, -0.9f, -0.5f), 0.02 * Overlap::band(img, -0.9f, -0.5f));
 }
@@ -669,9 +671,9 @@ TEST(RendererShadows, TheMapIsDrawnAgainOnlyWhenWhatCastsItChanges) {
   Renderer r(context());
   r.setMaterials({lambert({1, 1, 1})});
   const Overlap o;
+  o.upload(r);
   TriMesh coat = o.lower;
   coat.append(o.upper);
-  r.setCoat(coat, Overlap::twoFeathers(coat));
   const Image first = r.renderImage(frontCamera(), o.lights, o.settings(true));
   EXPECT_TRUE(r.lastStats().shadowMapRendered);
   Camera moved = frontCamera(4.0f);  // a new view: the light's map is still valid
