@@ -85,19 +85,14 @@ export SLURM_CONF=$T/slurm.conf
 slurmctld -i -c || skip "slurmctld does not start here: $(tail -n 2 "$T/slurmctld.log" 2>/dev/null)"
 sleep 1
 [ -f "$T/slurmctld.pid" ] && PIDS+=("$(cat "$T/slurmctld.pid")")
-# slurmd 22.05 always initialises a cgroup plugin, though this configuration uses none of it
-# (proctrack/linuxproc, task/none). In a chroot or container without /sys (no cgroup file system)
-# "autodetect" fails ("Unable to initialize cgroup plugin"). Then slurmd is started again with the
-# cgroup/v1 plugin pointed at an empty directory of our own, which it accepts and never uses.
-if ! slurmd -N "$HOST"; then
-  first=$(tail -n 2 "$T/slurmd.log" 2>/dev/null)
-  NOSYS=""
-  [ -z "$(ls -A /sys/fs/cgroup 2>/dev/null)" ] && NOSYS=" (no cgroup file system: /sys/fs/cgroup is empty or missing here)"
-  mkdir -p "$T/cgroup"
-  printf 'CgroupPlugin=cgroup/v1\nCgroupMountpoint=%s\n' "$T/cgroup" > "$T/cgroup.conf"
-  echo "slurmd did not start with cgroup autodetection$NOSYS; retrying with cgroup/v1 on $T/cgroup"
-  slurmd -N "$HOST" || skip "slurmd does not start here$NOSYS: $first; with cgroup/v1 on an empty directory: $(tail -n 2 "$T/slurmd.log" 2>/dev/null)"
-fi
+# A chroot or container without /sys (no cgroup file system, no CPU topology) stops slurmd 22.05 at its
+# cgroup plugin ("Unable to initialize cgroup plugin"), though this configuration uses no cgroups; say so.
+# (Pointing CgroupPlugin=cgroup/v1 at an empty directory gets slurmd up there, and the test then passes
+# on a host with /sys hidden by a private tmpfs; but in the fresh-machine chroot the job array then did
+# not finish within ctest's 600 s, so the test skips instead of hanging.)
+NOSYS=""
+[ -z "$(ls -A /sys/fs/cgroup 2>/dev/null)" ] && NOSYS=" (no cgroup file system: /sys/fs/cgroup is empty or missing here)"
+slurmd -N "$HOST" || skip "slurmd does not start here$NOSYS: $(tail -n 2 "$T/slurmd.log" 2>/dev/null)"
 sleep 1
 [ -f "$T/slurmd.pid" ] && PIDS+=("$(cat "$T/slurmd.pid")")
 for _ in $(seq 60); do
