@@ -69,7 +69,6 @@ struct Renderer::Impl {
   // each frame with the camera's surviving triangles).
   struct Shadow {
     GLuint fbo = 0, depthTex = 0, ebo = 0;
-    size_t eboBytes = 0;
     int size = 0;
     bool valid = false;       // the map matches skin, coat and materials (cleared when they change)
     glm::vec3 lightDir{0.0f};
@@ -675,12 +674,12 @@ Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(contex
                       r.compile(GL_FRAGMENT_SHADER, {perFragment, kShadowLookup, kSkinFragment}), common);
   r.skinProg.loc["uSkinColor"] = r.gl.GetUniformLocation(r.skinProg.id, "uSkinColor");
   r.coatVertexProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kCoatShading, kMeshAttributes, kMeshVertex}),
-                            r.compile(GL_FRAGMENT_SHADER, {perVertex, kShadowLookup, kCoatFragment}), coat);
+                            r.compile(GL_FRAGMENT_SHADER, {perVertex, kShadowLookup, kFeatherAlpha, kCoatFragment}), coat);
   r.coatFragmentProg =
       r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshAttributes, kMeshVertex}),
-             r.compile(GL_FRAGMENT_SHADER, {perFragment, kCoatShading, kShadowLookup, kCoatFragment}), coat);
+             r.compile(GL_FRAGMENT_SHADER, {perFragment, kCoatShading, kShadowLookup, kFeatherAlpha, kCoatFragment}), coat);
   r.depthProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kMeshAttributes, kDepthVertex}),
-                       r.compile(GL_FRAGMENT_SHADER, {perVertex, kDepthFragment}),
+                       r.compile(GL_FRAGMENT_SHADER, {perVertex, kFeatherAlpha, kDepthFragment}),
                        {"uLightViewProj", "uColorUv", "uColorTex", "uAlphaTex", "uUseAlphaTex", "uAlphaCut"});
   r.white = r.makeTexture(Image(1, 1, 255, 255, 255, 255), false, GL_REPEAT, GL_REPEAT);
   setMaterials({});
@@ -783,7 +782,6 @@ void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>&
     r.gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, r.shadow.ebo);
     r.gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(n * sizeof(uint32_t)),
                     n ? coat.indices.data() : nullptr, GL_STATIC_DRAW);
-    r.shadow.eboBytes = n * sizeof(uint32_t);
   }
   r.coatPositions = coat.positions;
   r.coatIndices = coat.indices;

@@ -130,12 +130,28 @@ layout(location = 5) in vec2 aUvGrowth;
 layout(location = 6) in float aAlpha;
 layout(location = 7) in float aSheath;
 layout(location = 8) in float aBarbCount;
+uniform int uColorUv;
+// The texture coordinates of the colour texture (FeatherMaterial::colorUv) and of the barb alpha mask,
+// repeated barbCount times across a polygon.
+vec2 colorUv() { return uColorUv == 1 ? aUvBarb : (uColorUv == 2 ? aUvGrowth : aUvGlobal); }
+vec2 alphaUv() { return vec2(aUvBarb.x * max(aBarbCount, 1.0), aUvBarb.y); }
+)GLSL";
+
+// A feather fragment's opacity, the same in the colour pass and the shadow map: vertex alpha x the colour
+// texture's alpha x the barb alpha mask, blended toward the opaque sheath (8.1).
+inline constexpr const char* kFeatherAlpha = R"GLSL(
+uniform sampler2D uAlphaTex;
+uniform int uUseAlphaTex;
+float featherAlpha(float alpha, float textureAlpha, vec2 uvAlpha, float sheath) {
+  float a = alpha * textureAlpha;
+  if (uUseAlphaTex != 0) a *= texture(uAlphaTex, uvAlpha).r;
+  return mix(a, 1.0, sheath);
+}
 )GLSL";
 
 // Shared by skin and coat (after kMeshAttributes).
 inline constexpr const char* kMeshVertex = R"GLSL(
 uniform mat4 uViewProj;
-uniform int uColorUv;
 uniform int uIsCoat;
 uniform mat4 uLightViewProj;
 uniform vec3 uShadowLightDir;
@@ -158,8 +174,8 @@ out vec3 vKeySpec;
 void main() {
   vPos = aPos;
   vNormal = aNormal;
-  vUvColor = uColorUv == 1 ? aUvBarb : (uColorUv == 2 ? aUvGrowth : aUvGlobal);
-  vUvAlpha = vec2(aUvBarb.x * max(aBarbCount, 1.0), aUvBarb.y);
+  vUvColor = colorUv();
+  vUvAlpha = alphaUv();
   vAlpha = aAlpha;
   vSheath = clamp(aSheath, 0.0, 1.0);
 #if PER_FRAGMENT
@@ -223,16 +239,12 @@ in vec3 vKeyDiffuse;
 in vec3 vKeySpec;
 #endif
 uniform sampler2D uColorTex;
-uniform sampler2D uAlphaTex;
-uniform int uUseAlphaTex;
 uniform vec3 uBaseColor;
 uniform vec3 uSheathColor;
 out vec4 oColor;
 void main() {
   vec4 tex = texture(uColorTex, vUvColor);
-  float a = vAlpha * tex.a;
-  if (uUseAlphaTex != 0) a *= texture(uAlphaTex, vUvAlpha).r;
-  a = mix(a, 1.0, vSheath);
+  float a = featherAlpha(vAlpha, tex.a, vUvAlpha, vSheath);
   if (a < 0.5 / 255.0) discard;
   vec3 albedo = mix(uBaseColor * tex.rgb, uSheathColor, vSheath);
 #if PER_FRAGMENT
@@ -252,14 +264,13 @@ void main() {
 // enough (the same alpha as the colour pass, thresholded at uAlphaCut), so barbs cast barb-shaped shadows.
 inline constexpr const char* kDepthVertex = R"GLSL(
 uniform mat4 uLightViewProj;
-uniform int uColorUv;
 out vec2 vUvColor;
 out vec2 vUvAlpha;
 out float vAlpha;
 out float vSheath;
 void main() {
-  vUvColor = uColorUv == 1 ? aUvBarb : (uColorUv == 2 ? aUvGrowth : aUvGlobal);
-  vUvAlpha = vec2(aUvBarb.x * max(aBarbCount, 1.0), aUvBarb.y);
+  vUvColor = colorUv();
+  vUvAlpha = alphaUv();
   vAlpha = aAlpha;
   vSheath = clamp(aSheath, 0.0, 1.0);
   gl_Position = uLightViewProj * vec4(aPos, 1.0);
@@ -272,13 +283,9 @@ in vec2 vUvAlpha;
 in float vAlpha;
 in float vSheath;
 uniform sampler2D uColorTex;
-uniform sampler2D uAlphaTex;
-uniform int uUseAlphaTex;
 uniform float uAlphaCut;
 void main() {
-  float a = vAlpha * texture(uColorTex, vUvColor).a;
-  if (uUseAlphaTex != 0) a *= texture(uAlphaTex, vUvAlpha).r;
-  a = mix(a, 1.0, vSheath);
+  float a = featherAlpha(vAlpha, texture(uColorTex, vUvColor).a, vUvAlpha, vSheath);
   if (a < uAlphaCut) discard;
 }
 )GLSL";
