@@ -156,7 +156,7 @@ std::optional<size_t> intersectingPairs(const CoatBvh& cb, std::vector<uint64_t>
     std::vector<uint64_t>* mine = attribution || triangles ? &found.local() : nullptr;
     size_t acc = 0;
     for (size_t k = r.begin(); k < r.end(); ++k) {
-      const auto [g, h] = tasks[k];
+      const uint32_t g = tasks[k].first, h = tasks[k].second;
       const uint32_t fg = cb.featherOf[g], fh = cb.featherOf[h];
       const uint64_t featherKey = (uint64_t(std::min(fg, fh)) << 32) | std::max(fg, fh);
       cb.trees[g].overlappingPairs(cb.trees[h], [&](uint32_t a, uint32_t b) {
