@@ -101,25 +101,48 @@ void schedule(const Context& ctx, const std::vector<uint32_t>& items, const uint
 
 using namespace packing;
 
+namespace {
+
+// What one pack's feathers share while they are packed: per-thread scratch and the output's views with the
+// chunk spheres above the groups.
+struct Run {
+  explicit Run(PackResult& res)
+      : chunkOffset(chunkOffsets(res.groupOffset)),
+        chunkBounds(chunkOffset.back()),
+        out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds,
+            res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds} {}
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  const std::vector<uint32_t> chunkOffset;
+  ChunkBounds chunkBounds;
+  Output out;
+
+  void packOne(const Context& ctx, PackResult& res, uint32_t i) {
+    packFeather(ctx, i, scratch.local(), out);
+    res.recomputed[i] = 1;
+  }
+};
+
+// Every feather in ctx.order is packed from its local data (pack and repack; absent ones have none).
+std::vector<Source> localSources(const Context& ctx) {
+  std::vector<Source> s(ctx.coat.size());
+  for (size_t i = 0; i < s.size(); ++i) s[i] = ctx.local[i].packable ? Source::Local : Source::None;
+  return s;
+}
+
+}  // namespace
+
 PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   checkInput(coat, options);
   Context ctx(skin, coat, options);
-  auto run = [&](PackResult& res) {
-    setup(ctx);
-    initResult(ctx, res);
-    tbb::enumerable_thread_specific<Scratch> scratch;
-    const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
-    ChunkBounds chunkBounds(chunkOffset.back());
-    Output out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
-    schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) {
-      packFeather(ctx, i, scratch.local(), out);
-      res.recomputed[i] = 1;
-    });
-    finish(ctx, scratch, res, t0);
-  };
   PackResult res;
-  detail::inArena(options.threads, [&] { run(res); });
+  detail::inArena(options.threads, [&] {
+    setup(ctx);
+    layoutResult(ctx, localSources(ctx), nullptr, res);
+    Run run(res);
+    schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) { run.packOne(ctx, res, i); });
+    finish(ctx, run.scratch, res, t0);
+  });
   return res;
 }
 
@@ -128,25 +151,16 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
   const auto t0 = std::chrono::steady_clock::now();
   checkInput(coat, options);
   const size_t n = coat.size();
-  std::vector<uint32_t> order = coat.layerOrder;
-  if (order.empty())
-    for (uint32_t i = 0; i < n; ++i) order.push_back(i);
-  order.erase(std::remove_if(order.begin(), order.end(), [&](uint32_t i) { return !coat.present.empty() && coat.present[i] == 0; }),
-              order.end());
   // The previous result must describe the same feathers in the same order.
   if (prev.elevation.size() != n || prev.pointOffset.size() != n + 1 || prev.packedKeys.keyOffset.size() != n + 1 ||
-      prev.order != order || changed.size() * 2 > n)
+      prev.order != presentInLayerOrder(coat) || changed.size() * 2 > n)
     return pack(skin, coat, options);
-  std::vector<uint8_t> isChanged(n, 0);
-  for (uint32_t c : changed) {
-    if (c >= n) throw Error("changed feather " + std::to_string(c) + " out of range", {}, "changed");
-    isChanged[c] = 1;
-  }
+  const std::vector<uint8_t> isChanged = changedMask(changed, n);
   Context ctx(skin, coat, options);
   PackResult res;
-  auto run = [&] {
+  detail::inArena(options.threads, [&] {
     setup(ctx);
-    initResult(ctx, res);
+    layoutResult(ctx, localSources(ctx), nullptr, res);
     // Feathers whose old packed points (previous bounds) touch i's footprint: a changed feather that
     // moved away must still dirty what it used to cover.
     std::vector<uint8_t> touched(n, 0);
@@ -165,31 +179,17 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
       });
     }
     std::vector<uint8_t> outChanged(n, 0);
-    tbb::enumerable_thread_specific<Scratch> scratch;
-    const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
-    ChunkBounds chunkBounds(chunkOffset.back());
-    Output out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
+    Run run(res);
     schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) {
       bool dirty = isChanged[i] || touched[i];
       for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !dirty; ++k) dirty = outChanged[ctx.deps[k]] != 0;
       const uint32_t cnt = res.pointOffset[i + 1] - res.pointOffset[i];
       const bool sameShape = prev.pointOffset[i + 1] - prev.pointOffset[i] == cnt && sameKeyLayout(prev.packedKeys, res.packedKeys, i);
       if (!dirty && sameShape) {
-        res.elevation[i] = prev.elevation[i];
-        copyKeys(prev.packedKeys, res.packedKeys, i);
-        res.barbsChanged[i] = prev.barbsChanged[i];
-        std::copy(prev.points.begin() + prev.pointOffset[i], prev.points.begin() + prev.pointOffset[i + 1],
-                  res.points.begin() + res.pointOffset[i]);
-        res.bounds[i] = prev.bounds[i];
-        PTERYLA_CHECK(prev.groupOffset[i + 1] - prev.groupOffset[i] == res.groupOffset[i + 1] - res.groupOffset[i],
-                      "unchanged feather with a different point structure");
-        std::copy(prev.groupBounds.begin() + prev.groupOffset[i], prev.groupBounds.begin() + prev.groupOffset[i + 1],
-                  res.groupBounds.begin() + res.groupOffset[i]);
-        closeChunks(out, i);
+        keepFeather(prev, res, run.out, i);
         return;
       }
-      packFeather(ctx, i, scratch.local(), out);
-      res.recomputed[i] = 1;
+      run.packOne(ctx, res, i);
       bool diff = !sameShape || std::memcmp(&res.elevation[i], &prev.elevation[i], sizeof(double)) != 0 ||
                   res.bounds[i] != prev.bounds[i];
       if (!diff)
@@ -197,9 +197,8 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
                            cnt * sizeof(glm::vec4)) != 0;
       outChanged[i] = diff ? 1 : 0;
     });
-    finish(ctx, scratch, res, t0);
-  };
-  detail::inArena(options.threads, run);
+    finish(ctx, run.scratch, res, t0);
+  });
   return res;
 }
 
@@ -219,20 +218,10 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
   order.reserve(base.order.size());
   for (uint32_t i : base.order)
     if (i < n && present(i)) order.push_back(i);
-  {
-    std::vector<uint32_t> want = coat.layerOrder;
-    if (want.empty())
-      for (uint32_t i = 0; i < n; ++i) want.push_back(i);
-    want.erase(std::remove_if(want.begin(), want.end(), [&](uint32_t i) { return !present(i); }), want.end());
-    if (want != order)
-      throw Error("packOver: the coat's present feathers are not packed in the base pack in the same layer order", {},
-                  "base");
-  }
-  std::vector<uint8_t> isChanged(n, 0);
-  for (uint32_t c : changed) {
-    if (c >= n) throw Error("changed feather " + std::to_string(c) + " out of range", {}, "changed");
-    isChanged[c] = 1;
-  }
+  if (presentInLayerOrder(coat) != order)
+    throw Error("packOver: the coat's present feathers are not packed in the base pack in the same layer order", {},
+                "base");
+  const std::vector<uint8_t> isChanged = changedMask(changed, n);
   if (options.skin && !skin.faces.empty()) {
     const auto& sd = base.skinSamples;
     if (!sd || sd->skinPositions.size() != skin.positions.size() ||
@@ -242,13 +231,8 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
 
   Context ctx(skin, coat, options);
   PackResult res;
-  auto run = [&] {
-    ctx.fixed = options.fixedElevation;
-    ctx.minElevation = resolveMinElevation(coat, options.styling);
-    ctx.shaftBand = resolveShaftBand(coat, options.styling);
-    ctx.order = order;
-    ctx.pos.assign(n, UINT32_MAX);
-    for (size_t k = 0; k < order.size(); ++k) ctx.pos[order[k]] = static_cast<uint32_t>(k);
+  detail::inArena(options.threads, [&] {
+    beginContext(ctx, order);
     ctx.clearance = base.clearance;
     ctx.skinClearance = base.skinClearance;
     ctx.medianReach = base.medianReach;
@@ -275,85 +259,24 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
     }
     buildDependencies(ctx, work, radius, 4);
 
-    // Result layout: kept feathers take base's point groups, packed ones their own, absent ones none.
-    res.order = order;
-    res.elevation.assign(n, 0.0);
-    // Packed feathers' key barbs laid out from their local data, kept ones' from base.
-    const PackedKeyBarbs& BK = base.packedKeys;
-    layoutKeys(
-        n, res.packedKeys,
-        [&](size_t i) -> std::array<uint32_t, 3> {
-          if (ctx.pos[i] == UINT32_MAX) return {0, 0, 0};
-          if (isChanged[i]) return localKeyCount(ctx.local[i]);
-          return {BK.keyOffset[i + 1] - BK.keyOffset[i], BK.leftKeys[i], BK.replaced[i]};
-        },
-        [&](size_t i, uint32_t k) -> uint32_t {
-          if (isChanged[i]) return ctx.local[i].keys[k].cvCount;
-          return BK.cvOffset[BK.keyOffset[i] + k + 1] - BK.cvOffset[BK.keyOffset[i] + k];
-        });
-    res.barbsChanged.assign(n, 0);
-    res.recomputed.assign(n, 0);
-    res.bounds.assign(n, glm::dvec4(0));
-    res.pointOffset.assign(n + 1, 0);
-    res.groupOffset.assign(n + 1, 0);
-    res.groupPoint.clear();
-    res.groupPoint.reserve(base.groupPoint.size());
-    for (uint32_t i = 0; i < n; ++i) {
-      uint32_t p = res.pointOffset[i];
-      if (ctx.pos[i] != UINT32_MAX && isChanged[i]) {
-        const LocalFeather& L = ctx.local[i];
-        p = appendGroups(L, options.barbSamples, p, res.groupPoint);
-        PTERYLA_CHECK(p - res.pointOffset[i] == L.pointCount, "point groups do not cover the points");
-      } else if (ctx.pos[i] != UINT32_MAX) {
-        for (uint32_t g = base.groupOffset[i]; g < base.groupOffset[i + 1]; ++g) {
-          res.groupPoint.push_back(p);
-          p += base.groupPoint[g + 1] - base.groupPoint[g];
-        }
-        PTERYLA_CHECK(p - res.pointOffset[i] == base.pointOffset[i + 1] - base.pointOffset[i],
-                      "base point groups do not cover its points");
-      }
-      res.pointOffset[i + 1] = p;
-      res.groupOffset[i + 1] = static_cast<uint32_t>(res.groupPoint.size());
-    }
-    res.groupPoint.push_back(res.pointOffset[n]);
-    res.points.clear();
-    res.points.resize(res.pointOffset[n]);
-    res.groupBounds.clear();
-    res.groupBounds.resize(res.groupOffset[n]);  // uninitialised: written by packed and kept feathers
-    res.barbFields.clear();
-    res.stats = {};
-    const std::vector<uint32_t> chunkOffset = chunkOffsets(res.groupOffset);
-    ChunkBounds chunkBounds(chunkOffset.back());
-    Output out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds, res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds};
-    // Kept feathers: base's results as they are.
+    // Kept feathers take base's shape and values, packed ones their own, absent ones none.
+    std::vector<Source> source(n, Source::None);
+    for (uint32_t i : order) source[i] = isChanged[i] ? Source::Local : Source::Kept;
+    layoutResult(ctx, source, &base, res);
+    Run run(res);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, static_cast<uint32_t>(n), 32), [&](const tbb::blocked_range<uint32_t>& r) {
-      for (uint32_t i = r.begin(); i < r.end(); ++i) {
-        if (ctx.pos[i] == UINT32_MAX || isChanged[i]) continue;
-        res.elevation[i] = base.elevation[i];
-        copyKeys(base.packedKeys, res.packedKeys, i);
-        res.barbsChanged[i] = base.barbsChanged[i];
-        res.bounds[i] = base.bounds[i];
-        std::copy(base.points.begin() + base.pointOffset[i], base.points.begin() + base.pointOffset[i + 1],
-                  res.points.begin() + res.pointOffset[i]);
-        std::copy(base.groupBounds.begin() + base.groupOffset[i], base.groupBounds.begin() + base.groupOffset[i + 1],
-                  res.groupBounds.begin() + res.groupOffset[i]);
-        closeChunks(out, i);
-      }
+      for (uint32_t i = r.begin(); i < r.end(); ++i)
+        if (source[i] == Source::Kept) keepFeather(base, res, run.out, i);
     });
     // The packed feathers, each after the packed feathers it depends on.
-    tbb::enumerable_thread_specific<Scratch> scratch;
-    schedule(ctx, work, isChanged.data(), options.threads, [&](uint32_t i) {
-      packFeather(ctx, i, scratch.local(), out);
-      res.recomputed[i] = 1;
-    });
-    finish(ctx, scratch, res, t0);
+    schedule(ctx, work, isChanged.data(), options.threads, [&](uint32_t i) { run.packOne(ctx, res, i); });
+    finish(ctx, run.scratch, res, t0);
     if (options.captureFields) {
       for (const BarbField& f : base.barbFields)
-        if (f.feather < n && ctx.pos[f.feather] != UINT32_MAX && !isChanged[f.feather]) res.barbFields.push_back(f);
+        if (f.feather < n && source[f.feather] == Source::Kept) res.barbFields.push_back(f);
       std::sort(res.barbFields.begin(), res.barbFields.end(), fieldBefore);
     }
-  };
-  detail::inArena(options.threads, run);
+  });
   return res;
 }
 

@@ -75,8 +75,9 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     std::copy(L.cvs.begin() + k.cvOff, L.cvs.begin() + k.cvOff + k.cvCount, K.cvs.begin() + K.cvOffset[k0 + kk]);
   }
   if (o.elevateBarbs && !L.unopened && nKeys > 0) {
-    PlacedKey pk[256];
-    const size_t nk = std::min<size_t>(nKeys, 256);
+    const size_t nk = nKeys;
+    S.placed.resize(nk);
+    PlacedKey* const pk = S.placed.data();
     for (size_t kk = 0; kk < nk; ++kk) {
       const LocalKey& k = L.keys[kk];
       pk[kk] = {R(k.root), R(k.u), R(k.w), R(k.d), R(k.left)};

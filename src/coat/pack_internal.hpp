@@ -152,7 +152,13 @@ struct SkinCandidate {
   }
 };
 
+// A key barb's frame placed at the feather's elevation (feather-local coordinates).
+struct PlacedKey {
+  dvec3 root, u, w, d, left;
+};
+
 struct Scratch {
+  std::vector<PlacedKey> placed;          // per main key barb of the feather being packed
   std::vector<FeatherCandidate> cand;
   std::vector<SkinCandidate> skinCand;
   std::vector<double> psiMin, shaftRadBin, yLo, yHi;
@@ -252,9 +258,6 @@ struct Output {
 
 constexpr uint32_t kChunk = 4;
 
-struct PlacedKey {
-  dvec3 root, u, w, d, left;
-};
 
 // A key barb's control vertex after flattening mu, stretching about the root cv0 (flattened likewise) by
 // `stretch` and lifting by alpha about the origin.
@@ -292,15 +295,30 @@ void checkInput(const CoatFeathers& c, const PackOptions& o);
 void buildReachClasses(Context& ctx, const std::vector<double>& radius, double med);
 void buildDependencies(Context& ctx, const std::vector<uint32_t>& items, const std::vector<double>& radius, size_t grain);
 void buildSkinSamples(Context& ctx, double medReach);
+// The styling constraints and the layer order (ctx.order, ctx.pos) of a pack.
+void beginContext(Context& ctx, std::vector<uint32_t> order);
+// Everything a full pack needs before its feathers: beginContext over the present feathers, feather-local
+// data, clearances, reach classes, dependencies and skin samples.
 void setup(Context& ctx);
-std::vector<uint32_t> pointOffsets(const Context& ctx);
+std::vector<uint32_t> presentInLayerOrder(const CoatFeathers& coat);
+std::vector<uint8_t> changedMask(const std::vector<uint32_t>& changed, size_t n);
 
 // ---- pack_result.cpp: the result's layout and the end of a pack
 uint32_t appendGroups(const LocalFeather& L, int barbSamples, uint32_t p, std::vector<uint32_t>& groupPoint);
 std::array<uint32_t, 3> localKeyCount(const LocalFeather& L);
 void copyKeys(const PackedKeyBarbs& from, PackedKeyBarbs& to, uint32_t i);
 bool sameKeyLayout(const PackedKeyBarbs& a, const PackedKeyBarbs& b, uint32_t i);
-void initResult(const Context& ctx, PackResult& res);
+// Where a feather's packed data comes from in a result being laid out.
+enum class Source : uint8_t {
+  None,   // not packed (absent): no points, groups or key barbs
+  Local,  // packed now, from its feather-local data
+  Kept,   // copied from an earlier result (its shape there)
+};
+// Sizes every array of `res` for ctx.order with each feather's shape from `source` (`kept` for Kept
+// feathers, may be null without them). Points, spheres and key barbs are left to be written once.
+void layoutResult(const Context& ctx, const std::vector<Source>& source, const PackResult* kept, PackResult& res);
+// Copies feather i from `from` into `res` (laid out with the same shape for i) and closes its chunks.
+void keepFeather(const PackResult& from, PackResult& res, Output& out, uint32_t i);
 bool fieldBefore(const BarbField& a, const BarbField& b);
 void finish(const Context& ctx, tbb::enumerable_thread_specific<Scratch>& scratch, PackResult& res,
             std::chrono::steady_clock::time_point t0);

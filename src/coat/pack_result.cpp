@@ -56,36 +56,81 @@ bool sameKeyLayout(const PackedKeyBarbs& a, const PackedKeyBarbs& b, uint32_t i)
   return true;
 }
 
-void initResult(const Context& ctx, PackResult& res) {
+void layoutResult(const Context& ctx, const std::vector<Source>& source, const PackResult* kept, PackResult& res) {
   const size_t n = ctx.coat.size();
+  PTERYLA_CHECK(source.size() == n, "layoutResult needs a source per feather");
+  auto keptShape = [&] {
+    PTERYLA_CHECK(kept && kept->groupOffset.size() == n + 1 && kept->packedKeys.keyOffset.size() == n + 1,
+                  "a kept feather needs a result of the same coat");
+    return kept;
+  };
   res.order = ctx.order;
   res.elevation.assign(n, 0.0);
-  layoutKeys(n, res.packedKeys, [&](size_t i) { return localKeyCount(ctx.local[i]); },
-             [&](size_t i, uint32_t k) -> uint32_t { return ctx.local[i].keys[k].cvCount; });
+  layoutKeys(
+      n, res.packedKeys,
+      [&](size_t i) -> std::array<uint32_t, 3> {
+        if (source[i] == Source::Local) return localKeyCount(ctx.local[i]);
+        if (source[i] == Source::None) return {0, 0, 0};
+        const PackedKeyBarbs& K = keptShape()->packedKeys;
+        return {K.keyOffset[i + 1] - K.keyOffset[i], K.leftKeys[i], K.replaced[i]};
+      },
+      [&](size_t i, uint32_t k) -> uint32_t {
+        if (source[i] == Source::Local) return ctx.local[i].keys[k].cvCount;
+        const PackedKeyBarbs& K = kept->packedKeys;
+        return K.cvOffset[K.keyOffset[i] + k + 1] - K.cvOffset[K.keyOffset[i] + k];
+      });
   res.barbsChanged.assign(n, 0);
   res.recomputed.assign(n, 0);
-  res.pointOffset = pointOffsets(ctx);
-  res.points.clear();
-  res.points.resize(res.pointOffset.back());  // uninitialised: every feather writes its own points
   res.bounds.assign(n, glm::dvec4(0));
+  res.pointOffset.assign(n + 1, 0);
   res.groupOffset.assign(n + 1, 0);
   res.groupPoint.clear();
   size_t groups = 1;
-  for (const LocalFeather& L : ctx.local)
-    if (L.packable) groups += 1 + (L.after.empty() ? 0 : 1) + L.keys.size();
-  res.groupPoint.reserve(groups);
-  for (size_t i = 0; i < n; ++i) {
+  for (uint32_t i = 0; i < n; ++i) {
     const LocalFeather& L = ctx.local[i];
+    if (source[i] == Source::Local) groups += 1 + (L.after.empty() ? 0 : 1) + L.keys.size();
+    if (source[i] == Source::Kept) groups += keptShape()->groupOffset[i + 1] - kept->groupOffset[i];
+  }
+  res.groupPoint.reserve(groups);
+  for (uint32_t i = 0; i < n; ++i) {
     uint32_t p = res.pointOffset[i];
-    if (L.packable) p = appendGroups(L, ctx.opt.barbSamples, p, res.groupPoint);
-    PTERYLA_CHECK(p == res.pointOffset[i + 1], "point groups do not cover the points");
+    if (source[i] == Source::Local) {
+      const LocalFeather& L = ctx.local[i];
+      p = appendGroups(L, ctx.opt.barbSamples, p, res.groupPoint);
+      PTERYLA_CHECK(p - res.pointOffset[i] == L.pointCount, "point groups do not cover the points");
+    } else if (source[i] == Source::Kept) {
+      for (uint32_t g = kept->groupOffset[i]; g < kept->groupOffset[i + 1]; ++g) {
+        res.groupPoint.push_back(p);
+        p += kept->groupPoint[g + 1] - kept->groupPoint[g];
+      }
+      PTERYLA_CHECK(p - res.pointOffset[i] == kept->pointOffset[i + 1] - kept->pointOffset[i],
+                    "kept point groups do not cover its points");
+    }
+    res.pointOffset[i + 1] = p;
     res.groupOffset[i + 1] = static_cast<uint32_t>(res.groupPoint.size());
   }
   res.groupPoint.push_back(res.pointOffset[n]);
+  res.points.clear();
+  res.points.resize(res.pointOffset[n]);  // uninitialised: every feather writes its own points
   res.groupBounds.clear();
   res.groupBounds.resize(res.groupOffset[n]);  // uninitialised: each group's sphere is written by its feather
   res.barbFields.clear();
   res.stats = {};
+}
+
+void keepFeather(const PackResult& from, PackResult& res, Output& out, uint32_t i) {
+  res.elevation[i] = from.elevation[i];
+  copyKeys(from.packedKeys, res.packedKeys, i);
+  res.barbsChanged[i] = from.barbsChanged[i];
+  res.bounds[i] = from.bounds[i];
+  PTERYLA_CHECK(from.pointOffset[i + 1] - from.pointOffset[i] == res.pointOffset[i + 1] - res.pointOffset[i] &&
+                    from.groupOffset[i + 1] - from.groupOffset[i] == res.groupOffset[i + 1] - res.groupOffset[i],
+                "kept feather with a different point structure");
+  std::copy(from.points.begin() + from.pointOffset[i], from.points.begin() + from.pointOffset[i + 1],
+            res.points.begin() + res.pointOffset[i]);
+  std::copy(from.groupBounds.begin() + from.groupOffset[i], from.groupBounds.begin() + from.groupOffset[i + 1],
+            res.groupBounds.begin() + res.groupOffset[i]);
+  closeChunks(out, i);
 }
 
 bool fieldBefore(const BarbField& a, const BarbField& b) {

@@ -111,24 +111,43 @@ void buildDependencies(Context& ctx, const std::vector<uint32_t>& items, const s
   for (size_t i = 0; i < n; ++i) std::copy(depLists[i].begin(), depLists[i].end(), ctx.deps.begin() + ctx.depOff[i]);
 }
 
+std::vector<uint32_t> presentInLayerOrder(const CoatFeathers& coat) {
+  const size_t n = coat.size();
+  std::vector<uint32_t> order;
+  if (coat.layerOrder.empty()) {
+    for (uint32_t i = 0; i < n; ++i) order.push_back(i);
+  } else {
+    order = coat.layerOrder;
+  }
+  order.erase(std::remove_if(order.begin(), order.end(), [&](uint32_t i) { return !coat.present.empty() && coat.present[i] == 0; }),
+              order.end());
+  return order;
+}
+
+std::vector<uint8_t> changedMask(const std::vector<uint32_t>& changed, size_t n) {
+  std::vector<uint8_t> mask(n, 0);
+  for (uint32_t c : changed) {
+    if (c >= n) throw Error("changed feather " + std::to_string(c) + " out of range", {}, "changed");
+    mask[c] = 1;
+  }
+  return mask;
+}
+
+void beginContext(Context& ctx, std::vector<uint32_t> order) {
+  const PackOptions& o = ctx.opt;
+  ctx.fixed = o.fixedElevation;
+  ctx.minElevation = resolveMinElevation(ctx.coat, o.styling);
+  ctx.shaftBand = resolveShaftBand(ctx.coat, o.styling);
+  ctx.order = std::move(order);
+  ctx.pos.assign(ctx.coat.size(), UINT32_MAX);
+  for (size_t k = 0; k < ctx.order.size(); ++k) ctx.pos[ctx.order[k]] = static_cast<uint32_t>(k);
+}
+
 void setup(Context& ctx) {
   const CoatFeathers& coat = ctx.coat;
   const PackOptions& o = ctx.opt;
   const size_t n = coat.size();
-  ctx.fixed = o.fixedElevation;
-  ctx.minElevation = resolveMinElevation(coat, o.styling);
-  ctx.shaftBand = resolveShaftBand(coat, o.styling);
-  ctx.order.clear();
-  if (coat.layerOrder.empty()) {
-    for (uint32_t i = 0; i < n; ++i) ctx.order.push_back(i);
-  } else {
-    ctx.order = coat.layerOrder;
-  }
-  ctx.order.erase(std::remove_if(ctx.order.begin(), ctx.order.end(),
-                                 [&](uint32_t i) { return !coat.present.empty() && coat.present[i] == 0; }),
-                  ctx.order.end());
-  ctx.pos.assign(n, UINT32_MAX);
-  for (size_t k = 0; k < ctx.order.size(); ++k) ctx.pos[ctx.order[k]] = static_cast<uint32_t>(k);
+  beginContext(ctx, presentInLayerOrder(coat));
 
   ctx.local.resize(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16), [&](const tbb::blocked_range<size_t>& r) {
@@ -297,13 +316,6 @@ void buildSkinSamples(Context& ctx, double medReach) {
     for (float r : sd.rho) sd.maxRho = std::max(sd.maxRho, static_cast<double>(r));
     ctx.skinData = std::move(data);
   }
-}
-
-std::vector<uint32_t> pointOffsets(const Context& ctx) {
-  const size_t n = ctx.coat.size();
-  std::vector<uint32_t> off(n + 1, 0);
-  for (size_t i = 0; i < n; ++i) off[i + 1] = off[i] + ctx.local[i].pointCount;
-  return off;
 }
 
 }  // namespace pteryla::coat::packing
