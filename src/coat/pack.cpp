@@ -34,6 +34,7 @@
 #include <tbb/task_arena.h>
 
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/frame.hpp"
 #include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/bezier.hpp"
 #include "pack_internal.hpp"
@@ -50,10 +51,8 @@ double HeightField1D::at(double s) const {
 }
 
 glm::dvec3 placeDirection(const FeatherFrame& f, double e, const glm::dvec3& d) {
-  const double c = std::cos(e), s = std::sin(e);
-  const dvec3 t = c * f.tangent + s * f.normal;
-  const dvec3 n = -s * f.tangent + c * f.normal;
-  return d.x * t + d.y * f.binormal + d.z * n;
+  const ElevatedAxes<dvec3> a = elevatedAxes(f.tangent, f.binormal, f.normal, e);
+  return d.x * a.x + d.y * a.y + d.z * a.z;
 }
 
 glm::dvec3 placePoint(const FeatherFrame& f, double e, const glm::dvec3& p) { return f.origin + placeDirection(f, e, p); }

@@ -217,6 +217,7 @@ inline dvec3 toFrame(const FeatherFrame& F, const dvec3& q) {
 }
 
 // Rotation by elevation e in the follicle frame (t, b, n): local (x, y, z) -> (x c - z s, y, x s + z c).
+// The placement of pteryla/core/frame.hpp written in follicle-frame coordinates (the packer's hot loops).
 struct Rot {
   double c, s;
   dvec3 operator()(const dvec3& p) const { return {p.x * c - p.z * s, p.y, p.x * s + p.z * c}; }

@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/frame.hpp"
 #include "pteryla/feather/bezier.hpp"
 
 namespace pteryla::feather {
@@ -867,11 +868,11 @@ void validateMeshOptions(const MeshOptions& o) {
 FeatherPlacement FeatherPlacement::fromFollicle(const glm::dvec3& origin, const glm::dvec3& T, const glm::dvec3& N,
                                                 double elevation, double scale) {
   FeatherPlacement p;
-  const double c = std::cos(elevation), s = std::sin(elevation);
+  const ElevatedAxes<glm::dvec3> a = elevatedAxes(T, glm::cross(N, T), N, elevation);
   p.origin = origin;
-  p.x = scale * (c * T + s * N);
-  p.y = scale * glm::cross(N, T);
-  p.z = scale * (-s * T + c * N);
+  p.x = scale * a.x;
+  p.y = scale * a.y;
+  p.z = scale * a.z;
   return p;
 }
 

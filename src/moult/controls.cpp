@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/frame.hpp"
 #include "pteryla/core/rng.hpp"
 
 namespace pteryla::moult {
@@ -272,7 +273,7 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
     raise(elevationOf(position[c] - F.origin, N), v.aim * w);
     if (v.dynamic > 0) {
       const double len = coat.params[i].totalLength();
-      const glm::dvec3 shaft = std::cos(e) * F.tangent + std::sin(e) * N;
+      const glm::dvec3 shaft = elevatedAxes(F.tangent, F.binormal, N, e).x;
       raise(elevationOf(shaft * len + v.lag, N), v.dynamic * w);
     }
     raise(cs.maxLift, v.lift * w);

@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/frame.hpp"
 #include "pteryla/core/rng.hpp"
 
 namespace pteryla::render {
@@ -166,8 +167,8 @@ SyntheticCoat makeSyntheticCoat(const SyntheticCoatParams& p) {
     if (glm::length(T) < 1e-3f) T = glm::vec3(0, 0, -1) - N * glm::dot(glm::vec3(0, 0, -1), N);
     T = glm::normalize(T);
     const float e = p.elevation;
-    const glm::vec3 Tp = std::cos(e) * T + std::sin(e) * N;
     const glm::vec3 B = glm::cross(N, T);
+    const glm::vec3 Tp = elevatedAxes(T, B, N, e).x;
     const float scale = 0.85f + 0.3f * static_cast<float>(hashUniform(p.seed, static_cast<uint64_t>(i), 1));
     const auto mat = static_cast<uint32_t>(hashUniform(p.seed, static_cast<uint64_t>(i), 2) * p.materialCount);
     fol[i] = {pos, Tp, B, scale, std::min<uint32_t>(mat, p.materialCount - 1)};

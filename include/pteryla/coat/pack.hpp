@@ -84,7 +84,10 @@ struct PackOptions {
   // Per feather: a fixed elevation in radians, NaN = computed by packing. Empty = none fixed.
   // Styling selections are resolved into this by resolveStyling() (style.hpp).
   std::vector<double> fixedElevation;
-  std::vector<StyleSelection> styling;  // parsed selections (kept for the pipeline; pack() ignores them)
+  // Parsed selections. pack() applies their minimum elevations and shaft bands itself (resolveMinElevation,
+  // resolveShaftBand); their fixed elevations and direction edits reach it only through fixedElevation and
+  // the coat's frames (applyStyling, style.hpp).
+  std::vector<StyleSelection> styling;
   bool captureFields = false;  // keep every key barb height field in PackResult::barbFields (tests, debugging)
   // How the pipeline packs a moult frame (docs/moult.md; pack() ignores it): true = the lost and growing
   // feathers over the mature coat (packOver, fast), false = a full repack of every feather (tighter).
