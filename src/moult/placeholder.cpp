@@ -1,1 +1,0 @@
-// placeholder: keeps the moult target buildable until its sources land
