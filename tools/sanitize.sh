@@ -7,6 +7,7 @@
 # built (its scripted tests run under the sanitizers too), the Google Benchmark binaries are not.
 # PTERYLA_SHARED=ON: libpteryla.so comes out of this build, so `install_consumer` installs it instead of
 # compiling the whole library a second time in a sub-build (~9 min of a core).
+# PTERYLA_DEBUG_CHECKS turns the hot-loop invariant checks (PTERYLA_DCHECK, core/error.hpp) back on here.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/bootstrap.sh
@@ -19,7 +20,7 @@ GEN=()
 command -v ninja >/dev/null && GEN=(-G Ninja)
 [ -f build-asan/CMakeCache.txt ] && GEN=()
 cmake -S . -B build-asan "${GEN[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
+  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG -DPTERYLA_DEBUG_CHECKS" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
   -DPTERYLA_WERROR=ON -DPTERYLA_SANITIZE=address,undefined -DPTERYLA_SHARED=ON -DPTERYLA_BUILD_VIEWER=ON \
   -DPTERYLA_BUILD_BENCHMARKS=OFF >/dev/null
 cmake --build build-asan -j"$(nproc)"

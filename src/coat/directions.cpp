@@ -181,7 +181,7 @@ SurfaceDirections computeSurfaceDirections(const SkinMesh& rest, const std::vect
 
 void evaluateFrames(const SkinMesh& skin, const Follicles& follicles, const SurfaceDirections& directions,
                     CoatFeathers& coat) {
-  PTERYLA_CHECK(directions.faceCoords.size() == follicles.size(), "directions were computed for other follicles");
+  PTERYLA_CHECK_EQ(directions.faceCoords.size(), follicles.size(), "directions were computed for other follicles");
   coat.frames.resize(coat.size());
   tbb::parallel_for(size_t(0), coat.size(), [&](size_t i) {
     const uint32_t f = coat.follicle[i];

@@ -71,7 +71,7 @@ KeyTriangulation triangulateKeys(const std::vector<glm::dvec2>& keys) {
   for (uint32_t i = 0; i < n; ++i) pts.emplace_back(K::Point_2(keys[i].x, keys[i].y), i);
   Delaunay dt;
   dt.insert(pts.begin(), pts.end());
-  PTERYLA_CHECK(dt.number_of_vertices() == n, "triangulateKeys: key positions must be distinct");
+  PTERYLA_CHECK_EQ(dt.number_of_vertices(), n, "triangulateKeys: key positions must be distinct");
   if (dt.dimension() == 2) {
     for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f)
       out.triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
@@ -221,7 +221,7 @@ std::vector<KeyFeather> resolveKeyFeathers(const Follicles& follicles, const Tra
 }
 
 std::vector<BlendWeights> tractBlendWeights(const TractParameterization& param, const std::vector<KeyFeather>& keys) {
-  PTERYLA_CHECK(param.follicles.size() == param.follicleUv.size(), "parameterization arrays differ in size");
+  PTERYLA_CHECK_EQ(param.follicles.size(), param.follicleUv.size(), "parameterization arrays differ in size");
   std::vector<BlendWeights> out(param.follicles.size());
   if (param.follicles.empty()) return out;
   PTERYLA_CHECK(!keys.empty(), "tractBlendWeights: a tract with follicles needs key feathers");
@@ -269,11 +269,11 @@ InterpolateStats interpolateCoatFeathers(const Follicles& follicles, const std::
   std::vector<Slot> slots(follicles.size());
   for (uint32_t t = 0; t < tracts.size(); ++t) {
     const TractParameterization* param = tracts[t].param;
-    PTERYLA_CHECK(param != nullptr, "interpolateCoatFeathers: tract without a parameterization");
+    PTERYLA_CHECK_NE(param, nullptr, "interpolateCoatFeathers: tract without a parameterization");
     for (uint32_t k = 0; k < param->follicles.size(); ++k) {
       const uint32_t f = param->follicles[k];
       PTERYLA_CHECK(f < follicles.size(), "parameterization refers to a missing follicle");
-      PTERYLA_CHECK(slots[f].tract == UINT32_MAX, "follicle parameterized by two tracts");
+      PTERYLA_CHECK_EQ(slots[f].tract, UINT32_MAX, "follicle parameterized by two tracts");
       slots[f] = {t, k};
     }
   }

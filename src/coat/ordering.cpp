@@ -35,7 +35,7 @@ double axisArcLength(const std::vector<glm::dvec3>& axis, const glm::dvec3& p) {
 
 std::vector<double> flowPotential(const std::vector<glm::dvec3>& x, const std::vector<glm::dvec3>& dir, int neighbours) {
   const size_t n = x.size();
-  PTERYLA_CHECK(dir.size() == n, "flowPotential: one direction per point");
+  PTERYLA_CHECK_EQ(dir.size(), n, "flowPotential: one direction per point");
   std::vector<double> phi(n, 0.0);
   if (n < 2) return phi;
   const size_t k = static_cast<size_t>(std::clamp(neighbours, 1, 64));
@@ -160,7 +160,7 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
     if (options.axis.size() < 2) throw Error("ordering by axis needs an \"axis\" polyline (head to tail)", {}, "ordering.axis");
     for (size_t i = 0; i < n; ++i) res.key[i] = axisArcLength(options.axis, follicles.position[coat.follicle[i]]);
   } else if (options.method == OrderMethod::Flow) {
-    PTERYLA_CHECK(coat.frames.size() == n, "orderLayers: flow ordering needs the feather frames");
+    PTERYLA_CHECK_EQ(coat.frames.size(), n, "orderLayers: flow ordering needs the feather frames");
     std::vector<glm::dvec3> x(n), d(n);
     for (size_t i = 0; i < n; ++i) {
       x[i] = coat.frames[i].origin;
@@ -168,8 +168,8 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
     }
     res.key = flowPotential(x, d, options.neighbours);
   } else {
-    PTERYLA_CHECK(params.size() == tracts.size(), "orderLayers: one parameterization per tract");
-    PTERYLA_CHECK(directions.faceCoords.size() == follicles.size(), "orderLayers: directions of other follicles");
+    PTERYLA_CHECK_EQ(params.size(), tracts.size(), "orderLayers: one parameterization per tract");
+    PTERYLA_CHECK_EQ(directions.faceCoords.size(), follicles.size(), "orderLayers: directions of other follicles");
 
     // Per feather: (u,v) position and direction; per tract: the mean direction.
     std::vector<glm::dvec2> uv(n), duv(n);

@@ -281,7 +281,7 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
 
 std::vector<uint32_t> changedFeathers(const CoatFeathers& a, const CoatFeathers& b, const std::vector<double>& fa,
                                       const std::vector<double>& fb) {
-  PTERYLA_CHECK(a.size() == b.size(), "changedFeathers needs coats of equal size");
+  PTERYLA_CHECK_EQ(a.size(), b.size(), "changedFeathers needs coats of equal size");
   std::vector<uint32_t> out;
   auto bitsEq = [](double x, double y) { return std::memcmp(&x, &y, sizeof(double)) == 0; };
   for (uint32_t i = 0; i < a.size(); ++i) {

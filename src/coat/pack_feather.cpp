@@ -41,7 +41,7 @@ void closeChunks(Output& out, uint32_t i) {
     }
     out.chunkBounds[c] = glm::dvec4(centre, r * (1 + 1e-9) + 1e-9 * (glm::length(centre) + r) + 1e-12);
   }
-  PTERYLA_CHECK(c == out.chunkOffset[i + 1], "chunk count mismatch");
+  PTERYLA_CHECK_EQ(c, out.chunkOffset[i + 1], "chunk count mismatch");
 }
 
 // Packs feather i against its dependencies' packed points (already in `out`) and the skin.
@@ -70,7 +70,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
                 "packed key barb layout mismatch");
   for (size_t kk = 0; kk < K.keyOffset[i + 1] - k0; ++kk) {
     const LocalKey& k = L.keys[kk];
-    PTERYLA_CHECK(K.cvOffset[k0 + kk + 1] - K.cvOffset[k0 + kk] == k.cvCount, "packed key barb layout mismatch");
+    PTERYLA_DCHECK_EQ(K.cvOffset[k0 + kk + 1] - K.cvOffset[k0 + kk], k.cvCount, "packed key barb layout mismatch");
     K.rp[k0 + kk] = k.rp;
     std::copy(L.cvs.begin() + k.cvOff, L.cvs.begin() + k.cvOff + k.cvCount, K.cvs.begin() + K.cvOffset[k0 + kk]);
   }
@@ -137,7 +137,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
   auto closeGroup = [&] {
     // Sphere around the group's stored (float) points: box centre, largest distance plus thickness.
     const uint32_t a = out.groupPoint[g], b = out.groupPoint[g + 1];
-    PTERYLA_CHECK(b == q, "packed point group mismatch");
+    PTERYLA_DCHECK_EQ(b, q, "packed point group mismatch");
     dvec3 lo(kInf), hi(-kInf);
     for (uint32_t k = a; k < b; ++k) {
       const dvec3 p(out.points[k]);

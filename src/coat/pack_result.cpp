@@ -32,7 +32,7 @@ uint32_t appendGroups(const LocalFeather& L, int barbSamples, uint32_t p, std::v
 std::array<uint32_t, 3> localKeyCount(const LocalFeather& L) {
   if (!L.packable || L.unopened) return {0, 0, 0};
   for (uint32_t k = 0; k < L.mainKeys; ++k)
-    PTERYLA_CHECK((L.keys[k].vane == 0) == (k < L.leftKeys), "local key barbs are not left vane first");
+    PTERYLA_DCHECK((L.keys[k].vane == 0) == (k < L.leftKeys), "local key barbs are not left vane first");
   return {L.mainKeys, L.leftKeys, 1};
 }
 
@@ -58,7 +58,7 @@ bool sameKeyLayout(const PackedKeyBarbs& a, const PackedKeyBarbs& b, uint32_t i)
 
 void layoutResult(const Context& ctx, const std::vector<Source>& source, const PackResult* kept, PackResult& res) {
   const size_t n = ctx.coat.size();
-  PTERYLA_CHECK(source.size() == n, "layoutResult needs a source per feather");
+  PTERYLA_CHECK_EQ(source.size(), n, "layoutResult needs a source per feather");
   auto keptShape = [&] {
     PTERYLA_CHECK(kept && kept->groupOffset.size() == n + 1 && kept->packedKeys.keyOffset.size() == n + 1,
                   "a kept feather needs a result of the same coat");
@@ -97,14 +97,13 @@ void layoutResult(const Context& ctx, const std::vector<Source>& source, const P
     if (source[i] == Source::Local) {
       const LocalFeather& L = ctx.local[i];
       p = appendGroups(L, ctx.opt.barbSamples, p, res.groupPoint);
-      PTERYLA_CHECK(p - res.pointOffset[i] == L.pointCount, "point groups do not cover the points");
+      PTERYLA_CHECK_EQ(p - res.pointOffset[i], L.pointCount, "point groups do not cover the points");
     } else if (source[i] == Source::Kept) {
       for (uint32_t g = kept->groupOffset[i]; g < kept->groupOffset[i + 1]; ++g) {
         res.groupPoint.push_back(p);
         p += kept->groupPoint[g + 1] - kept->groupPoint[g];
       }
-      PTERYLA_CHECK(p - res.pointOffset[i] == kept->pointOffset[i + 1] - kept->pointOffset[i],
-                    "kept point groups do not cover its points");
+      PTERYLA_CHECK_EQ(p - res.pointOffset[i], kept->pointOffset[i + 1] - kept->pointOffset[i], "kept point groups do not cover its points");
     }
     res.pointOffset[i + 1] = p;
     res.groupOffset[i + 1] = static_cast<uint32_t>(res.groupPoint.size());

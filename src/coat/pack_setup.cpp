@@ -241,7 +241,7 @@ void buildSkinSamples(Context& ctx, double medReach) {
             const double u = static_cast<double>(x) / m, v = static_cast<double>(y) / m;
             sd.pts[q++] = P[0] + u * (P[1] - P[0]) + v * (P[2] - P[0]);
           }
-        PTERYLA_CHECK(q == base + faceOff[f + 1], "skin sample count mismatch");
+        PTERYLA_DCHECK_EQ(q, base + faceOff[f + 1], "skin sample count mismatch");
       }
     });
     // The sample grid (serial, ~2.5 MB of fresh memory on the bird) is built beside the patches.

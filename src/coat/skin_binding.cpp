@@ -56,7 +56,7 @@ void bindPoints(const SkinMesh& skin, const std::vector<V>& points, std::vector<
     glm::dvec3 bary(1.0 / 3.0);
     double d2 = 0;
     const int64_t f = bvh.nearest(p, std::numeric_limits<double>::infinity(), bary, d2);
-    PTERYLA_CHECK(f >= 0, "no nearest skin face");
+    PTERYLA_CHECK_GE(f, 0, "no nearest skin face");
     at[i] = {static_cast<uint32_t>(f), bary};
     const LocalFrame fr = frameAt(skin, at[i]);
     const glm::dvec3 d = p - pointAt(skin, at[i]);

@@ -57,7 +57,7 @@ StyleApplied applyStyling(CoatFeathers& coat, const std::vector<StyleSelection>&
   StyleApplied r;
   r.fixedElevation = baseFixed;
   if (r.fixedElevation.empty()) r.fixedElevation.assign(n, std::numeric_limits<double>::quiet_NaN());
-  PTERYLA_CHECK(r.fixedElevation.size() == n, "baseFixed must be empty or one entry per feather");
+  PTERYLA_CHECK_EQ(r.fixedElevation.size(), n, "baseFixed must be empty or one entry per feather");
   std::vector<uint8_t> changed(n, 0);
   for (size_t k = 0; k < selections.size(); ++k) {
     const StyleSelection& s = selections[k];

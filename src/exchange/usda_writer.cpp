@@ -570,7 +570,7 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
         layer{"int[] primvars:layer", "interpolation = \"vertex\"", {}}, age{"float[] primvars:age", "interpolation = \"vertex\"", {}};
     for (size_t k = 0; k < nf; ++k) {
       const ExportFrame& f = s.frames[k];
-      PTERYLA_CHECK(f.feathers.size() == nFeathers, "the feather count changed between frames");
+      PTERYLA_CHECK_EQ(f.feathers.size(), nFeathers, "the feather count changed between frames");
       std::vector<double> length(nFeathers, 0);
       for (size_t i = 0; i < nFeathers; ++i) length[i] = medianLength[std::min<size_t>(f.feathers[i].material, byMaterial.size() - 1)];
       for (const auto& r : f.ranges) length[r.feather] = std::max(1e-12, featherLength(f, r));

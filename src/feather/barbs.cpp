@@ -369,7 +369,7 @@ void generateBarbs(const FeatherParams& p, FeatherCurves& out, const GenerateOpt
 }
 
 void barbPolyline(const FeatherCurves& c, const BarbCurve& b, int segments, std::vector<glm::vec3>& out) {
-  PTERYLA_CHECK(segments >= 1, "need at least one segment");
+  PTERYLA_CHECK_GE(segments, 1, "need at least one segment");
   out.resize(static_cast<size_t>(segments) + 1);
   const glm::vec3* cv = c.cvs.data() + b.cvOffset;
   for (int i = 0; i <= segments; ++i) out[i] = bezierPoint(cv, b.cvCount, static_cast<double>(i) / segments);

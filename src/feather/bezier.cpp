@@ -26,14 +26,14 @@ std::vector<glm::dvec3> elevateDegree(const std::vector<glm::dvec3>& cvs) {
 }
 
 std::vector<glm::dvec3> elevateTo(const std::vector<glm::dvec3>& cvs, size_t count) {
-  PTERYLA_CHECK(count >= cvs.size(), "elevateTo cannot lower the degree");
+  PTERYLA_CHECK_GE(count, cvs.size(), "elevateTo cannot lower the degree");
   std::vector<glm::dvec3> out = cvs;
   while (out.size() < count) out = elevateDegree(out);
   return out;
 }
 
 void sampleBezier(const std::vector<glm::dvec3>& cvs, int segments, std::vector<glm::dvec3>& out) {
-  PTERYLA_CHECK(segments >= 1, "need at least one segment");
+  PTERYLA_CHECK_GE(segments, 1, "need at least one segment");
   out.resize(static_cast<size_t>(segments) + 1);
   for (int i = 0; i <= segments; ++i) out[i] = bezierPoint(cvs, static_cast<double>(i) / segments);
 }

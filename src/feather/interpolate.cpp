@@ -79,7 +79,7 @@ FeatherParams blendFeathers(const std::vector<const FeatherParams*>& feathersIn,
   for (size_t i = 0; i < feathersIn.size(); ++i) {
     const double wi = weightsIn[i];
     if (!std::isfinite(wi) || wi < 0) throw Error("blendFeathers: weights must be finite and >= 0", {}, "weights[" + std::to_string(i) + "]");
-    PTERYLA_CHECK(feathersIn[i] != nullptr, "null feather in blend");
+    PTERYLA_CHECK_NE(feathersIn[i], nullptr, "null feather in blend");
     if (wi > 0) {
       fs.push_back(feathersIn[i]);
       w.push_back(wi);

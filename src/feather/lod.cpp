@@ -145,7 +145,7 @@ void computeLodOrder(const FeatherCurves& c, LodOrder& out) {
     s.heap.push_back(iv);
   }
   divideAndConquer(s.heap, out.rank, next, [](uint32_t i) { return i; }, s.keyDist);
-  PTERYLA_CHECK(next == n, "every barb gets a collapse rank");
+  PTERYLA_CHECK_EQ(next, n, "every barb gets a collapse rank");
 }
 
 LodOrder computeLodOrder(const FeatherCurves& c) {

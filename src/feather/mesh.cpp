@@ -357,7 +357,7 @@ void padTo(std::vector<T>& v, size_t n, const T& def) {
 Dst reserveSlice(TriMesh& out, size_t verts, size_t indices) {
   const size_t n0 = out.positions.size();
   const size_t n1 = n0 + verts;
-  PTERYLA_CHECK(n1 <= std::numeric_limits<uint32_t>::max(), "mesh exceeds 32-bit vertex indices");
+  PTERYLA_CHECK_LE(n1, std::numeric_limits<uint32_t>::max(), "mesh exceeds 32-bit vertex indices");
   padTo(out.normals, n0, glm::vec3(0, 0, 1));
   padTo(out.tangents, n0, glm::vec3(1, 0, 0));
   padTo(out.uvGlobal, n0, glm::vec2(0));

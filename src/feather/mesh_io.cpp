@@ -49,7 +49,7 @@ void checkMesh(const TriMesh& m, const std::string& path) {
                     ok(m.uvGrowth.size()) && ok(m.alpha.size()) && ok(m.sheath.size()) && ok(m.barbCount.size()) &&
                     ok(m.featherId.size()),
                 "TriMesh attribute arrays must be empty or have one entry per vertex");
-  PTERYLA_CHECK(m.indices.size() % 3 == 0, "TriMesh indices must come in triples");
+  PTERYLA_CHECK_EQ(m.indices.size() % 3, size_t(0), "TriMesh indices must come in triples");
   for (uint32_t i : m.indices) PTERYLA_CHECK(i < n, "TriMesh index out of range");
   // No NaN or infinity ever reaches a file: refuse before anything is written.
   requireFinite(m, path);

@@ -14,14 +14,14 @@
 namespace pteryla::feather::meshing {
 
 Plan makePlan(const FeatherMeshInput& in, const MeshOptions& opt, Scratch& s) {
-  PTERYLA_CHECK(in.curves != nullptr, "FeatherMeshInput::curves is required");
+  PTERYLA_CHECK_NE(in.curves, nullptr, "FeatherMeshInput::curves is required");
   Plan pl;
   pl.c = in.curves;
   pl.ref = in.reference ? in.reference : in.curves;
   const FeatherCurves& c = *in.curves;
   PTERYLA_CHECK(c.barbBegin.size() == c.partCount() && c.barbEnd.size() == c.partCount(), "malformed FeatherCurves");
   if (in.order) {
-    PTERYLA_CHECK(in.order->rank.size() == c.barbs.size(), "LodOrder was computed for different curves");
+    PTERYLA_CHECK_EQ(in.order->rank.size(), c.barbs.size(), "LodOrder was computed for different curves");
     pl.order = in.order;
   } else {
     computeLodOrder(c, s.order);

@@ -184,10 +184,10 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
                                std::vector<double>& fixedElevation, const NaturalPackFn& naturalPack) {
   ControlResult res;
   const size_t n = coat.size();
-  PTERYLA_CHECK(binding.control.size() == follicles.size(), "control binding was made for other follicles");
-  PTERYLA_CHECK(binding.anchor.size() == controls.size(), "control binding was made for other controls");
+  PTERYLA_CHECK_EQ(binding.control.size(), follicles.size(), "control binding was made for other follicles");
+  PTERYLA_CHECK_EQ(binding.anchor.size(), controls.size(), "control binding was made for other controls");
   if (fixedElevation.empty()) fixedElevation.assign(n, std::numeric_limits<double>::quiet_NaN());
-  PTERYLA_CHECK(fixedElevation.size() == n, "fixedElevation must have one entry per feather");
+  PTERYLA_CHECK_EQ(fixedElevation.size(), n, "fixedElevation must have one entry per feather");
   if (controls.empty()) return res;
 
   std::vector<ControlValues> values(controls.size());
@@ -248,7 +248,7 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
     coat::PackOptions o = pack;
     o.fixedElevation = fixedElevation;
     natural = &naturalPack(posed, coat, o).elevation;
-    PTERYLA_CHECK(natural->size() == n, "the natural pack must have one elevation per feather");
+    PTERYLA_CHECK_EQ(natural->size(), n, "the natural pack must have one elevation per feather");
     res.naturalPacked = true;
   }
 

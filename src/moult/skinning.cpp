@@ -102,7 +102,7 @@ SkeletonPose restPose(const Skeleton& s) {
 }
 
 std::vector<RigidTransform> jointTransforms(const Skeleton& s, const SkeletonPose& pose) {
-  PTERYLA_CHECK(pose.rotation.size() == s.jointCount(), "pose and skeleton differ in joint count");
+  PTERYLA_CHECK_EQ(pose.rotation.size(), s.jointCount(), "pose and skeleton differ in joint count");
   std::vector<RigidTransform> out(s.jointCount());
   for (size_t j = 0; j < s.jointCount(); ++j) {
     const glm::dmat3 r = glm::mat3_cast(pose.rotation[j]);
@@ -120,7 +120,7 @@ std::vector<RigidTransform> jointTransforms(const Skeleton& s, const SkeletonPos
 
 void skinPoints(const Skeleton& s, const std::vector<RigidTransform>& joints, const std::vector<glm::dvec3>& rest,
                 std::vector<glm::dvec3>& out) {
-  PTERYLA_CHECK(rest.size() == s.vertexCount(), "skinPoints: point count differs from the skeleton's vertex count");
+  PTERYLA_CHECK_EQ(rest.size(), s.vertexCount(), "skinPoints: point count differs from the skeleton's vertex count");
   out.resize(rest.size());
   for (size_t v = 0; v < rest.size(); ++v) {
     const glm::dvec3& p = rest[v];
