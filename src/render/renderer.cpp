@@ -17,9 +17,6 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include "gl_api.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/render/image.hpp"
@@ -78,45 +75,11 @@ struct Renderer::Impl {
   } shadow;
   glm::vec3 skinLo{0.0f}, skinHi{0.0f};
   bool hasSkinBounds = false;
-  std::vector<FeatherDrawRange> ranges;
-  std::vector<glm::vec4> rangeSpheres;  // per range: bounding sphere (centre, radius) for culling
-  std::vector<glm::vec3> rangeBoxes;    // per range: lo, hi (2 entries) for occlusion culling
-  // Each feather part split into chunks of at most kChunkTriangles consecutive triangles (a few
-  // barbs), each with its own box, so the part of a feather behind the body is skipped too. The
-  // chunks of part k of range i are chunks[partChunks[5 i + k], partChunks[5 i + k + 1]).
-  struct Chunk {
-    glm::vec3 lo, hi;
-    uint32_t first, count;  // indices
-    uint32_t vertexLo, vertexHi;  // the vertices its triangles use lie in [vertexLo, vertexHi]
-  };
-  static constexpr uint32_t kChunkTriangles = 32;
-  std::vector<Chunk> chunks;
-  std::vector<uint32_t> partChunks;
-  // CPU mirror of the coat for per-frame culling; each frame's surviving triangles are written to
-  // frameIndices in draw order (layer order, octant order) and drawn in one call per material run.
-  std::vector<glm::vec3> coatPositions;
-  std::vector<uint32_t> coatIndices;
-  std::vector<uint32_t> frameIndices;
-  std::vector<uint32_t> scratch;  // per frame: each chunk's surviving indices at the chunk's offset
-  std::vector<uint32_t> kept;     // per frame and chunk: indices surviving
-  struct Plan {                   // per frame and feather
-    enum State : uint8_t { kEmpty, kCulled, kOccluded, kDrawn };
-    State state = kEmpty;
-    bool backward = false;
-    int8_t order[4] = {0, 1, 2, 3};  // parts: shaft, left, right, afterfeather
-    uint32_t triangles = 0, occludedTriangles = 0, subpixelTriangles = 0;
-  };
-  std::vector<Plan> plans;
-  struct Run {
-    uint32_t material;
-    size_t first, count;  // in frameIndices
-  };
-  std::vector<Run> runs;
-  std::vector<float> depth;              // skin depth read back for occlusion culling
-  std::vector<float> tileMax;            // per kTile x kTile block: farthest depth
-  std::vector<float> tileMin;            // per kTile x kTile block: nearest depth
-  int tilesX = 0, tilesY = 0;
-  static constexpr int kTile = 8;
+  // The coat's CPU mirror and each frame's plan (culling, draw order, material runs): the frame's
+  // surviving indices are streamed into the coat's element buffer and drawn one call per run.
+  DrawPlan plan;
+  std::vector<float> depth;  // skin depth read back for occlusion culling
+  DepthTiles occluders;      // the same, reduced to tiles
   std::vector<GpuMaterial> materials;
   std::map<std::string, GLuint> fileTextures;            // path -> texture, per setMaterials
   std::map<std::tuple<double, double, double>, GLuint> brdfCache;
@@ -252,10 +215,10 @@ struct Renderer::Impl {
   bool shadowBounds(glm::vec3& lo, glm::vec3& hi) const {
     bool any = false;
     if (hasSkinBounds && skin.indexCount > 0) lo = skinLo, hi = skinHi, any = true;
-    for (size_t i = 0; i < ranges.size(); ++i) {
-      if (ranges[i].indexCount == 0) continue;
-      lo = any ? glm::min(lo, rangeBoxes[2 * i]) : rangeBoxes[2 * i];
-      hi = any ? glm::max(hi, rangeBoxes[2 * i + 1]) : rangeBoxes[2 * i + 1];
+    for (size_t i = 0; i < plan.ranges().size(); ++i) {
+      if (plan.ranges()[i].indexCount == 0) continue;
+      lo = any ? glm::min(lo, plan.featherLo(i)) : plan.featherLo(i);
+      hi = any ? glm::max(hi, plan.featherHi(i)) : plan.featherHi(i);
       any = true;
     }
     return any;
@@ -333,29 +296,20 @@ struct Renderer::Impl {
       applyDefaults(skin);
       drawIndices(0, skin.indexCount);
     }
-    if (coat.indexCount > 0 && !ranges.empty()) {
+    if (coat.indexCount > 0 && !plan.ranges().empty()) {
       gl.Uniform1f(U(p, "uAlphaCut"), 0.5f);
       gl.BindVertexArray(coat.vao);
       applyDefaults(coat);
       gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, shadow.ebo);
-      // Runs of consecutive feathers of one material, each drawn from the full index list.
-      size_t i = 0;
-      while (i < ranges.size()) {
-        const uint32_t material = ranges[i].material;
-        const size_t first = ranges[i].firstIndex;
-        size_t last = first + ranges[i].indexCount, j = i + 1;
-        while (j < ranges.size() && ranges[j].material == material && ranges[j].firstIndex == last)
-          last += ranges[j].indexCount, ++j;
-        if (last > first && material < materials.size()) {
-          const GpuMaterial& m = materials[material];
-          gl.ActiveTexture(GL_TEXTURE0);
-          gl.BindTexture(GL_TEXTURE_2D, m.colorTex);
-          gl.ActiveTexture(GL_TEXTURE1);
-          gl.BindTexture(GL_TEXTURE_2D, m.alphaTex);
-          gl.Uniform1i(U(p, "uColorUv"), static_cast<int>(m.desc.colorUv));
-          drawIndices(first, last - first);
-        }
-        i = j;
+      for (const DrawRun& run : plan.shadowRuns()) {
+        if (run.material >= materials.size()) continue;
+        const GpuMaterial& m = materials[run.material];
+        gl.ActiveTexture(GL_TEXTURE0);
+        gl.BindTexture(GL_TEXTURE_2D, m.colorTex);
+        gl.ActiveTexture(GL_TEXTURE1);
+        gl.BindTexture(GL_TEXTURE_2D, m.alphaTex);
+        gl.Uniform1i(U(p, "uColorUv"), static_cast<int>(m.desc.colorUv));
+        drawIndices(run.first, run.count);
       }
     }
     gl.Disable(GL_POLYGON_OFFSET_FILL);
@@ -458,166 +412,6 @@ struct Renderer::Impl {
     if (count == 0) return;
     gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
                     reinterpret_cast<const void*>(first * sizeof(uint32_t)));
-  }
-
-  // Writes a chunk's triangles to `out`, forward or in reverse triangle order; with `test`, only the
-  // triangles that may be visible: a triangle is dropped when it lies outside the viewport or its
-  // nearest vertex is behind the farthest skin depth over every tile its bounds touch (window depth
-  // is affine over a triangle, so its nearest point is a vertex). Returns the indices written.
-  // `projected` is scratch space. Thread-safe (reads shared state only).
-  // With `subpixel`, triangles that cover no pixel centre are dropped as well (they produce no fragment
-  // without multisampling, but llvmpipe still shades their vertices and sets them up).
-  // `tiny` counts the triangles dropped only for covering no pixel centre.
-  uint32_t emitChunk(const Chunk& ch, bool backward, bool test, bool subpixel, const glm::mat4& viewProj, int w, int h,
-                     uint32_t* out, std::vector<glm::vec3>& projected, uint32_t& tiny) const {
-    const uint32_t* idx = coatIndices.data() + ch.first;
-    const uint32_t tris = ch.count / 3;
-    if (!test && !subpixel) {
-      if (!backward) {
-        std::copy(idx, idx + ch.count, out);
-      } else {
-        for (uint32_t t = 0; t < tris; ++t) std::copy(idx + 3 * (tris - 1 - t), idx + 3 * (tris - t), out + 3 * t);
-      }
-      return ch.count;
-    }
-    const uint32_t nv = ch.vertexHi - ch.vertexLo + 1;
-    projected.resize(nv);
-    for (uint32_t v = 0; v < nv; ++v) {
-      const glm::vec4 q = viewProj * glm::vec4(coatPositions[ch.vertexLo + v], 1.0f);
-      if (q.w <= 1e-6f) {
-        projected[v] = glm::vec3(std::numeric_limits<float>::quiet_NaN());
-        continue;
-      }
-      const float inv = 1.0f / q.w;
-      projected[v] = glm::vec3((q.x * inv * 0.5f + 0.5f) * float(w), (q.y * inv * 0.5f + 0.5f) * float(h),
-                               q.z * inv * 0.5f + 0.5f);
-    }
-    uint32_t written = 0;
-    for (uint32_t n = 0; n < tris; ++n) {
-      const uint32_t* t = idx + 3 * (backward ? tris - 1 - n : n);
-      const glm::vec3& a = projected[t[0] - ch.vertexLo];
-      const glm::vec3& b = projected[t[1] - ch.vertexLo];
-      const glm::vec3& c = projected[t[2] - ch.vertexLo];
-      bool keep = true;
-      if (!(std::isnan(a.x) || std::isnan(b.x) || std::isnan(c.x))) {
-        const float x0 = std::min({a.x, b.x, c.x}), x1 = std::max({a.x, b.x, c.x});
-        const float y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y});
-        if (x1 < -1.0f || y1 < -1.0f || x0 > float(w) + 1.0f || y0 > float(h) + 1.0f) {
-          keep = false;
-        } else {
-          if (test) {
-            const float nearest = std::min({a.z, b.z, c.z});
-            keep = !(nearest > 0.0f) || !hiddenRect(x0, y0, x1, y1, nearest);
-          }
-          if (keep && subpixel && !mayCoverPixelCentre(a, b, c, x0, y0, x1, y1)) {
-            keep = false;
-            ++tiny;
-          }
-        }
-      }
-      if (keep) {
-        std::copy(t, t + 3, out + written);
-        written += 3;
-      }
-    }
-    return written;
-  }
-
-  // False only when the window-space triangle abc (bounds x0..y1) certainly covers no pixel centre
-  // (x + 0.5, y + 0.5): no centre in its bounds, or none of the few centres in its bounds inside all
-  // three edges. Everything is widened by kSubpixelSlack pixels, far more than the rounding between
-  // this projection and the rasterizer's (fixed point, 1/256 px), so a dropped triangle never had a
-  // fragment. Larger triangles (more than 16 centres in their bounds) are kept untested.
-  static constexpr float kSubpixelSlack = 0.05f;
-  static bool mayCoverPixelCentre(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, float x0, float y0,
-                                  float x1, float y1) {
-    const float e = kSubpixelSlack;
-    const float cx0 = std::ceil(x0 - 0.5f - e), cx1 = std::floor(x1 - 0.5f + e);
-    const float cy0 = std::ceil(y0 - 0.5f - e), cy1 = std::floor(y1 - 0.5f + e);
-    if (cx0 > cx1 || cy0 > cy1) return false;
-    if ((cx1 - cx0 + 1.0f) * (cy1 - cy0 + 1.0f) > 16.0f) return true;
-    const float area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-    if (!(std::abs(area) > 1e-6f)) return true;  // (nearly) degenerate: leave it to the rasterizer
-    const float sign = area > 0.0f ? 1.0f : -1.0f;
-    const glm::vec2 v[3] = {{a.x, a.y}, {b.x, b.y}, {c.x, c.y}};
-    float len[3];
-    for (int k = 0; k < 3; ++k) len[k] = glm::length(v[(k + 1) % 3] - v[k]);
-    for (float py = cy0 + 0.5f; py <= cy1 + 0.5f; py += 1.0f)
-      for (float px = cx0 + 0.5f; px <= cx1 + 0.5f; px += 1.0f) {
-        bool inside = true;
-        for (int k = 0; k < 3 && inside; ++k) {
-          const glm::vec2& p0 = v[k];
-          const glm::vec2& p1 = v[(k + 1) % 3];
-          const float edge = sign * ((p1.x - p0.x) * (py - p0.y) - (p1.y - p0.y) * (px - p0.x));
-          inside = edge >= -e * len[k];
-        }
-        if (inside) return true;
-      }
-    return false;
-  }
-
-  // True when every depth tile over the pixel rectangle is nearer than windowDepth.
-  bool hiddenRect(float x0, float y0, float x1, float y1, float windowDepth) const {
-    const int tx0 = std::clamp(static_cast<int>(std::floor(x0)) / kTile, 0, tilesX - 1);
-    const int tx1 = std::clamp(static_cast<int>(std::ceil(x1)) / kTile, 0, tilesX - 1);
-    const int ty0 = std::clamp(static_cast<int>(std::floor(y0)) / kTile, 0, tilesY - 1);
-    const int ty1 = std::clamp(static_cast<int>(std::ceil(y1)) / kTile, 0, tilesY - 1);
-    for (int ty = ty0; ty <= ty1; ++ty)
-      for (int tx = tx0; tx <= tx1; ++tx)
-        if (tileMax[static_cast<size_t>(ty) * tilesX + tx] >= windowDepth - 1e-6f) return false;
-    return true;
-  }
-
-  void buildDepthTiles(int w, int h) {
-    tilesX = (w + kTile - 1) / kTile;
-    tilesY = (h + kTile - 1) / kTile;
-    tileMax.assign(static_cast<size_t>(tilesX) * tilesY, 0.0f);
-    tileMin.assign(static_cast<size_t>(tilesX) * tilesY, 1.0f);
-    for (int y = 0; y < h; ++y) {
-      const float* row = depth.data() + static_cast<size_t>(y) * w;
-      float* hi = tileMax.data() + static_cast<size_t>(y / kTile) * tilesX;
-      float* lo = tileMin.data() + static_cast<size_t>(y / kTile) * tilesX;
-      for (int x = 0; x < w; ++x) {
-        hi[x / kTile] = std::max(hi[x / kTile], row[x]);
-        lo[x / kTile] = std::min(lo[x / kTile], row[x]);
-      }
-    }
-  }
-
-  // True when the box [lo, hi] is certainly hidden behind the skin depth: its nearest point lies
-  // behind the farthest skin depth over every tile its projection touches.
-  enum class Depth { Hidden, InFront, Mixed };
-  // Where the box [lo, hi] lies against the skin depth: Hidden when its nearest point is behind the
-  // farthest skin depth over every tile its projection touches; InFront when its farthest point is
-  // nearer than the nearest skin depth over all those tiles (nothing of it can be hidden); else Mixed.
-  Depth classify(const glm::vec3& lo, const glm::vec3& hi, const glm::mat4& viewProj, const glm::mat4& view,
-                 const glm::mat4& proj, int w, int h) const {
-    const float zNear = proj[3][2] / (proj[2][2] - 1.0f);
-    float nearest = std::numeric_limits<float>::max(), farthest = 0.0f;
-    float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
-    for (int k = 0; k < 8; ++k) {
-      const glm::vec4 corner(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z, 1.0f);
-      const float d = -(view * corner).z;
-      nearest = std::min(nearest, d);
-      farthest = std::max(farthest, d);
-      const glm::vec4 q = viewProj * corner;
-      if (q.w <= 0.0f) return Depth::Mixed;
-      const float sx = (q.x / q.w * 0.5f + 0.5f) * w, sy = (q.y / q.w * 0.5f + 0.5f) * h;
-      x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
-    }
-    if (nearest <= zNear * 1.01f) return Depth::Mixed;
-    // Window depth at view distance d (glm perspective: z_clip = P22 z + P32, w = -z).
-    auto windowDepth = [&](float d) { return ((proj[2][2] * -d + proj[3][2]) / d) * 0.5f + 0.5f; };
-    if (hiddenRect(x0, y0, x1, y1, windowDepth(nearest))) return Depth::Hidden;
-    const float far = windowDepth(farthest);
-    const int tx0 = std::clamp(static_cast<int>(std::floor(x0)) / kTile, 0, tilesX - 1);
-    const int tx1 = std::clamp(static_cast<int>(std::ceil(x1)) / kTile, 0, tilesX - 1);
-    const int ty0 = std::clamp(static_cast<int>(std::floor(y0)) / kTile, 0, tilesY - 1);
-    const int ty1 = std::clamp(static_cast<int>(std::ceil(y1)) / kTile, 0, tilesY - 1);
-    for (int ty = ty0; ty <= ty1; ++ty)
-      for (int tx = tx0; tx <= tx1; ++tx)
-        if (tileMin[static_cast<size_t>(ty) * tilesX + tx] <= far + 1e-6f) return Depth::Mixed;
-    return Depth::InFront;
   }
 
   void ensureTarget(int w, int h, int samples) {
@@ -735,41 +529,7 @@ void Renderer::setSkin(const TriMesh& skin) {
 
 void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>& ranges) {
   const size_t n = coat.indices.size();
-  for (size_t i = 0; i < ranges.size(); ++i) {
-    const FeatherDrawRange& f = ranges[i];
-    const std::string el = "ranges[" + std::to_string(i) + "]";
-    if (f.firstIndex % 3 != 0 || f.indexCount % 3 != 0)
-      throw Error("feather draw range must start and span whole triangles (multiples of 3)", {}, el);
-    if (static_cast<size_t>(f.firstIndex) + f.indexCount > n)
-      throw Error("feather draw range [" + std::to_string(f.firstIndex) + ", +" + std::to_string(f.indexCount) +
-                      ") exceeds the " + std::to_string(n) + " coat indices",
-                  {}, el);
-    uint64_t sum = 0;
-    for (uint32_t c : f.partCount) {
-      if (c % 3 != 0) throw Error("feather part index counts must be multiples of 3", {}, el + ".partCount");
-      sum += c;
-    }
-    if (sum != 0 && sum != f.indexCount)
-      throw Error("feather part counts sum to " + std::to_string(sum) + ", expected indexCount " +
-                      std::to_string(f.indexCount),
-                  {}, el + ".partCount");
-  }
-  {
-    // Ranges may come in any order but must not share indices: each frame's surviving triangles are
-    // written into a buffer the size of the coat's index list.
-    std::vector<std::pair<uint32_t, size_t>> byFirst;
-    for (size_t i = 0; i < ranges.size(); ++i)
-      if (ranges[i].indexCount > 0) byFirst.push_back({ranges[i].firstIndex, i});
-    std::sort(byFirst.begin(), byFirst.end());
-    for (size_t k = 1; k < byFirst.size(); ++k) {
-      const FeatherDrawRange& prev = ranges[byFirst[k - 1].second];
-      if (size_t(prev.firstIndex) + prev.indexCount > byFirst[k].first) {
-        const size_t a = std::min(byFirst[k - 1].second, byFirst[k].second), b = std::max(byFirst[k - 1].second, byFirst[k].second);
-        throw Error("feather draw range overlaps ranges[" + std::to_string(a) + "] (each triangle belongs to one feather)",
-                    {}, "ranges[" + std::to_string(b) + "]");
-      }
-    }
-  }
+  DrawPlan::validateRanges(ranges, n);
   Impl& r = *impl_;
   r.ctx.makeCurrent();
   r.upload(r.coat, coat, nullptr, false);
@@ -783,52 +543,7 @@ void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>&
     r.gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(n * sizeof(uint32_t)),
                     n ? coat.indices.data() : nullptr, GL_STATIC_DRAW);
   }
-  r.coatPositions = coat.positions;
-  r.coatIndices = coat.indices;
-  r.ranges = ranges;
-  if (r.ranges.empty() && n > 0) {
-    FeatherDrawRange all;
-    all.indexCount = static_cast<uint32_t>(n);
-    all.origin = glm::vec3(0.0f);
-    r.ranges.push_back(all);
-  }
-  // Per feather: chunk boxes, and the feather's box and bounding sphere (box centre, farthest
-  // vertex) for frustum and occlusion culling.
-  r.rangeSpheres.resize(r.ranges.size());
-  r.rangeBoxes.resize(2 * r.ranges.size());
-  r.chunks.clear();
-  r.partChunks.assign(5 * r.ranges.size() + 1, 0);
-  for (size_t i = 0; i < r.ranges.size(); ++i) {
-    const FeatherDrawRange& f = r.ranges[i];
-    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-    const bool hasParts = f.partCount[0] + f.partCount[1] + f.partCount[2] + f.partCount[3] > 0;
-    uint32_t partFirst = f.firstIndex;
-    for (int k = 0; k < 4; ++k) {
-      r.partChunks[5 * i + k] = static_cast<uint32_t>(r.chunks.size());
-      const uint32_t count = hasParts ? f.partCount[k] : (k == 0 ? f.indexCount : 0);
-      for (uint32_t c = 0; c < count; c += 3 * Impl::kChunkTriangles) {
-        Impl::Chunk ch{glm::vec3(std::numeric_limits<float>::max()), glm::vec3(-std::numeric_limits<float>::max()),
-                       partFirst + c, std::min(3 * Impl::kChunkTriangles, count - c), UINT32_MAX, 0};
-        for (uint32_t j = ch.first; j < ch.first + ch.count; ++j) {
-          const glm::vec3& q = coat.positions[coat.indices[j]];
-          ch.lo = glm::min(ch.lo, q);
-          ch.hi = glm::max(ch.hi, q);
-          ch.vertexLo = std::min(ch.vertexLo, coat.indices[j]);
-          ch.vertexHi = std::max(ch.vertexHi, coat.indices[j]);
-        }
-        lo = glm::min(lo, ch.lo);
-        hi = glm::max(hi, ch.hi);
-        r.chunks.push_back(ch);
-      }
-      partFirst += count;
-    }
-    r.partChunks[5 * i + 4] = static_cast<uint32_t>(r.chunks.size());
-    if (f.indexCount == 0) lo = hi = glm::vec3(0.0f);
-    const glm::vec3 c = 0.5f * (lo + hi);
-    r.rangeSpheres[i] = glm::vec4(c, glm::length(hi - c) * 1.001f + 1e-6f);
-    r.rangeBoxes[2 * i] = lo;
-    r.rangeBoxes[2 * i + 1] = hi;
-  }
+  r.plan.setCoat(coat.positions, coat.indices, ranges);
 }
 
 void Renderer::setMaterials(const std::vector<FeatherMaterial>& materials) {
@@ -1002,13 +717,13 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       r.depth.resize(static_cast<size_t>(s.width) * s.height);
       gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
       gl.ReadPixels(0, 0, s.width, s.height, GL_DEPTH_COMPONENT, GL_FLOAT, r.depth.data());
-      r.buildDepthTiles(s.width, s.height);
+      r.occluders.build(r.depth.data(), s.width, s.height);
       occlusion = true;
     }
   }
 
   // Feathers: depth test on, depth writes off, blended in layer order (7.2).
-  if (s.drawCoat && r.coat.indexCount > 0 && !r.ranges.empty()) {
+  if (s.drawCoat && r.coat.indexCount > 0 && !r.plan.ranges().empty()) {
     const Program& p = s.brdfPerFragment ? r.coatFragmentProg : r.coatVertexProg;
     r.setFastFilter(s.fastTextureFiltering);
     setCommon(p);
@@ -1022,115 +737,27 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     gl.BindVertexArray(r.coat.vao);
     r.applyDefaults(r.coat);
 
-    // Frustum planes (Gribb-Hartmann) for per-feather culling with the bounding spheres.
-    glm::vec4 planes[6];
-    const glm::mat4 m = glm::transpose(viewProj);
-    for (int k = 0; k < 3; ++k) {
-      planes[2 * k] = m[3] + m[k];
-      planes[2 * k + 1] = m[3] - m[k];
-    }
-    for (auto& pl : planes) pl /= glm::length(glm::vec3(pl));
-    auto visible = [&](const glm::vec4& sphere) {
-      for (const auto& pl : planes)
-        if (glm::dot(glm::vec3(pl), glm::vec3(sphere)) + pl.w < -sphere.w) return false;
-      return true;
-    };
-
-    for (size_t i = 0; i < r.ranges.size(); ++i)
-      if (r.ranges[i].indexCount > 0 && r.ranges[i].material >= r.materials.size())
-        throw Error("feather draw range uses material " + std::to_string(r.ranges[i].material) + " but " +
+    const std::vector<FeatherDrawRange>& ranges = r.plan.ranges();
+    for (size_t i = 0; i < ranges.size(); ++i)
+      if (ranges[i].indexCount > 0 && ranges[i].material >= r.materials.size())
+        throw Error("feather draw range uses material " + std::to_string(ranges[i].material) + " but " +
                         std::to_string(r.materials.size()) + " materials are set",
                     {}, "ranges[" + std::to_string(i) + "].material");
-    // Pass 1, in parallel over feathers: visibility and octant order of each feather, and the
-    // surviving triangles of each chunk in its draw direction, written to the chunk's own slot of
-    // `scratch` (same offsets as the coat's indices).
-    using Depth = Impl::Depth;
-    const bool ordered = s.viewDependentOrder;
-    r.plans.resize(r.ranges.size());
-    r.scratch.resize(r.coatIndices.size());
-    r.kept.resize(r.chunks.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, r.ranges.size(), 16), [&](const tbb::blocked_range<size_t>& br) {
-      std::vector<glm::vec3> projected;
-      for (size_t i = br.begin(); i != br.end(); ++i) {
-        Impl::Plan& pl = r.plans[i];
-        pl = Impl::Plan();
-        const FeatherDrawRange& f = r.ranges[i];
-        if (f.indexCount == 0) continue;
-        if (!visible(r.rangeSpheres[i])) {
-          pl.state = Impl::Plan::kCulled;
-          continue;
-        }
-        const Depth depth = occlusion ? r.classify(r.rangeBoxes[2 * i], r.rangeBoxes[2 * i + 1], viewProj, view, proj,
-                                                   s.width, s.height)
-                                      : Depth::InFront;
-        if (depth == Depth::Hidden) {
-          pl.state = Impl::Plan::kOccluded;
-          continue;
-        }
-        pl.state = Impl::Plan::kDrawn;
-        // Octant rule (7.1.2): farther substructures first, from this feather's own view direction.
-        const glm::vec3 toEye = camera.eye - f.origin;
-        pl.backward = ordered && glm::dot(toEye, f.axisX) <= 0.0f;
-        if (ordered) {
-          const bool leftNear = glm::dot(toEye, f.axisY) > 0.0f;
-          const int8_t farVane = leftNear ? 2 : 1, nearVane = leftNear ? 1 : 2;
-          const bool dorsal = glm::dot(toEye, glm::cross(f.axisX, f.axisY)) > 0.0f;
-          const int8_t o[4] = {int8_t(dorsal ? 3 : 0), farVane, nearVane, int8_t(dorsal ? 0 : 3)};
-          std::copy(o, o + 4, pl.order);
-        }
-        // Chunks hidden behind the skin are left out, the ones that may be partly hidden are tested
-        // per triangle.
-        const uint32_t c0 = r.partChunks[5 * i], c1 = r.partChunks[5 * i + 4];
-        for (uint32_t c = c0; c < c1; ++c) {
-          const Impl::Chunk& ch = r.chunks[c];
-          uint32_t tiny = 0;
-          Depth d = depth;
-          if (d == Depth::Mixed && c1 - c0 > 1) d = r.classify(ch.lo, ch.hi, viewProj, view, proj, s.width, s.height);
-          const uint32_t n = d == Depth::Hidden ? 0
-                                                : r.emitChunk(ch, pl.backward, d == Depth::Mixed, subpixel, viewProj,
-                                                              s.width, s.height, r.scratch.data() + ch.first, projected,
-                                                              tiny);
-          r.kept[c] = n;
-          pl.triangles += n / 3;
-          pl.occludedTriangles += (ch.count - n) / 3 - tiny;
-          pl.subpixelTriangles += tiny;
-        }
-      }
-    });
+    DrawOptions options;
+    options.viewDependentOrder = s.viewDependentOrder;
+    options.subpixelCulling = subpixel;
+    r.plan.build(camera, s.width, s.height, options, occlusion ? &r.occluders : nullptr);
+    const DrawCounts& counts = r.plan.counts();
+    stats_.triangles += counts.triangles;
+    stats_.backwardParts += counts.backwardParts;
+    stats_.culledFeathers += counts.culledFeathers;
+    stats_.occludedFeathers += counts.occludedFeathers;
+    stats_.occludedTriangles += counts.occludedTriangles;
+    stats_.subpixelTriangles += counts.subpixelTriangles;
 
-    // Pass 2: the surviving triangles in draw order (layer order, then each feather's parts in
-    // octant order), split into runs of one material.
-    r.frameIndices.resize(r.coatIndices.size());
-    size_t used = 0;
-    r.runs.clear();
-    for (size_t i = 0; i < r.ranges.size(); ++i) {
-      const Impl::Plan& pl = r.plans[i];
-      if (pl.state == Impl::Plan::kCulled) ++stats_.culledFeathers;
-      if (pl.state == Impl::Plan::kOccluded) ++stats_.occludedFeathers;
-      if (pl.state != Impl::Plan::kDrawn) continue;
-      stats_.triangles += pl.triangles;
-      stats_.occludedTriangles += pl.occludedTriangles;
-      stats_.subpixelTriangles += pl.subpixelTriangles;
-      const uint32_t material = r.ranges[i].material;
-      if (r.runs.empty() || r.runs.back().material != material) r.runs.push_back({material, used, 0});
-      for (int8_t k : pl.order) {
-        const uint32_t c0 = r.partChunks[5 * i + k], c1 = r.partChunks[5 * i + k + 1];
-        if (c0 == c1) continue;
-        stats_.backwardParts += pl.backward ? 1 : 0;
-        for (uint32_t n = 0; n < c1 - c0; ++n) {
-          const uint32_t c = pl.backward ? c1 - 1 - n : c0 + n;
-          const uint32_t* from = r.scratch.data() + r.chunks[c].first;
-          std::copy(from, from + r.kept[c], r.frameIndices.data() + used);
-          used += r.kept[c];
-        }
-      }
-      r.runs.back().count = used - r.runs.back().first;
-    }
-    r.frameIndices.resize(used);
-
-    // Pass 2: upload the indices once, one draw call per material run.
-    r.streamIndices(r.coat, r.frameIndices, GL_STREAM_DRAW);
-    for (const Impl::Run& run : r.runs) {
+    // The plan's indices uploaded once, one draw call per material run.
+    r.streamIndices(r.coat, r.plan.indices(), GL_STREAM_DRAW);
+    for (const DrawRun& run : r.plan.runs()) {
       if (run.count == 0) continue;
       {
         const GpuMaterial& mat = r.materials[run.material];

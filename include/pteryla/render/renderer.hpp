@@ -20,12 +20,13 @@
 //  (uvBarb.x * barbCount, uvBarb.y) with repeat across. alpha multiplies opacity; sheath in [0,1]
 //  blends toward the opaque sheath colour (pin feathers, 8.1). featherId is not used for drawing.
 // Texture images are top row first: row 0 of a colour pattern is v = 1 (the feather tip).
-// Feathers whose bounds fall outside the view, or (RenderSettings::occlusionCulling) entirely behind
-// the skin's depth, are skipped; so are, within the other feathers, runs of a few barbs (32
-// triangles) and then single triangles that lie behind the skin or outside the view (conservative
-// tests against the skin depth read back once per frame: the image is unchanged). The surviving
-// triangles are written into one index buffer per frame in draw order and drawn with one call per
-// run of feathers sharing a material. RenderStats reports the counts.
+// Which feathers and triangles a frame draws, in which order and in how many calls, is decided on
+// the CPU by a DrawPlan (draw_plan.hpp): feathers whose bounds fall outside the view, or
+// (RenderSettings::occlusionCulling) entirely behind the skin's depth, are skipped; so are, within the
+// other feathers, runs of a few barbs (32 triangles) and then single triangles that lie behind the
+// skin or outside the view (conservative tests against the skin depth read back once per frame: the
+// image is unchanged). The surviving triangles are written into one index buffer per frame in draw
+// order and drawn with one call per run of feathers sharing a material. RenderStats reports the counts.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -38,6 +39,7 @@
 #include "pteryla/render/brdf_table.hpp"
 #include "pteryla/render/camera.hpp"
 #include "pteryla/render/context.hpp"
+#include "pteryla/render/draw_plan.hpp"
 #include "pteryla/render/image.hpp"
 
 namespace pteryla::render {
@@ -62,33 +64,6 @@ struct FeatherMaterial {
   float coneSigma = 0.35f;                  // width of the glint cone exp(-(L.T+V.T)^2 / 2 s^2)
   float translucency = 0.15f;               // light passed through a vane lit from behind
   glm::vec3 sheathColor{0.55f, 0.60f, 0.68f};
-};
-
-// Where one feather's triangles sit in the coat index buffer, and how to order them.
-// Indices [firstIndex, firstIndex + indexCount) of coat.indices belong to the feather (a multiple of
-// 3). When partCount is all zero the range is drawn as one block, front-to-back or back-to-front
-// along the shaft by the view direction (fallback). Otherwise the range is split into consecutive
-// parts in the order shaft, left vane, right vane, afterfeather, with partCount[k] indices each
-// (summing to indexCount; any may be 0). The mesher emits each vane's barbs in barb order from the
-// feather base to the tip, each barb's triangles from the rachis toward the barb tip.
-//
-// Octant rule (7.1.2), with v the direction from `origin` to the eye and Z = axisX x axisY (dorsal):
-//  - parts far from the viewer first: if v.Z > 0 (dorsal view) afterfeather, right/left vanes by
-//    v.axisY (v.axisY > 0: the left vane is nearer, so right vane first), shaft last; if v.Z <= 0
-//    the shaft first, then the vanes, the afterfeather last;
-//  - inside a vane (and for the fallback block): when the tip is nearer (v.axisX > 0) barbs are drawn
-//    base-to-tip (forward), else tip-to-base (backward). Backward order reverses whole triangles, so
-//    each barb is then also drawn tip-to-rachis (a documented simplification of the thesis' separate
-//    per-barb direction choice).
-// v is taken per feather (from its own origin), so near views stay locally correct (7.1.2).
-struct FeatherDrawRange {
-  uint32_t firstIndex = 0;
-  uint32_t indexCount = 0;
-  uint32_t material = 0;                 // index into setMaterials(); out of range -> Error
-  glm::vec3 origin{0.0f};                // follicle position, world
-  glm::vec3 axisX{1.0f, 0.0f, 0.0f};     // feather-local +x (shaft, base to tip) in world, unit
-  glm::vec3 axisY{0.0f, 1.0f, 0.0f};     // feather-local +y (toward the left vane) in world, unit
-  uint32_t partCount[4] = {0, 0, 0, 0};  // shaft, left vane, right vane, afterfeather
 };
 
 struct RenderSettings {
