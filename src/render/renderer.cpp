@@ -27,9 +27,48 @@ namespace {
 
 enum Attr : GLuint { kPos, kNormal, kTangent, kUvGlobal, kUvBarb, kUvGrowth, kAlpha, kSheath, kBarbCount, kAttrCount };
 
+// Every uniform of the four programs (shaders.hpp). Each program resolves all of them once, when it is
+// linked; one it lacks stays -1, which glUniform* ignores.
+#define PTERYLA_UNIFORMS(X)                     \
+  X(viewProj, "uViewProj")                      \
+  X(colorUv, "uColorUv")                        \
+  X(isCoat, "uIsCoat")                          \
+  X(eye, "uEye")                                \
+  X(ambient, "uAmbient")                        \
+  X(lightCount, "uLightCount")                  \
+  X(lightDir, "uLightDir")                      \
+  X(lightColor, "uLightColor")                  \
+  X(lightViewProj, "uLightViewProj")            \
+  X(shadowLightDir, "uShadowLightDir")          \
+  X(shadowNormalOffset, "uShadowNormalOffset")  \
+  X(shadowMap, "uShadowMap")                    \
+  X(shadows, "uShadows")                        \
+  X(shadowStrength, "uShadowStrength")          \
+  X(shadowTexel, "uShadowTexel")                \
+  X(exposureScale, "uExposureScale")            \
+  X(filmic, "uFilmic")                          \
+  X(skinColor, "uSkinColor")                    \
+  X(colorTex, "uColorTex")                      \
+  X(alphaTex, "uAlphaTex")                      \
+  X(brdfTex, "uBrdfTex")                        \
+  X(useAlphaTex, "uUseAlphaTex")                \
+  X(useBrdf, "uUseBrdf")                        \
+  X(baseColor, "uBaseColor")                    \
+  X(sheathColor, "uSheathColor")                \
+  X(barbuleCosSin, "uBarbuleCosSin")            \
+  X(specular, "uSpecular")                      \
+  X(coneInv2s2, "uConeInv2s2")                  \
+  X(translucency, "uTranslucency")              \
+  X(alphaCut, "uAlphaCut")
+struct Uniforms {
+#define PTERYLA_UNIFORM_MEMBER(member, name) GLint member = -1;
+  PTERYLA_UNIFORMS(PTERYLA_UNIFORM_MEMBER)
+#undef PTERYLA_UNIFORM_MEMBER
+};
+
 struct Program {
   GLuint id = 0;
-  std::map<std::string, GLint> loc;
+  Uniforms u;
 };
 
 struct GpuMesh {
@@ -119,7 +158,7 @@ struct Renderer::Impl {
     return s;
   }
 
-  Program link(GLuint v, GLuint f, std::initializer_list<const char*> uniforms) {
+  Program link(GLuint v, GLuint f) {
     Program p;
     p.id = gl.CreateProgram();
     gl.AttachShader(p.id, v);
@@ -134,13 +173,10 @@ struct Renderer::Impl {
       gl.GetProgramInfoLog(p.id, sizeof log, nullptr, log);
       PTERYLA_CHECK(false, std::string("shader link failed: ") + log);
     }
-    for (const char* u : uniforms) p.loc[u] = gl.GetUniformLocation(p.id, u);
+#define PTERYLA_UNIFORM_LOCATION(member, name) p.u.member = gl.GetUniformLocation(p.id, name);
+    PTERYLA_UNIFORMS(PTERYLA_UNIFORM_LOCATION)
+#undef PTERYLA_UNIFORM_LOCATION
     return p;
-  }
-
-  GLint U(const Program& p, const char* name) const {
-    auto it = p.loc.find(name);
-    return it == p.loc.end() ? -1 : it->second;
   }
 
   GLuint makeTexture(const Image& source, bool mipmap, GLint wrapS, GLint wrapT) {
@@ -281,23 +317,23 @@ struct Renderer::Impl {
     gl.PolygonOffset(1.5f, 2.0f);
     const Program& p = depthProg;
     gl.UseProgram(p.id);
-    gl.UniformMatrix4fv(U(p, "uLightViewProj"), 1, GL_FALSE, glm::value_ptr(shadow.viewProj));
-    gl.Uniform1i(U(p, "uColorTex"), 0);
-    gl.Uniform1i(U(p, "uAlphaTex"), 1);
-    gl.Uniform1i(U(p, "uUseAlphaTex"), s.useAlphaTexture ? 1 : 0);
+    gl.UniformMatrix4fv(p.u.lightViewProj, 1, GL_FALSE, glm::value_ptr(shadow.viewProj));
+    gl.Uniform1i(p.u.colorTex, 0);
+    gl.Uniform1i(p.u.alphaTex, 1);
+    gl.Uniform1i(p.u.useAlphaTex, s.useAlphaTexture ? 1 : 0);
     gl.ActiveTexture(GL_TEXTURE0);
     gl.BindTexture(GL_TEXTURE_2D, white);
     gl.ActiveTexture(GL_TEXTURE1);
     gl.BindTexture(GL_TEXTURE_2D, white);
     if (skin.indexCount > 0) {  // opaque
-      gl.Uniform1f(U(p, "uAlphaCut"), 0.0f);
-      gl.Uniform1i(U(p, "uColorUv"), 0);
+      gl.Uniform1f(p.u.alphaCut, 0.0f);
+      gl.Uniform1i(p.u.colorUv, 0);
       gl.BindVertexArray(skin.vao);
       applyDefaults(skin);
       drawIndices(0, skin.indexCount);
     }
     if (coat.indexCount > 0 && !plan.ranges().empty()) {
-      gl.Uniform1f(U(p, "uAlphaCut"), 0.5f);
+      gl.Uniform1f(p.u.alphaCut, 0.5f);
       gl.BindVertexArray(coat.vao);
       applyDefaults(coat);
       gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, shadow.ebo);
@@ -308,7 +344,7 @@ struct Renderer::Impl {
         gl.BindTexture(GL_TEXTURE_2D, m.colorTex);
         gl.ActiveTexture(GL_TEXTURE1);
         gl.BindTexture(GL_TEXTURE_2D, m.alphaTex);
-        gl.Uniform1i(U(p, "uColorUv"), static_cast<int>(m.desc.colorUv));
+        gl.Uniform1i(p.u.colorUv, static_cast<int>(m.desc.colorUv));
         drawIndices(run.first, run.count);
       }
     }
@@ -455,26 +491,15 @@ Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(contex
   const char* perVertex = "#version 330 core\n#define PER_FRAGMENT 0\n";
   const char* perFragment = "#version 330 core\n#define PER_FRAGMENT 1\n";
   using namespace shaders;
-  const std::initializer_list<const char*> common = {
-      "uViewProj",      "uColorUv",  "uIsCoat",        "uEye",        "uAmbient",        "uLightCount",
-      "uLightDir",      "uLightColor", "uLightViewProj", "uShadowLightDir", "uShadowNormalOffset", "uShadowMap",
-      "uShadows",       "uShadowStrength", "uShadowTexel", "uExposureScale", "uFilmic"};
-  const std::initializer_list<const char*> coat = {
-      "uViewProj", "uColorUv", "uIsCoat", "uEye", "uAmbient", "uLightCount", "uLightDir", "uLightColor",
-      "uColorTex", "uAlphaTex", "uBrdfTex", "uUseAlphaTex", "uUseBrdf", "uBaseColor", "uSheathColor",
-      "uBarbuleCosSin", "uSpecular", "uConeInv2s2", "uTranslucency", "uLightViewProj", "uShadowLightDir",
-      "uShadowNormalOffset", "uShadowMap", "uShadows", "uShadowStrength", "uShadowTexel", "uExposureScale", "uFilmic"};
   r.skinProg = r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshAttributes, kMeshVertex}),
-                      r.compile(GL_FRAGMENT_SHADER, {perFragment, kShadowLookup, kSkinFragment}), common);
-  r.skinProg.loc["uSkinColor"] = r.gl.GetUniformLocation(r.skinProg.id, "uSkinColor");
+                      r.compile(GL_FRAGMENT_SHADER, {perFragment, kShadowLookup, kSkinFragment}));
   r.coatVertexProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kCoatShading, kMeshAttributes, kMeshVertex}),
-                            r.compile(GL_FRAGMENT_SHADER, {perVertex, kShadowLookup, kFeatherAlpha, kCoatFragment}), coat);
+                            r.compile(GL_FRAGMENT_SHADER, {perVertex, kShadowLookup, kFeatherAlpha, kCoatFragment}));
   r.coatFragmentProg =
       r.link(r.compile(GL_VERTEX_SHADER, {perFragment, kMeshAttributes, kMeshVertex}),
-             r.compile(GL_FRAGMENT_SHADER, {perFragment, kCoatShading, kShadowLookup, kFeatherAlpha, kCoatFragment}), coat);
+             r.compile(GL_FRAGMENT_SHADER, {perFragment, kCoatShading, kShadowLookup, kFeatherAlpha, kCoatFragment}));
   r.depthProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kMeshAttributes, kDepthVertex}),
-                       r.compile(GL_FRAGMENT_SHADER, {perVertex, kFeatherAlpha, kDepthFragment}),
-                       {"uLightViewProj", "uColorUv", "uColorTex", "uAlphaTex", "uUseAlphaTex", "uAlphaCut"});
+                       r.compile(GL_FRAGMENT_SHADER, {perVertex, kFeatherAlpha, kDepthFragment}));
   r.white = r.makeTexture(Image(1, 1, 255, 255, 255, 255), false, GL_REPEAT, GL_REPEAT);
   setMaterials({});
 }
@@ -614,31 +639,31 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   bool shadowsOn = false;
   auto setCommon = [&](const Program& p) {
     gl.UseProgram(p.id);
-    gl.UniformMatrix4fv(r.U(p, "uViewProj"), 1, GL_FALSE, glm::value_ptr(viewProj));
-    gl.Uniform3f(r.U(p, "uEye"), camera.eye.x, camera.eye.y, camera.eye.z);
-    gl.Uniform3f(r.U(p, "uAmbient"), s.ambient.x, s.ambient.y, s.ambient.z);
-    gl.Uniform1i(r.U(p, "uLightCount"), lightCount);
+    gl.UniformMatrix4fv(p.u.viewProj, 1, GL_FALSE, glm::value_ptr(viewProj));
+    gl.Uniform3f(p.u.eye, camera.eye.x, camera.eye.y, camera.eye.z);
+    gl.Uniform3f(p.u.ambient, s.ambient.x, s.ambient.y, s.ambient.z);
+    gl.Uniform1i(p.u.lightCount, lightCount);
     if (lightCount > 0) {
-      gl.Uniform3fv(r.U(p, "uLightDir"), lightCount, glm::value_ptr(dirs[0]));
-      gl.Uniform3fv(r.U(p, "uLightColor"), lightCount, glm::value_ptr(colors[0]));
+      gl.Uniform3fv(p.u.lightDir, lightCount, glm::value_ptr(dirs[0]));
+      gl.Uniform3fv(p.u.lightColor, lightCount, glm::value_ptr(colors[0]));
     }
-    gl.Uniform1i(r.U(p, "uColorUv"), 0);
-    gl.Uniform1i(r.U(p, "uIsCoat"), &p == &r.skinProg ? 0 : 1);
-    gl.Uniform1i(r.U(p, "uShadows"), shadowsOn ? 1 : 0);
-    gl.Uniform1f(r.U(p, "uExposureScale"), std::exp2(std::clamp(s.exposure, -16.0f, 16.0f)));
-    gl.Uniform1i(r.U(p, "uFilmic"), s.filmic ? 1 : 0);
-    gl.Uniform1i(r.U(p, "uShadowMap"), 3);
+    gl.Uniform1i(p.u.colorUv, 0);
+    gl.Uniform1i(p.u.isCoat, &p == &r.skinProg ? 0 : 1);
+    gl.Uniform1i(p.u.shadows, shadowsOn ? 1 : 0);
+    gl.Uniform1f(p.u.exposureScale, std::exp2(std::clamp(s.exposure, -16.0f, 16.0f)));
+    gl.Uniform1i(p.u.filmic, s.filmic ? 1 : 0);
+    gl.Uniform1i(p.u.shadowMap, 3);
     if (shadowsOn) {
-      gl.UniformMatrix4fv(r.U(p, "uLightViewProj"), 1, GL_FALSE, glm::value_ptr(r.shadow.viewProj));
-      gl.Uniform3f(r.U(p, "uShadowLightDir"), dirs[0].x, dirs[0].y, dirs[0].z);
-      gl.Uniform1f(r.U(p, "uShadowNormalOffset"), 1.5f * r.shadow.texelWorld);
-      gl.Uniform1f(r.U(p, "uShadowStrength"), std::clamp(s.shadowStrength, 0.0f, 1.0f));
-      gl.Uniform1f(r.U(p, "uShadowTexel"), 1.0f / float(r.shadow.size));
+      gl.UniformMatrix4fv(p.u.lightViewProj, 1, GL_FALSE, glm::value_ptr(r.shadow.viewProj));
+      gl.Uniform3f(p.u.shadowLightDir, dirs[0].x, dirs[0].y, dirs[0].z);
+      gl.Uniform1f(p.u.shadowNormalOffset, 1.5f * r.shadow.texelWorld);
+      gl.Uniform1f(p.u.shadowStrength, std::clamp(s.shadowStrength, 0.0f, 1.0f));
+      gl.Uniform1f(p.u.shadowTexel, 1.0f / float(r.shadow.size));
     } else {
       const glm::mat4 identity(1.0f);
-      gl.UniformMatrix4fv(r.U(p, "uLightViewProj"), 1, GL_FALSE, glm::value_ptr(identity));
-      gl.Uniform3f(r.U(p, "uShadowLightDir"), 0.0f, 0.0f, 1.0f);
-      gl.Uniform1f(r.U(p, "uShadowNormalOffset"), 0.0f);
+      gl.UniformMatrix4fv(p.u.lightViewProj, 1, GL_FALSE, glm::value_ptr(identity));
+      gl.Uniform3f(p.u.shadowLightDir, 0.0f, 0.0f, 1.0f);
+      gl.Uniform1f(p.u.shadowNormalOffset, 0.0f);
     }
   };
 
@@ -667,7 +692,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   // Opaque, Lambert, writing depth: the skin and the ground.
   auto drawOpaque = [&](const GpuMesh& mesh, const glm::vec3& colour) {
     setCommon(r.skinProg);
-    gl.Uniform3f(r.U(r.skinProg, "uSkinColor"), colour.r, colour.g, colour.b);
+    gl.Uniform3f(r.skinProg.u.skinColor, colour.r, colour.g, colour.b);
     gl.BindVertexArray(mesh.vao);
     r.applyDefaults(mesh);
     r.drawIndices(0, mesh.indexCount);
@@ -727,10 +752,10 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     const Program& p = s.brdfPerFragment ? r.coatFragmentProg : r.coatVertexProg;
     r.setFastFilter(s.fastTextureFiltering);
     setCommon(p);
-    gl.Uniform1i(r.U(p, "uColorTex"), 0);
-    gl.Uniform1i(r.U(p, "uAlphaTex"), 1);
-    gl.Uniform1i(r.U(p, "uBrdfTex"), 2);
-    gl.Uniform1i(r.U(p, "uUseAlphaTex"), s.useAlphaTexture ? 1 : 0);
+    gl.Uniform1i(p.u.colorTex, 0);
+    gl.Uniform1i(p.u.alphaTex, 1);
+    gl.Uniform1i(p.u.brdfTex, 2);
+    gl.Uniform1i(p.u.useAlphaTex, s.useAlphaTexture ? 1 : 0);
     gl.Enable(GL_BLEND);
     gl.BlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
     gl.DepthMask(GL_FALSE);
@@ -768,15 +793,15 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
         gl.BindTexture(GL_TEXTURE_2D, mat.alphaTex);
         gl.ActiveTexture(GL_TEXTURE2);
         gl.BindTexture(GL_TEXTURE_2D, mat.brdfTex);
-        gl.Uniform1i(r.U(p, "uColorUv"), static_cast<int>(d.colorUv));
-        gl.Uniform1i(r.U(p, "uUseBrdf"), (s.useBrdf && d.useBrdf) ? 1 : 0);
-        gl.Uniform3f(r.U(p, "uBaseColor"), d.baseColor.r, d.baseColor.g, d.baseColor.b);
-        gl.Uniform3f(r.U(p, "uSheathColor"), d.sheathColor.r, d.sheathColor.g, d.sheathColor.b);
-        gl.Uniform2f(r.U(p, "uBarbuleCosSin"), std::cos(d.barbuleAngle), std::sin(d.barbuleAngle));
-        gl.Uniform1f(r.U(p, "uSpecular"), d.specular);
+        gl.Uniform1i(p.u.colorUv, static_cast<int>(d.colorUv));
+        gl.Uniform1i(p.u.useBrdf, (s.useBrdf && d.useBrdf) ? 1 : 0);
+        gl.Uniform3f(p.u.baseColor, d.baseColor.r, d.baseColor.g, d.baseColor.b);
+        gl.Uniform3f(p.u.sheathColor, d.sheathColor.r, d.sheathColor.g, d.sheathColor.b);
+        gl.Uniform2f(p.u.barbuleCosSin, std::cos(d.barbuleAngle), std::sin(d.barbuleAngle));
+        gl.Uniform1f(p.u.specular, d.specular);
         const float cone = std::max(d.coneSigma, 1e-3f);
-        gl.Uniform1f(r.U(p, "uConeInv2s2"), 1.0f / (2.0f * cone * cone));
-        gl.Uniform1f(r.U(p, "uTranslucency"), d.translucency);
+        gl.Uniform1f(p.u.coneInv2s2, 1.0f / (2.0f * cone * cone));
+        gl.Uniform1f(p.u.translucency, d.translucency);
       }
       r.drawIndices(run.first, run.count);
       ++stats_.drawCalls;
