@@ -597,10 +597,11 @@ void Renderer::setMaterials(const std::vector<FeatherMaterial>& materials) {
   r.ctx.makeCurrent();
   r.releaseMaterials();
   r.shadow.valid = false;
-  for (auto& [path, img] : files) {
+  for (const auto& file : files) {
+    const std::string& path = file.first;
     const bool isAlpha = std::any_of(materials.begin(), materials.end(),
                                      [&](const FeatherMaterial& m) { return m.alphaTexture == path; });
-    r.fileTextures[path] = r.makeTexture(img, true, isAlpha ? GL_REPEAT : GL_CLAMP_TO_EDGE, GL_CLAMP_TO_EDGE);
+    r.fileTextures[path] = r.makeTexture(file.second, true, isAlpha ? GL_REPEAT : GL_CLAMP_TO_EDGE, GL_CLAMP_TO_EDGE);
   }
   std::vector<FeatherMaterial> list = materials;
   if (list.empty()) list.emplace_back();
