@@ -1,0 +1,243 @@
+// The renderer's GL resources: shader programs (uniform locations resolved at link time), textures
+// (images, the per-material BRDF tables of brdf_table.hpp), vertex and index buffers, off-screen
+// framebuffers.
+#include <algorithm>
+#include <cstring>
+#include <string>
+
+#include "pteryla/core/error.hpp"
+#include "renderer_impl.hpp"
+
+namespace pteryla::render {
+using namespace detail;
+
+void Renderer::Impl::setFastFilter(bool fast) {
+  if (fast == fastFilter) return;
+  fastFilter = fast;
+  for (const GpuMaterial& m : materials) {
+    for (GLuint t : {m.colorTex, m.alphaTex}) {
+      if (t == white) continue;
+      gl.BindTexture(GL_TEXTURE_2D, t);
+      gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, minFilter());
+    }
+  }
+}
+
+GLuint Renderer::Impl::compile(GLenum type, std::initializer_list<const char*> parts) {
+  GLuint s = gl.CreateShader(type);
+  const std::vector<const char*> src(parts);
+  gl.ShaderSource(s, static_cast<GLsizei>(src.size()), src.data(), nullptr);
+  gl.CompileShader(s);
+  GLint ok = 0;
+  gl.GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[4096] = {};
+    gl.GetShaderInfoLog(s, sizeof log, nullptr, log);
+    gl.DeleteShader(s);
+    PTERYLA_CHECK(false, std::string("shader compilation failed: ") + log);
+  }
+  return s;
+}
+
+Program Renderer::Impl::link(GLuint v, GLuint f) {
+  Program p;
+  p.id = gl.CreateProgram();
+  gl.AttachShader(p.id, v);
+  gl.AttachShader(p.id, f);
+  gl.LinkProgram(p.id);
+  gl.DeleteShader(v);
+  gl.DeleteShader(f);
+  GLint ok = 0;
+  gl.GetProgramiv(p.id, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[4096] = {};
+    gl.GetProgramInfoLog(p.id, sizeof log, nullptr, log);
+    PTERYLA_CHECK(false, std::string("shader link failed: ") + log);
+  }
+#define PTERYLA_UNIFORM_LOCATION(member, name) p.u.member = gl.GetUniformLocation(p.id, name);
+  PTERYLA_UNIFORMS(PTERYLA_UNIFORM_LOCATION)
+#undef PTERYLA_UNIFORM_LOCATION
+  return p;
+}
+
+GLuint Renderer::Impl::makeTexture(const Image& source, bool mipmap, GLint wrapS, GLint wrapT) {
+  // Larger than the GL implementation allows (a 20000x1 strip): scaled down to fit instead of a GL error.
+  GLint maxSide = 0;
+  gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &maxSide);
+  const bool tooLarge = maxSide > 0 && (source.width > maxSide || source.height > maxSide);
+  const Image fitted = tooLarge ? fitImage(source, maxSide) : Image();
+  const Image& img = tooLarge ? fitted : source;
+  // Image rows are top-first; texture t = 0 is the bottom row.
+  std::vector<uint8_t> flipped(img.rgba.size());
+  const size_t row = static_cast<size_t>(img.width) * 4;
+  for (int y = 0; y < img.height; ++y)
+    std::memcpy(flipped.data() + row * (img.height - 1 - y), img.rgba.data() + row * y, row);
+  GLuint t = 0;
+  gl.GenTextures(1, &t);
+  gl.BindTexture(GL_TEXTURE_2D, t);
+  gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, flipped.data());
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, mipmap ? minFilter() : GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrapT);
+  if (mipmap) gl.GenerateMipmap(GL_TEXTURE_2D);
+  return t;
+}
+
+GLuint Renderer::Impl::brdfTexture(const BarbuleParams& b) {
+  const auto key = std::make_tuple(b.d, b.h, b.sigma);
+  auto it = brdfCache.find(key);
+  if (it != brdfCache.end()) return it->second;
+  const BrdfTable table = buildBrdfTable(b, 128);
+  GLuint t = 0;
+  gl.GenTextures(1, &t);
+  gl.BindTexture(GL_TEXTURE_2D, t);
+  gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, table.size, table.size, 0, GL_RG, GL_FLOAT, table.data.data());
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  brdfCache[key] = t;
+  return t;
+}
+
+void Renderer::Impl::releaseMaterials() {
+  for (auto& [path, t] : fileTextures) gl.DeleteTextures(1, &t);
+  fileTextures.clear();
+  for (auto& m : materials) {
+    // Textures from files are shared through fileTextures; in-memory ones are owned here.
+    if (m.desc.colorTexture.empty() && m.colorTex != white) gl.DeleteTextures(1, &m.colorTex);
+    if (m.desc.alphaTexture.empty() && m.alphaTex != white) gl.DeleteTextures(1, &m.alphaTex);
+  }
+  materials.clear();
+}
+
+void Renderer::Impl::releaseMesh(GpuMesh& m) {
+  if (m.vao) gl.DeleteVertexArrays(1, &m.vao);
+  gl.DeleteBuffers(kAttrCount, m.vbo);
+  if (m.ebo) gl.DeleteBuffers(1, &m.ebo);
+  m = GpuMesh();
+}
+
+void Renderer::Impl::releaseTarget() {
+  Target& t = target;
+  if (t.fbo) gl.DeleteFramebuffers(1, &t.fbo);
+  if (t.msFbo) gl.DeleteFramebuffers(1, &t.msFbo);
+  GLuint rbs[4] = {t.color, t.depth, t.msColor, t.msDepth};
+  for (GLuint rb : rbs)
+    if (rb) gl.DeleteRenderbuffers(1, &rb);
+  t = Target();
+}
+
+template <class T>
+void Renderer::Impl::syncAttr(GpuMesh& m, Attr a, const std::vector<T>& data, size_t vertexCount, int comps, const char* name) {
+  if (data.empty()) {
+    m.present[a] = false;
+    gl.DisableVertexAttribArray(a);
+    return;
+  }
+  if (data.size() != vertexCount)
+    throw Error(std::string("mesh attribute '") + name + "' has " + std::to_string(data.size()) +
+                    " entries for " + std::to_string(vertexCount) + " vertices",
+                {}, name);
+  const size_t bytes = data.size() * sizeof(T);
+  if (!m.vbo[a]) gl.GenBuffers(1, &m.vbo[a]);
+  gl.BindBuffer(GL_ARRAY_BUFFER, m.vbo[a]);
+  if (bytes == m.vboBytes[a]) {
+    gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), data.data());
+  } else {
+    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), data.data(), GL_STATIC_DRAW);
+    m.vboBytes[a] = bytes;
+  }
+  gl.VertexAttribPointer(a, comps, GL_FLOAT, GL_FALSE, 0, nullptr);
+  gl.EnableVertexAttribArray(a);
+  m.present[a] = true;
+}
+
+void Renderer::Impl::applyDefaults(const GpuMesh& m) {
+  if (!m.present[kNormal]) gl.VertexAttrib3f(kNormal, 0, 0, 1);
+  if (!m.present[kTangent]) gl.VertexAttrib3f(kTangent, 1, 0, 0);
+  if (!m.present[kUvGlobal]) gl.VertexAttrib2f(kUvGlobal, 0, 0);
+  if (!m.present[kUvBarb]) gl.VertexAttrib2f(kUvBarb, 0.5f, 0.5f);
+  if (!m.present[kUvGrowth]) gl.VertexAttrib2f(kUvGrowth, 0, 0);
+  if (!m.present[kAlpha]) gl.VertexAttrib1f(kAlpha, 1.0f);
+  if (!m.present[kSheath]) gl.VertexAttrib1f(kSheath, 0.0f);
+  if (!m.present[kBarbCount]) gl.VertexAttrib1f(kBarbCount, 1.0f);
+}
+
+void Renderer::Impl::upload(GpuMesh& m, const TriMesh& mesh, const std::vector<glm::vec3>* normalsOverride, bool staticIndices) {
+  if (mesh.indices.size() % 3 != 0) throw Error("mesh index count is not a multiple of 3", {}, "indices");
+  const size_t nv = mesh.vertexCount();
+  for (size_t i = 0; i < mesh.indices.size(); ++i)
+    if (mesh.indices[i] >= nv)
+      throw Error("mesh index " + std::to_string(mesh.indices[i]) + " out of range (" + std::to_string(nv) +
+                      " vertices)",
+                  {}, "face " + std::to_string(i / 3));
+  if (!m.vao) gl.GenVertexArrays(1, &m.vao);
+  gl.BindVertexArray(m.vao);
+  syncAttr(m, kPos, mesh.positions, nv, 3, "positions");
+  syncAttr(m, kNormal, normalsOverride ? *normalsOverride : mesh.normals, nv, 3, "normals");
+  syncAttr(m, kTangent, mesh.tangents, nv, 3, "tangents");
+  syncAttr(m, kUvGlobal, mesh.uvGlobal, nv, 2, "uvGlobal");
+  syncAttr(m, kUvBarb, mesh.uvBarb, nv, 2, "uvBarb");
+  syncAttr(m, kUvGrowth, mesh.uvGrowth, nv, 2, "uvGrowth");
+  syncAttr(m, kAlpha, mesh.alpha, nv, 1, "alpha");
+  syncAttr(m, kSheath, mesh.sheath, nv, 1, "sheath");
+  syncAttr(m, kBarbCount, mesh.barbCount, nv, 1, "barbCount");
+  // Static indices (skin), or none here: the coat's are written every frame (streamIndices).
+  const size_t n = mesh.indices.size();
+  if (!m.ebo) gl.GenBuffers(1, &m.ebo);
+  if (staticIndices) streamIndices(m, mesh.indices, GL_STATIC_DRAW);
+  m.indexCount = n;
+  gl.BindVertexArray(0);
+}
+
+void Renderer::Impl::streamIndices(GpuMesh& m, const std::vector<uint32_t>& indices, GLenum usage) {
+  gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
+  const size_t bytes = indices.size() * sizeof(uint32_t);
+  if (bytes <= m.eboBytes && bytes > 0 && usage == GL_STREAM_DRAW) {
+    gl.BufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), indices.data());
+  } else {
+    gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), indices.empty() ? nullptr : indices.data(),
+                  usage);
+    m.eboBytes = bytes;
+  }
+}
+
+void Renderer::Impl::drawIndices(size_t first, size_t count) {
+  if (count == 0) return;
+  gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                  reinterpret_cast<const void*>(first * sizeof(uint32_t)));
+}
+
+void Renderer::Impl::ensureTarget(int w, int h, int samples) {
+  Target& t = target;
+  if (t.fbo && t.width == w && t.height == h && t.samples == samples) return;
+  releaseTarget();
+  t.width = w;
+  t.height = h;
+  t.samples = samples;
+  auto makeFbo = [&](GLuint& fbo, GLuint& color, GLuint& depth, int s) {
+    gl.GenFramebuffers(1, &fbo);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
+    gl.GenRenderbuffers(1, &color);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, color);
+    if (s > 0) gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_RGBA8, w, h);
+    else gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
+    gl.GenRenderbuffers(1, &depth);
+    gl.BindRenderbuffer(GL_RENDERBUFFER, depth);
+    if (s > 0) gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_DEPTH24_STENCIL8, w, h);
+    else gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, w, h);
+    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
+    if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw Error("cannot create an off-screen framebuffer of " + std::to_string(w) + "x" + std::to_string(h) +
+                  (s > 0 ? " with " + std::to_string(s) + " samples" : std::string()));
+  };
+  makeFbo(t.fbo, t.color, t.depth, 0);
+  if (samples > 0) makeFbo(t.msFbo, t.msColor, t.msDepth, samples);
+}
+
+}  // namespace pteryla::render
