@@ -60,6 +60,21 @@ Program Renderer::Impl::link(GLuint v, GLuint f) {
   return p;
 }
 
+void Renderer::Impl::setSampling(GLint minification, GLint wrapS, GLint wrapT) {
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, minification);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrapT);
+}
+
+void Renderer::Impl::bindTextures(std::initializer_list<GLuint> textures) {
+  GLenum unit = GL_TEXTURE0;
+  for (GLuint t : textures) {
+    gl.ActiveTexture(unit++);
+    gl.BindTexture(GL_TEXTURE_2D, t);
+  }
+}
+
 GLuint Renderer::Impl::makeTexture(const Image& source, bool mipmap, GLint wrapS, GLint wrapT) {
   // Larger than the GL implementation allows (a 20000x1 strip): scaled down to fit instead of a GL error.
   GLint maxSide = 0;
@@ -77,10 +92,7 @@ GLuint Renderer::Impl::makeTexture(const Image& source, bool mipmap, GLint wrapS
   gl.BindTexture(GL_TEXTURE_2D, t);
   gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
   gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, flipped.data());
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, mipmap ? minFilter() : GL_LINEAR);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrapS);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrapT);
+  setSampling(mipmap ? minFilter() : GL_LINEAR, wrapS, wrapT);
   if (mipmap) gl.GenerateMipmap(GL_TEXTURE_2D);
   return t;
 }
@@ -95,10 +107,7 @@ GLuint Renderer::Impl::brdfTexture(const BarbuleParams& b) {
   gl.BindTexture(GL_TEXTURE_2D, t);
   gl.PixelStorei(GL_UNPACK_ALIGNMENT, 4);
   gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, table.size, table.size, 0, GL_RG, GL_FLOAT, table.data.data());
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  setSampling(GL_LINEAR, GL_CLAMP_TO_EDGE, GL_CLAMP_TO_EDGE);
   brdfCache[key] = t;
   return t;
 }

@@ -331,12 +331,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       {
         const GpuMaterial& mat = r.materials[run.material];
         const FeatherMaterial& d = mat.desc;
-        gl.ActiveTexture(GL_TEXTURE0);
-        gl.BindTexture(GL_TEXTURE_2D, mat.colorTex);
-        gl.ActiveTexture(GL_TEXTURE1);
-        gl.BindTexture(GL_TEXTURE_2D, mat.alphaTex);
-        gl.ActiveTexture(GL_TEXTURE2);
-        gl.BindTexture(GL_TEXTURE_2D, mat.brdfTex);
+        r.bindTextures({mat.colorTex, mat.alphaTex, mat.brdfTex});
         gl.Uniform1i(p.u.colorUv, static_cast<int>(d.colorUv));
         gl.Uniform1i(p.u.useBrdf, (s.useBrdf && d.useBrdf) ? 1 : 0);
         gl.Uniform3f(p.u.baseColor, d.baseColor.r, d.baseColor.g, d.baseColor.b);

@@ -135,6 +135,10 @@ struct Renderer::Impl {
   void setFastFilter(bool fast);
   GLuint compile(GLenum type, std::initializer_list<const char*> parts);
   Program link(GLuint v, GLuint f);
+  // Filtering (magnification bilinear) and wrapping of the texture bound to GL_TEXTURE_2D.
+  void setSampling(GLint minification, GLint wrapS, GLint wrapT);
+  // Binds `textures` to texture units 0, 1, ... in order.
+  void bindTextures(std::initializer_list<GLuint> textures);
   GLuint makeTexture(const Image& source, bool mipmap, GLint wrapS, GLint wrapT);
   GLuint brdfTexture(const BarbuleParams& b);
   void releaseMaterials();

@@ -50,10 +50,7 @@ bool Renderer::Impl::updateShadowMap(const glm::vec3& toLight, const RenderSetti
     gl.GenTextures(1, &shadow.depthTex);
     gl.BindTexture(GL_TEXTURE_2D, shadow.depthTex);
     gl.TexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, size, size, 0, GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    setSampling(GL_LINEAR, GL_CLAMP_TO_EDGE, GL_CLAMP_TO_EDGE);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
     gl.GenFramebuffers(1, &shadow.fbo);
@@ -92,10 +89,7 @@ bool Renderer::Impl::updateShadowMap(const glm::vec3& toLight, const RenderSetti
   gl.Uniform1i(p.u.colorTex, 0);
   gl.Uniform1i(p.u.alphaTex, 1);
   gl.Uniform1i(p.u.useAlphaTex, s.useAlphaTexture ? 1 : 0);
-  gl.ActiveTexture(GL_TEXTURE0);
-  gl.BindTexture(GL_TEXTURE_2D, white);
-  gl.ActiveTexture(GL_TEXTURE1);
-  gl.BindTexture(GL_TEXTURE_2D, white);
+  bindTextures({white, white});
   if (skin.indexCount > 0) {  // opaque
     gl.Uniform1f(p.u.alphaCut, 0.0f);
     gl.Uniform1i(p.u.colorUv, 0);
@@ -111,10 +105,7 @@ bool Renderer::Impl::updateShadowMap(const glm::vec3& toLight, const RenderSetti
     for (const DrawRun& run : plan.shadowRuns()) {
       if (run.material >= materials.size()) continue;
       const GpuMaterial& m = materials[run.material];
-      gl.ActiveTexture(GL_TEXTURE0);
-      gl.BindTexture(GL_TEXTURE_2D, m.colorTex);
-      gl.ActiveTexture(GL_TEXTURE1);
-      gl.BindTexture(GL_TEXTURE_2D, m.alphaTex);
+      bindTextures({m.colorTex, m.alphaTex});
       gl.Uniform1i(p.u.colorUv, static_cast<int>(m.desc.colorUv));
       drawIndices(run.first, run.count);
     }
