@@ -365,7 +365,8 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
   });
 
   // Pass 2: the surviving triangles in draw order (layer order, then each feather's parts in
-  // octant order), split into runs of one material.
+  // octant order), split into maximal runs of one material: a feather none of whose triangles
+  // survived neither starts a run nor splits one.
   frameIndices_.resize(coatIndices_.size());
   size_t used = 0;
   for (size_t i = 0; i < ranges_.size(); ++i) {
@@ -377,7 +378,8 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
     counts_.occludedTriangles += pl.occludedTriangles;
     counts_.subpixelTriangles += pl.subpixelTriangles;
     const uint32_t material = ranges_[i].material;
-    if (runs_.empty() || runs_.back().material != material) runs_.push_back({material, used, 0});
+    if (pl.triangles > 0 && (runs_.empty() || runs_.back().material != material))
+      runs_.push_back({material, used, 0});
     for (int8_t k : pl.order) {
       const uint32_t c0 = partChunks_[5 * i + k], c1 = partChunks_[5 * i + k + 1];
       if (c0 == c1) continue;
@@ -389,7 +391,7 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
         used += kept_[c];
       }
     }
-    runs_.back().count = used - runs_.back().first;
+    if (!runs_.empty()) runs_.back().count = used - runs_.back().first;
   }
   frameIndices_.resize(used);
 }

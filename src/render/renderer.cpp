@@ -327,7 +327,6 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     // The plan's indices uploaded once, one draw call per material run.
     r.streamIndices(r.coat, r.plan.indices(), GL_STREAM_DRAW);
     for (const DrawRun& run : r.plan.runs()) {
-      if (run.count == 0) continue;
       {
         const GpuMaterial& mat = r.materials[run.material];
         const FeatherMaterial& d = mat.desc;

@@ -283,6 +283,40 @@ TEST(DrawPlan, AFeatherNotDrawnDoesNotSplitARun) {
   EXPECT_EQ(plan.runs()[0].count, 12u);
 }
 
+TEST(DrawPlan, AFeatherWhoseTrianglesAreAllCulledDoesNotSplitARun) {
+  // The middle feather is in the frustum, but its one triangle falls between pixel centres.
+  const float pixel = 2.0f * 5.0f * std::tan(glm::radians(20.0f)) / kSize;
+  const glm::vec3 centre(0.25f * pixel, 0.25f * pixel, 0);
+  Coat coat;
+  coat.feather({0, 0.5f, 0}, 2, 0);
+  FeatherDrawRange tiny;
+  tiny.firstIndex = static_cast<uint32_t>(coat.indices.size());
+  tiny.indexCount = 3;
+  tiny.material = 1;
+  coat.triangle({0, 0, 0}, 1e-4f);
+  coat.ranges.push_back(tiny);
+  coat.feather({0, -0.5f, 0}, 2, 0);
+  DrawPlan plan = coat.plan();
+  DrawOptions o;
+  o.subpixelCulling = true;
+  plan.build(cameraAt(centre + glm::vec3(0, 0, 5), centre), kSize, kSize, o);
+  EXPECT_EQ(plan.counts().subpixelTriangles, 1u);
+  EXPECT_EQ(plan.counts().culledFeathers, 0u);
+  ASSERT_EQ(plan.runs().size(), 1u);
+  EXPECT_EQ(plan.runs()[0].material, 0u);
+  EXPECT_EQ(plan.runs()[0].count, 12u);
+  // Every run draws something, and neighbouring runs differ in material.
+  o.subpixelCulling = false;
+  plan.build(cameraAt(centre + glm::vec3(0, 0, 5), centre), kSize, kSize, o);
+  ASSERT_EQ(plan.runs().size(), 3u);
+  for (size_t k = 0; k < plan.runs().size(); ++k) {
+    EXPECT_GT(plan.runs()[k].count, 0u);
+    if (k > 0) {
+      EXPECT_NE(plan.runs()[k].material, plan.runs()[k - 1].material);
+    }
+  }
+}
+
 TEST(DrawPlan, EmptyInputGivesAnEmptyPlan) {
   DrawPlan fresh;
   fresh.build(front(), kSize, kSize, DrawOptions());
