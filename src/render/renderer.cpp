@@ -327,20 +327,18 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     // The plan's indices uploaded once, one draw call per material run.
     r.streamIndices(r.coat, r.plan.indices(), GL_STREAM_DRAW);
     for (const DrawRun& run : r.plan.runs()) {
-      {
-        const GpuMaterial& mat = r.materials[run.material];
-        const FeatherMaterial& d = mat.desc;
-        r.bindTextures({mat.colorTex, mat.alphaTex, mat.brdfTex});
-        gl.Uniform1i(p.u.colorUv, static_cast<int>(d.colorUv));
-        gl.Uniform1i(p.u.useBrdf, (s.useBrdf && d.useBrdf) ? 1 : 0);
-        gl.Uniform3f(p.u.baseColor, d.baseColor.r, d.baseColor.g, d.baseColor.b);
-        gl.Uniform3f(p.u.sheathColor, d.sheathColor.r, d.sheathColor.g, d.sheathColor.b);
-        gl.Uniform2f(p.u.barbuleCosSin, std::cos(d.barbuleAngle), std::sin(d.barbuleAngle));
-        gl.Uniform1f(p.u.specular, d.specular);
-        const float cone = std::max(d.coneSigma, 1e-3f);
-        gl.Uniform1f(p.u.coneInv2s2, 1.0f / (2.0f * cone * cone));
-        gl.Uniform1f(p.u.translucency, d.translucency);
-      }
+      const GpuMaterial& mat = r.materials[run.material];
+      const FeatherMaterial& d = mat.desc;
+      r.bindTextures({mat.colorTex, mat.alphaTex, mat.brdfTex});
+      gl.Uniform1i(p.u.colorUv, static_cast<int>(d.colorUv));
+      gl.Uniform1i(p.u.useBrdf, (s.useBrdf && d.useBrdf) ? 1 : 0);
+      gl.Uniform3f(p.u.baseColor, d.baseColor.r, d.baseColor.g, d.baseColor.b);
+      gl.Uniform3f(p.u.sheathColor, d.sheathColor.r, d.sheathColor.g, d.sheathColor.b);
+      gl.Uniform2f(p.u.barbuleCosSin, std::cos(d.barbuleAngle), std::sin(d.barbuleAngle));
+      gl.Uniform1f(p.u.specular, d.specular);
+      const float cone = std::max(d.coneSigma, 1e-3f);
+      gl.Uniform1f(p.u.coneInv2s2, 1.0f / (2.0f * cone * cone));
+      gl.Uniform1f(p.u.translucency, d.translucency);
       r.drawIndices(run.first, run.count);
       ++stats_.drawCalls;
       ++stats_.drawRanges;

@@ -89,7 +89,7 @@ void shadeCoat(vec3 pos, vec3 normal, vec3 tangent, out vec3 diffuse, out vec3 s
 }
 )GLSL";
 
-// The key light's shadow map (renderer.cpp: an orthographic depth map of the skin and the alpha-tested
+// The key light's shadow map (shadow_pass.cpp: an orthographic depth map of the skin and the alpha-tested
 // coat from light 0). vShadowPos is the fragment's light clip position, pushed off its surface along the
 // normal in the vertex shader. Four bilinear depth comparisons (hardware PCF) half a texel apart give a
 // soft edge about two texels wide. Returns the key light's visibility in [1 - uShadowStrength, 1].
@@ -119,7 +119,7 @@ vec3 toneMap(vec3 c) {
 }
 )GLSL";
 
-// Vertex attributes of every vertex shader. Locations match renderer.cpp's Attr enum.
+// Vertex attributes of every vertex shader. Locations match renderer_impl.hpp's Attr enum.
 inline constexpr const char* kMeshAttributes = R"GLSL(
 layout(location = 0) in vec3 aPos;
 layout(location = 1) in vec3 aNormal;
