@@ -177,8 +177,7 @@ int cmdBench(const Common& c, const BenchArgs& a) {
   view.render(p, l.width, l.height);
   const double renderSecs = std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
   // First-evaluation seconds per stage, read before the scrub below resets the timings.
-  auto& g = p.graph();
-  auto secs = [&](Stage s) { return g.lastSeconds(g.find(pipeline::stageName(s))); };
+  auto secs = [&](Stage s) { return p.lastSeconds(s); };
   const double load = parse + secs(Stage::Skin) + secs(Stage::Tracts);
   const double distribute = secs(Stage::Distribute);
   const double interpolate = secs(Stage::Interpolate) + secs(Stage::Directions);

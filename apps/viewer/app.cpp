@@ -377,7 +377,7 @@ void App::uploadResults() {
   pipeline::Pipeline* p = doc_.idlePipeline();
   if (p && doc_.upToDate() && doc_.resultVersion() != syncedResult_) {
     // The pipeline is idle and clean: reading its coat does not evaluate anything.
-    const uint64_t meshEvals = p->graph().evaluations(p->graph().find("mesh"));
+    const uint64_t meshEvals = p->evaluations(pipeline::Stage::Mesh);
     if (meshEvals != meshEvals_) {
       const pipeline::CoatMesh& coat = p->coatMesh();
       context_->makeCurrent();

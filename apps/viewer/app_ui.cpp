@@ -240,7 +240,7 @@ void App::panelColumn() {
   panel("Render", false, drawRenderPanel);
   if (header("Stage timings", false)) {
     const Snapshot& s = doc_.snapshot();
-    for (int i = 0; i < 10; ++i)
+    for (size_t i = 0; i < pipeline::kStageCount; ++i)
       ImGui::Text("%-12s %8.3f s", pipeline::stageName(pipeline::Stage(i)), s.stageSeconds[i]);
     ImGui::Text("%-12s %8.3f s", "view render", lastRenderSeconds_);
   }

@@ -30,11 +30,6 @@ bool sameFile(const std::string& a, const std::string& b) {
   return std::filesystem::absolute(a).lexically_normal() == std::filesystem::absolute(b).lexically_normal();
 }
 
-uint64_t evaluations(Pipeline& p, Stage s) {
-  const auto id = p.graph().find(pipeline::stageName(s));
-  return id < 0 ? 0 : p.graph().evaluations(id);
-}
-
 void bounds(const TriMesh& m, glm::vec3& lo, glm::vec3& hi) {
   if (!m.bounds(lo, hi)) lo = hi = glm::vec3(0);
 }
@@ -229,7 +224,7 @@ void Document::update() {
   if (failed_ || halted_) return;
   // Anything that left a stage dirty behind the Document's back is evaluated too (the GL view must
   // never pull a dirty pipeline on the UI thread).
-  if (!needEval_ && !pending_ && pipeline_->graph().dirty(pipeline_->graph().find(pipeline::stageName(Stage::Mesh))))
+  if (!needEval_ && !pending_ && pipeline_->dirty(Stage::Mesh))
     needEval_ = true;
   if (!(needEval_ || pending_ || timeDirty_ || lodDirty_ || checkWanted_)) return;
   // Hand edits to the pipeline (the worker is idle).
@@ -276,12 +271,12 @@ void Document::startJob(bool check) {
     Snapshot work = *base;
     try {
       Pipeline& p = *pipeline_;
-      const uint64_t poseBefore = evaluations(p, Stage::Pose), tractsBefore = evaluations(p, Stage::Tracts);
-      const uint64_t distBefore = evaluations(p, Stage::Distribute);
-      const bool poseDirty = p.graph().dirty(p.graph().find("pose"));
+      const uint64_t poseBefore = p.evaluations(Stage::Pose), tractsBefore = p.evaluations(Stage::Tracts);
+      const uint64_t distBefore = p.evaluations(Stage::Distribute);
+      const bool poseDirty = p.dirty(Stage::Pose);
       // Phase 1: the rest skin, shown while the rest evaluates.
       const coat::SkinMesh& rest = p.restSkin();
-      if (poseDirty && evaluations(p, Stage::Skin) > 0 && (work.skinVersion == 0 || work.skin.empty())) {
+      if (poseDirty && p.evaluations(Stage::Skin) > 0 && (work.skinVersion == 0 || work.skin.empty())) {
         work.skin = coat::toTriMesh(rest);
         bounds(work.skin, work.skinLo, work.skinHi);
         work.groupNames = rest.groupNames;
@@ -289,7 +284,7 @@ void Document::startJob(bool check) {
         publishSnapshot(work);
       }
       const auto& tracts = p.tracts();
-      if (evaluations(p, Stage::Tracts) != tractsBefore || work.tractNames.size() != tracts.size()) {
+      if (p.evaluations(Stage::Tracts) != tractsBefore || work.tractNames.size() != tracts.size()) {
         work.tractNames.clear();
         work.tractFaces.clear();
         for (const auto& t : tracts) {
@@ -300,7 +295,7 @@ void Document::startJob(bool check) {
       }
       // Phase 2: follicles.
       const coat::Follicles& f = p.follicles();
-      if (evaluations(p, Stage::Distribute) != distBefore || work.follicleVersion == 0) {
+      if (p.evaluations(Stage::Distribute) != distBefore || work.follicleVersion == 0) {
         work.follicle.assign(f.size(), glm::vec3(0));
         work.follicleNormal.assign(f.size(), glm::vec3(0));
         for (size_t i = 0; i < f.size(); ++i) {
@@ -314,7 +309,7 @@ void Document::startJob(bool check) {
       }
       // Phase 3: posed skin and the coat.
       const coat::SkinMesh& posed = p.posedSkin();
-      if (evaluations(p, Stage::Pose) != poseBefore || work.skinVersion == 0) {
+      if (p.evaluations(Stage::Pose) != poseBefore || work.skinVersion == 0) {
         work.skin = coat::toTriMesh(posed);
         bounds(work.skin, work.skinLo, work.skinHi);
         work.groupNames = rest.groupNames;
@@ -348,7 +343,7 @@ void Document::startJob(bool check) {
         work.coatHi = work.skinHi;
       }
       work.haveCoat = true;
-      for (int s = 0; s < 10; ++s) work.stageSeconds[s] = p.graph().lastSeconds(p.graph().find(pipeline::stageName(Stage(s))));
+      for (size_t s = 0; s < pipeline::kStageCount; ++s) work.stageSeconds[s] = p.lastSeconds(Stage(s));
       ++work.coatVersion;
       publishSnapshot(work);
       if (check) {

@@ -55,7 +55,7 @@ struct Snapshot {
   size_t coatTriangles = 0, coatFeathers = 0;
   glm::vec3 coatLo{0}, coatHi{0};
   bool haveCoat = false;
-  double stageSeconds[10] = {};           // last evaluation time of each stage
+  double stageSeconds[pipeline::kStageCount] = {};           // last evaluation time of each stage
 };
 
 struct JobProgress {

@@ -25,7 +25,6 @@
 #include "pteryla/exchange/coat_export.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
-#include "pteryla/pipeline/stage_graph.hpp"
 #include "pteryla/render/image.hpp"
 #include "pteryla/render/osmesa_context.hpp"
 #include "pteryla/render/scene_view.hpp"
@@ -283,9 +282,7 @@ struct Session::Impl {
   }
 
   uint64_t meshEvaluations() {
-    pipeline::StageGraph& g = pipeline->graph();
-    const auto id = g.find(pipeline::stageName(pipeline::Stage::Mesh));
-    return id < 0 ? 0 : g.evaluations(id);
+    return pipeline->evaluations(pipeline::Stage::Mesh);
   }
 
   // Follow mode: carries the base coat (the pipeline's frame, already in the views' arrays) onto the host's

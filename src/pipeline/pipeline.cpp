@@ -39,6 +39,7 @@
 #include "pteryla/feather/lod.hpp"
 #include "pteryla/feather/mesh.hpp"
 #include "scene_sections.hpp"
+#include "stage_graph.hpp"
 #include "time_stages.hpp"
 
 namespace pteryla::pipeline {
@@ -105,8 +106,7 @@ struct Pipeline::Impl {
   ProgressFn progress;
   double time = 0, lod = 1;
   std::vector<double> featherLods;  // per feather, multiplies lod (empty: 1 for all)
-  StageGraph graph;
-  StageGraph::Id ids[10];
+  StageGraph graph;  // node int(s) is stage s
 
   std::optional<coat::SkinMesh> memorySkin;  // the rest skin when given in memory (else scene.meshPath)
   std::vector<glm::dvec3> skinPose;          // the caller's posed positions (empty: skeleton / rest)
@@ -178,12 +178,7 @@ struct Pipeline::Impl {
   TriMesh lastUnpacked;
   std::optional<size_t> lastUnpackedPairs;
 
-  Stage stageOf(StageGraph::Id id) const {
-    for (int i = 0; i < 10; ++i)
-      if (ids[i] == id) return Stage(i);
-    return Stage::Skin;
-  }
-  StageGraph::Id id(Stage s) const { return ids[int(s)]; }
+  static StageGraph::Id id(Stage s) { return static_cast<StageGraph::Id>(s); }
 
   void build();
   void computeSkin();
@@ -206,7 +201,8 @@ void Pipeline::Impl::build() {
   auto add = [&](Stage s, std::vector<Stage> in, void (Impl::*fn)()) {
     std::vector<StageGraph::Id> inputs;
     for (Stage i : in) inputs.push_back(id(i));
-    ids[int(s)] = graph.add(stageName(s), inputs, [this, fn] { (this->*fn)(); });
+    const StageGraph::Id added = graph.add(stageName(s), inputs, [this, fn] { (this->*fn)(); });
+    PTERYLA_CHECK(added == id(s), "stages are added in the order of pipeline::Stage");
   };
   add(Stage::Skin, {}, &Impl::computeSkin);
   add(Stage::Tracts, {Stage::Skin}, &Impl::computeTracts);
@@ -1318,7 +1314,9 @@ FrameReuse Pipeline::frameReuse() const {
   return r;
 }
 
-StageGraph& Pipeline::graph() { return impl_->graph; }
+uint64_t Pipeline::evaluations(Stage s) const { return impl_->graph.evaluations(Impl::id(s)); }
+bool Pipeline::dirty(Stage s) const { return impl_->graph.dirty(Impl::id(s)); }
+double Pipeline::lastSeconds(Stage s) const { return impl_->graph.lastSeconds(Impl::id(s)); }
 double Pipeline::stageSeconds(Stage s) const { return impl_->graph.totalSeconds(impl_->id(s)); }
 void Pipeline::resetTimings() { impl_->graph.resetTimings(); }
 

@@ -1,4 +1,4 @@
-#include "pteryla/pipeline/stage_graph.hpp"
+#include "stage_graph.hpp"
 
 #include "pteryla/core/error.hpp"
 
@@ -42,12 +42,6 @@ void StageGraph::pull(Id s) {
 
 void StageGraph::resetTimings() {
   for (auto& n : nodes_) { n.totalSeconds = 0; n.lastSeconds = 0; }
-}
-
-StageGraph::Id StageGraph::find(const std::string& name) const {
-  for (size_t i = 0; i < nodes_.size(); ++i)
-    if (nodes_[i].name == name) return static_cast<Id>(i);
-  return -1;
 }
 
 }  // namespace pteryla::pipeline

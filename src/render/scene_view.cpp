@@ -218,20 +218,19 @@ struct SceneView::Impl {
 
   void sync(pipeline::Pipeline& p) {
     const auto& coat = p.coatMesh();
-    auto& g = p.graph();
-    const auto skinId = g.find("pose"), meshId = g.find("mesh");
-    if (g.evaluations(skinId) != lastSkinEval) {
+    using pipeline::Stage;
+    if (p.evaluations(Stage::Pose) != lastSkinEval) {
       skin = p.skinTriMesh();
       renderer.setSkin(skin);
-      lastSkinEval = g.evaluations(skinId);
+      lastSkinEval = p.evaluations(Stage::Pose);
     }
-    if (g.evaluations(meshId) != lastMeshEval) {
+    if (p.evaluations(Stage::Mesh) != lastMeshEval) {
       if (!materialsSet) {
         renderer.setMaterials(sceneMaterials(p.scene(), coat));
         materialsSet = true;
       }
       renderer.setCoat(coat.mesh, drawRanges(coat));
-      lastMeshEval = g.evaluations(meshId);
+      lastMeshEval = p.evaluations(Stage::Mesh);
     }
   }
 };

@@ -18,7 +18,6 @@
 #include "pteryla/feather/mesh.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
-#include "pteryla/pipeline/stage_graph.hpp"
 
 using namespace pteryla;
 using pipeline::Pipeline;
@@ -139,7 +138,7 @@ TEST(IncrementalFrames, TimeWithoutTimeDependentSectionsRecomputesNothing) {
   Pipeline p(scene);
   p.setLod(0.3);
   const Frame at0 = grab(p);
-  auto evaluations = [&](pipeline::Stage s) { return p.graph().evaluations(p.graph().find(pipeline::stageName(s))); };
+  auto evaluations = [&](pipeline::Stage s) { return p.evaluations(s); };
   const uint64_t pose = evaluations(pipeline::Stage::Pose), pack = evaluations(pipeline::Stage::Pack),
                  mesh = evaluations(pipeline::Stage::Mesh);
   p.setTime(4.0);

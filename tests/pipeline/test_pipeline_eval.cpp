@@ -46,8 +46,8 @@ TEST(PipelineEval, TimeAndLodEditsDirtyOnlyDownstreamStages) {
   scene.moult = Json::parse(R"({"start": 10, "duration": 1})");
   Pipeline p(std::move(scene));
   p.coatMesh();
-  auto& g = p.graph();
-  const auto skin = g.find("skin"), dist = g.find("distribute"), pack = g.find("pack"), mesh = g.find("mesh");
+  const Pipeline& g = p;
+  const auto skin = Stage::Skin, dist = Stage::Distribute, pack = Stage::Pack, mesh = Stage::Mesh;
   EXPECT_EQ(g.evaluations(skin), 1u);
   p.setTime(3.0);
   p.coatMesh();
@@ -124,8 +124,8 @@ TEST(PipelineEval, SkinInMemoryAndCallerPose) {
   for (size_t k = 0; k < p.coatMesh().ranges.size(); ++k)
     EXPECT_EQ(p.coatMesh().ranges[k].feather, p.feathers().layerOrder[k]);  // every feather present
 
-  auto& g = p.graph();
-  const auto dist = g.find("distribute"), interp = g.find("interpolate"), pose = g.find("pose");
+  const Pipeline& g = p;
+  const auto dist = Stage::Distribute, interp = Stage::Interpolate, pose = Stage::Pose;
   std::vector<glm::dvec3> moved = rest.positions;
   for (auto& v : moved) v.x *= 1.25;
   p.setSkinPose(moved);
@@ -192,8 +192,8 @@ TEST(PipelineEval, PerFeatherLodsLowerOnlyTheirFeathers) {
   const uint32_t lowered = p.feathers().layerOrder[n / 2];
   std::vector<double> lods(n, 1.0);
   lods[lowered] = 0.2;
-  auto& g = p.graph();
-  const auto pack = g.find("pack");
+  const Pipeline& g = p;
+  const auto pack = Stage::Pack;
   const size_t packs = g.evaluations(pack);
   p.setFeatherLods(lods);
   const CoatMesh mixed = p.coatMesh();

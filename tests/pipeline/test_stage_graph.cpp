@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "pteryla/pipeline/stage_graph.hpp"
+#include "stage_graph.hpp"
 
 using pteryla::pipeline::StageGraph;
 
@@ -31,6 +31,5 @@ TEST(StageGraph, EditDirtiesOnlyDownstream) {
   g.pull(sFol);  // pulling an upstream stage leaves downstream dirty
   EXPECT_EQ(fol, 2);
   EXPECT_TRUE(g.dirty(sMesh));
-  EXPECT_EQ(g.find("pack"), sPack);
-  EXPECT_EQ(g.find("nope"), -1);
+  EXPECT_EQ(g.name(sPack), "pack");
 }

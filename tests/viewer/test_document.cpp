@@ -181,8 +181,7 @@ TEST(Document, OnlyDownstreamStagesRerun) {
   d.reset(smallPatch(), "");
   ASSERT_TRUE(d.waitIdle());
   auto evals = [&](pipeline::Stage s) {
-    auto& g = d.idlePipeline()->graph();
-    return g.evaluations(g.find(pipeline::stageName(s)));
+    return d.idlePipeline()->evaluations(s);
   };
   const auto distribute = evals(pipeline::Stage::Distribute), mesh = evals(pipeline::Stage::Mesh);
   d.setLod(0.3);
@@ -251,8 +250,7 @@ TEST(Document, CheckRunsTheCheckerAndKeepsTheViewLod) {
   EXPECT_EQ(d.metrics()->intersectingFeathers, ref.intersectingFeathers);
   EXPECT_FALSE(d.metrics()->intersectingFeathers.empty());
   for (uint32_t i : d.metrics()->intersectingFeathers) EXPECT_LT(i, d.snapshot().featherOrigin.size());
-  auto& g = d.idlePipeline()->graph();
-  EXPECT_FALSE(g.dirty(g.find("mesh")));
+  EXPECT_FALSE(d.idlePipeline()->dirty(pipeline::Stage::Mesh));
   EXPECT_DOUBLE_EQ(d.idlePipeline()->lod(), d.lod());
 }
 

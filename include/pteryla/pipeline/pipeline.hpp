@@ -19,7 +19,7 @@
 #include "pteryla/core/progress.hpp"
 #include "pteryla/core/trimesh.hpp"
 #include "pteryla/pipeline/scene.hpp"
-#include "pteryla/pipeline/stage_graph.hpp"
+#include "pteryla/pipeline/stage.hpp"
 
 namespace pteryla::feather { struct FeatherParams; }
 namespace pteryla::coat {
@@ -30,9 +30,6 @@ struct CoatFeathers;
 }  // namespace pteryla::coat
 
 namespace pteryla::pipeline {
-
-enum class Stage { Skin, Tracts, Distribute, Interpolate, Directions, Pose, Ages, Controls, Pack, Mesh };
-const char* stageName(Stage s);
 
 // What the renderer needs to draw one feather of the coat mesh (mirrors render::FeatherDrawRange
 // without depending on the render module).
@@ -166,8 +163,13 @@ class Pipeline {
   // it packs the mature coat (the frame's full pack; the moulting feathers are packed over it).
   double timeFullPack(int repeats);
 
-  StageGraph& graph();
-  double stageSeconds(Stage s) const;  // summed since the last resetTimings()
+  // Per stage (tests, benchmarks, and views that upload only what changed): completed evaluations since
+  // construction, whether the next result that needs it recomputes it, the seconds of its last
+  // evaluation and the seconds summed since the last resetTimings().
+  uint64_t evaluations(Stage s) const;
+  bool dirty(Stage s) const;
+  double lastSeconds(Stage s) const;
+  double stageSeconds(Stage s) const;
   void resetTimings();
 
  private:

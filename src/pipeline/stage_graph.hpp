@@ -4,6 +4,7 @@
 // invalidate(s) dirties s and everything downstream of it, so an edit to packing settings repacks
 // without re-relaxing follicles, and a timeline scrub does not reload the mesh.
 // The graph records per-stage evaluation counts and the seconds of the last evaluation (for bench).
+// Internal to the pipeline: clients address stages through Pipeline by pipeline::Stage (stage.hpp).
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -34,7 +35,6 @@ class StageGraph {
   // Seconds summed over every evaluation since the last resetTimings().
   double totalSeconds(Id s) const { return nodes_[s].totalSeconds; }
   void resetTimings();
-  Id find(const std::string& name) const;  // -1 when absent
 
  private:
   struct Node {
