@@ -10,6 +10,7 @@
 #include "pteryla/coat/tracts.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
+#include "pteryla/pipeline/scene_stages.hpp"
 #include "scene_edit.hpp"
 
 namespace pteryla::viewer {
@@ -88,7 +89,7 @@ void Document::markChanged(const Scene& before) {
   failed_ = false;
   halted_ = false;
   metrics_.reset();
-  if (const auto st = earliestChangedStage(before, scene_)) {
+  if (const auto st = pipeline::earliestChangedStage(before, scene_)) {
     pending_ = pending_ ? std::min(*pending_, *st) : *st;
     needEval_ = true;
     if (running_) cancel_ = true;

@@ -5,9 +5,10 @@
 //
 // Threading: the UI thread owns the Document. Edits change the Document's own copy of the Scene
 // (scene()) at once and are handed to the Pipeline with Pipeline::editScene(stage, ...) when no job is
-// running; `stage` is the earliest stage the edit affects (earliestChangedStage), so only what is
-// downstream re-runs. While a job runs the Pipeline belongs to the worker thread: the UI reads only the
-// Snapshot, which the worker publishes in phases (posed skin, follicles, coat) as stages finish.
+// running; `stage` is the earliest stage the edit affects (pipeline::earliestChangedStage, the
+// pipeline's section-to-stage table), so only what is downstream re-runs. While a job runs the Pipeline
+// belongs to the worker thread: the UI reads only the Snapshot, which the worker publishes in phases
+// (posed skin, follicles, coat) as stages finish.
 // A new edit while a job runs cancels it at the next progress report (stage boundary or relaxation
 // iteration); the cancelled stage stays dirty and is re-run with the edit applied.
 //

@@ -10,21 +10,6 @@
 namespace pteryla::viewer {
 
 using pipeline::Scene;
-using pipeline::Stage;
-
-std::optional<Stage> earliestChangedStage(const Scene& a, const Scene& b) {
-  if (a.meshPath != b.meshPath || a.meshRepair != b.meshRepair || a.feathers != b.feathers ||
-      a.fromBareMesh != b.fromBareMesh)
-    return Stage::Skin;
-  if (a.tracts != b.tracts || a.growth != b.growth) return Stage::Tracts;  // growth: read with the tracts
-  if (a.seed != b.seed) return Stage::Distribute;  // scatter and jitter seeds
-  // Directions and ordering are read by the directions stage, packing by the controls stage.
-  if (a.directions != b.directions || a.ordering != b.ordering) return Stage::Directions;
-  if (a.skeleton != b.skeleton) return Stage::Pose;
-  if (a.moult != b.moult) return Stage::Ages;
-  if (a.controls != b.controls || a.packing != b.packing) return Stage::Controls;
-  return std::nullopt;
-}
 
 Json sceneJson(const Scene& s) { return pipeline::sceneToJson(s, ""); }
 

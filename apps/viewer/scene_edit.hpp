@@ -1,7 +1,8 @@
 #pragma once
-// Scene edits as the viewer sees them: which pipeline stage an edit of the Scene has to re-run, generic
-// JSON-pointer edits (the `set` script command and the JSON inspectors), and turning a bare-mesh scene
-// into an explicit one so that what the viewer saves reloads to the same coat.
+// Scene edits as the viewer sees them: generic JSON-pointer edits (the `set` script command and the JSON
+// inspectors), and turning a bare-mesh scene into an explicit one so that what the viewer saves reloads
+// to the same coat. Which stage an edit re-runs is the pipeline's to say: pipeline::earliestChangedStage
+// (pteryla/pipeline/scene_stages.hpp).
 // Pure data: no GL, no ImGui (unit-tested in tests/viewer).
 #include <optional>
 #include <string>
@@ -12,12 +13,6 @@
 #include "pteryla/pipeline/scene.hpp"
 
 namespace pteryla::viewer {
-
-// Earliest stage whose inputs differ between `before` and `after`; nullopt when only view settings
-// (name, camera, lights, render) differ, which need no re-evaluation.
-// The pipeline reads the directions, packing and ordering sections in its tracts stage, so an edit of
-// them re-runs from Stage::Tracts (see pipeline.cpp computeTracts).
-std::optional<pipeline::Stage> earliestChangedStage(const pipeline::Scene& before, const pipeline::Scene& after);
 
 // The scene as JSON with absolute paths (in-memory form; saveScene writes relative ones).
 Json sceneJson(const pipeline::Scene& s);

@@ -10,6 +10,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "frames.hpp"
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/growth.hpp"
@@ -21,6 +22,10 @@
 
 using namespace pteryla;
 using pipeline::Pipeline;
+using pipeline_test::expectIdentical;
+using pipeline_test::Frame;
+using pipeline_test::grab;
+using pipeline_test::sameBytes;
 
 namespace {
 
@@ -39,55 +44,6 @@ Json patchScene() {
     "directions": {"vectors": [{"at": [0, 0, 0], "direction": [1, 0, 0]}]},
     "packing": {"method": "height_field", "clearance": 0.0004, "skin_sample_spacing": 0.01}
   })");
-}
-
-struct Frame {
-  std::vector<double> elevation, age;
-  std::vector<uint8_t> present;
-  TriMesh mesh;
-  std::vector<pipeline::CoatDrawRange> ranges;
-};
-
-Frame grab(Pipeline& p) {
-  Frame f;
-  f.elevation = p.elevations();
-  f.age = p.feathers().age;
-  f.present = p.feathers().present;
-  f.mesh = p.coatMesh().mesh;
-  f.ranges = p.coatMesh().ranges;
-  return f;
-}
-
-template <class T>
-bool sameBytes(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
-void expectIdentical(const Frame& a, const Frame& b, double t) {
-  SCOPED_TRACE("t = " + std::to_string(t));
-  EXPECT_TRUE(sameBytes(a.elevation, b.elevation));
-  EXPECT_TRUE(sameBytes(a.age, b.age));
-  EXPECT_EQ(a.present, b.present);
-  EXPECT_EQ(a.mesh.vertexCount(), b.mesh.vertexCount());
-  EXPECT_TRUE(sameBytes(a.mesh.positions, b.mesh.positions));
-  EXPECT_TRUE(sameBytes(a.mesh.normals, b.mesh.normals));
-  EXPECT_TRUE(sameBytes(a.mesh.tangents, b.mesh.tangents));
-  EXPECT_TRUE(sameBytes(a.mesh.uvGlobal, b.mesh.uvGlobal));
-  EXPECT_TRUE(sameBytes(a.mesh.uvBarb, b.mesh.uvBarb));
-  EXPECT_TRUE(sameBytes(a.mesh.uvGrowth, b.mesh.uvGrowth));
-  EXPECT_TRUE(sameBytes(a.mesh.alpha, b.mesh.alpha));
-  EXPECT_TRUE(sameBytes(a.mesh.sheath, b.mesh.sheath));
-  EXPECT_TRUE(sameBytes(a.mesh.barbCount, b.mesh.barbCount));
-  EXPECT_TRUE(sameBytes(a.mesh.featherId, b.mesh.featherId));
-  EXPECT_TRUE(sameBytes(a.mesh.indices, b.mesh.indices));
-  ASSERT_EQ(a.ranges.size(), b.ranges.size());
-  for (size_t k = 0; k < a.ranges.size(); ++k) {
-    EXPECT_EQ(a.ranges[k].firstIndex, b.ranges[k].firstIndex) << k;
-    EXPECT_EQ(a.ranges[k].indexCount, b.ranges[k].indexCount) << k;
-    for (int q = 0; q < 4; ++q) EXPECT_EQ(a.ranges[k].partCount[q], b.ranges[k].partCount[q]) << k;
-    EXPECT_EQ(a.ranges[k].origin, b.ranges[k].origin) << k;
-    EXPECT_EQ(a.ranges[k].axisX, b.ranges[k].axisX) << k;
-  }
 }
 
 Frame fresh(const pipeline::Scene& scene, double t, double lod) {

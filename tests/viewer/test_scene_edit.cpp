@@ -1,9 +1,10 @@
-// Scene edits: which stage an edit re-runs, JSON-pointer edits through the strict scene reader, tract
+// Scene edits: which stage an edit re-runs (the pipeline's table, as the viewer uses it), JSON-pointer edits through the strict scene reader, tract
 // references.
 #include <gtest/gtest.h>
 
 #include "fixtures.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/pipeline/scene_stages.hpp"
 #include "scene_edit.hpp"
 
 using namespace pteryla;
@@ -15,7 +16,7 @@ TEST(SceneEdit, EarliestChangedStage) {
   auto changed = [&](const std::function<void(pipeline::Scene&)>& f) {
     pipeline::Scene b = a;
     f(b);
-    return earliestChangedStage(a, b);
+    return pipeline::earliestChangedStage(a, b);
   };
   EXPECT_FALSE(changed([](pipeline::Scene&) {}).has_value());
   EXPECT_FALSE(changed([](pipeline::Scene& s) { s.render.brdfD = 3; }).has_value());
