@@ -38,6 +38,7 @@
 #include "pteryla/feather/io.hpp"
 #include "pteryla/feather/lod.hpp"
 #include "pteryla/feather/mesh.hpp"
+#include "coat_mesher.hpp"
 #include "scene_sections.hpp"
 #include "stage_graph.hpp"
 #include "time_stages.hpp"
@@ -135,43 +136,16 @@ struct Pipeline::Impl {
   const coat::PackResult* packed = nullptr;  // timeState.frame.result once packed
   const coat::CoatFeathers* packedCoat = nullptr;  // the coat `packed` was packed from (coatNow or packCoat)
   // Draped packing (packing.method "drape"): the pack stage lays nothing (every elevation 0, `flatPack`)
-  // and the mesh stage drapes the assembled mesh; `drape` is its last result. The mesh's indices before
-  // draping trimmed triangles are kept, since assembleMesh copies reused slices from the last mesh.
+  // and the mesh stage drapes the assembled mesh; `drape` is its last result.
   coat::PackResult flatPack;
   coat::DrapeResult drape;
-  std::vector<uint32_t> undrapedIndices;
   CoatMesh mesh;
+  CoatMesher mesher;                // mesh.mesh is its last result
   // Rest-state generation: bumped whenever the directions stage (downstream of every rest stage) runs,
   // so caches of time-stage results know when the rest state they were made from is gone.
   uint64_t restGeneration = 1;
   uint64_t coatNowGeneration = 0;   // generation coatNow was copied from coatRest at
   uint64_t posedGeneration = 0;     // generation `posed` is an untouched copy of `rest` at (0 = not)
-  // Per-feather mesh inputs kept across frames (each reused only when its inputs are exactly equal):
-  // the packed parameters the mature curves and LOD order were generated from, and the age of the
-  // grown (pin feather) curves.
-  std::vector<feather::FeatherParams> meshParams;
-  std::vector<uint8_t> matureValid;
-  std::vector<double> grownAge;     // NaN = no grown curves
-  std::vector<feather::FeatherParams> grownParams;  // packed grown parameters the grown curves are from
-  std::vector<feather::FeatherCurves> matureCurves, grownCurves;
-  std::vector<feather::LodOrder> lodOrders, grownOrders;
-  size_t meshRegenerated = 0;       // feathers whose curves the last mesh evaluation generated
-  std::vector<uint64_t> curvesVersion;  // per feather: bumped whenever its curves are regenerated
-  // Where each feather sits in mesh.mesh and what it was meshed from: a feather whose curves, level of
-  // detail and sheath are unchanged is copied (unplaced) from the last mesh instead of re-meshed.
-  struct MeshSlice {
-    bool valid = false;
-    uint64_t version = 0;
-    bool growing = false;             // meshed from the grown curves (else the mature ones)
-    double lod = 0, shed = 0;
-    uint32_t v0 = 0, vn = 0, i0 = 0, in = 0;
-    feather::FeatherMeshRanges ranges;  // absolute, in mesh.mesh
-  };
-  std::vector<MeshSlice> slices;
-  TriMesh spareMesh, freshMesh;     // buffers kept across frames (no reallocation per frame)
-  // Unplaced positions, normals and tangents of mesh.mesh's vertices (and spares).
-  std::vector<glm::vec3> localPos, localNrm, localTan, spareLocalPos, spareLocalNrm, spareLocalTan;
-  size_t meshReused = 0;            // feathers copied from the last mesh
   // check(): the last unpacked proxy coat and its intersecting pair count. The unpacked coat comes from
   // the input alone, so checks after edits that leave it as it was (packing, pose-free edits, LOD)
   // reuse the count instead of searching the same mesh again.
@@ -193,8 +167,6 @@ struct Pipeline::Impl {
   void computeControls();
   void computePack();
   void computeMesh();
-  void assembleMesh(const std::vector<feather::FeatherMeshInput>& inputs, const std::vector<uint32_t>& which,
-                    const std::vector<double>& shed, std::vector<feather::FeatherMeshRanges>& ranges);
 };
 
 void Pipeline::Impl::build() {
@@ -646,13 +618,6 @@ void Pipeline::Impl::computeControls() {
   applyControls(scene, time, posed, posedFollicles, timeState, coatNow, fixedElevation);
 }
 
-namespace {
-// computePack: a growing feather whose shaft is full grown is packed (and meshed) as grown.
-bool packedAsGrown(double age, const feather::GrowthSchedule& schedule) {
-  return age < 1.0 && feather::growthStateAt(age, schedule)[feather::GrowthParam::ShaftLength] >= 1.0;
-}
-}  // namespace
-
 void Pipeline::Impl::computePack() {
   report(progress, "pack", 0);
   coat::PackOptions o = packOptions;
@@ -705,300 +670,18 @@ void Pipeline::Impl::computePack() {
   report(progress, "pack", 1);
 }
 
-namespace {
-
-// Empties every array of `m` keeping its capacity.
-void truncate(TriMesh& m) {
-  m.positions.clear();
-  m.normals.clear();
-  m.tangents.clear();
-  m.uvGlobal.clear();
-  m.uvBarb.clear();
-  m.uvGrowth.clear();
-  m.alpha.clear();
-  m.sheath.clear();
-  m.barbCount.clear();
-  m.featherId.clear();
-  m.indices.clear();
-}
-
-void resizeAll(TriMesh& m, size_t verts, size_t indices) {
-  m.positions.resize(verts);
-  m.normals.resize(verts);
-  m.tangents.resize(verts);
-  m.uvGlobal.resize(verts);
-  m.uvBarb.resize(verts);
-  m.uvGrowth.resize(verts);
-  m.alpha.resize(verts);
-  m.sheath.resize(verts);
-  m.barbCount.resize(verts);
-  m.featherId.resize(verts);
-  m.indices.resize(indices);
-}
-
-template <class T>
-void copySlice(const std::vector<T>& from, size_t f0, std::vector<T>& to, size_t t0, size_t count) {
-  if (count) std::memcpy(to.data() + t0, from.data() + f0, count * sizeof(T));
-}
-
-// Moves the part offsets of a feather's ranges from index position `from` to `to`. An afterfeather
-// range that was never set (no afterfeather: afterFirst stays 0) stays 0.
-feather::FeatherMeshRanges rebase(feather::FeatherMeshRanges r, uint32_t from, uint32_t to) {
-  auto move = [&](uint32_t& first) { first = first - from + to; };
-  move(r.shaftFirst);
-  move(r.leftFirst);
-  move(r.rightFirst);
-  if (!(r.afterFirst == 0 && r.afterCount == 0)) move(r.afterFirst);
-  return r;
-}
-
-}  // namespace
-
-// Meshes the present feathers (inputs, in layer order) into mesh.mesh. Feathers are meshed unplaced
-// (feather-local positions, normals, tangents; feather/mesh.hpp) and kept that way in localPos/Nrm/Tan:
-// a feather whose curves, level of detail and sheath are unchanged is copied from the last mesh instead
-// of meshed again, and every feather is then placed. The result is exactly what meshing every feather
-// afresh gives (each feather's vertices and indices depend only on its own input and its position in
-// the mesh, and placing later applies the same arithmetic).
-void Pipeline::Impl::assembleMesh(const std::vector<feather::FeatherMeshInput>& placed, const std::vector<uint32_t>& which,
-                                  const std::vector<double>& shed, std::vector<feather::FeatherMeshRanges>& ranges) {
-  const size_t count = placed.size();
-  const feather::MeshOptions mo;
-  std::vector<feather::FeatherMeshInput> inputs = placed;
-  for (auto& in : inputs) in.unplaced = true;
-  std::vector<uint8_t> reuse(count, 0);
-  size_t reused = 0;
-  for (size_t k = 0; k < count; ++k) {
-    const uint32_t i = which[k];
-    const MeshSlice& sl = slices[i];
-    const bool growing = inputs[k].reference != nullptr;
-    const bool same = sl.valid && sl.version == curvesVersion[i] && sl.growing == growing && sl.lod == inputs[k].lod &&
-                      std::memcmp(&sl.shed, &shed[i], sizeof(double)) == 0 &&
-                      sl.in > 0;  // empty feathers are re-meshed (nothing to copy; keeps range offsets exact)
-    reuse[k] = same ? 1 : 0;
-    reused += reuse[k];
-  }
-  meshReused = reused;
-  ranges.assign(count, feather::FeatherMeshRanges{});
-  std::vector<MeshSlice> next(count);
-  if (reused * 10 < count) {
-    // Little to reuse: mesh everything straight into the output.
-    truncate(mesh.mesh);
-    feather::appendFeatherMeshes(inputs.data(), count, mo, mesh.mesh, &ranges);
-    uint32_t iEnd = 0, vEnd = 0;
-    for (size_t k = 0; k < count; ++k) {
-      MeshSlice& sl = next[k];
-      const auto& r = ranges[k];
-      sl.i0 = iEnd;
-      iEnd = std::max({iEnd, r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
-                       r.afterFirst + r.afterCount});
-      sl.in = iEnd - sl.i0;
-      sl.v0 = vEnd;
-      const uint32_t id = inputs[k].featherId;
-      while (vEnd < mesh.mesh.featherId.size() && mesh.mesh.featherId[vEnd] == id) ++vEnd;
-      sl.vn = vEnd - sl.v0;
-      sl.ranges = r;
-    }
-    std::swap(mesh.mesh.positions, localPos);
-    std::swap(mesh.mesh.normals, localNrm);
-    std::swap(mesh.mesh.tangents, localTan);
-  } else {
-    // Mesh the changed feathers into freshMesh, then copy every slice into the spare buffers in order.
-    std::vector<feather::FeatherMeshInput> changed;
-    std::vector<size_t> changedAt;
-    for (size_t k = 0; k < count; ++k)
-      if (!reuse[k]) {
-        changed.push_back(inputs[k]);
-        changedAt.push_back(k);
-      }
-    truncate(freshMesh);
-    std::vector<feather::FeatherMeshRanges> freshRanges;
-    feather::appendFeatherMeshes(changed.data(), changed.size(), mo, freshMesh, &freshRanges);
-    // Source slices: in the last mesh (reused) or in freshMesh.
-    std::vector<MeshSlice> src(count);
-    uint32_t iEnd = 0, vEnd = 0;
-    for (size_t c = 0; c < changed.size(); ++c) {
-      MeshSlice& sl = src[changedAt[c]];
-      const auto& r = freshRanges[c];
-      sl.i0 = iEnd;
-      iEnd = std::max({iEnd, r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
-                       r.afterFirst + r.afterCount});
-      sl.in = iEnd - sl.i0;
-      sl.v0 = vEnd;
-      while (vEnd < freshMesh.featherId.size() && freshMesh.featherId[vEnd] == changed[c].featherId) ++vEnd;
-      sl.vn = vEnd - sl.v0;
-      sl.ranges = r;
-    }
-    for (size_t k = 0; k < count; ++k)
-      if (reuse[k]) src[k] = slices[which[k]];
-    size_t vTotal = 0, iTotal = 0;
-    for (size_t k = 0; k < count; ++k) {
-      next[k].v0 = static_cast<uint32_t>(vTotal);
-      next[k].i0 = static_cast<uint32_t>(iTotal);
-      next[k].vn = src[k].vn;
-      next[k].in = src[k].in;
-      next[k].ranges = rebase(src[k].ranges, src[k].i0, next[k].i0);
-      vTotal += src[k].vn;
-      iTotal += src[k].in;
-    }
-    PTERYLA_CHECK(vTotal <= UINT32_MAX, "mesh exceeds 32-bit vertex indices");
-    resizeAll(spareMesh, vTotal, iTotal);  // every element is overwritten (positions etc. when placed)
-    spareLocalPos.resize(vTotal);
-    spareLocalNrm.resize(vTotal);
-    spareLocalTan.resize(vTotal);
-    const TriMesh& last = mesh.mesh;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t k = range.begin(); k < range.end(); ++k) {
-        const bool old = reuse[k] != 0;
-        const TriMesh& from = old ? last : freshMesh;
-        const MeshSlice& a = src[k];
-        const MeshSlice& b = next[k];
-        copySlice(old ? localPos : freshMesh.positions, a.v0, spareLocalPos, b.v0, a.vn);
-        copySlice(old ? localNrm : freshMesh.normals, a.v0, spareLocalNrm, b.v0, a.vn);
-        copySlice(old ? localTan : freshMesh.tangents, a.v0, spareLocalTan, b.v0, a.vn);
-        copySlice(from.uvGlobal, a.v0, spareMesh.uvGlobal, b.v0, a.vn);
-        copySlice(from.uvBarb, a.v0, spareMesh.uvBarb, b.v0, a.vn);
-        copySlice(from.uvGrowth, a.v0, spareMesh.uvGrowth, b.v0, a.vn);
-        copySlice(from.alpha, a.v0, spareMesh.alpha, b.v0, a.vn);
-        copySlice(from.sheath, a.v0, spareMesh.sheath, b.v0, a.vn);
-        copySlice(from.barbCount, a.v0, spareMesh.barbCount, b.v0, a.vn);
-        copySlice(from.featherId, a.v0, spareMesh.featherId, b.v0, a.vn);
-        const uint32_t shift = b.v0 - a.v0;  // modular: vertex indices move by the slice's shift
-        const uint32_t* fi = from.indices.data() + a.i0;
-        uint32_t* ti = spareMesh.indices.data() + b.i0;
-        for (uint32_t q = 0; q < a.in; ++q) ti[q] = fi[q] + shift;
-      }
-    });
-    std::swap(mesh.mesh, spareMesh);
-    std::swap(localPos, spareLocalPos);
-    std::swap(localNrm, spareLocalNrm);
-    std::swap(localTan, spareLocalTan);
-    for (size_t k = 0; k < count; ++k) ranges[k] = next[k].ranges;
-  }
-  // Place every feather.
-  const size_t vertices = localPos.size();
-  mesh.mesh.positions.resize(vertices);
-  mesh.mesh.normals.resize(vertices);
-  mesh.mesh.tangents.resize(vertices);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t k = range.begin(); k < range.end(); ++k) {
-      const MeshSlice& sl = next[k];
-      feather::placeFeatherVertices(placed[k].placement, localPos.data() + sl.v0, localNrm.data() + sl.v0,
-                                    localTan.data() + sl.v0, sl.vn, mesh.mesh.positions.data() + sl.v0,
-                                    mesh.mesh.normals.data() + sl.v0, mesh.mesh.tangents.data() + sl.v0);
-    }
-  });
-  // Remember what each slice of the new mesh was made from.
-  for (auto& sl : slices) sl.valid = false;
-  for (size_t k = 0; k < count; ++k) {
-    MeshSlice& sl = slices[which[k]];
-    sl = next[k];
-    sl.valid = true;
-    sl.version = curvesVersion[which[k]];
-    sl.growing = inputs[k].reference != nullptr;
-    sl.lod = inputs[k].lod;
-    sl.shed = shed[which[k]];
-  }
-}
-
 void Pipeline::Impl::computeMesh() {
   report(progress, "mesh", 0);
-  const size_t n = coatNow.size();
-  if (meshParams.size() != n) {
-    meshParams.assign(n, feather::FeatherParams{});
-    matureValid.assign(n, 0);
-    grownAge.assign(n, std::nan(""));
-    grownParams.assign(n, feather::FeatherParams{});
-    matureCurves.assign(n, {});
-    grownCurves.assign(n, {});
-    lodOrders.assign(n, {});
-    grownOrders.assign(n, {});
-    curvesVersion.assign(n, 0);
-    slices.assign(n, MeshSlice{});
-  }
-  std::vector<uint8_t> grown(n, 1);
-  std::vector<double> shed(n, 1.0);
-  std::vector<uint8_t> regenerated(n, 0);
-  // Barb curves are a pure function of the packed parameters (and the age while growing), so a feather
-  // whose inputs equal those of its cached curves keeps them. A growing feather keeps the mature
-  // feather's LOD order (docs/growth.md), so its kept barbs do not change as it opens.
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i < range.end(); ++i) {
-      if (!coatNow.present[i]) continue;
-      const double age = coatNow.age[i];
-      const feather::GrowthSchedule& schedule = feather::growthScheduleOf(coatNow.params[i]);
-      // Growing (age < 1), or worn (age > 1 with a schedule that wears): meshed from the feather at its
-      // age, with the mature feather as the reference for texture coordinates and LOD order. A worn
-      // feather is packed mature; its shorter barbs lie within the packed ones.
-      const bool growing = age < 1.0 || (age > 1.0 && schedule.wears());
-      // A feather packed as grown (computePack) is meshed from its packed parameters as they are; the
-      // mature feather (unpacked) gives its texture coordinates and LOD order. Any other growing feather
-      // was packed mature and grows from its packed parameters.
-      // The packed parameters are rebuilt from the pack's flat key barbs only when they differ from the
-      // cached ones (coat::packedParamsEqual compares without building them).
-      const bool havePacked = !packed->packedKeys.keyOffset.empty();
-      const bool asGrown = growing && havePacked && packedAsGrown(age, schedule);
-      const bool meshUnpacked = asGrown || !havePacked;  // mesh params = coatNow.params[i], else the packed ones
-      const bool same = matureValid[i] && (meshUnpacked ? meshParams[i] == coatNow.params[i]
-                                                        : coat::packedParamsEqual(meshParams[i], *packedCoat, *packed, i));
-      if (!same) {
-        if (meshUnpacked) meshParams[i] = coatNow.params[i];
-        else coat::packedParamsInto(*packedCoat, *packed, i, meshParams[i]);
-        const feather::FeatherParams& p = meshParams[i];
-        feather::generateBarbs(p, matureCurves[i]);
-        feather::computeLodOrder(matureCurves[i], lodOrders[i]);
-        matureValid[i] = 1;
-        grownAge[i] = std::nan("");
-        regenerated[i] = 1;
-      }
-      if (growing) {
-        const feather::GrowthState st = feather::growthStateAt(age, schedule);
-        // Whether a feather is packed as grown depends on its age only, so equal ages mean the same path.
-        if (std::memcmp(&grownAge[i], &age, sizeof(double)) != 0 ||
-            (asGrown && !coat::packedParamsEqual(grownParams[i], *packedCoat, *packed, i))) {
-          if (asGrown) coat::packedParamsInto(*packedCoat, *packed, i, grownParams[i]);
-          feather::generateBarbs(asGrown ? grownParams[i] : feather::featherAtState(meshParams[i], st, schedule), grownCurves[i]);
-          // Same barbs as the mature feather (the usual case): its LOD order (as buildFeatherMesh does).
-          if (grownCurves[i].barbs.size() != matureCurves[i].barbs.size())
-            feather::computeLodOrder(grownCurves[i], grownOrders[i]);
-          grownAge[i] = age;
-          regenerated[i] = 1;
-        }
-        shed[i] = st[feather::GrowthParam::Sheath];
-        grown[i] = 0;
-      }
-    }
-  });
-  meshRegenerated = 0;
-  for (size_t i = 0; i < n; ++i)
-    if (regenerated[i]) {
-      ++meshRegenerated;
-      ++curvesVersion[i];
-    }
-  std::vector<feather::FeatherMeshInput> inputs;
-  std::vector<uint32_t> which;
-  inputs.reserve(n);
-  for (uint32_t i : coatNow.layerOrder) {
-    if (!coatNow.present[i]) continue;
-    feather::FeatherMeshInput in;
-    in.curves = grown[i] ? &matureCurves[i] : &grownCurves[i];
-    in.reference = grown[i] ? nullptr : &matureCurves[i];
-    in.order = !grown[i] && grownCurves[i].barbs.size() != matureCurves[i].barbs.size() ? &grownOrders[i] : &lodOrders[i];
-    const coat::FeatherFrame& fr = coatNow.frames[i];
-    in.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, packed->elevation[i]);
-    in.featherId = i;
-    in.lod = featherLods.size() == n ? lod * featherLods[i] : lod;
-    in.sheathShed = shed[i];
-    inputs.push_back(in);
-    which.push_back(i);
-  }
-  std::vector<feather::FeatherMeshRanges> ranges;
-  if (!undrapedIndices.empty() && undrapedIndices.size() == mesh.mesh.indices.size()) mesh.mesh.indices.swap(undrapedIndices);
-  undrapedIndices.clear();
-  assembleMesh(inputs, which, shed, ranges);
+  CoatMeshInput in;
+  in.coat = &coatNow;
+  in.packedCoat = packedCoat;
+  in.packed = packed;
+  in.lod = lod;
+  in.featherLods = &featherLods;
+  mesher.update(in, mesh.mesh);
   drape = coat::DrapeResult{};
   if (packOptions.method == coat::PackMethod::Drape) {
-    undrapedIndices = mesh.mesh.indices;
+    mesher.keepIndices(mesh.mesh);
     coat::DrapeOptions dopt;
     dopt.gap = packOptions.clearance;
     dopt.maxSlope = std::tan(packOptions.drapeMaxSlopeDeg * feather::kPi / 180.0);
@@ -1006,6 +689,8 @@ void Pipeline::Impl::computeMesh() {
     dopt.baseAllowance = packOptions.baseAllowance;
     drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt);
   }
+  const std::vector<uint32_t>& which = mesher.feathers();
+  const std::vector<feather::FeatherMeshRanges>& ranges = mesher.ranges();
   mesh.ranges.clear();
   mesh.ranges.reserve(ranges.size());
   std::map<std::string, uint32_t> matIndex;
@@ -1309,8 +994,8 @@ FrameReuse Pipeline::frameReuse() const {
   r.moult = p.moult;
   r.moultChanged = p.moultChanged;
   r.moultRecomputed = p.moultRecomputed;
-  r.meshRegenerated = impl_->meshRegenerated;
-  r.meshReused = impl_->meshReused;
+  r.meshRegenerated = impl_->mesher.regenerated();
+  r.meshReused = impl_->mesher.reused();
   return r;
 }
 

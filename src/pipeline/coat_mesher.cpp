@@ -1,0 +1,331 @@
+// The pipeline's mesh stage (coat_mesher.hpp): barb curves (Streit 2003, 5.2) generated from the packed
+// feathers (6.3), tessellated per feather at its level of detail (7.1) and placed at its follicle.
+#include "coat_mesher.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "pteryla/core/error.hpp"
+
+namespace pteryla::pipeline {
+
+bool packedAsGrown(double age, const feather::GrowthSchedule& schedule) {
+  return age < 1.0 && feather::growthStateAt(age, schedule)[feather::GrowthParam::ShaftLength] >= 1.0;
+}
+
+namespace {
+
+// Empties every array of `m` keeping its capacity.
+void truncate(TriMesh& m) {
+  m.positions.clear();
+  m.normals.clear();
+  m.tangents.clear();
+  m.uvGlobal.clear();
+  m.uvBarb.clear();
+  m.uvGrowth.clear();
+  m.alpha.clear();
+  m.sheath.clear();
+  m.barbCount.clear();
+  m.featherId.clear();
+  m.indices.clear();
+}
+
+void resizeAll(TriMesh& m, size_t verts, size_t indices) {
+  m.positions.resize(verts);
+  m.normals.resize(verts);
+  m.tangents.resize(verts);
+  m.uvGlobal.resize(verts);
+  m.uvBarb.resize(verts);
+  m.uvGrowth.resize(verts);
+  m.alpha.resize(verts);
+  m.sheath.resize(verts);
+  m.barbCount.resize(verts);
+  m.featherId.resize(verts);
+  m.indices.resize(indices);
+}
+
+template <class T>
+void copySlice(const std::vector<T>& from, size_t f0, std::vector<T>& to, size_t t0, size_t count) {
+  if (count) std::memcpy(to.data() + t0, from.data() + f0, count * sizeof(T));
+}
+
+// Moves the part offsets of a feather's ranges from index position `from` to `to`. An afterfeather
+// range that was never set (no afterfeather: afterFirst stays 0) stays 0.
+feather::FeatherMeshRanges rebase(feather::FeatherMeshRanges r, uint32_t from, uint32_t to) {
+  auto move = [&](uint32_t& first) { first = first - from + to; };
+  move(r.shaftFirst);
+  move(r.leftFirst);
+  move(r.rightFirst);
+  if (!(r.afterFirst == 0 && r.afterCount == 0)) move(r.afterFirst);
+  return r;
+}
+
+}  // namespace
+
+void CoatMesher::clear() { *this = CoatMesher{}; }
+
+void CoatMesher::keepIndices(const TriMesh& out) { keptIndices_ = out.indices; }
+
+void CoatMesher::resize(size_t n) {
+  if (meshParams_.size() == n) return;
+  meshParams_.assign(n, feather::FeatherParams{});
+  matureValid_.assign(n, 0);
+  grownAge_.assign(n, std::nan(""));
+  grownParams_.assign(n, feather::FeatherParams{});
+  matureCurves_.assign(n, {});
+  grownCurves_.assign(n, {});
+  lodOrders_.assign(n, {});
+  grownOrders_.assign(n, {});
+  curvesVersion_.assign(n, 0);
+  slices_.assign(n, Slice{});
+}
+
+// Barb curves are a pure function of the packed parameters (and the age while growing), so a feather
+// whose inputs equal those of its cached curves keeps them. A growing feather keeps the mature
+// feather's LOD order (docs/growth.md), so its kept barbs do not change as it opens.
+void CoatMesher::updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& grown, std::vector<double>& shed) {
+  const coat::CoatFeathers& coat = *in.coat;
+  const coat::CoatFeathers& packedCoat = *in.packedCoat;
+  const coat::PackResult& packed = *in.packed;
+  const size_t n = coat.size();
+  std::vector<uint8_t> regenerated(n, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i < range.end(); ++i) {
+      if (!coat.present[i]) continue;
+      const double age = coat.age[i];
+      const feather::GrowthSchedule& schedule = feather::growthScheduleOf(coat.params[i]);
+      // Growing (age < 1), or worn (age > 1 with a schedule that wears): meshed from the feather at its
+      // age, with the mature feather as the reference for texture coordinates and LOD order. A worn
+      // feather is packed mature; its shorter barbs lie within the packed ones.
+      const bool growing = age < 1.0 || (age > 1.0 && schedule.wears());
+      // A feather packed as grown (computePack) is meshed from its packed parameters as they are; the
+      // mature feather (unpacked) gives its texture coordinates and LOD order. Any other growing feather
+      // was packed mature and grows from its packed parameters.
+      // The packed parameters are rebuilt from the pack's flat key barbs only when they differ from the
+      // cached ones (coat::packedParamsEqual compares without building them).
+      const bool havePacked = !packed.packedKeys.keyOffset.empty();
+      const bool asGrown = growing && havePacked && packedAsGrown(age, schedule);
+      const bool meshUnpacked = asGrown || !havePacked;  // mesh params = coat.params[i], else the packed ones
+      const bool same = matureValid_[i] && (meshUnpacked ? meshParams_[i] == coat.params[i]
+                                                         : coat::packedParamsEqual(meshParams_[i], packedCoat, packed, i));
+      if (!same) {
+        if (meshUnpacked) meshParams_[i] = coat.params[i];
+        else coat::packedParamsInto(packedCoat, packed, i, meshParams_[i]);
+        const feather::FeatherParams& p = meshParams_[i];
+        feather::generateBarbs(p, matureCurves_[i]);
+        feather::computeLodOrder(matureCurves_[i], lodOrders_[i]);
+        matureValid_[i] = 1;
+        grownAge_[i] = std::nan("");
+        regenerated[i] = 1;
+      }
+      if (growing) {
+        const feather::GrowthState st = feather::growthStateAt(age, schedule);
+        // Whether a feather is packed as grown depends on its age only, so equal ages mean the same path.
+        if (std::memcmp(&grownAge_[i], &age, sizeof(double)) != 0 ||
+            (asGrown && !coat::packedParamsEqual(grownParams_[i], packedCoat, packed, i))) {
+          if (asGrown) coat::packedParamsInto(packedCoat, packed, i, grownParams_[i]);
+          feather::generateBarbs(asGrown ? grownParams_[i] : feather::featherAtState(meshParams_[i], st, schedule),
+                                 grownCurves_[i]);
+          // Same barbs as the mature feather (the usual case): its LOD order (as buildFeatherMesh does).
+          if (grownCurves_[i].barbs.size() != matureCurves_[i].barbs.size())
+            feather::computeLodOrder(grownCurves_[i], grownOrders_[i]);
+          grownAge_[i] = age;
+          regenerated[i] = 1;
+        }
+        shed[i] = st[feather::GrowthParam::Sheath];
+        grown[i] = 0;
+      }
+    }
+  });
+  regenerated_ = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (regenerated[i]) {
+      ++regenerated_;
+      ++curvesVersion_[i];
+    }
+}
+
+void CoatMesher::update(const CoatMeshInput& in, TriMesh& out) {
+  const coat::CoatFeathers& coat = *in.coat;
+  const size_t n = coat.size();
+  resize(n);
+  std::vector<uint8_t> grown(n, 1);
+  std::vector<double> shed(n, 1.0);
+  updateCurves(in, grown, shed);
+  std::vector<feather::FeatherMeshInput> inputs;
+  which_.clear();
+  inputs.reserve(n);
+  for (uint32_t i : coat.layerOrder) {
+    if (!coat.present[i]) continue;
+    feather::FeatherMeshInput fi;
+    fi.curves = grown[i] ? &matureCurves_[i] : &grownCurves_[i];
+    fi.reference = grown[i] ? nullptr : &matureCurves_[i];
+    fi.order = !grown[i] && grownCurves_[i].barbs.size() != matureCurves_[i].barbs.size() ? &grownOrders_[i] : &lodOrders_[i];
+    const coat::FeatherFrame& fr = coat.frames[i];
+    fi.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, in.packed->elevation[i]);
+    fi.featherId = i;
+    fi.lod = in.featherLods && in.featherLods->size() == n ? in.lod * (*in.featherLods)[i] : in.lod;
+    fi.sheathShed = shed[i];
+    inputs.push_back(fi);
+    which_.push_back(i);
+  }
+  if (!keptIndices_.empty() && keptIndices_.size() == out.indices.size()) out.indices.swap(keptIndices_);
+  keptIndices_.clear();
+  // Not the mesh of the last update (or a first one): nothing can be copied from it.
+  if (out.featherId.size() != localPos_.size())
+    for (auto& sl : slices_) sl.valid = false;
+  assemble(inputs, shed, out);
+}
+
+// Meshes the present feathers (inputs, in layer order) into `out`. Feathers are meshed unplaced
+// (feather-local positions, normals, tangents; feather/mesh.hpp) and kept that way in localPos_/Nrm_/Tan_:
+// a feather whose curves, level of detail and sheath are unchanged is copied from the last mesh instead
+// of meshed again, and every feather is then placed.
+void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, const std::vector<double>& shed,
+                          TriMesh& out) {
+  const std::vector<uint32_t>& which = which_;
+  const size_t count = placed.size();
+  const feather::MeshOptions mo;
+  std::vector<feather::FeatherMeshInput> inputs = placed;
+  for (auto& in : inputs) in.unplaced = true;
+  std::vector<uint8_t> reuse(count, 0);
+  size_t reused = 0;
+  for (size_t k = 0; k < count; ++k) {
+    const uint32_t i = which[k];
+    const Slice& sl = slices_[i];
+    const bool growing = inputs[k].reference != nullptr;
+    const bool same = sl.valid && sl.version == curvesVersion_[i] && sl.growing == growing && sl.lod == inputs[k].lod &&
+                      std::memcmp(&sl.shed, &shed[i], sizeof(double)) == 0 &&
+                      sl.in > 0;  // empty feathers are re-meshed (nothing to copy; keeps range offsets exact)
+    reuse[k] = same ? 1 : 0;
+    reused += reuse[k];
+  }
+  reused_ = reused;
+  std::vector<feather::FeatherMeshRanges>& ranges = ranges_;
+  ranges.assign(count, feather::FeatherMeshRanges{});
+  std::vector<Slice> next(count);
+  if (reused * 10 < count) {
+    // Little to reuse: mesh everything straight into the output.
+    truncate(out);
+    feather::appendFeatherMeshes(inputs.data(), count, mo, out, &ranges);
+    uint32_t iEnd = 0, vEnd = 0;
+    for (size_t k = 0; k < count; ++k) {
+      Slice& sl = next[k];
+      const auto& r = ranges[k];
+      sl.i0 = iEnd;
+      iEnd = std::max({iEnd, r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
+                       r.afterFirst + r.afterCount});
+      sl.in = iEnd - sl.i0;
+      sl.v0 = vEnd;
+      const uint32_t id = inputs[k].featherId;
+      while (vEnd < out.featherId.size() && out.featherId[vEnd] == id) ++vEnd;
+      sl.vn = vEnd - sl.v0;
+      sl.ranges = r;
+    }
+    std::swap(out.positions, localPos_);
+    std::swap(out.normals, localNrm_);
+    std::swap(out.tangents, localTan_);
+  } else {
+    // Mesh the changed feathers into freshMesh_, then copy every slice into the spare buffers in order.
+    std::vector<feather::FeatherMeshInput> changed;
+    std::vector<size_t> changedAt;
+    for (size_t k = 0; k < count; ++k)
+      if (!reuse[k]) {
+        changed.push_back(inputs[k]);
+        changedAt.push_back(k);
+      }
+    truncate(freshMesh_);
+    std::vector<feather::FeatherMeshRanges> freshRanges;
+    feather::appendFeatherMeshes(changed.data(), changed.size(), mo, freshMesh_, &freshRanges);
+    // Source slices: in the last mesh (reused) or in freshMesh_.
+    std::vector<Slice> src(count);
+    uint32_t iEnd = 0, vEnd = 0;
+    for (size_t c = 0; c < changed.size(); ++c) {
+      Slice& sl = src[changedAt[c]];
+      const auto& r = freshRanges[c];
+      sl.i0 = iEnd;
+      iEnd = std::max({iEnd, r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
+                       r.afterFirst + r.afterCount});
+      sl.in = iEnd - sl.i0;
+      sl.v0 = vEnd;
+      while (vEnd < freshMesh_.featherId.size() && freshMesh_.featherId[vEnd] == changed[c].featherId) ++vEnd;
+      sl.vn = vEnd - sl.v0;
+      sl.ranges = r;
+    }
+    for (size_t k = 0; k < count; ++k)
+      if (reuse[k]) src[k] = slices_[which[k]];
+    size_t vTotal = 0, iTotal = 0;
+    for (size_t k = 0; k < count; ++k) {
+      next[k].v0 = static_cast<uint32_t>(vTotal);
+      next[k].i0 = static_cast<uint32_t>(iTotal);
+      next[k].vn = src[k].vn;
+      next[k].in = src[k].in;
+      next[k].ranges = rebase(src[k].ranges, src[k].i0, next[k].i0);
+      vTotal += src[k].vn;
+      iTotal += src[k].in;
+    }
+    PTERYLA_CHECK(vTotal <= UINT32_MAX, "mesh exceeds 32-bit vertex indices");
+    resizeAll(spareMesh_, vTotal, iTotal);  // every element is overwritten (positions etc. when placed)
+    spareLocalPos_.resize(vTotal);
+    spareLocalNrm_.resize(vTotal);
+    spareLocalTan_.resize(vTotal);
+    const TriMesh& last = out;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t k = range.begin(); k < range.end(); ++k) {
+        const bool old = reuse[k] != 0;
+        const TriMesh& from = old ? last : freshMesh_;
+        const Slice& a = src[k];
+        const Slice& b = next[k];
+        copySlice(old ? localPos_ : freshMesh_.positions, a.v0, spareLocalPos_, b.v0, a.vn);
+        copySlice(old ? localNrm_ : freshMesh_.normals, a.v0, spareLocalNrm_, b.v0, a.vn);
+        copySlice(old ? localTan_ : freshMesh_.tangents, a.v0, spareLocalTan_, b.v0, a.vn);
+        copySlice(from.uvGlobal, a.v0, spareMesh_.uvGlobal, b.v0, a.vn);
+        copySlice(from.uvBarb, a.v0, spareMesh_.uvBarb, b.v0, a.vn);
+        copySlice(from.uvGrowth, a.v0, spareMesh_.uvGrowth, b.v0, a.vn);
+        copySlice(from.alpha, a.v0, spareMesh_.alpha, b.v0, a.vn);
+        copySlice(from.sheath, a.v0, spareMesh_.sheath, b.v0, a.vn);
+        copySlice(from.barbCount, a.v0, spareMesh_.barbCount, b.v0, a.vn);
+        copySlice(from.featherId, a.v0, spareMesh_.featherId, b.v0, a.vn);
+        const uint32_t shift = b.v0 - a.v0;  // modular: vertex indices move by the slice's shift
+        const uint32_t* fi = from.indices.data() + a.i0;
+        uint32_t* ti = spareMesh_.indices.data() + b.i0;
+        for (uint32_t q = 0; q < a.in; ++q) ti[q] = fi[q] + shift;
+      }
+    });
+    std::swap(out, spareMesh_);
+    std::swap(localPos_, spareLocalPos_);
+    std::swap(localNrm_, spareLocalNrm_);
+    std::swap(localTan_, spareLocalTan_);
+    for (size_t k = 0; k < count; ++k) ranges[k] = next[k].ranges;
+  }
+  // Place every feather.
+  const size_t vertices = localPos_.size();
+  out.positions.resize(vertices);
+  out.normals.resize(vertices);
+  out.tangents.resize(vertices);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) {
+      const Slice& sl = next[k];
+      feather::placeFeatherVertices(placed[k].placement, localPos_.data() + sl.v0, localNrm_.data() + sl.v0,
+                                    localTan_.data() + sl.v0, sl.vn, out.positions.data() + sl.v0,
+                                    out.normals.data() + sl.v0, out.tangents.data() + sl.v0);
+    }
+  });
+  // Remember what each slice of the new mesh was made from.
+  for (auto& sl : slices_) sl.valid = false;
+  for (size_t k = 0; k < count; ++k) {
+    Slice& sl = slices_[which[k]];
+    sl = next[k];
+    sl.valid = true;
+    sl.version = curvesVersion_[which[k]];
+    sl.growing = inputs[k].reference != nullptr;
+    sl.lod = inputs[k].lod;
+    sl.shed = shed[which[k]];
+  }
+}
+
+}  // namespace pteryla::pipeline

@@ -1,0 +1,90 @@
+#pragma once
+// CoatMesher: the pipeline's mesh stage as a stateful mesher (the one-off function beside it is meshing
+// every feather with feather::appendFeatherMeshes). It keeps, per feather, the barb curves and LOD order
+// generated from the packed parameters (and the age while growing), and where the feather sits in the
+// last mesh, unplaced. An update regenerates the curves of feathers whose inputs changed, copies the
+// triangles of feathers whose curves, level of detail and sheath are unchanged from the last mesh,
+// meshes the others, and places every feather again. The result equals meshing every feather afresh,
+// bit for bit: a feather's vertices and indices depend only on its own input and its position in the
+// mesh, and placing later applies the same arithmetic (feather::placeFeatherVertices).
+#include <cstdint>
+#include <vector>
+
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/pack.hpp"
+#include "pteryla/core/trimesh.hpp"
+#include "pteryla/feather/barbs.hpp"
+#include "pteryla/feather/growth.hpp"
+#include "pteryla/feather/lod.hpp"
+#include "pteryla/feather/mesh.hpp"
+
+namespace pteryla::pipeline {
+
+// A growing feather whose shaft is full grown is packed (and meshed) as grown at its age; any other
+// growing feather is packed mature and grown from its packed parameters when meshed.
+bool packedAsGrown(double age, const feather::GrowthSchedule& schedule);
+
+// One frame's input to the mesher. Every pointer must be set and stay valid during update().
+struct CoatMeshInput {
+  const coat::CoatFeathers* coat = nullptr;        // the frame's coat: params, frames, ages, presence, layer order
+  const coat::CoatFeathers* packedCoat = nullptr;  // the coat `packed` was packed from (coat, or it with grown params)
+  const coat::PackResult* packed = nullptr;        // elevations; packed key barbs (none: mesh coat's params)
+  double lod = 1;                                  // (0,1]
+  // Per feather, multiplies lod; ignored unless it has one entry per feather.
+  const std::vector<double>* featherLods = nullptr;
+};
+
+class CoatMesher {
+ public:
+  // Meshes the present feathers of in.coat, in layer order, into `out` (featherId = feather index).
+  // `out` must hold what the last update() wrote, or be empty: reused feathers are copied from it. Its
+  // positions, normals and tangents may have been rewritten since (every vertex is placed again); before
+  // rewriting its indices, call keepIndices(out).
+  void update(const CoatMeshInput& in, TriMesh& out);
+  // Keeps `out`'s indices for the next update, which restores them first (a draped coat trims triangles
+  // of the mesh it was given).
+  void keepIndices(const TriMesh& out);
+  // Forgets everything: the next update meshes every feather.
+  void clear();
+
+  // Of the last update: the feather of each range (layer order, present feathers) and its index ranges.
+  const std::vector<uint32_t>& feathers() const { return which_; }
+  const std::vector<feather::FeatherMeshRanges>& ranges() const { return ranges_; }
+  size_t regenerated() const { return regenerated_; }  // present feathers whose barb curves were generated
+  size_t reused() const { return reused_; }            // present feathers copied from the last mesh
+
+ private:
+  // Where a feather sits in the mesh and what it was meshed from.
+  struct Slice {
+    bool valid = false;
+    uint64_t version = 0;             // curvesVersion_ of the curves it was meshed from
+    bool growing = false;             // meshed from the grown curves (else the mature ones)
+    double lod = 0, shed = 0;
+    uint32_t v0 = 0, vn = 0, i0 = 0, in = 0;
+    feather::FeatherMeshRanges ranges;  // absolute, in the mesh
+  };
+
+  void resize(size_t n);
+  void updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& grown, std::vector<double>& shed);
+  void assemble(const std::vector<feather::FeatherMeshInput>& placed, const std::vector<double>& shed, TriMesh& out);
+
+  // Per feather: the packed parameters the mature curves and LOD order were generated from, and the age
+  // (NaN = none) and packed grown parameters of the grown (pin feather) curves.
+  std::vector<feather::FeatherParams> meshParams_, grownParams_;
+  std::vector<uint8_t> matureValid_;
+  std::vector<double> grownAge_;
+  std::vector<feather::FeatherCurves> matureCurves_, grownCurves_;
+  std::vector<feather::LodOrder> lodOrders_, grownOrders_;
+  std::vector<uint64_t> curvesVersion_;  // bumped whenever a feather's curves are regenerated
+  std::vector<Slice> slices_;
+  // Unplaced positions, normals and tangents of the last mesh's vertices, and spare buffers kept across
+  // updates (no reallocation per frame).
+  std::vector<glm::vec3> localPos_, localNrm_, localTan_, spareLocalPos_, spareLocalNrm_, spareLocalTan_;
+  TriMesh spareMesh_, freshMesh_;
+  std::vector<uint32_t> keptIndices_;
+  std::vector<uint32_t> which_;
+  std::vector<feather::FeatherMeshRanges> ranges_;
+  size_t regenerated_ = 0, reused_ = 0;
+};
+
+}  // namespace pteryla::pipeline
