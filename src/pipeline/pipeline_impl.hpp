@@ -1,0 +1,115 @@
+#pragma once
+// Pipeline::Impl: the state of a Pipeline, shared by pipeline.cpp (the stage graph, the time stages and
+// the public API) and rest_stages.cpp (the rest stages, skin to directions).
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "coat_mesher.hpp"
+#include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/directions.hpp"
+#include "pteryla/coat/drape.hpp"
+#include "pteryla/coat/follicles.hpp"
+#include "pteryla/coat/key_feathers.hpp"
+#include "pteryla/coat/ordering.hpp"
+#include "pteryla/coat/pack.hpp"
+#include "pteryla/coat/parameterize.hpp"
+#include "pteryla/coat/relax.hpp"
+#include "pteryla/coat/skin.hpp"
+#include "pteryla/coat/tracts.hpp"
+#include "pteryla/feather/growth.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+#include "stage_graph.hpp"
+#include "time_stages.hpp"
+
+namespace pteryla::pipeline {
+
+// Per-tract settings the pipeline reads itself (the rest of a tract object belongs to coat parsers).
+struct TractSettings {
+  coat::Tract tract;
+  double density = 0;       // follicles per unit area (0: use count)
+  size_t count = 0;
+  bool autoScale = false;   // scale feathers so their length is ~featherSpacings x follicle spacing
+  double featherScale = 1;  // explicit scale factor
+  double featherSpacings = 3.5;
+  coat::RelaxOptions relax;
+  std::vector<glm::dvec3> pinned;
+  coat::TractFeatherOptions feathers;
+  std::shared_ptr<const feather::GrowthSchedule> growth;  // the tract's "growth" (null: none)
+  std::string overlapGroup;  // "overlap_group": tracts of one group share one distribution where they overlap
+  std::optional<uint64_t> seed;  // "seed": this tract's own follicle seed (else derived from the scene's)
+  double area = 0;
+  std::string element;
+};
+
+struct Pipeline::Impl {
+  Scene scene;
+  ProgressFn progress;
+  double time = 0, lod = 1;
+  std::vector<double> featherLods;  // per feather, multiplies lod (empty: 1 for all)
+  StageGraph graph;  // node int(s) is stage s
+
+  std::optional<coat::SkinMesh> memorySkin;  // the rest skin when given in memory (else scene.meshPath)
+  std::vector<glm::dvec3> skinPose;          // the caller's posed positions (empty: skeleton / rest)
+  std::map<uint64_t, double> hostElevations;  // setFixedElevations: follicle id -> radians
+
+  // Cached stage results.
+  coat::SkinMesh rest, posed;
+  coat::FeatherLibrary library;
+  std::vector<std::string> materialNames;
+  std::vector<TractSettings> tractSettings;
+  std::shared_ptr<const feather::GrowthSchedule> sceneGrowth;  // the scene's "growth" (null: none)
+  std::vector<coat::Tract> tracts;
+  coat::Follicles follicles, posedFollicles;
+  std::vector<coat::RelaxResult> relaxResults;
+  std::vector<coat::TractParameterization> params;
+  coat::CoatFeathers coatRest;    // interpolated + rest frames + order
+  coat::SurfaceDirections directions;
+  coat::DirectionOptions directionOptions;
+  coat::OrderOptions orderOptions;
+  coat::PackOptions packOptions;
+  coat::CoatFeathers coatNow;     // at the current time: posed frames, ages, presence
+  coat::CoatFeathers packCoat;    // coatNow with growing feathers as grown (the pack input when any grows)
+  std::vector<double> packGrownAge;  // per feather, the age packCoat's parameters are grown to (empty = none)
+  TimeState timeState;
+  std::vector<double> fixedElevation;
+  const coat::PackResult* packed = nullptr;  // timeState.frame.result once packed
+  const coat::CoatFeathers* packedCoat = nullptr;  // the coat `packed` was packed from (coatNow or packCoat)
+  // Draped packing (packing.method "drape"): the pack stage lays nothing (every elevation 0, `flatPack`)
+  // and the mesh stage drapes the assembled mesh; `drape` is its last result.
+  coat::PackResult flatPack;
+  coat::DrapeResult drape;
+  CoatMesh mesh;
+  CoatMesher mesher;                // mesh.mesh is its last result
+  // Rest-state generation: bumped whenever the directions stage (downstream of every rest stage) runs,
+  // so caches of time-stage results know when the rest state they were made from is gone.
+  uint64_t restGeneration = 1;
+  uint64_t coatNowGeneration = 0;   // generation coatNow was copied from coatRest at
+  uint64_t posedGeneration = 0;     // generation `posed` is an untouched copy of `rest` at (0 = not)
+  // check(): the last unpacked proxy coat and its intersecting pair count. The unpacked coat comes from
+  // the input alone, so checks after edits that leave it as it was (packing, pose-free edits, LOD)
+  // reuse the count instead of searching the same mesh again.
+  TriMesh lastUnpacked;
+  std::optional<size_t> lastUnpackedPairs;
+
+  static StageGraph::Id id(Stage s) { return static_cast<StageGraph::Id>(s); }
+
+  void build();
+  void computeSkin();
+  void computeTracts();
+  void computeDistribute();
+  void redistributeOverlaps(uint64_t& nextId);
+  void computeInterpolate();
+  coat::TractParameterization boxParameterization(uint32_t tract) const;
+  void computeDirections();
+  void computePose();
+  void computeAges();
+  void computeControls();
+  void computePack();
+  void computeMesh();
+};
+
+}  // namespace pteryla::pipeline

@@ -1,0 +1,410 @@
+// The rest stages of the pipeline (Streit 2003, Ch.6): the skin and the feather library, the tracts,
+// follicle distribution (with overlapping tracts, 9.2.1), key-feather interpolation, and the feather
+// directions with the layer order. Each runs only when its section of the scene changed
+// (scene_stages.hpp); the time stages are in pipeline.cpp.
+#include <algorithm>
+#include <filesystem>
+#include <limits>
+
+#include <glm/common.hpp>
+
+#include "pipeline_impl.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/core/limits.hpp"
+#include "pteryla/core/rng.hpp"
+#include "pteryla/feather/io.hpp"
+#include "scene_sections.hpp"
+
+namespace pteryla::pipeline {
+
+namespace {
+
+// Follicles of a tract with neither count nor density, times its share of the mesh area: 3,000 lets the
+// small parts of real meshes (fingers, ears, fins) carry their own feathers (issue #22, docs/packing.md).
+constexpr size_t kAutoCount = 3000;
+// Memory estimates checked against the ceiling (core/limits.hpp, docs/limits.md). Lower bounds from the
+// bird (3152 feathers, 1.29 M triangles at lod 0.6: 775 MB peak), so no scene that fits is refused.
+constexpr double kBytesPerFollicle = 32e3;
+constexpr double kTrianglesPerBarb = 16;
+constexpr double kBytesPerTriangle = 200;
+
+// Axes of the rest skin's bounding box, longest first.
+void boxAxes(const coat::SkinMesh& m, glm::dvec3& lo, glm::dvec3& hi, int axes[3]) {
+  lo = hi = m.positions.empty() ? glm::dvec3(0) : m.positions[0];
+  for (const auto& p : m.positions) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+  const glm::dvec3 ext = hi - lo;
+  axes[0] = 0; axes[1] = 1; axes[2] = 2;
+  std::sort(axes, axes + 3, [&](int a, int b) { return ext[a] > ext[b]; });
+}
+
+}  // namespace
+
+void Pipeline::Impl::computeSkin() {
+  report(progress, "load", 0);
+  coat::MeshLoadOptions o;
+  o.repair = scene.meshRepair;
+  if (memorySkin) {
+    rest = *memorySkin;
+  } else {
+    if (!scene.fromBareMesh && !std::filesystem::is_regular_file(scene.meshPath))
+      throw Error("mesh file '" + scene.meshPath + "' " +
+                      (std::filesystem::exists(scene.meshPath) ? "is not a regular file" : "does not exist"),
+                  scene.file, "mesh");
+    rest = coat::loadSkinMesh(scene.meshPath, o);
+  }
+  // Feather library: every named feather of the scene.
+  library.clear();
+  materialNames.clear();
+  // A scene without feathers gets the bundled contour feather, as a bare mesh does.
+  const Json feathers = scene.feathers.empty()
+                            ? Json{{"contour", (std::filesystem::path(dataDir()) / "feathers" / "contour.json").string()}}
+                            : scene.feathers;
+  for (auto it = feathers.begin(); it != feathers.end(); ++it) {
+    feather::FeatherParams p;
+    if (it->is_string()) {
+      try {
+        p = feather::loadFeather(it->get<std::string>());
+      } catch (const Error& e) {
+        throw Error(e.detail(), e.file().empty() ? scene.file : e.file(),
+                    e.file().empty() ? "feathers." + it.key() : e.element());
+      }
+    } else {
+      JsonReader r(*it, scene.file, "feathers." + it.key());
+      p = feather::readFeather(r);
+      p.sourceFile = scene.file;
+    }
+    p.name = it.key();
+    library[it.key()] = std::move(p);
+    materialNames.push_back(it.key());
+  }
+  if (library.empty()) throw Error("the scene defines no feathers", scene.file, "feathers");
+  report(progress, "load", 1);
+}
+
+void Pipeline::Impl::computeTracts() {
+  tractSettings.clear();
+  tracts.clear();
+  // The scene's growth schedule (docs/growth.md), read with the tracts: feathers whose file and tract
+  // give none grow and wear by it.
+  sceneGrowth.reset();
+  if (!scene.growth.empty()) {
+    JsonReader g(scene.growth, scene.file, "growth");
+    sceneGrowth = std::make_shared<const feather::GrowthSchedule>(feather::readGrowthSchedule(g));
+  }
+  std::vector<coat::Tract> earlier;
+  const double meshArea = rest.totalArea();
+  double plannedFollicles = 0;
+  if (scene.tracts.empty()) scene.tracts = Json::array({Json{{"name", "all"}}});
+  for (size_t i = 0; i < scene.tracts.size(); ++i) {
+    const std::string where = "tracts[" + std::to_string(i) + "]";
+    JsonReader r(scene.tracts[i], scene.file, where);
+    TractSettings t;
+    t.element = where;
+    t.tract = coat::readTract(r, rest, earlier);
+    // Names are how ordering, directions and controls refer to tracts (docs/tracts.md: unique).
+    for (const coat::Tract& e : earlier)
+      if (e.name == t.tract.name) r.fail("name", "duplicate tract name '" + e.name + "'");
+    earlier.push_back(t.tract);
+    const double area = coat::tractArea(rest, t.tract);
+    if (r.has("count")) {
+      t.count = static_cast<size_t>(r.integer("count", 0, 2000000));
+      r.allow("density");
+    } else if (r.has("density")) {
+      if (!r.json().at("density").is_number()) r.fail("density", "expected a number of follicles per unit area");
+      t.density = r.number("density", 0.0, 1e9);
+    } else {
+      r.allow("density");
+      t.count = static_cast<size_t>(std::lround(kAutoCount * area / std::max(meshArea, 1e-300)));
+    }
+    // Memory before distributing: every follicle becomes a feather (frames, pack data, mesh).
+    const double follicles = t.count ? double(t.count) : t.density * area;
+    plannedFollicles += follicles;
+    requireMemory(plannedFollicles * kBytesPerFollicle,
+                  "the coat of about " + std::to_string(static_cast<uint64_t>(std::min(plannedFollicles, 1e18))) +
+                      " follicles",
+                  scene.file, where + (t.count ? ".count" : r.has("density") ? ".density" : ""));
+    if (r.has("feather_scale") && r.json().at("feather_scale").is_string()) {
+      if (r.string("feather_scale") != "auto") r.fail("feather_scale", "expected a positive number or \"auto\"");
+      t.autoScale = true;
+    } else {
+      // Without a feather_scale, feathers are sized from the follicle spacing, on any mesh.
+      t.autoScale = !r.has("feather_scale");
+      t.featherScale = r.number("feather_scale", 1.0, 1e-6, 1e6);
+    }
+    t.featherSpacings = r.number("feather_spacings", t.featherSpacings, 0.1, 100.0);
+    t.area = area;
+    t.overlapGroup = r.string("overlap_group", "");
+    if (r.has("seed")) t.seed = r.seed("seed", 0);
+    t.relax.iterations = 40;
+    if (r.has("relax")) {
+      JsonReader rr = r.object("relax");
+      t.relax.iterations = static_cast<int>(rr.integer("iterations", t.relax.iterations, 0, 100000));
+      t.relax.overRelaxation = rr.number("over_relaxation", t.relax.overRelaxation, 1.0, 1.99);
+      t.relax.fixBoundary = rr.boolean("fix_boundary", t.relax.fixBoundary);
+      for (auto& b : rr.objects("bias")) {
+        coat::BiasVector v;
+        v.origin = b.vec3("at");
+        v.direction = b.vec3("direction");
+        v.sigma = b.number("sigma", 0.0, 0.0, 1e9);
+        v.stretch = b.number("stretch", v.stretch, 1.0, 10.0);
+        v.densityGain = b.number("density_gain", 0.0, 0.0, 100.0);
+        b.finish();
+        t.relax.bias.push_back(v);
+      }
+      rr.finish();
+    } else {
+      r.allow("relax");
+    }
+    if (r.has("pinned")) {
+      for (auto& p : r.objects("pinned")) {
+        t.pinned.push_back(p.vec3("at"));
+        p.finish();
+      }
+    } else {
+      r.allow("pinned");
+    }
+    t.feathers = coat::parseTractFeatherOptions(r);
+    if (r.has("growth")) {
+      JsonReader g = r.object("growth");
+      t.growth = std::make_shared<const feather::GrowthSchedule>(feather::readGrowthSchedule(g));
+    } else {
+      r.allow("growth");
+    }
+    r.allow("moult");  // read by the time stages
+    r.finish();
+    tracts.push_back(t.tract);
+    tractSettings.push_back(std::move(t));
+  }
+}
+
+void Pipeline::Impl::computeDistribute() {
+  follicles.clear();
+  relaxResults.clear();
+  uint64_t nextId = 0;
+  for (size_t i = 0; i < tractSettings.size(); ++i) {
+    TractSettings& t = tractSettings[i];
+    coat::ScatterOptions so;
+    // A tract's own seed re-scatters only that tract; the others keep their follicles.
+    so.seed = t.seed ? mix64(*t.seed * 0x9E37u + 0x5EED0000u) : mix64(scene.seed * 0x9E37u + i);
+    so.density.uniform = t.density;
+    so.count = t.count;
+    so.tractIndex = static_cast<uint32_t>(i);
+    so.firstId = nextId;
+    // count 0 with no density: a tract of hand-placed (pinned) follicles only, e.g. flight feathers.
+    coat::Follicles f = (so.count == 0 && t.density <= 0) ? coat::Follicles{} : coat::scatterFollicles(rest, t.tract, so);
+    nextId += f.size() + t.pinned.size() + 1;
+    for (size_t k = 0; k < t.pinned.size(); ++k)
+      coat::addPinnedFollicleNear(f, rest, t.tract, t.pinned[k], static_cast<uint32_t>(i), nextId - 1 - k);
+    coat::RelaxOptions ro = t.relax;
+    ro.progress = [&, i](const std::string&, double fr) {
+      return report(progress, "distribute", (double(i) + fr) / double(tractSettings.size()));
+    };
+    relaxResults.push_back(f.size() > t.pinned.size() ? coat::relaxFollicles(rest, t.tract, f, ro) : coat::RelaxResult{});
+    follicles.append(f);
+  }
+  redistributeOverlaps(nextId);
+  report(progress, "distribute", 1);
+}
+
+// Thesis 9.2.1: "if the tracts are the same feather type a more uniform distribution is typically desired.
+// This can be accomplished by running the follicle distribution algorithm a second time, on only polygons
+// of multiple tracts." Per overlap_group (in order of first appearance): the faces in two or more of its
+// tracts lose the follicles scattered there (pinned ones stay) and get one distribution at the group's
+// mean density, relaxed on those faces; each new follicle joins the group's tract whose remaining
+// follicle is nearest (the tract it continues). Deterministic in the scene seed and the group's index.
+void Pipeline::Impl::redistributeOverlaps(uint64_t& nextId) {
+  std::vector<std::string> groups;
+  for (const TractSettings& t : tractSettings)
+    if (!t.overlapGroup.empty() && std::find(groups.begin(), groups.end(), t.overlapGroup) == groups.end())
+      groups.push_back(t.overlapGroup);
+  for (size_t g = 0; g < groups.size(); ++g) {
+    std::vector<uint32_t> members;
+    for (size_t i = 0; i < tractSettings.size(); ++i)
+      if (tractSettings[i].overlapGroup == groups[g]) members.push_back(static_cast<uint32_t>(i));
+    if (members.size() < 2) continue;
+    std::vector<uint8_t> cover(rest.faceCount(), 0), isMember(tractSettings.size(), 0);
+    double density = 0;
+    for (uint32_t i : members) {
+      isMember[i] = 1;
+      const TractSettings& t = tractSettings[i];
+      for (uint32_t f : t.tract.faces) cover[f] = static_cast<uint8_t>(std::min(cover[f] + 1, 2));
+      density += t.density > 0 ? t.density : double(t.count) / std::max(t.area, 1e-300);
+    }
+    density /= double(members.size());
+    coat::Tract shared;
+    shared.name = groups[g] + " overlap";
+    for (uint32_t f = 0; f < cover.size(); ++f)
+      if (cover[f] >= 2) shared.faces.push_back(f);
+    if (shared.faces.empty() || !(density > 0)) continue;
+    // The group's follicles off the shared faces (and pinned ones) stay.
+    coat::Follicles kept;
+    kept.reserve(follicles.size());
+    for (size_t k = 0; k < follicles.size(); ++k) {
+      if (isMember[follicles.tract[k]] && cover[follicles.face[k]] >= 2 && !follicles.pinned[k]) continue;
+      kept.push(rest, follicles.face[k], follicles.bary[k], follicles.tract[k], follicles.id[k], follicles.pinned[k]);
+    }
+    coat::ScatterOptions so;
+    so.seed = mix64(scene.seed * 0x9E37u + 0x0E7A0000u + g);
+    so.density.uniform = density;
+    so.tractIndex = members[0];
+    so.firstId = nextId;
+    coat::Follicles fresh = coat::scatterFollicles(rest, shared, so);
+    nextId += fresh.size() + 1;
+    if (fresh.size() > 1) coat::relaxFollicles(rest, shared, fresh, coat::RelaxOptions{});
+    // Each joins the member tract of the nearest remaining follicle (ties: the earlier tract).
+    std::vector<glm::dvec3> sites;
+    std::vector<uint32_t> siteTract;
+    for (size_t k = 0; k < kept.size(); ++k)
+      if (isMember[kept.tract[k]]) {
+        sites.push_back(kept.position[k]);
+        siteTract.push_back(kept.tract[k]);
+      }
+    for (size_t k = 0; k < fresh.size(); ++k) {
+      uint32_t best = members[0];
+      double bestD = std::numeric_limits<double>::infinity();
+      for (size_t s = 0; s < sites.size(); ++s) {
+        const double d = glm::dot(sites[s] - fresh.position[k], sites[s] - fresh.position[k]);
+        if (d < bestD || (d == bestD && siteTract[s] < best)) {
+          bestD = d;
+          best = siteTract[s];
+        }
+      }
+      fresh.tract[k] = best;
+    }
+    kept.append(fresh);
+    follicles = std::move(kept);
+  }
+}
+
+coat::TractParameterization Pipeline::Impl::boxParameterization(uint32_t tract) const {
+  glm::dvec3 lo, hi;
+  int ax[3];
+  boxAxes(rest, lo, hi, ax);
+  const glm::dvec3 ext = glm::max(hi - lo, glm::dvec3(1e-12));
+  coat::TractParameterization p;
+  p.method = coat::ParamMethod::Projection;
+  p.note = "bounding-box projection (at most one key feather)";
+  p.scale = ext[ax[0]];
+  for (size_t f = 0; f < follicles.size(); ++f) {
+    if (follicles.tract[f] != tract) continue;
+    const glm::dvec3 q = (follicles.position[f] - lo) / ext;
+    p.follicles.push_back(static_cast<uint32_t>(f));
+    p.follicleUv.push_back({q[ax[0]], q[ax[1]]});
+  }
+  return p;
+}
+
+void Pipeline::Impl::computeInterpolate() {
+  report(progress, "interpolate", 0);
+  params.clear();
+  std::vector<coat::TractKeys> keys;
+  for (size_t i = 0; i < tractSettings.size(); ++i) {
+    TractSettings& t = tractSettings[i];
+    try {
+      params.push_back(coat::parameterizeTract(rest, t.tract, static_cast<uint32_t>(i), follicles,
+                                               t.feathers.parameterization));
+    } catch (const Error&) {
+      // With at most one key feather nothing is interpolated, so a closed or folded tract needs no
+      // real parameterization: (u,v) from the two longest axes of the mesh's bounding box.
+      if (t.feathers.keys.size() > 1) throw;
+      params.push_back(boxParameterization(static_cast<uint32_t>(i)));
+    }
+  }
+  for (size_t i = 0; i < tractSettings.size(); ++i) {
+    TractSettings& t = tractSettings[i];
+    coat::TractKeys k;
+    k.param = &params[i];
+    k.keys = coat::resolveKeyFeathers(follicles, params[i], t.feathers.keys, library, t.tract.name, t.feathers.feather,
+                                      scene.file);
+    k.scaleJitter = t.feathers.scaleJitter;
+    keys.push_back(std::move(k));
+  }
+  coatRest = coat::CoatFeathers{};
+  coat::InterpolateOptions io;
+  io.seed = scene.seed;
+  coat::interpolateCoatFeathers(follicles, keys, library, io, coatRest);
+  // Tract-level feather scale (explicit, or automatic from the follicle spacing).
+  for (size_t i = 0; i < tractSettings.size(); ++i) {
+    const TractSettings& t = tractSettings[i];
+    double s = t.featherScale;
+    if (t.autoScale && i < relaxResults.size() && relaxResults[i].spacing > 0) {
+      double len = 0;
+      size_t n = 0;
+      for (size_t f = 0; f < coatRest.size(); ++f)
+        if (coatRest.tract[f] == i) { len += coatRest.params[f].totalLength(); ++n; }
+      if (n && len > 0) s = t.featherSpacings * relaxResults[i].spacing / (len / double(n));
+    }
+    if (s != 1.0)
+      for (size_t f = 0; f < coatRest.size(); ++f)
+        if (coatRest.tract[f] == i) coat::scaleFeather(coatRest.params[f], s);
+  }
+  // Growth schedules: the tract's, else the feather file's, else the scene's (else the default).
+  for (size_t f = 0; f < coatRest.size(); ++f) {
+    const uint32_t t = coatRest.tract[f];
+    if (t < tractSettings.size() && tractSettings[t].growth) coatRest.params[f].growth = tractSettings[t].growth;
+    else if (!coatRest.params[f].growth) coatRest.params[f].growth = sceneGrowth;
+  }
+  // Memory of the coat's geometry before packing and meshing it: barbs on both vanes (and afterfeathers)
+  // at the current level of detail, about kTrianglesPerBarb triangles each.
+  double triangles = 0;
+  size_t largest = 0;
+  double largestBarbs = 0;
+  for (size_t f = 0; f < coatRest.size(); ++f) {
+    double barbs = 0;
+    for (const feather::FeatherParams* p = &coatRest.params[f]; p; p = p->afterfeather.get())
+      barbs += 2.0 * p->rachisLength / std::max(std::min(p->spacingBase, p->spacingTip), 1e-300);
+    if (barbs > largestBarbs) { largestBarbs = barbs; largest = f; }
+    triangles += barbs * kTrianglesPerBarb * lod;
+  }
+  if (!coatRest.params.empty()) {
+    const std::string name = coatRest.params[largest].name;
+    requireMemory(triangles * kBytesPerTriangle,
+                  "the coat's geometry (about " + std::to_string(static_cast<uint64_t>(std::min(triangles, 1e18))) +
+                      " triangles; up to " + std::to_string(static_cast<uint64_t>(std::min(largestBarbs, 1e18))) +
+                      " barbs per feather)",
+                  scene.file, name.empty() ? "feathers" : "feathers." + name);
+  }
+  report(progress, "interpolate", 1);
+}
+
+// Directions and ordering are read here, not with the tracts, so editing them re-orients and
+// repacks without re-relaxing follicles.
+void Pipeline::Impl::computeDirections() {
+  directionOptions = coat::DirectionOptions{};
+  orderOptions = coat::OrderOptions{};
+  if (scene.fromBareMesh) {
+    // Any mesh with one command: feathers flow along the longest bounding-box axis and are layered
+    // along it (roof tiles from the far end).
+    glm::dvec3 lo, hi;
+    int ax[3];
+    boxAxes(rest, lo, hi, ax);
+    glm::dvec3 a = 0.5 * (lo + hi), b = a;
+    a[ax[0]] = lo[ax[0]];
+    b[ax[0]] = hi[ax[0]];
+    directionOptions.field.axis = {a, b};
+    orderOptions.method = coat::OrderMethod::Axis;
+    orderOptions.axis = {a, b};
+  }
+  if (!scene.directions.empty()) {
+    JsonReader r(scene.directions, scene.file, "directions");
+    directionOptions = coat::parseDirections(r);
+  }
+  if (!scene.ordering.empty()) {
+    JsonReader r(scene.ordering, scene.file, "ordering");
+    orderOptions = coat::parseOrdering(r);
+  } else if (!scene.directions.empty() && directionOptions.field.axis.size() >= 2) {
+    // A scene that gives a body axis and no ordering is layered along that axis (roof tiles from the tail).
+    orderOptions.method = coat::OrderMethod::Axis;
+    orderOptions.axis = directionOptions.field.axis;
+  }
+  ++restGeneration;
+  directions = coat::computeSurfaceDirections(rest, tracts, follicles, directionOptions);
+  coat::evaluateFrames(rest, follicles, directions, coatRest);
+  try {
+    coat::orderLayers(rest, tracts, params, follicles, directions, orderOptions, coatRest);
+  } catch (const Error& e) {
+    throw e.withFile(scene.file);  // "ordering.tracts[2]" is a key of the scene
+  }
+}
+
+}  // namespace pteryla::pipeline
