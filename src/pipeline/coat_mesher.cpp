@@ -66,6 +66,31 @@ feather::FeatherMeshRanges rebase(feather::FeatherMeshRanges r, uint32_t from, u
 
 }  // namespace
 
+uint32_t indexEnd(const feather::FeatherMeshRanges& r) {
+  return std::max({r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
+                   r.afterFirst + r.afterCount});
+}
+
+// Where each of `inputs`, meshed one after another into `mesh` from its start with `ranges`, sits in it.
+std::vector<CoatMesher::Slice> CoatMesher::locate(const std::vector<feather::FeatherMeshInput>& inputs,
+                                                  const std::vector<feather::FeatherMeshRanges>& ranges,
+                                                  const TriMesh& mesh) {
+  std::vector<Slice> out(inputs.size());
+  uint32_t iEnd = 0, vEnd = 0;
+  for (size_t k = 0; k < inputs.size(); ++k) {
+    Slice& sl = out[k];
+    const auto& r = ranges[k];
+    sl.i0 = iEnd;
+    iEnd = std::max(iEnd, indexEnd(r));
+    sl.in = iEnd - sl.i0;
+    sl.v0 = vEnd;
+    while (vEnd < mesh.featherId.size() && mesh.featherId[vEnd] == inputs[k].featherId) ++vEnd;
+    sl.vn = vEnd - sl.v0;
+    sl.ranges = r;
+  }
+  return out;
+}
+
 void CoatMesher::clear() { *this = CoatMesher{}; }
 
 void CoatMesher::keepIndices(const TriMesh& out) { keptIndices_ = out.indices; }
@@ -212,20 +237,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     // Little to reuse: mesh everything straight into the output.
     truncate(out);
     feather::appendFeatherMeshes(inputs.data(), count, mo, out, &ranges);
-    uint32_t iEnd = 0, vEnd = 0;
-    for (size_t k = 0; k < count; ++k) {
-      Slice& sl = next[k];
-      const auto& r = ranges[k];
-      sl.i0 = iEnd;
-      iEnd = std::max({iEnd, r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
-                       r.afterFirst + r.afterCount});
-      sl.in = iEnd - sl.i0;
-      sl.v0 = vEnd;
-      const uint32_t id = inputs[k].featherId;
-      while (vEnd < out.featherId.size() && out.featherId[vEnd] == id) ++vEnd;
-      sl.vn = vEnd - sl.v0;
-      sl.ranges = r;
-    }
+    next = locate(inputs, ranges, out);
     std::swap(out.positions, localPos_);
     std::swap(out.normals, localNrm_);
     std::swap(out.tangents, localTan_);
@@ -243,19 +255,8 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     feather::appendFeatherMeshes(changed.data(), changed.size(), mo, freshMesh_, &freshRanges);
     // Source slices: in the last mesh (reused) or in freshMesh_.
     std::vector<Slice> src(count);
-    uint32_t iEnd = 0, vEnd = 0;
-    for (size_t c = 0; c < changed.size(); ++c) {
-      Slice& sl = src[changedAt[c]];
-      const auto& r = freshRanges[c];
-      sl.i0 = iEnd;
-      iEnd = std::max({iEnd, r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
-                       r.afterFirst + r.afterCount});
-      sl.in = iEnd - sl.i0;
-      sl.v0 = vEnd;
-      while (vEnd < freshMesh_.featherId.size() && freshMesh_.featherId[vEnd] == changed[c].featherId) ++vEnd;
-      sl.vn = vEnd - sl.v0;
-      sl.ranges = r;
-    }
+    const std::vector<Slice> fresh = locate(changed, freshRanges, freshMesh_);
+    for (size_t c = 0; c < changed.size(); ++c) src[changedAt[c]] = fresh[c];
     for (size_t k = 0; k < count; ++k)
       if (reuse[k]) src[k] = slices_[which[k]];
     size_t vTotal = 0, iTotal = 0;

@@ -24,6 +24,9 @@ namespace pteryla::pipeline {
 // growing feather is packed mature and grown from its packed parameters when meshed.
 bool packedAsGrown(double age, const feather::GrowthSchedule& schedule);
 
+// One past the last index of a feather's ranges (its parts are contiguous, shaft first).
+uint32_t indexEnd(const feather::FeatherMeshRanges& r);
+
 // One frame's input to the mesher. Every pointer must be set and stay valid during update().
 struct CoatMeshInput {
   const coat::CoatFeathers* coat = nullptr;        // the frame's coat: params, frames, ages, presence, layer order
@@ -64,6 +67,8 @@ class CoatMesher {
     feather::FeatherMeshRanges ranges;  // absolute, in the mesh
   };
 
+  static std::vector<Slice> locate(const std::vector<feather::FeatherMeshInput>& inputs,
+                                   const std::vector<feather::FeatherMeshRanges>& ranges, const TriMesh& mesh);
   void resize(size_t n);
   void updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& grown, std::vector<double>& shed);
   void assemble(const std::vector<feather::FeatherMeshInput>& placed, const std::vector<double>& shed, TriMesh& out);

@@ -60,7 +60,7 @@ void Pipeline::Impl::build() {
 
 
 void Pipeline::Impl::computePose() {
-  timeState.generation = restGeneration;
+  timeState.generation = restGeneration();
   if (!skinPose.empty()) {
     // The caller's pose (setSkinPose) replaces the skeleton's. Checked against the rest skin again here:
     // a scene edit may have changed the mesh since it was set.
@@ -76,17 +76,17 @@ void Pipeline::Impl::computePose() {
     posedGeneration = 0;
   } else {
     // poseSkin wants `posed` as a copy of `rest` and touches it only when the pose moves the skin.
-    if (posedGeneration != restGeneration) posed = rest;
+    if (posedGeneration != restGeneration()) posed = rest;
     poseSkin(scene, time, rest, posed, timeState);
-    posedGeneration = timeState.posedMoved ? 0 : restGeneration;
+    posedGeneration = timeState.posedMoved ? 0 : restGeneration();
   }
   posedFollicles = follicles;
   coat::updateFollicleGeometry(posed, posedFollicles);
   // Rest data (params, follicles, layer order) is copied once per rest state; the time stages rewrite
   // frames, ages and presence every frame.
-  if (coatNowGeneration != restGeneration) {
+  if (coatNowGeneration != restGeneration()) {
     coatNow = coatRest;
-    coatNowGeneration = restGeneration;
+    coatNowGeneration = restGeneration();
   }
   coat::evaluateFrames(posed, posedFollicles, directions, coatNow);
 }
@@ -203,11 +203,8 @@ void Pipeline::Impl::computeMesh() {
     const auto& r = ranges[k];
     CoatDrawRange d;
     d.feather = i;
-    const uint32_t first = r.shaftFirst;
-    const uint32_t end = std::max({r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
-                                   r.afterFirst + r.afterCount});
-    d.firstIndex = first;
-    d.indexCount = end - first;
+    d.firstIndex = r.shaftFirst;
+    d.indexCount = indexEnd(r) - r.shaftFirst;
     d.partCount[0] = r.shaftCount;
     d.partCount[1] = r.leftCount;
     d.partCount[2] = r.rightCount;

@@ -84,9 +84,8 @@ struct Pipeline::Impl {
   coat::DrapeResult drape;
   CoatMesh mesh;
   CoatMesher mesher;                // mesh.mesh is its last result
-  // Rest-state generation: bumped whenever the directions stage (downstream of every rest stage) runs,
-  // so caches of time-stage results know when the rest state they were made from is gone.
-  uint64_t restGeneration = 1;
+  // Caches of time-stage results are stamped with the rest state they were made from: the number of
+  // evaluations of the directions stage, downstream of every rest stage (restGeneration()).
   uint64_t coatNowGeneration = 0;   // generation coatNow was copied from coatRest at
   uint64_t posedGeneration = 0;     // generation `posed` is an untouched copy of `rest` at (0 = not)
   // check(): the last unpacked proxy coat and its intersecting pair count. The unpacked coat comes from
@@ -96,6 +95,7 @@ struct Pipeline::Impl {
   std::optional<size_t> lastUnpackedPairs;
 
   static StageGraph::Id id(Stage s) { return static_cast<StageGraph::Id>(s); }
+  uint64_t restGeneration() const { return graph.evaluations(id(Stage::Directions)); }
 
   void build();
   void computeSkin();

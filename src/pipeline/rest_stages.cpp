@@ -397,7 +397,6 @@ void Pipeline::Impl::computeDirections() {
     orderOptions.method = coat::OrderMethod::Axis;
     orderOptions.axis = directionOptions.field.axis;
   }
-  ++restGeneration;
   directions = coat::computeSurfaceDirections(rest, tracts, follicles, directionOptions);
   coat::evaluateFrames(rest, follicles, directions, coatRest);
   try {
