@@ -8,6 +8,7 @@
 //
 // Edits dirty only what is downstream (`invalidate`), so a packing change repacks without re-relaxing
 // follicles, and a timeline scrub (setTime) re-evaluates pose, ages, controls, pack and mesh only.
+// Which stage each scene section feeds: scene_stages.hpp (earliestChangedStage).
 // Results are pure functions of (scene, time, lod): evaluating t=5 then t=2 equals evaluating t=2 fresh.
 #include <functional>
 #include <map>
