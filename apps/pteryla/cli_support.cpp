@@ -7,7 +7,13 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include <charconv>
+#include <sstream>
+
+#include "commands.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/limits.hpp"
+#include "pteryla/pipeline/scene.hpp"
 
 namespace pteryla::cli {
 namespace {
@@ -70,6 +76,67 @@ void ensureParentDir(const std::string& path) {
 
 void info(const Common& c, const std::string& msg) {
   if (!c.quiet) std::fprintf(stderr, "%s\n", msg.c_str());
+}
+
+using pipeline::Pipeline;
+
+
+uint64_t parseSeed(const std::string& text) {
+  uint64_t v = 0;
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size())
+    throw Error("expected an integer in [0, 18446744073709551615], got '" + text + "'", "", "--seed");
+  return v;
+}
+
+Loaded load(const Common& c, const SceneArgs& a) {
+  Loaded l;
+  if (!a.size.empty()) parseSize(a.size, "--size", l.width, l.height);
+  if (a.lod && !(*a.lod > 0 && *a.lod <= 1)) throw Error("expected a fraction in (0, 1], got " + std::to_string(*a.lod), "", "--lod");
+  if (a.time && !std::isfinite(*a.time)) throw Error("expected a finite time", "", "--time");
+  const std::optional<uint64_t> seed = a.seed.empty() ? std::nullopt : std::optional<uint64_t>(parseSeed(a.seed));
+  if (l.width)
+    requireMemory(double(l.width) * l.height * kBytesPerPixel, "a " + a.size + " image", "", "--size");
+  pipeline::Scene s = pipeline::loadScene(a.scene);
+  if (seed) s.seed = *seed;
+  if (!l.width) {
+    l.width = s.render.width;
+    l.height = s.render.height;
+    requireMemory(double(l.width) * l.height * kBytesPerPixel,
+                  "a " + std::to_string(l.width) + "x" + std::to_string(l.height) + " image", s.file, "render.size");
+  }
+  l.pipeline = std::make_unique<Pipeline>(std::move(s), makeProgress(c));
+  if (a.time) l.pipeline->setTime(*a.time);
+  if (a.lod) l.pipeline->setLod(*a.lod);
+  return l;
+}
+
+std::string jsonNumberOrNull(const std::optional<double>& v) {
+  if (!v || !std::isfinite(*v)) return "null";
+  std::ostringstream os;
+  os.precision(6);
+  os << *v;
+  return os.str();
+}
+std::string jsonEscape(const std::string& in) {
+  std::string out;
+  for (const char ch : in) {
+    if (ch == '"' || ch == '\\') out.push_back('\\');
+    if (static_cast<unsigned char>(ch) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", ch);
+      out += buf;
+    } else {
+      out.push_back(ch);
+    }
+  }
+  return out;
+}
+
+std::string perCent(double f) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g%%", 100.0 * f);
+  return b;
 }
 
 }  // namespace pteryla::cli

@@ -3,7 +3,11 @@
 #include <optional>
 #include <string>
 
+#include <cstdint>
+#include <memory>
+
 #include "pteryla/core/progress.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
 
 namespace pteryla::cli {
 
@@ -22,5 +26,25 @@ void parseSize(const std::string& s, const std::string& option, int& w, int& h);
 // Creates the parent directory of `path` if needed; throws Error when impossible.
 void ensureParentDir(const std::string& path);
 void info(const Common& c, const std::string& msg);  // stderr line unless quiet
+
+struct SceneArgs;
+// Bytes per rendered pixel: OSMesa colour + depth buffers, the read-back, the flipped Image and the
+// encoder's copy.
+inline constexpr double kBytesPerPixel = 24.0;
+// A scene's pipeline with the command's --seed, --time, --lod applied, and the image size (--size or
+// the scene's render.size), checked against the memory ceiling.
+struct Loaded {
+  std::unique_ptr<pipeline::Pipeline> pipeline;
+  int width = 0, height = 0;
+};
+Loaded load(const Common& c, const SceneArgs& a);
+// --seed: an integer in [0, 2^64-1]; throws Error naming the option.
+uint64_t parseSeed(const std::string& text);
+// A JSON number (6 significant digits) or null when absent or not finite.
+std::string jsonNumberOrNull(const std::optional<double>& v);
+// "1.23%": a fraction as a percentage, 3 significant digits.
+std::string perCent(double f);
+// `in` escaped for a JSON string.
+std::string jsonEscape(const std::string& in);
 
 }  // namespace pteryla::cli
