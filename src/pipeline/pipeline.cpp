@@ -234,8 +234,18 @@ void Pipeline::Impl::computeMesh() {
   report(progress, "mesh", 1);
 }
 
+namespace {
+// A scene without tracts feathers the whole skin as one tract named "all" (docs/tracts.md). Filled in
+// once where a scene enters the pipeline (construction and every edit), so every stage, rest or time,
+// sees the same tracts whatever stage re-runs.
+void defaultTracts(Scene& scene) {
+  if (scene.tracts.empty()) scene.tracts = Json::array({Json{{"name", "all"}}});
+}
+}  // namespace
+
 Pipeline::Pipeline(Scene scene, ProgressFn progress) : impl_(std::make_unique<Impl>()) {
   impl_->scene = std::move(scene);
+  defaultTracts(impl_->scene);
   impl_->progress = std::move(progress);
   impl_->time = impl_->scene.time;
   impl_->lod = impl_->scene.render.lod;
@@ -251,6 +261,7 @@ Pipeline::~Pipeline() = default;
 const Scene& Pipeline::scene() const { return impl_->scene; }
 void Pipeline::editScene(Stage from, const std::function<void(Scene&)>& edit) {
   edit(impl_->scene);
+  defaultTracts(impl_->scene);
   invalidate(from);
 }
 void Pipeline::invalidate(Stage from) { impl_->graph.invalidate(impl_->id(from)); }

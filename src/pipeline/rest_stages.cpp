@@ -94,7 +94,6 @@ void Pipeline::Impl::computeTracts() {
   std::vector<coat::Tract> earlier;
   const double meshArea = rest.totalArea();
   double plannedFollicles = 0;
-  if (scene.tracts.empty()) scene.tracts = Json::array({Json{{"name", "all"}}});
   for (size_t i = 0; i < scene.tracts.size(); ++i) {
     const std::string where = "tracts[" + std::to_string(i) + "]";
     JsonReader r(scene.tracts[i], scene.file, where);

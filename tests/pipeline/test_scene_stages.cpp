@@ -174,3 +174,30 @@ INSTANTIATE_TEST_SUITE_P(Sections, SceneStagesEdit, testing::Range<size_t>(0, ed
                            const Edit e = edits()[info.param];
                            return e.key + (e.subKey.empty() ? "" : "_" + e.subKey);
                          });
+
+// A scene without tracts (one default tract, "all") edited the way the viewer edits: its own copy of the
+// scene, still without tracts, handed back, re-running from a time stage. The moult and a control naming
+// tract "all" must still apply, as in a fresh pipeline. (Before the default tract was filled in where a
+// scene enters the pipeline, only the tracts stage added it, so this edit lost the moult and the control
+// failed with an unknown tract.)
+TEST(SceneStages, SceneWithoutTractsKeepsItsDefaultTractThroughEdits) {
+  Scene before = baseScene();
+  before.tracts = Json::array();
+  before.controls = Json::parse(
+      R"([{"name": "raise", "tracts": ["all"], "at": [0.9, 0.1, 0.0], "radius": 0.35, "keys": [{"t": 0, "lift": 0}, {"t": 8, "lift": 1}]}])");
+  Pipeline p(before);
+  const Frame first = grab(p);
+  size_t growing = 0;
+  for (double a : first.age) growing += a < 1 ? 1 : 0;
+  ASSERT_GT(growing, 0u) << "the moult should be under way at t = 5";
+
+  Scene after = before;  // the viewer's copy: still no tracts
+  after.moult["window"] = 0.3;
+  p.editScene(Stage::Ages, [&](Scene& s) { s = after; });
+  const Frame edited = grab(p);
+  Pipeline fresh(after);
+  pipeline_test::expectIdentical(edited, grab(fresh), after.time);
+  size_t growingAfter = 0;
+  for (double a : edited.age) growingAfter += a < 1 ? 1 : 0;
+  EXPECT_GT(growingAfter, 0u) << "the moult was lost with the default tract";
+}
