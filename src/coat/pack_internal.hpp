@@ -128,7 +128,6 @@ inline void bezierPair(const dvec3* cvs, size_t count, double u0, double u1, dve
   p1 = feather::bezierPoint(cvs, count, u1);
 }
 
-// Fills the vane outline from the shaft polyline and the key barbs, with barbs interpolated between
 // ------------------------------------------------------------------ context
 
 // Candidate points in the follicle frame (t along T, b along B, n along N). Points of packed feathers carry

@@ -12,6 +12,7 @@
 
 namespace pteryla::coat::packing {
 
+// Fills the vane outline from the shaft polyline and the key barbs, with barbs interpolated between
 // consecutive key barbs, dilated by one lateral bin and by `margin` in radius.
 void buildOutline(LocalFeather& L, const PackOptions& o) {
   constexpr int nb = LocalFeather::kOutlineBins;
