@@ -59,11 +59,9 @@ bool sameKeyLayout(const PackedKeyBarbs& a, const PackedKeyBarbs& b, uint32_t i)
 void layoutResult(const Context& ctx, const std::vector<Source>& source, const PackResult* kept, PackResult& res) {
   const size_t n = ctx.coat.size();
   PTERYLA_CHECK_EQ(source.size(), n, "layoutResult needs a source per feather");
-  auto keptShape = [&] {
+  if (std::find(source.begin(), source.end(), Source::Kept) != source.end())
     PTERYLA_CHECK(kept && kept->groupOffset.size() == n + 1 && kept->packedKeys.keyOffset.size() == n + 1,
                   "a kept feather needs a result of the same coat");
-    return kept;
-  };
   res.order = ctx.order;
   res.elevation.assign(n, 0.0);
   layoutKeys(
@@ -71,7 +69,7 @@ void layoutResult(const Context& ctx, const std::vector<Source>& source, const P
       [&](size_t i) -> std::array<uint32_t, 3> {
         if (source[i] == Source::Local) return localKeyCount(ctx.local[i]);
         if (source[i] == Source::None) return {0, 0, 0};
-        const PackedKeyBarbs& K = keptShape()->packedKeys;
+        const PackedKeyBarbs& K = kept->packedKeys;
         return {K.keyOffset[i + 1] - K.keyOffset[i], K.leftKeys[i], K.replaced[i]};
       },
       [&](size_t i, uint32_t k) -> uint32_t {
@@ -89,7 +87,7 @@ void layoutResult(const Context& ctx, const std::vector<Source>& source, const P
   for (uint32_t i = 0; i < n; ++i) {
     const LocalFeather& L = ctx.local[i];
     if (source[i] == Source::Local) groups += 1 + (L.after.empty() ? 0 : 1) + L.keys.size();
-    if (source[i] == Source::Kept) groups += keptShape()->groupOffset[i + 1] - kept->groupOffset[i];
+    if (source[i] == Source::Kept) groups += kept->groupOffset[i + 1] - kept->groupOffset[i];
   }
   res.groupPoint.reserve(groups);
   for (uint32_t i = 0; i < n; ++i) {
