@@ -18,7 +18,17 @@ install(FILES
 install(FILES
   ${PROJECT_SOURCE_DIR}/include/pteryla/core/error.hpp
   ${PROJECT_SOURCE_DIR}/include/pteryla/core/data_dir.hpp
+  ${PROJECT_SOURCE_DIR}/include/pteryla/core/atomic_file.hpp
+  ${PROJECT_SOURCE_DIR}/include/pteryla/core/limits.hpp
+  ${PROJECT_SOURCE_DIR}/include/pteryla/core/memory.hpp
+  ${PROJECT_SOURCE_DIR}/include/pteryla/core/paths.hpp
+  ${PROJECT_SOURCE_DIR}/include/pteryla/core/quiet.hpp
+  ${PROJECT_SOURCE_DIR}/include/pteryla/core/sha256.hpp
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/pteryla/core)
+install(FILES
+  ${PROJECT_SOURCE_DIR}/include/pteryla/render/image.hpp
+  ${PROJECT_SOURCE_DIR}/include/pteryla/render/image_diff.hpp
+  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/pteryla/render)
 # The data the defaults need (feathers; textures for renderers), and the bundled scenes with their
 # meshes so that Session::fromSceneFile can open them from the installed copy.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/data/ DESTINATION ${PTERYLA_INSTALL_DATADIR})

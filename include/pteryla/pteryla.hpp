@@ -1,7 +1,7 @@
 #pragma once
 // The host API: what a program outside this repository (a DCC plug-in, a game tool, a script binding)
-// uses to feather its own mesh. This header and the three it includes (core/error.hpp,
-// core/data_dir.hpp, export.hpp) are what `cmake --install` ships; they use standard C++17 only (no
+// uses to feather its own mesh. This header and what it includes (core/error.hpp, core/data_dir.hpp,
+// export.hpp and the utilities below) are what `cmake --install` ships; they use standard C++17 only (no
 // JSON, GL, TBB, CGAL, OpenMesh or GLM types), and the rest of the library stays behind them.
 //
 // A Session is stateful, in the style of geometry-central's solvers: build it once from the rest skin
@@ -44,6 +44,16 @@
 #include "pteryla/core/data_dir.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/export.hpp"
+// Utilities a host shares with the library (and the CLI uses): the memory ceiling and quiet output of
+// the whole process, paths, SHA-256, files written through a temporary name, images and comparing them.
+#include "pteryla/core/atomic_file.hpp"
+#include "pteryla/core/limits.hpp"
+#include "pteryla/core/memory.hpp"
+#include "pteryla/core/paths.hpp"
+#include "pteryla/core/quiet.hpp"
+#include "pteryla/core/sha256.hpp"
+#include "pteryla/render/image.hpp"
+#include "pteryla/render/image_diff.hpp"
 
 namespace pteryla {
 
@@ -236,14 +246,58 @@ struct ExportSettings {
 struct ExportSummary {
   size_t bytes = 0;   // size of the file written
   size_t frames = 0;
-  double seconds = 0; // evaluating the frames and writing
+  size_t feathers = 0;     // in the last frame written
+  size_t triangles = 0;    // coat and skin triangles of the last frame (cards, glTF, OBJ, PLY)
+  size_t curves = 0;       // USD curves: rachis and barb curves of the last frame
+  size_t instances = 0;    // USD instances: feathers instanced, and
+  size_t prototypes = 0;   //   the prototype feathers they share
+  double seconds = 0;      // evaluating the frames and writing
+  double writeSeconds = 0; // of which writing the file
 };
+// The times of a frame range from..to (inclusive) at `fps` frames per unit of time, as `pteryla export
+// --from --to --fps` and `pteryla frames` sample it. Throws pteryla::Error naming "from", "to" or "fps"
+// for a non-finite value, from > to or fps <= 0.
+PTERYLA_API std::vector<double> exportFrameTimes(double from, double to, double fps);
+// Refuses, before anything is evaluated, what Session::exportTo would refuse for these settings: an
+// unknown extension, a coat form the format cannot carry, several times in an OBJ or PLY file, a bad
+// metersPerUnit or fps, times not increasing. Throws pteryla::Error naming the path or the setting.
+PTERYLA_API void checkExportSettings(const std::string& path, const ExportSettings& settings);
 
 // Session::render: an image of the frame through Mesa's off-screen OpenGL (llvmpipe; no display or GPU).
 struct RenderSettings {
   int width = 0, height = 0;      // pixels, each in [1, 16384]; 0 and 0 = the scene's render.size (960x720)
   std::string style;              // "" = the scene's render.style; "shaded" or "scratchboard" (docs/render.md)
 };
+// What Session::render drew.
+struct RenderSummary {
+  int width = 0, height = 0;
+  size_t feathers = 0;   // feathers drawn (present at the frame's time)
+  size_t triangles = 0;  // coat triangles drawn
+};
+
+// Seconds each stage of the pipeline took the last time it ran (0 for a stage that has not run), for
+// profiling a host's set-up (`pteryla bench` prints them).
+struct StageSeconds {
+  double skin = 0, tracts = 0, distribute = 0, interpolate = 0, directions = 0, pack = 0, controls = 0, mesh = 0;
+};
+
+// Session::fromSceneFile's options.
+struct SceneFileOptions {
+  std::optional<uint64_t> seed;  // replaces the scene's master seed (the file's "seed")
+  Progress progress;             // reports of reading the skin and tracts, and then of every evaluation
+                                 // until setProgress replaces it (see setProgress)
+};
+
+// One feather definition file (docs/feather-format.md) on its own, as `pteryla feather` makes it: built
+// at a growth age and a level of detail, written as a mesh (.obj, .ply) or rendered (.png, width x height,
+// through Mesa's off-screen OpenGL). The output's directory is created once the feather is built, so a
+// bad file leaves nothing behind. Throws pteryla::Error naming the file or setting. Returns the triangles.
+struct FeatherOutput {
+  double age = 1;           // growth age: (0, 1] grows (Streit 8.1), above 1 wears
+  double lod = 1;           // fraction of barbs meshed, (0, 1]
+  int width = 512, height = 512;  // .png only, each in [1, 16384]
+};
+PTERYLA_API size_t writeFeather(const std::string& featherFile, const std::string& out, const FeatherOutput& output = {});
 
 class PTERYLA_API Session {
  public:
@@ -252,7 +306,7 @@ class PTERYLA_API Session {
   Session(const SkinArrays& skin, const CoatSetup& setup);
   // A scene file (docs/scene-format.md) or a bare mesh (.obj/.ply/.off/.stl): the only door through
   // which the library reads JSON from the caller. Paths inside resolve against the file.
-  static Session fromSceneFile(const std::string& path);
+  static Session fromSceneFile(const std::string& path, const SceneFileOptions& options = {});
 
   Session(Session&&) noexcept;
   Session& operator=(Session&&) noexcept;
@@ -292,8 +346,10 @@ class PTERYLA_API Session {
   [[nodiscard]] bool evaluate(const Progress& progress = {});
   // The last complete evaluation. Throws pteryla::Error when an input changed since (call evaluate()).
   const Frame& frame() const;
-  // Runs the independent checker on the current frame at full detail (evaluates first if needed, and
-  // leaves frame() valid). Throws with a PoseMode::Follow pose set (it checks what the pipeline laid). Costs more than an evaluation: it also meshes and checks the unpacked coat.
+  // Runs the independent checker on the current frame at full detail (evaluates first if needed).
+  // frame() stays valid if it was (a session that only checks never meshes at its own level of detail).
+  // Throws with a PoseMode::Follow pose set (it checks what the pipeline laid). Costs more than an
+  // evaluation: it also meshes and checks the unpacked coat.
   Metrics metrics();
   // Writes the last complete evaluation's coat mesh (frame()) as Wavefront OBJ or PLY, chosen by the
   // extension of `path` (".obj", ".ply"); PLY carries every vertex attribute (feather/mesh_io.hpp). Throws
@@ -313,7 +369,24 @@ class PTERYLA_API Session {
   // .tif, .exr) through a temporary file renamed on success. libOSMesa is loaded on the first call:
   // without it, or for a bad size, style or path, throws pteryla::Error naming it. Not for a
   // PoseMode::Follow pose yet (throws). frame() stays valid if it was.
-  void render(const std::string& path, const RenderSettings& settings = {});
+  RenderSummary render(const std::string& path, const RenderSettings& settings = {});
+  // The same image, in memory.
+  render::Image renderImage(const RenderSettings& settings = {});
+  // The off-screen context and the uploaded coat are kept between renders of the same size (a sequence
+  // renders each frame without compiling shaders or uploading an unchanged skin again); this frees them.
+  void releaseRenderer();
+  // The image size renders default to: the scene's render.size (960x720 for a typed set-up).
+  std::array<int, 2> sceneImageSize() const;
+
+  // Reports of every evaluation the session runs from now on: evaluate() without a callback of its own,
+  // render, renderImage, exportTo and metrics. A false answer cancels: evaluate() returns false, the
+  // others throw pteryla::Error ("cancelled"). An empty function reports nowhere.
+  void setProgress(Progress progress);
+
+  // Profiling: seconds of each stage's last run, and the best of `repeats` full packs of the current
+  // coat with warm memory (what a packing edit costs; leaves every result as it was).
+  StageSeconds stageSeconds() const;
+  double timeFullPack(int repeats);
 
  private:
   struct Impl;

@@ -258,6 +258,19 @@ struct Session::Impl {
   std::vector<glm::vec3> followPositions, followNormals;
   std::vector<glm::dvec3> scratch;
 
+  Progress progress;  // setProgress (or SceneFileOptions::progress): reports of every evaluation
+  // The kept renderer: one off-screen context (resized when the image size changes) and the view that
+  // holds the uploaded skin and coat. The view goes before the context.
+  std::unique_ptr<render::OsMesaContext> context;
+  std::unique_ptr<render::SceneView> view;
+
+  // The renderer makes its own context current for every call and when it is destroyed, so several
+  // sessions' renderers live side by side.
+  void releaseRenderer() {
+    view.reset();
+    context.reset();
+  }
+
   explicit Impl(std::unique_ptr<pipeline::Pipeline> p) : pipeline(std::move(p)) {
     // Read the skin, the feathers and the tracts now, so bad input fails here and not at evaluate().
     const coat::SkinMesh& rest = pipeline->restSkin();
@@ -338,6 +351,45 @@ struct Session::Impl {
 
   bool following() const { return poseMode == PoseMode::Follow && !followPose.empty(); }
 
+  // Runs `fn` with `report` (or, when empty, the session's progress) receiving the pipeline's reports; a
+  // false answer unwinds `fn` with Cancelled. The pipeline reports nowhere afterwards.
+  template <class Fn>
+  auto withProgress(const Progress& report, Fn&& fn) {
+    const Progress& use = report ? report : progress;
+    pipeline->setProgress([&use](const std::string& stage, double fraction) {
+      if (use && !use(stage, fraction)) throw Cancelled{};
+      return true;
+    });
+    struct Restore {
+      pipeline::Pipeline& p;
+      ~Restore() { p.setProgress({}); }
+    } restore{*pipeline};
+    return fn();
+  }
+  // The same for the calls that return results (render, export, metrics): a cancel is an Error.
+  template <class Fn>
+  auto reporting(const char* what, Fn&& fn) {
+    try {
+      return withProgress({}, std::forward<Fn>(fn));
+    } catch (const Cancelled&) {
+      throw Error(std::string(what) + " cancelled: the progress callback returned false", "", "progress");
+    }
+  }
+
+  // The kept renderer at width x height (made on the first call; libOSMesa is loaded then).
+  render::SceneView& renderer(int width, int height) {
+    if (!context) {
+      context = std::make_unique<render::OsMesaContext>(width, height);
+      view = std::make_unique<render::SceneView>(*context);
+    } else if (context->framebufferSize() != glm::ivec2(width, height)) {
+      context->resize(width, height);
+    }
+    return *view;
+  }
+  render::Image draw(const std::array<int, 2>& size, const std::string& style) {
+    return reporting("the render", [&] { return renderer(size[0], size[1]).render(*pipeline, size[0], size[1], style); });
+  }
+
   // The frame's coat mesh as a TriMesh (exportMesh): the pipeline's, or carried onto a Follow pose.
   TriMesh frameMesh() {
     const TriMesh& m = pipeline->coatMesh().mesh;
@@ -417,8 +469,19 @@ Session::Session(const SkinArrays& skin, const CoatSetup& setup) {
   impl_ = std::make_unique<Impl>(std::make_unique<pipeline::Pipeline>(sceneFromSetup(setup), std::move(mesh)));
 }
 
-Session Session::fromSceneFile(const std::string& path) {
-  return Session(std::make_unique<Impl>(std::make_unique<pipeline::Pipeline>(pipeline::loadScene(path))));
+Session Session::fromSceneFile(const std::string& path, const SceneFileOptions& options) {
+  pipeline::Scene scene = pipeline::loadScene(path);
+  if (options.seed) scene.seed = *options.seed;
+  // The constructor reads the skin and the tracts: their reports go to the options' callback.
+  const Progress& report = options.progress;
+  auto impl = std::make_unique<Impl>(std::make_unique<pipeline::Pipeline>(
+      std::move(scene), [&report, &path](const std::string& stage, double fraction) {
+        if (report && !report(stage, fraction)) throw Error("reading the scene cancelled", path, "progress");
+        return true;
+      }));
+  impl->pipeline->setProgress({});
+  impl->progress = options.progress;
+  return Session(std::move(impl));
 }
 
 Session::Session(Session&&) noexcept = default;
@@ -522,21 +585,43 @@ bool Session::evaluate(const Progress& progress) {
   Impl& m = *impl_;
   m.frameValid = false;
   // The host's callback sees every report; a false answer unwinds the stage that is running.
-  m.pipeline->setProgress([&progress](const std::string& stage, double fraction) {
-    if (progress && !progress(stage, fraction)) throw Cancelled{};
-    return true;
-  });
-  struct Restore {
-    pipeline::Pipeline& p;
-    ~Restore() { p.setProgress({}); }
-  } restore{*m.pipeline};
   try {
-    m.fillFrame();
+    m.withProgress(progress, [&] { m.fillFrame(); });
   } catch (const Cancelled&) {
     return false;
   }
   return true;
 }
+
+void Session::setProgress(Progress progress) { impl_->progress = std::move(progress); }
+
+StageSeconds Session::stageSeconds() const {
+  const pipeline::Pipeline& p = *impl_->pipeline;
+  using pipeline::Stage;
+  StageSeconds s;
+  s.skin = p.lastSeconds(Stage::Skin);
+  s.tracts = p.lastSeconds(Stage::Tracts);
+  s.distribute = p.lastSeconds(Stage::Distribute);
+  s.interpolate = p.lastSeconds(Stage::Interpolate);
+  s.directions = p.lastSeconds(Stage::Directions);
+  s.pack = p.lastSeconds(Stage::Pack);
+  s.controls = p.lastSeconds(Stage::Controls);
+  s.mesh = p.lastSeconds(Stage::Mesh);
+  return s;
+}
+
+double Session::timeFullPack(int repeats) {
+  if (repeats < 1) throw Error("expected at least one repeat, got " + std::to_string(repeats), "", "repeats");
+  Impl& m = *impl_;
+  return m.reporting("timing the pack", [&] { return m.pipeline->timeFullPack(repeats); });
+}
+
+std::array<int, 2> Session::sceneImageSize() const {
+  const auto& r = impl_->pipeline->scene().render;
+  return {{r.width, r.height}};
+}
+
+void Session::releaseRenderer() { impl_->releaseRenderer(); }
 
 const Frame& Session::frame() const {
   if (!impl_->frameValid)
@@ -550,48 +635,101 @@ void Session::exportMesh(const std::string& path) const {
   feather::writeMesh(path, impl_->frameMesh());
 }
 
-ExportSummary Session::exportTo(const std::string& path, const ExportSettings& settings) {
-  Impl& m = *impl_;
-  if (m.following())
-    throw Error("exporting a coat carried onto a Follow pose is not supported yet: exportMesh() writes this frame, "
-                "or use PoseMode::Repack", path, "poseMode");
+std::vector<double> exportFrameTimes(double from, double to, double fps) { return exchange::frameTimes(from, to, fps); }
+
+namespace {
+
+exchange::ExportOptions exportOptions(const std::string& path, const ExportSettings& settings) {
+  const exchange::Format format = exchange::formatOf(path);
   exchange::ExportOptions opt;
   opt.as = exchange::coatAsOf(settings.coatAs);
   for (size_t k = 0; k < settings.times.size(); ++k)
     if (!std::isfinite(settings.times[k]) || (k > 0 && !(settings.times[k] > settings.times[k - 1])))
       throw Error("times must be finite and increasing", "", "times[" + std::to_string(k) + "]");
+  if ((format == exchange::Format::Obj || format == exchange::Format::Ply) && settings.times.size() > 1)
+    throw Error("OBJ and PLY hold one frame: export several times as .glb, .gltf or .usda", path, "times");
+  if (!(settings.fps > 0 && std::isfinite(settings.fps))) throw Error("fps must be a positive number", path, "fps");
+  if (!(settings.metersPerUnit > 0 && std::isfinite(settings.metersPerUnit)))
+    throw Error("metersPerUnit must be a positive number", path, "metersPerUnit");
   opt.times = settings.times;
   opt.fps = settings.fps;
   opt.metersPerUnit = settings.metersPerUnit;
-  const bool hadFrame = m.frameValid;
-  m.frameValid = false;
-  const exchange::ExportResult r = exchange::exportCoat(*m.pipeline, path, opt);
-  if (hadFrame) m.fillFrame();  // the export evaluated other times: point the views at this one again
-  ExportSummary out;
-  out.bytes = r.bytes;
-  out.frames = r.frames;
-  out.seconds = r.seconds;
-  return out;
+  return opt;
 }
 
-void Session::render(const std::string& path, const RenderSettings& settings) {
-  Impl& m = *impl_;
-  if (m.following())
-    throw Error("rendering a coat carried onto a Follow pose is not supported yet: use PoseMode::Repack", path,
-                "poseMode");
+// Image size and style of a render, checked.
+std::array<int, 2> renderSize(const pipeline::Pipeline& p, const RenderSettings& settings, const std::string& path) {
   const bool sceneSize = settings.width == 0 && settings.height == 0;
-  const int width = sceneSize ? m.pipeline->scene().render.width : settings.width;
-  const int height = sceneSize ? m.pipeline->scene().render.height : settings.height;
+  const int width = sceneSize ? p.scene().render.width : settings.width;
+  const int height = sceneSize ? p.scene().render.height : settings.height;
   for (const auto& [v, name] : {std::pair{width, "width"}, {height, "height"}})
     if (v < 1 || v > 16384) throw Error(std::string(name) + " must be in [1, 16384], got " + std::to_string(v), path, name);
   if (!settings.style.empty() && settings.style != "shaded" && settings.style != "scratchboard")
     throw Error("style must be \"\", \"shaded\" or \"scratchboard\", got \"" + settings.style + "\"", path, "style");
+  return {{width, height}};
+}
+
+}  // namespace
+
+void checkExportSettings(const std::string& path, const ExportSettings& settings) { exportOptions(path, settings); }
+
+ExportSummary Session::exportTo(const std::string& path, const ExportSettings& settings) {
+  Impl& m = *impl_;
+  if (m.following())
+    throw Error("exporting a coat carried onto a Follow pose is not supported yet: exportMesh() writes this frame, "
+                "or use PoseMode::Repack", path, "poseMode");
+  const exchange::ExportOptions opt = exportOptions(path, settings);
   const bool hadFrame = m.frameValid;
   m.frameValid = false;
+  const exchange::ExportResult r = m.reporting("the export", [&] { return exchange::exportCoat(*m.pipeline, path, opt); });
+  if (hadFrame) m.fillFrame();  // the export evaluated other times: point the views at this one again
+  ExportSummary out;
+  out.bytes = r.bytes;
+  out.frames = r.frames;
+  out.feathers = r.feathers;
+  out.triangles = r.triangles;
+  out.curves = r.curves;
+  out.instances = r.instances;
+  out.prototypes = r.prototypes;
+  out.seconds = r.seconds;
+  out.writeSeconds = r.writeSeconds;
+  return out;
+}
+
+render::Image Session::renderImage(const RenderSettings& settings) {
+  Impl& m = *impl_;
+  if (m.following())
+    throw Error("rendering a coat carried onto a Follow pose is not supported yet: use PoseMode::Repack", "",
+                "poseMode");
+  const std::array<int, 2> size = renderSize(*m.pipeline, settings, "");
+  const bool hadFrame = m.frameValid;
+  m.frameValid = false;
+  render::Image image;
   try {
-    render::OsMesaContext context(width, height);
-    render::SceneView view(context);
-    const render::Image image = view.render(*m.pipeline, width, height, settings.style);
+    image = m.draw(size, settings.style);
+  } catch (...) {
+    if (hadFrame) m.fillFrame();  // a failed context keeps the frame the host had
+    throw;
+  }
+  // The view may have set per-feather levels of detail (render.lod_by_screen_size): point the views at
+  // the frame as it is now.
+  if (hadFrame) m.fillFrame();
+  return image;
+}
+
+RenderSummary Session::render(const std::string& path, const RenderSettings& settings) {
+  Impl& m = *impl_;
+  if (m.following())
+    throw Error("rendering a coat carried onto a Follow pose is not supported yet: use PoseMode::Repack", path,
+                "poseMode");
+  const std::array<int, 2> size = renderSize(*m.pipeline, settings, path);
+  const bool hadFrame = m.frameValid;
+  m.frameValid = false;
+  RenderSummary summary;
+  try {
+    const render::Image image = m.draw(size, settings.style);
+    const pipeline::CoatMesh& drawn = m.pipeline->coatMesh();  // evaluated by the render: no work
+    summary = {size[0], size[1], drawn.ranges.size(), drawn.mesh.triangleCount()};
     render::saveImage(path, image);
   } catch (...) {
     // A failed write (or context) keeps the frame the host had.
@@ -601,6 +739,7 @@ void Session::render(const std::string& path, const RenderSettings& settings) {
   // The view may have set per-feather levels of detail (render.lod_by_screen_size): point the views at
   // the frame as it is now.
   if (hadFrame) m.fillFrame();
+  return summary;
 }
 
 Metrics Session::metrics() {
@@ -610,15 +749,17 @@ Metrics Session::metrics() {
                 "pose or use PoseMode::Repack to check a pose", "", "poseMode");
   pipeline::QualityMetrics q;
   const double lod = m.pipeline->lod();
+  const bool hadFrame = m.frameValid;
+  m.frameValid = false;
   try {
-    q = m.pipeline->check();
+    q = m.reporting("the check", [&] { return m.pipeline->check(); });
   } catch (...) {
     m.pipeline->setLod(lod);  // check() meshes at lod 1 and restores the level only when it completes
-    m.frameValid = false;
     throw;
   }
-  // check() evaluates the frame and meshes it at full detail: point the views at the frame's own level.
-  m.fillFrame();
+  // check() meshes at full detail: point the views at the frame's own level again (meshing it anew),
+  // only for a host that had a frame.
+  if (hadFrame) m.fillFrame();
   Metrics r;
   r.follicles = q.follicles;
   r.feathers = q.feathers;

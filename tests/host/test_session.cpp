@@ -703,9 +703,19 @@ TEST(HostSession, FromSceneFileEqualsThePipeline) {
 }
 
 TEST(HostSession, MetricsMatchTheFrame) {
+  {
+    // A session that only checks gets the metrics without a frame: the checker meshes at full detail,
+    // and meshing again at the session's own level would be wasted.
+    Session fresh(sphereSkin(), smallSetup());
+    fresh.setLod(0.3);
+    const pteryla::Metrics m = fresh.metrics();  // evaluates first
+    EXPECT_EQ(m.feathers.value_or(0), 120u);
+    EXPECT_THROW(fresh.frame(), pteryla::Error);
+  }
   Session s(sphereSkin(), smallSetup());
   s.setLod(0.3);
-  const pteryla::Metrics m = s.metrics();  // evaluates first
+  ASSERT_TRUE(s.evaluate());
+  const pteryla::Metrics m = s.metrics();
   ASSERT_TRUE(m.follicles && m.feathers && m.coverage && m.intersectingPairs);
   EXPECT_EQ(*m.follicles, 120u);
   EXPECT_EQ(*m.feathers, 120u);
@@ -721,7 +731,7 @@ TEST(HostSession, MetricsMatchTheFrame) {
       EXPECT_TRUE(s.frame().present[i]);
     }
   }
-  // The frame is valid afterwards and at the session's level of detail, not the checker's.
+  // A frame the host had is valid afterwards and at the session's level of detail, not the checker's.
   Session same = evaluated(sphereSkin(), smallSetup());
   expectIdentical(s.frame(), same.frame());
 }

@@ -7,9 +7,11 @@
 #include <cstdio>
 #include <string>
 
+#include "pteryla/export.hpp"
+
 namespace pteryla {
 
-class AtomicFile {
+class PTERYLA_API AtomicFile {
  public:
   // Creates the temporary file; throws pteryla::Error naming `path` when the directory is not writable.
   explicit AtomicFile(std::string path);
@@ -37,7 +39,7 @@ class AtomicFile {
 };
 
 // Writes `n` bytes to `path` atomically (see AtomicFile).
-void writeFileAtomic(const std::string& path, const void* data, size_t n);
+PTERYLA_API void writeFileAtomic(const std::string& path, const void* data, size_t n);
 inline void writeFileAtomic(const std::string& path, const std::string& s) {
   writeFileAtomic(path, s.data(), s.size());
 }

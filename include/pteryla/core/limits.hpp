@@ -5,16 +5,18 @@
 // machine out of memory. The ceiling defaults to kDefaultMemoryLimitGb; `pteryla --max-memory GB` raises it.
 #include <string>
 
+#include "pteryla/export.hpp"
+
 namespace pteryla {
 
 constexpr double kDefaultMemoryLimitGb = 4.0;
 
 // Process-wide ceiling in bytes.
-double memoryLimitBytes();
-void setMemoryLimitBytes(double bytes);
+PTERYLA_API double memoryLimitBytes();
+PTERYLA_API void setMemoryLimitBytes(double bytes);
 
 // Throws Error(file, element) when `bytes` exceeds the ceiling:
 // "<what> needs about 6.3 GB, above the memory ceiling of 4 GB (raise it with --max-memory GB)".
-void requireMemory(double bytes, const std::string& what, const std::string& file, const std::string& element);
+PTERYLA_API void requireMemory(double bytes, const std::string& what, const std::string& file, const std::string& element);
 
 }  // namespace pteryla

@@ -6,12 +6,14 @@
 #include <cstdint>
 #include <string>
 
+#include "pteryla/export.hpp"
+
 namespace pteryla {
 
 // Lower-case hex digest (64 characters) of `n` bytes.
-std::string sha256Hex(const void* data, size_t n);
+PTERYLA_API std::string sha256Hex(const void* data, size_t n);
 inline std::string sha256Hex(const std::string& bytes) { return sha256Hex(bytes.data(), bytes.size()); }
 // Digest of a whole file; empty string when it cannot be read.
-std::string sha256File(const std::string& path);
+PTERYLA_API std::string sha256File(const std::string& path);
 
 }  // namespace pteryla

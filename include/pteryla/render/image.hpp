@@ -6,9 +6,11 @@
 #include <string>
 #include <vector>
 
+#include "pteryla/export.hpp"
+
 namespace pteryla::render {
 
-struct Image {
+struct PTERYLA_API Image {
   int width = 0;
   int height = 0;
   std::vector<uint8_t> rgba;  // width * height * 4, row-major, top row first
@@ -23,22 +25,22 @@ struct Image {
 // Writes `image`; the format follows the extension (.png .jpg/.jpeg .tif/.tiff .exr). JPEG drops
 // alpha. Creates no directories. Atomic: encoded in memory, written to a temporary file and renamed, so a
 // failed write throws pteryla::Error naming the file and leaves any previous file unchanged.
-void saveImage(const std::string& path, const Image& image);
+PTERYLA_API void saveImage(const std::string& path, const Image& image);
 // Reads any OpenImageIO format into RGBA8; the size in the file's header is checked against the memory
 // ceiling (core/limits.hpp) before anything is decoded (grey -> RGB, missing alpha -> 255, float images are
 // clamped to [0,1]). Throws pteryla::Error naming the file when it is missing or unreadable.
-Image loadImage(const std::string& path);
+PTERYLA_API Image loadImage(const std::string& path);
 
 // `image` scaled down (box filter) so neither side exceeds maxSide; unchanged when it already fits.
 // Used for textures wider or taller than the GL implementation's GL_MAX_TEXTURE_SIZE.
-Image fitImage(const Image& image, int maxSide);
+PTERYLA_API Image fitImage(const Image& image, int maxSide);
 
 // Mean absolute difference over all pixels and the R, G, B channels, in [0,1] (1 = white vs black).
 // Alpha is ignored. Throws pteryla::Error when the sizes differ.
-double meanAbsoluteError(const Image& a, const Image& b);
+PTERYLA_API double meanAbsoluteError(const Image& a, const Image& b);
 
 // Fraction of pixels whose RGB differs from `background` by more than `tolerance` (0..255) in any
 // channel: the covered-pixel fraction used by analytic coverage checks.
-double coveredFraction(const Image& image, const uint8_t background[3], int tolerance = 2);
+PTERYLA_API double coveredFraction(const Image& image, const uint8_t background[3], int tolerance = 2);
 
 }  // namespace pteryla::render

@@ -5,6 +5,8 @@
 
 #include "pteryla/render/image.hpp"
 
+#include "pteryla/export.hpp"
+
 namespace pteryla::render {
 
 // A pixel "changed" when any of its R, G, B, A channels differs by more than `pixel` (in [0,1], 1 = the
@@ -30,11 +32,11 @@ struct ImageDiff {
 
 // Compares `actual` with `expected`. Images of different sizes never match (sameSize = false, no other
 // figure is computed). Throws pteryla::Error when a tolerance is not a number in [0, 1].
-ImageDiff diffImages(const Image& actual, const Image& expected, const DiffTolerance& tolerance = {});
+PTERYLA_API ImageDiff diffImages(const Image& actual, const Image& expected, const DiffTolerance& tolerance = {});
 
 // A picture of the difference for a person: |actual - expected| per RGB channel times `gain`, opaque, with
 // changed pixels (above tolerance.pixel) tinted so even a one-level change is visible. Sizes must match.
-Image differenceImage(const Image& actual, const Image& expected, const DiffTolerance& tolerance = {},
+PTERYLA_API Image differenceImage(const Image& actual, const Image& expected, const DiffTolerance& tolerance = {},
                       double gain = 8.0);
 
 }  // namespace pteryla::render
