@@ -11,9 +11,7 @@
 #include <sstream>
 
 #include "commands.hpp"
-#include "pteryla/core/error.hpp"
-#include "pteryla/core/limits.hpp"
-#include "pteryla/pipeline/scene.hpp"
+#include "pteryla/pteryla.hpp"
 
 namespace pteryla::cli {
 namespace {
@@ -22,7 +20,7 @@ int g_lastPercent = -1;
 bool g_open = false;
 }  // namespace
 
-ProgressFn makeProgress(const Common& c) {
+Progress makeProgress(const Common& c) {
   if (c.quiet) return {};
   const bool tty = isatty(fileno(stderr)) || std::getenv("PTERYLA_PROGRESS");
   return [tty](const std::string& stage, double f) {
@@ -78,7 +76,6 @@ void info(const Common& c, const std::string& msg) {
   if (!c.quiet) std::fprintf(stderr, "%s\n", msg.c_str());
 }
 
-using pipeline::Pipeline;
 
 
 uint64_t parseSeed(const std::string& text) {
@@ -90,24 +87,24 @@ uint64_t parseSeed(const std::string& text) {
 }
 
 Loaded load(const Common& c, const SceneArgs& a) {
-  Loaded l;
-  if (!a.size.empty()) parseSize(a.size, "--size", l.width, l.height);
+  int width = 0, height = 0;
+  if (!a.size.empty()) parseSize(a.size, "--size", width, height);
   if (a.lod && !(*a.lod > 0 && *a.lod <= 1)) throw Error("expected a fraction in (0, 1], got " + std::to_string(*a.lod), "", "--lod");
   if (a.time && !std::isfinite(*a.time)) throw Error("expected a finite time", "", "--time");
-  const std::optional<uint64_t> seed = a.seed.empty() ? std::nullopt : std::optional<uint64_t>(parseSeed(a.seed));
-  if (l.width)
-    requireMemory(double(l.width) * l.height * kBytesPerPixel, "a " + a.size + " image", "", "--size");
-  pipeline::Scene s = pipeline::loadScene(a.scene);
-  if (seed) s.seed = *seed;
+  SceneFileOptions options;
+  if (!a.seed.empty()) options.seed = parseSeed(a.seed);
+  if (width) requireMemory(double(width) * height * kBytesPerPixel, "a " + a.size + " image", "", "--size");
+  options.progress = makeProgress(c);
+  Loaded l{Session::fromSceneFile(a.scene, options), width, height};
   if (!l.width) {
-    l.width = s.render.width;
-    l.height = s.render.height;
+    const std::array<int, 2> size = l.session.sceneImageSize();
+    l.width = size[0];
+    l.height = size[1];
     requireMemory(double(l.width) * l.height * kBytesPerPixel,
-                  "a " + std::to_string(l.width) + "x" + std::to_string(l.height) + " image", s.file, "render.size");
+                  "a " + std::to_string(l.width) + "x" + std::to_string(l.height) + " image", a.scene, "render.size");
   }
-  l.pipeline = std::make_unique<Pipeline>(std::move(s), makeProgress(c));
-  if (a.time) l.pipeline->setTime(*a.time);
-  if (a.lod) l.pipeline->setLod(*a.lod);
+  if (a.time) l.session.setTime(*a.time);
+  if (a.lod) l.session.setLod(*a.lod);
   return l;
 }
 

@@ -6,8 +6,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "pteryla/core/progress.hpp"
-#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/pteryla.hpp"
 
 namespace pteryla::cli {
 
@@ -18,7 +17,7 @@ struct Common {
 
 // A ProgressFn drawing "stage [#####     ] 42%" on stderr (only when not quiet and stderr is a TTY or
 // PTERYLA_PROGRESS=1; otherwise one line per stage so logs stay readable).
-ProgressFn makeProgress(const Common& c);
+Progress makeProgress(const Common& c);
 // Finishes the current progress line.
 void endProgress(const Common& c);
 // "WxH" -> width, height; throws pteryla::Error naming the option.
@@ -31,10 +30,11 @@ struct SceneArgs;
 // Bytes per rendered pixel: OSMesa colour + depth buffers, the read-back, the flipped Image and the
 // encoder's copy.
 inline constexpr double kBytesPerPixel = 24.0;
-// A scene's pipeline with the command's --seed, --time, --lod applied, and the image size (--size or
-// the scene's render.size), checked against the memory ceiling.
+// A scene's session (the host API, include/pteryla/pteryla.hpp) with the command's --seed, --time,
+// --lod applied and its progress reported on stderr, and the image size (--size or the scene's
+// render.size), checked against the memory ceiling.
 struct Loaded {
-  std::unique_ptr<pipeline::Pipeline> pipeline;
+  Session session;
   int width = 0, height = 0;
 };
 Loaded load(const Common& c, const SceneArgs& a);

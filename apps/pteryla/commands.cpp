@@ -1,5 +1,6 @@
-// The pteryla subcommands. Every scene command evaluates through pipeline::Pipeline; rendering goes
-// through render::SceneView on an OSMesa context, so `render --time T` and `frames` draw identically.
+// The pteryla subcommands. Every scene command is a client of the host API (pteryla::Session,
+// include/pteryla/pteryla.hpp), the same door a DCC plug-in uses; `render --time T` and `frames` draw
+// through the same kept renderer, identically.
 #include "commands.hpp"
 
 #include <sys/resource.h>
@@ -17,29 +18,10 @@
 #include <optional>
 #include <sstream>
 
-#include "pteryla/coat/coat_feathers.hpp"
-#include "pteryla/coat/follicles.hpp"
-#include "pteryla/core/atomic_file.hpp"
-#include "pteryla/core/error.hpp"
-#include "pteryla/core/limits.hpp"
-#include "pteryla/core/paths.hpp"
-#include "pteryla/core/sha256.hpp"
-#include "pteryla/exchange/coat_export.hpp"
-#include "pteryla/feather/barbs.hpp"
-#include "pteryla/feather/io.hpp"
-#include "pteryla/feather/mesh.hpp"
-#include "pteryla/feather/mesh_io.hpp"
-#include "pteryla/pipeline/pipeline.hpp"
-#include "pteryla/pipeline/scene.hpp"
-#include "pteryla/render/image.hpp"
-#include "pteryla/render/osmesa_context.hpp"
-#include "pteryla/render/scene_view.hpp"
+#include "pteryla/pteryla.hpp"
 
 namespace pteryla::cli {
 namespace {
-
-using pipeline::Pipeline;
-using pipeline::Stage;
 
 void checkOutExtension(const std::string& out, const std::vector<std::string>& allowed, const std::string& what) {
   const std::string e = extensionOf(out);
@@ -70,22 +52,25 @@ std::string jsonIdsOrNull(bool known, const std::vector<uint32_t>& ids) {
 int cmdRender(const Common& c, const RenderArgs& a) {
   checkOutExtension(a.out, {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr"}, "an image");
   Loaded l = load(c, a);
-  render::OsMesaContext ctx(l.width, l.height);
-  render::SceneView view(ctx);
-  const render::Image img = view.render(*l.pipeline, l.width, l.height, a.style);
+  RenderSettings settings;
+  settings.width = l.width;
+  settings.height = l.height;
+  settings.style = a.style;
+  const render::Image image = l.session.renderImage(settings);
   // Directories are created only once the scene has evaluated: a failing scene leaves no trace.
   ensureParentDir(a.out);
-  render::saveImage(a.out, img);
+  render::saveImage(a.out, image);
   endProgress(c);
+  if (!l.session.evaluate()) throw InternalError("the render's own frame could not be read back");  // no work: up to date
+  const Frame& f = l.session.frame();
   info(c, "wrote " + a.out + " (" + std::to_string(l.width) + "x" + std::to_string(l.height) + ", " +
-              std::to_string(l.pipeline->coatMesh().ranges.size()) + " feathers, " +
-              std::to_string(l.pipeline->coatMesh().mesh.triangleCount()) + " feather triangles)");
+              std::to_string(f.ranges.size) + " feathers, " + std::to_string(f.indices.size / 3) + " feather triangles)");
   return 0;
 }
 
 int cmdCheck(const Common& c, const SceneArgs& a) {
   Loaded l = load(c, a);
-  const pipeline::QualityMetrics m = l.pipeline->check();
+  const Metrics m = l.session.metrics();
   endProgress(c);
   std::printf(
       "{\"follicles\": %s, \"hex_fraction\": %s, \"nn_cv\": %s, \"feathers\": %s, \"intersecting_pairs\": %s, "
@@ -103,78 +88,96 @@ int cmdCheck(const Common& c, const SceneArgs& a) {
   return 0;
 }
 
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Evaluates `s` (its progress is the CLI's bar, which never cancels).
+void evaluate(Session& s) {
+  if (!s.evaluate()) throw InternalError("an evaluation was cancelled with no one to cancel it");
+}
+
+}  // namespace
+
 int cmdBench(const Common& c, const BenchArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   Loaded l = load(c, a);
-  Pipeline& p = *l.pipeline;
-  const double parse = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  p.coatMesh();  // evaluates every stage once
-  render::OsMesaContext ctx(l.width, l.height);
-  render::SceneView view(ctx);
-  view.render(p, l.width, l.height);  // warm-up: shader compile, uploads
+  Session& s = l.session;
+  // Parsing the scene and reading the skin and the tracts (the session reads them when it is made).
+  const double load = secondsSince(t0);
+  evaluate(s);  // every stage once
+  RenderSettings size;
+  size.width = l.width;
+  size.height = l.height;
+  s.renderImage(size);  // warm-up: context, shader compile, uploads
   const auto r0 = std::chrono::steady_clock::now();
-  view.render(p, l.width, l.height);
-  const double renderSecs = std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+  s.renderImage(size);
+  const double renderSecs = secondsSince(r0);
   // First-evaluation seconds per stage, read before the scrub below resets the timings.
-  auto secs = [&](Stage s) { return p.lastSeconds(s); };
-  const double load = parse + secs(Stage::Skin) + secs(Stage::Tracts);
-  const double distribute = secs(Stage::Distribute);
-  const double interpolate = secs(Stage::Interpolate) + secs(Stage::Directions);
-  const double packSecs = secs(Stage::Pack) + secs(Stage::Controls);
-  const double meshSecs = secs(Stage::Mesh);
+  const StageSeconds st = s.stageSeconds();
+  const double distribute = st.distribute;
+  const double interpolate = st.interpolate + st.directions;
+  const double packSecs = st.pack + st.controls;
+  const double meshSecs = st.mesh;
   // A full pack again with warm memory (best of 3): what repacking the coat costs after an edit.
-  const double packRepeat = p.timeFullPack(3);
+  const double packRepeat = s.timeFullPack(3);
   // A second frame at a new time: what a timeline scrub costs (pose, ages, controls, pack, mesh).
-  const double t = p.time();
-  p.setTime(t + 1e-3);
+  const double t = s.time();
+  s.setTime(t + 1e-3);
   const auto f0 = std::chrono::steady_clock::now();
-  p.coatMesh();
-  const double frameSecs = std::chrono::duration<double>(std::chrono::steady_clock::now() - f0).count();
-  p.setTime(t);
-  p.coatMesh();
+  evaluate(s);
+  const double frameSecs = secondsSince(f0);
+  s.setTime(t);
+  evaluate(s);
   // --check: what `pteryla check` adds once the scene has evaluated: the mesh at full detail, then the
   // checker on it (pairs, skin, coverage, the proxy coats' pairs).
   std::string checkJson;
   if (a.check) {
-    const double lod = p.lod();
+    const double lod = s.lod();
     const auto m0 = std::chrono::steady_clock::now();
-    p.setLod(1.0);
-    p.coatMesh();
+    s.setLod(1.0);
+    evaluate(s);
     const auto c0 = std::chrono::steady_clock::now();
-    p.check();
+    s.metrics();
     const auto c1 = std::chrono::steady_clock::now();
-    p.setLod(lod);
+    s.setLod(lod);
     char buf[96];
     std::snprintf(buf, sizeof buf, ", \"check_mesh\": %.6f, \"check\": %.6f",
                   std::chrono::duration<double>(c0 - m0).count(), std::chrono::duration<double>(c1 - c0).count());
     checkJson = buf;
   }
+  evaluate(s);
   endProgress(c);
+  const Frame& f = s.frame();
   std::printf(
       "{\"load\": %.6f, \"distribute\": %.6f, \"interpolate\": %.6f, \"pack\": %.6f, \"pack_repeat\": %.6f, "
       "\"mesh\": %.6f, \"render\": %.6f, "
       "\"frame\": %.6f, \"triangles\": %zu, \"feathers\": %zu, \"width\": %d, \"height\": %d, \"lod\": %.4f, "
       "\"peak_rss_mb\": %.1f%s}\n",
-      load, distribute, interpolate, packSecs, packRepeat, meshSecs, renderSecs, frameSecs, p.coatMesh().mesh.triangleCount(), p.coatMesh().ranges.size(),
-      l.width, l.height, p.lod(), peakRssMb(), checkJson.c_str());
+      load, distribute, interpolate, packSecs, packRepeat, meshSecs, renderSecs, frameSecs, f.indices.size / 3,
+      f.ranges.size, l.width, l.height, s.lod(), peakRssMb(), checkJson.c_str());
   return 0;
 }
 
 int cmdExport(const Common& c, const ExportArgs& a) {
-  // Everything that can be refused is refused before the scene is evaluated.
-  const exchange::Format fmt = exchange::formatOf(a.out);
-  exchange::ExportOptions opt;
-  opt.as = exchange::coatAsOf(a.as);
-  const bool usd = fmt == exchange::Format::Usda;
-  if (a.asGiven && !usd && opt.as != exchange::CoatAs::Cards)
+  // Everything that can be refused is refused before the scene is evaluated: the extension and the coat
+  // form first, then what the command's options add.
+  ExportSettings settings;
+  settings.coatAs = a.as;
+  checkExportSettings(a.out, settings);
+  const std::string ext = extensionOf(a.out);
+  const bool usd = ext == ".usda";
+  if (a.asGiven && !usd && a.as != "cards")
     throw Error("--as " + a.as + " needs a .usda file: glTF, OBJ and PLY carry the coat as cards", a.out, "--as");
   if (a.from.has_value() != a.to.has_value()) throw Error("--from and --to go together", "", a.from ? "--to" : "--from");
   if (a.from && a.time) throw Error("give either --time or a range --from/--to", "", "--time");
-  if (a.from) opt.times = exchange::frameTimes(*a.from, *a.to, a.fps);
-  opt.fps = a.fps;
+  if (a.from) settings.times = exportFrameTimes(*a.from, *a.to, a.fps);
+  settings.fps = a.fps;
   if (!(a.metersPerUnit > 0 && std::isfinite(a.metersPerUnit))) throw Error("expected a positive number", "", "--meters-per-unit");
-  opt.metersPerUnit = a.metersPerUnit;
-  if ((fmt == exchange::Format::Obj || fmt == exchange::Format::Ply) && opt.times.size() > 1)
+  settings.metersPerUnit = a.metersPerUnit;
+  if ((ext == ".obj" || ext == ".ply") && settings.times.size() > 1)
     throw Error("OBJ and PLY hold one frame: export a range as .glb, .gltf or .usda", a.out, "--from");
   {
     // An existing directory we may not write into fails now, not after the evaluation.
@@ -185,15 +188,15 @@ int cmdExport(const Common& c, const ExportArgs& a) {
     if (std::filesystem::is_directory(a.out, ec)) throw Error("is a directory", a.out, "--out");
   }
   Loaded l = load(c, a);
-  ensureParentDir(a.out);  // after evaluation: a failing scene leaves no trace
-  const exchange::ExportResult r = exchange::exportCoat(*l.pipeline, a.out, opt);
+  ensureParentDir(a.out);  // after the scene is read: a scene that fails to load leaves no trace
+  const ExportSummary r = l.session.exportTo(a.out, settings);
   endProgress(c);
   std::ostringstream os;
   os.precision(3);
   os << "wrote " << a.out << " (" << r.bytes << " bytes, " << r.frames << (r.frames == 1 ? " frame, " : " frames, ")
      << r.feathers << " feathers";
-  if (usd && opt.as == exchange::CoatAs::Curves) os << ", " << r.curves << " curves";
-  else if (usd && opt.as == exchange::CoatAs::Instances) os << ", " << r.instances << " instances of " << r.prototypes << " prototypes";
+  if (usd && a.as == "curves") os << ", " << r.curves << " curves";
+  else if (usd && a.as == "instances") os << ", " << r.instances << " instances of " << r.prototypes << " prototypes";
   else os << ", " << r.triangles << " triangles";
   os << "; " << std::fixed << r.seconds << " s, of which writing " << r.writeSeconds << " s)";
   info(c, os.str());
@@ -203,24 +206,15 @@ int cmdExport(const Common& c, const ExportArgs& a) {
 int cmdFeather(const Common& c, const FeatherArgs& a) {
   checkOutExtension(a.out, {".obj", ".ply", ".png"}, "a mesh or an image");
   if (!(a.lod > 0 && a.lod <= 1)) throw Error("expected a fraction in (0, 1]", "", "--lod");
-  const feather::FeatherParams p = feather::loadFeather(a.file);
-  int w = 0, h = 0;
+  FeatherOutput output;
+  output.age = a.age;
+  output.lod = a.lod;
   if (extensionOf(a.out) == ".png") {
-    parseSize(a.size, "--size", w, h);
-    requireMemory(double(w) * h * kBytesPerPixel, "a " + a.size + " image", "", "--size");
+    parseSize(a.size, "--size", output.width, output.height);
+    requireMemory(double(output.width) * output.height * kBytesPerPixel, "a " + a.size + " image", "", "--size");
   }
-  const TriMesh mesh = feather::buildFeatherMesh(p, a.age, a.lod, {}, feather::growthScheduleOf(p));
-  if (extensionOf(a.out) != ".png") {
-    ensureParentDir(a.out);
-    feather::writeMesh(a.out, mesh);
-    info(c, "wrote " + a.out + " (" + std::to_string(mesh.triangleCount()) + " triangles)");
-    return 0;
-  }
-  render::OsMesaContext ctx(w, h);
-  const render::Image img = render::renderFeatherImage(ctx, p, mesh, w, h);
-  ensureParentDir(a.out);
-  render::saveImage(a.out, img);
-  info(c, "wrote " + a.out + " (" + std::to_string(mesh.triangleCount()) + " triangles)");
+  const size_t triangles = writeFeather(a.file, a.out, output);
+  info(c, "wrote " + a.out + " (" + std::to_string(triangles) + " triangles)");
   return 0;
 }
 

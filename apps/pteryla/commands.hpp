@@ -4,7 +4,6 @@
 #include <string>
 
 #include "cli_support.hpp"
-#include "pteryla/render/image_diff.hpp"
 
 namespace pteryla::cli {
 

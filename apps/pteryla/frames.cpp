@@ -17,27 +17,10 @@
 #include <optional>
 #include <sstream>
 
-#include "pteryla/coat/coat_feathers.hpp"
-#include "pteryla/coat/follicles.hpp"
-#include "pteryla/core/atomic_file.hpp"
-#include "pteryla/core/error.hpp"
-#include "pteryla/core/limits.hpp"
-#include "pteryla/core/paths.hpp"
-#include "pteryla/core/sha256.hpp"
-#include "pteryla/exchange/coat_export.hpp"
-#include "pteryla/feather/barbs.hpp"
-#include "pteryla/feather/io.hpp"
-#include "pteryla/feather/mesh.hpp"
-#include "pteryla/feather/mesh_io.hpp"
-#include "pteryla/pipeline/pipeline.hpp"
-#include "pteryla/pipeline/scene.hpp"
-#include "pteryla/render/image.hpp"
-#include "pteryla/render/osmesa_context.hpp"
-#include "pteryla/render/scene_view.hpp"
+#include "pteryla/pteryla.hpp"
 
 namespace pteryla::cli {
 
-using pipeline::Pipeline;
 
 // ------------------------------------------------------------------ frames, chunks and the farm
 //
@@ -348,14 +331,14 @@ int assembleFrames(const Common& c, const FramesArgs& a, uint64_t count, const L
 
 namespace {
 
-// --export and what goes with it: refused before the scene is evaluated. Returns the options each
-// frame's export uses (one frame, at the pipeline's time).
-exchange::ExportOptions checkFramesExport(FramesArgs& a) {
-  exchange::ExportOptions opt;
+// --export and what goes with it: refused before the scene is evaluated. Returns the settings each
+// frame's export uses (one frame, at the session's time).
+ExportSettings checkFramesExport(FramesArgs& a) {
+  ExportSettings settings;
   if (a.exportExt.empty()) {
     if (a.asGiven) throw Error("--as chooses how --export .usda carries the coat; PNG frames take no --as", "", "--as");
     if (a.metersGiven) throw Error("--meters-per-unit applies to --export only", "", "--meters-per-unit");
-    return opt;
+    return settings;
   }
   std::string ext = a.exportExt;
   if (ext.front() != '.') ext.insert(ext.begin(), '.');
@@ -365,24 +348,25 @@ exchange::ExportOptions checkFramesExport(FramesArgs& a) {
                 "frame with `pteryla export --time T`), got '" + a.exportExt + "'",
                 "", "--export");
   a.exportExt = ext;
-  opt.as = exchange::coatAsOf(a.as);
-  if (a.asGiven && ext != ".usda" && opt.as != exchange::CoatAs::Cards)
+  settings.coatAs = a.as;
+  checkExportSettings("frame" + ext, settings);  // the coat form's name
+  if (a.asGiven && ext != ".usda" && a.as != "cards")
     throw Error("--as " + a.as + " needs --export .usda: glTF carries the coat as cards", "", "--as");
   if (ext != ".usda") a.as = "cards";  // what the file holds, in the sidecars and the manifest
   if (!(a.metersPerUnit > 0 && std::isfinite(a.metersPerUnit)))
     throw Error("expected a positive number", "", "--meters-per-unit");
-  opt.metersPerUnit = a.metersPerUnit;
-  opt.fps = a.fps;
+  settings.metersPerUnit = a.metersPerUnit;
+  settings.fps = a.fps;
   if (!a.style.empty()) throw Error("--style applies to rendered frames, not to --export", "", "--style");
   if (!a.size.empty()) throw Error("--size applies to rendered frames, not to --export", "", "--size");
-  return opt;
+  return settings;
 }
 
 }  // namespace
 
 int cmdFrames(const Common& c, const FramesArgs& args) {
   FramesArgs a = args;
-  const exchange::ExportOptions exportOptions = checkFramesExport(a);
+  const ExportSettings exportSettings = checkFramesExport(a);
   const bool exporting = !a.exportExt.empty();
   const std::string ext = frameExt(a);
   const uint64_t count = frameCount(a);
@@ -411,22 +395,21 @@ int cmdFrames(const Common& c, const FramesArgs& args) {
   }
   const std::string host = hostName();
   if (!todo.empty()) {
-    // Exported frames need no GL context.
-    std::optional<render::OsMesaContext> ctx;
-    std::optional<render::SceneView> view;
-    if (!exporting) {
-      ctx.emplace(l.width, l.height);
-      view.emplace(*ctx);
-    }
-    l.pipeline->setProgress({});
-    const ProgressFn bar = makeProgress(c);
+    // The session keeps one renderer for every frame (exported frames never make one); its progress
+    // bar reported the first evaluation, and the frames get one bar of their own.
+    l.session.setProgress({});
+    RenderSettings look;
+    look.width = l.width;
+    look.height = l.height;
+    look.style = a.style;
+    const Progress bar = makeProgress(c);
     for (size_t i = 0; i < todo.size(); ++i) {
       const uint64_t k = todo[i];
       const auto t0 = std::chrono::steady_clock::now();
-      l.pipeline->setTime(timeOf(k));
+      l.session.setTime(timeOf(k));
       render::Image frame;
-      if (!exporting) frame = view->render(*l.pipeline, l.width, l.height, a.style);
-      else l.pipeline->coatMesh();  // evaluate before the directory exists
+      if (!exporting) frame = l.session.renderImage(look);
+      else if (!l.session.evaluate()) throw InternalError("a frame's evaluation was cancelled");  // before the directory exists
       // The first frame is made before the directory exists: a scene that fails creates nothing.
       if (i == 0) {
         std::error_code ec;
@@ -438,9 +421,9 @@ int cmdFrames(const Common& c, const FramesArgs& args) {
       std::error_code rm;
       fs::remove(side, rm);  // a crash between the frame and its new sidecar must not leave an old, matching one
       if (exporting) {
-        // The pipeline is already at this frame's time: exportCoat samples it there (the same file as
+        // The session is already at this frame's time: exportTo samples it there (the same file as
         // `pteryla export --time T`).
-        exchange::exportCoat(*l.pipeline, png, exportOptions);
+        l.session.exportTo(png, exportSettings);
       } else {
         render::saveImage(png, frame);
       }
@@ -454,7 +437,7 @@ int cmdFrames(const Common& c, const FramesArgs& args) {
       s["params"] = frameParams(a, sceneDigest, l.width, l.height, timeOf(k));
       writeFileAtomic(side, s.dump(2) + "\n");
       sidecars[k] = std::move(s);
-      report(bar, "frames", double(i + 1) / double(todo.size()));
+      if (bar) bar("frames", double(i + 1) / double(todo.size()));
     }
   }
   const uint64_t skipped = (hi - lo) - todo.size();
@@ -534,7 +517,7 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& args) {
     throw Error("sbatch not found on PATH: run on a Slurm login node (Debian: slurm-client), or use --dry-run to only "
                 "write the scripts",
                 "", "farm slurm");
-  pipeline::loadScene(a.scene);  // a scene that does not load fails here, not on every node
+  Session::fromSceneFile(a.scene);  // a scene that does not load fails here, not on every node
   const uint64_t tasks = (count + uint64_t(a.farmChunk) - 1) / uint64_t(a.farmChunk);
   const std::string exe = fs::read_symlink("/proc/self/exe").string();
   const std::string scene = fs::absolute(a.scene).lexically_normal().string();

@@ -6,10 +6,7 @@
 #include <exception>
 
 #include "commands.hpp"
-#include "pteryla/core/error.hpp"
-#include "pteryla/core/limits.hpp"
-#include "pteryla/core/memory.hpp"
-#include "pteryla/core/quiet.hpp"
+#include "pteryla/pteryla.hpp"
 
 using namespace pteryla::cli;
 
