@@ -1,12 +1,12 @@
 // The viewer's main loop: events, background evaluation, GL view sync, UI, screenshots and the orbit
 // benchmark. The Renderer (src/render) does the scene's GL into its off-screen target; the viewer keeps
 // the last frame in a texture drawn behind the panels, re-rendering only when the camera, the uploaded
-// results or the look change. Its own GL is that texture upload and the wireframe polygon mode.
+// results or the look change. It calls no GL itself: the texture is a render::ImageTexture, the wireframe
+// a RenderSettings flag, the window's clear Renderer::clearWindow (only ImGui's GL backend draws).
 #include "app.hpp"
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
-#include <GL/gl.h>
 #include <imgui.h>
 #include <imgui_impl_glfw.h>
 #include <imgui_internal.h>
@@ -89,8 +89,8 @@ App::App(const ViewerOptions& o) : options_(o), autosave_(o.autosaveSeconds) {
 
 App::~App() {
   if (window_) glfwMakeContextCurrent(window_);
-  if (window_ && scratchTexture_) glDeleteTextures(1, &scratchTexture_);
-  if (window_ && viewTexture_) glDeleteTextures(1, &viewTexture_);
+  scratchTexture_.reset();  // each deletes its texture in the window's context
+  viewTexture_.reset();
   renderer_.reset();
   navRenderer_.reset();
   if (imguiReady_) {
@@ -278,9 +278,9 @@ void App::frame() {
     }
   }
   ImGui::NewFrame();
-  if (viewTexture_ && doc_.hasScene()) {
+  if (viewTexture_ && viewTexture_->id() && doc_.hasScene()) {
     const glm::vec2 o = view_.viewOrigin, e = o + glm::vec2(view_.viewSize);
-    ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(static_cast<intptr_t>(viewTexture_)),
+    ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(static_cast<intptr_t>(viewTexture_->id())),
                                              ImVec2(o.x, o.y), ImVec2(e.x, e.y));
   }
   guardedUi("viewport", [&] { handleInput(); });
@@ -290,10 +290,8 @@ void App::frame() {
   ImGui::Render();
 
   if (fw > 0 && fh > 0) {
-    glViewport(0, 0, fw, fh);
     const glm::dvec3 bg = doc_.hasScene() ? doc_.scene().render.background : glm::dvec3(0.2, 0.22, 0.25);
-    glClearColor(float(bg.x), float(bg.y), float(bg.z), 1.0f);
-    glClear(GL_COLOR_BUFFER_BIT);
+    renderer_->clearWindow(fw, fh, glm::vec3(bg));
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     captureScreenshot(fw, fh, true);
     captureScreenshot(fw, fh, false);
@@ -477,7 +475,7 @@ void App::renderView() {
   std::vector<float> key = viewKey();
   key.push_back(nav ? 1.0f : 0.0f);
   key.push_back(float(scale));
-  if (key == lastViewKey_ && viewTexture_) return;
+  if (key == lastViewKey_ && viewTexture_ && viewTexture_->id()) return;
   render::Renderer& renderer = nav ? *navRenderer_ : *renderer_;
   navUsed_ = nav;
   const pipeline::Scene& scene = doc_.scene();
@@ -485,36 +483,15 @@ void App::renderView() {
       render::sceneSettings(scene, std::max(1, viewPixels_.x / scale), std::max(1, viewPixels_.y / scale));
   settings.drawSkin = view_.showSkin;
   settings.drawCoat = view_.showCoat;
-  settings.subpixelCulling = !view_.wireframe;  // a wireframe draws the edges of triangles that cover no centre
-  settings.shadows = settings.shadows && !view_.wireframe;  // the map would be drawn in lines too
+  settings.wireframe = view_.wireframe;  // also turns off shadows and sub-pixel culling
   if (moving) settings.msaaSamples = 0;  // multisampling costs most of a frame on llvmpipe: only at rest
   // The navigation coat shows every k-th feather: colour the skin like the coat looked (the mean of
   // the last full view) so the body reads as feathered rather than bare while the camera moves.
   if (nav && navSkinColor_.x >= 0.0f) settings.skinColor = navSkinColor_;
   const auto t0 = std::chrono::steady_clock::now();
-  context_->makeCurrent();
-  if (view_.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
   viewImage_ = renderer.renderImage(camera_.camera(), render::sceneLights(scene), settings);
-  if (view_.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-  // Renderer::renderImage can leave its own target bound when it (re)creates it (it reads the previous
-  // binding after creating the target): draw the window into the window again.
-  using BindFramebufferFn = void (*)(GLenum, GLuint);
-  static const auto bindFramebuffer = reinterpret_cast<BindFramebufferFn>(glfwGetProcAddress("glBindFramebuffer"));
-  if (bindFramebuffer) bindFramebuffer(0x8D40 /* GL_FRAMEBUFFER */, 0);
-  if (!viewTexture_) glGenTextures(1, &viewTexture_);
-  glBindTexture(GL_TEXTURE_2D, viewTexture_);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  if (viewTexW_ != viewImage_.width || viewTexH_ != viewImage_.height) {
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, viewImage_.width, viewImage_.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
-                 viewImage_.rgba.data());
-    viewTexW_ = viewImage_.width;
-    viewTexH_ = viewImage_.height;
-  } else {
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, viewImage_.width, viewImage_.height, GL_RGBA, GL_UNSIGNED_BYTE,
-                    viewImage_.rgba.data());
-  }
+  if (!viewTexture_) viewTexture_ = std::make_unique<render::ImageTexture>(*context_);
+  viewTexture_->upload(viewImage_);
   lastRenderSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!nav && moving && view_.fastNavigation) movingFullMs_ = smoothFrameMs(movingFullMs_, 1000.0 * lastRenderSeconds_);
   if (!nav && scale == 1 && view_.showCoat) {

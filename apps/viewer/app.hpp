@@ -22,6 +22,7 @@
 struct GLFWwindow;
 
 #include "pteryla/render/image.hpp"
+#include "pteryla/render/image_texture.hpp"
 
 namespace pteryla::render {
 class Renderer;
@@ -133,8 +134,7 @@ class App {
   uint64_t syncedResult_ = ~0ull, uploadedSkin_ = 0, meshEvals_ = ~0ull, uploadVersion_ = 0;
   std::vector<float> lastViewKey_;
   render::Image viewImage_;
-  unsigned int viewTexture_ = 0;
-  int viewTexW_ = 0, viewTexH_ = 0;
+  std::unique_ptr<render::ImageTexture> viewTexture_;
   double lastRenderSeconds_ = 0;
   // Adaptive navigation: smoothed full-coat render time while moving (< 0: not measured since the
   // last upload or view resize) and what it was measured for.
@@ -196,8 +196,7 @@ class App {
   glm::vec3 dragNormal_{0, 0, 1};
 
   // Scratchboard preview (CPU renderer) as a GL texture.
-  unsigned int scratchTexture_ = 0;
-  int scratchW_ = 0, scratchH_ = 0;
+  std::unique_ptr<render::ImageTexture> scratchTexture_;
   bool showScratch_ = false;
   std::string scratchError_;
 };

@@ -1,6 +1,5 @@
 // Menu bar, the panel column and the dialogs: open, save as (asks before replacing a file), unsaved
 // changes on quit or open (Save / Discard / Cancel), errors from any stage (the viewer keeps running).
-#include <GL/gl.h>
 #include <imgui.h>
 #include <imgui_internal.h>
 #include <imgui_stdlib.h>
@@ -10,6 +9,7 @@
 #include <filesystem>
 
 #include "app.hpp"
+#include "glfw_context.hpp"
 #include "json_widgets.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
@@ -448,14 +448,8 @@ void App::scratchboardWindow() {
       ss.height = std::max(64, fbSize_.y / 2);
       const render::Image img =
           render::renderScratchboard(p.coatMesh().mesh, p.skinTriMesh(), camera_.camera(), render::sceneLights(doc_.scene()), ss);
-      if (!scratchTexture_) glGenTextures(1, &scratchTexture_);
-      glBindTexture(GL_TEXTURE_2D, scratchTexture_);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, img.width, img.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, img.rgba.data());
-      scratchW_ = img.width;
-      scratchH_ = img.height;
+      if (!scratchTexture_) scratchTexture_ = std::make_unique<render::ImageTexture>(*context_);
+      scratchTexture_->upload(img);
       scratchError_.clear();
     } catch (const std::exception& e) {
       scratchError_ = e.what();
@@ -466,10 +460,10 @@ void App::scratchboardWindow() {
     ImGui::TextDisabled("(waiting for the evaluation)");
   }
   if (!scratchError_.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", scratchError_.c_str());
-  if (scratchTexture_) {
+  if (scratchTexture_ && scratchTexture_->id()) {
     const float w = ImGui::GetContentRegionAvail().x;
-    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<intptr_t>(scratchTexture_)),
-                 ImVec2(w, w * float(scratchH_) / float(std::max(scratchW_, 1))));
+    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<intptr_t>(scratchTexture_->id())),
+                 ImVec2(w, w * float(scratchTexture_->height()) / float(std::max(scratchTexture_->width(), 1))));
   }
   ImGui::End();
 }

@@ -64,6 +64,9 @@
   X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                             \
   X(PFNGLTEXIMAGE2DPROC, TexImage2D)                                   \
   X(PFNGLTEXPARAMETERIPROC, TexParameteri)                             \
+  X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)                             \
+  X(PFNGLGETTEXIMAGEPROC, GetTexImage)                                 \
+  X(PFNGLPOLYGONMODEPROC, PolygonMode)                                 \
   X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap)                           \
   X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers)                         \
   X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers)                   \

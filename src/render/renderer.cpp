@@ -212,7 +212,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   };
 
   // The key light's shadow map first (it binds its own framebuffer and restores the caller's).
-  if (s.shadows && lightCount > 0 && (s.drawCoat || s.drawSkin)) {
+  if (s.shadows && !s.wireframe && lightCount > 0 && (s.drawCoat || s.drawSkin)) {
     gl.Viewport(0, 0, s.width, s.height);
     stats_.shadowMapRendered = r.updateShadowMap(dirs[0], s);
     shadowsOn = r.shadow.valid;
@@ -222,6 +222,15 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   gl.ActiveTexture(GL_TEXTURE0);
 
   gl.Viewport(0, 0, s.width, s.height);
+  // Wireframe: every draw below in lines, back to filled triangles whichever way this returns.
+  struct PolygonModeScope {
+    GlApi& gl;
+    bool lines;
+    ~PolygonModeScope() {
+      if (lines) gl.PolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    }
+  } polygonMode{gl, s.wireframe};
+  if (s.wireframe) gl.PolygonMode(GL_FRONT_AND_BACK, GL_LINE);
   gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   gl.DepthMask(GL_TRUE);
   gl.ClearColor(s.background.r, s.background.g, s.background.b, s.background.a);
@@ -280,7 +289,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   GLint sampleBuffers = 0;
   gl.GetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
   // Sub-pixel culling relies on single-sample rasterization (fragments only at pixel centres).
-  const bool subpixel = s.subpixelCulling && sampleBuffers == 0;
+  const bool subpixel = s.subpixelCulling && !s.wireframe && sampleBuffers == 0;
   if (s.occlusionCulling && s.drawSkin && r.skin.indexCount > 0 && s.drawCoat) {
     if (sampleBuffers == 0) {
       r.depth.resize(static_cast<size_t>(s.width) * s.height);
@@ -374,6 +383,16 @@ Image Renderer::renderImage(const Camera& camera, const std::vector<Light>& ligh
   Image img = readPixels(s.width, s.height);
   r.gl.BindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(previous));
   return img;
+}
+
+void Renderer::clearWindow(int width, int height, const glm::vec3& color) {
+  if (width <= 0 || height <= 0) throw Error("window size must be positive", {}, "width/height");
+  Impl& r = *impl_;
+  r.ctx.makeCurrent();
+  r.gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  r.gl.Viewport(0, 0, width, height);
+  r.gl.ClearColor(color.r, color.g, color.b, 1.0f);
+  r.gl.Clear(GL_COLOR_BUFFER_BIT);
 }
 
 Image Renderer::readPixels(int width, int height) {

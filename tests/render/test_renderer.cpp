@@ -8,6 +8,7 @@
 
 #include "gl_fixture.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/render/image_texture.hpp"
 #include "pteryla/render/osmesa_context.hpp"
 #include "pteryla/render/pattern.hpp"
 #include "pteryla/render/renderer.hpp"
@@ -756,4 +757,60 @@ TEST(RendererTone, TheGroundTakesTheModelsContactShadow) {
   const Image none = r.renderImage(cam, tilted, s);
   EXPECT_EQ(at(none, -0.9f, 0.0f), 0) << "background (blue) without a ground";
   EXPECT_EQ(int(none.pixel(64, 127)[2]), 255);
+}
+
+// A wireframe draws the quad's three edges' worth of lines: the outline and the diagonal cover a thin
+// fraction of what the filled quad covers, and the pixel at the quad's centre (off the diagonal) is empty.
+TEST(RendererWireframe, DrawsEdgesOnlyAndLeavesTheStateFilled) {
+  Renderer r(context());
+  const TriMesh q = quad({0, 0, 0}, {0.6f, 0, 0}, {0, 0.6f, 0});
+  r.setCoat(q, {whole(q)});
+  r.setMaterials({lambert({1, 1, 1})});
+  RenderSettings s = flatSettings(128);
+  const uint8_t black[3] = {0, 0, 0};
+  const double filled = coveredFraction(r.renderImage(frontCamera(), kFrontLight, s), black);
+  s.wireframe = true;
+  const Image lines = r.renderImage(frontCamera(), kFrontLight, s);
+  const double edges = coveredFraction(lines, black);
+  EXPECT_GT(edges, 0.0);
+  EXPECT_LT(edges, 0.25 * filled);
+  EXPECT_EQ(lines.pixel(64 + 10, 64 - 10)[0], 0);  // inside the quad, away from the diagonal
+  // The next filled frame is filled again: the mode is not left behind in the context.
+  s.wireframe = false;
+  EXPECT_NEAR(coveredFraction(r.renderImage(frontCamera(), kFrontLight, s), black), filled, 1e-12);
+}
+
+TEST(RendererWindow, ClearWindowFillsTheContextsOwnFramebuffer) {
+  Renderer r(context());
+  r.clearWindow(64, 64, {0.0f, 1.0f, 0.0f});
+  const Image img = r.readPixels(64, 64);
+  EXPECT_EQ(img.pixel(0, 0)[0], 0);
+  EXPECT_EQ(img.pixel(0, 0)[1], 255);
+  EXPECT_EQ(img.pixel(63, 63)[1], 255);
+  EXPECT_THROW(r.clearWindow(0, 64, {0, 0, 0}), Error);
+}
+
+TEST(ImageTexture, UploadsReplacesAndResizes) {
+  ImageTexture t(context());
+  EXPECT_EQ(t.id(), 0u);
+  EXPECT_TRUE(t.download().empty());
+  Image a(3, 2, 10, 20, 30, 255);
+  a.pixel(2, 1)[0] = 200;
+  t.upload(a);
+  const uint32_t id = t.id();
+  EXPECT_NE(id, 0u);
+  EXPECT_EQ(t.download().rgba, a.rgba);
+  Image b(3, 2, 1, 2, 3, 4);  // same size: replaced in place
+  t.upload(b);
+  EXPECT_EQ(t.id(), id);
+  EXPECT_EQ(t.download().rgba, b.rgba);
+  const Image c(5, 7, 9, 8, 7, 6);  // new size: reallocated
+  t.upload(c);
+  EXPECT_EQ(t.width(), 5);
+  EXPECT_EQ(t.height(), 7);
+  EXPECT_EQ(t.download().rgba, c.rgba);
+  Image bad(2, 2);
+  bad.rgba.pop_back();
+  EXPECT_THROW(t.upload(bad), Error);
+  EXPECT_EQ(t.download().rgba, c.rgba);  // a refused upload keeps the texture
 }

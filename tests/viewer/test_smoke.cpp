@@ -29,6 +29,7 @@ TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
   if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
   const std::string dir = viewer_test::scratchDir("smoke");
   const std::string saved = dir + "/groomed.json", shot = dir + "/view.png", window = dir + "/window.png";
+  const std::string wire = dir + "/wireframe.png";
   const std::string script = dir + "/session.txt";
   std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
                         << "count 0 30\n"
@@ -66,6 +67,9 @@ TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
                         << "save " << saved << "\n"
                         << "screenshot " << shot << "\n"
                         << "screenshot-window " << window << "\n"
+                        << "show wireframe on\n"
+                           "frames 2\n"
+                        << "screenshot " << wire << "\n"
                         << "quit\n";
   const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
@@ -118,6 +122,12 @@ TEST(ViewerSmoke, ScriptedSessionUnderXvfb) {
   EXPECT_GE(distinct(0, 0, 400, 700), 8u) << "panel column";
   EXPECT_GE(distinct(500, 50, 1000, 650), 8u) << "3D view";
   EXPECT_GE(distinct(0, 672, 1000, 700), 3u) << "status bar";
+  // The wireframe view (the renderer's polygon mode) shows the same framing in edges: more background.
+  const render::Image shotImg = render::loadImage(shot), wireImg = render::loadImage(wire);
+  ASSERT_EQ(wireImg.width, shotImg.width);
+  const uint8_t bgShot[3] = {shotImg.rgba[0], shotImg.rgba[1], shotImg.rgba[2]};
+  EXPECT_GT(render::meanAbsoluteError(shotImg, wireImg), 0.01);
+  EXPECT_LT(render::coveredFraction(wireImg, bgShot, 8), render::coveredFraction(shotImg, bgShot, 8));
   EXPECT_GE(distinct(900, 0, 1000, 700), 2u) << "right edge";
 }
 

@@ -88,8 +88,11 @@ struct RenderSettings {
   bool occlusionCulling = true;
   // Skip feather triangles that cover no pixel centre (within 0.05 px): without multisampling they
   // produce no fragment, but llvmpipe still shades their vertices and sets them up. The image is
-  // unchanged; off automatically with multisampling. Turn off for wireframe (glPolygonMode) views.
+  // unchanged; off automatically with multisampling and in wireframe.
   bool subpixelCulling = true;
+  // Draw the triangles' edges only (a modelling view); shadows and sub-pixel culling are off with it (the
+  // map would be drawn in lines too; an edge shows even where its triangle covers no pixel centre).
+  bool wireframe = false;
   // Minified colour and alpha textures: true samples the nearest texel of the nearest mip level
   // (about 20% faster on llvmpipe); false filters bilinearly within it. Magnification is bilinear.
   bool fastTextureFiltering = true;
@@ -158,6 +161,9 @@ class Renderer {
   Image renderImage(const Camera& camera, const std::vector<Light>& lights, const RenderSettings& settings);
   // Reads the currently bound framebuffer's [0,w) x [0,h) region as RGBA8, top row first.
   Image readPixels(int width, int height);
+  // Binds the context's own framebuffer (0: the window's), sets the viewport to width x height and clears
+  // it to `color` (a window's background before its UI is drawn over it).
+  void clearWindow(int width, int height, const glm::vec3& color);
 
   const RenderStats& lastStats() const { return stats_; }
   // GL_VERSION and GL_RENDERER of the context, for logs and golden-image READMEs.
