@@ -81,6 +81,7 @@ struct BirdScene {
   SkinMesh skin;
   CoatFeathers coat;
   PackOptions options;
+  PackConstraints constraints;  // the styling, resolved
 };
 
 const BirdScene& birdScene() {
@@ -91,11 +92,15 @@ const BirdScene& birdScene() {
     pipeline::Pipeline p(pipeline::loadScene(path));
     s->skin = p.posedSkin();
     s->coat = p.feathers();
+    PackingSettings settings;
     if (!p.scene().packing.empty()) {
       JsonReader r(p.scene().packing, path, "packing");
-      s->options = parsePackOptions(r);
+      settings = parsePackingSettings(r);
     }
-    s->options.fixedElevation = resolveStyling(s->coat, s->options.styling);
+    s->options = settings.options;
+    s->constraints.fixedElevation = resolveStyling(s->coat, settings.styling);
+    s->constraints.minElevation = resolveMinElevation(s->coat, settings.styling);
+    s->constraints.shaftBand = resolveShaftBand(s->coat, settings.styling);
   }
   return *s;
 }
@@ -106,7 +111,7 @@ void runBird(benchmark::State& state, const PackOptions& o) {
   PackResult r;
   for (auto _ : state) {
     const double c0 = cpuSeconds();
-    r = pack(b.skin, b.coat, o);
+    r = pack(b.skin, b.coat, o, b.constraints);
     cpu += cpuSeconds() - c0;
     benchmark::DoNotOptimize(r.elevation.data());
   }

@@ -116,12 +116,17 @@ int main(int argc, char** argv) {
   pipeline::Pipeline p(pipeline::loadScene(path));
   const SkinMesh skin = p.posedSkin();
   const CoatFeathers coat = p.feathers();
-  PackOptions o;
+  PackingSettings settings;
   if (!p.scene().packing.empty()) {
     JsonReader r(p.scene().packing, path, "packing");
-    o = parsePackOptions(r);
+    settings = parsePackingSettings(r);
   }
-  o.fixedElevation = resolveStyling(coat, o.styling);
+  PackOptions o = settings.options;
+  // The styling resolved as the pipeline resolves it (the bird's coat: no direction edits).
+  PackConstraints styled;
+  styled.fixedElevation = resolveStyling(coat, settings.styling);
+  styled.minElevation = resolveMinElevation(coat, settings.styling);
+  styled.shaftBand = resolveShaftBand(coat, settings.styling);
   o.captureFields = fields;
   PackOptions d = withDefaultSampling(o);
   if (timing) {
@@ -130,7 +135,7 @@ int main(int argc, char** argv) {
     to.threads = std::stoi(argv[3]);
     for (int k = 0; k < reps; ++k) {
       const double w0 = wallSeconds(), c0 = cpuSeconds();
-      const PackResult r = pack(skin, coat, to);
+      const PackResult r = pack(skin, coat, to, styled);
       const double w1 = wallSeconds(), c1 = cpuSeconds();
       std::printf("pack %d: wall %.1f ms cpu %.1f ms (stats.seconds %.1f ms)\n", k, 1e3 * (w1 - w0), 1e3 * (c1 - c0),
                   1e3 * r.stats.seconds);
@@ -139,8 +144,8 @@ int main(int argc, char** argv) {
   }
   for (int t : {1, 2}) {
     o.threads = d.threads = t;
-    digest(("bird/" + std::to_string(t)).c_str(), coat, pack(skin, coat, o), fields);
-    digest(("bird-default/" + std::to_string(t)).c_str(), coat, pack(skin, coat, d), fields);
+    digest(("bird/" + std::to_string(t)).c_str(), coat, pack(skin, coat, o, styled), fields);
+    digest(("bird-default/" + std::to_string(t)).c_str(), coat, pack(skin, coat, d, styled), fields);
   }
   const SkinMesh sphere = makeIcosphere(4);
   const CoatFeathers sc = packtest::sphereCoat(sphere, static_cast<size_t>(3150 / 0.8 + 0.5), std::sqrt(320.0 / 3150));

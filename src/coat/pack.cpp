@@ -130,10 +130,11 @@ std::vector<Source> localSources(const Context& ctx) {
 
 }  // namespace
 
-PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options) {
+PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options,
+                const PackConstraints& constraints) {
   const auto t0 = std::chrono::steady_clock::now();
-  checkInput(coat, options);
-  Context ctx(skin, coat, options);
+  checkInput(coat, options, constraints);
+  Context ctx(skin, coat, options, constraints);
   PackResult res;
   detail::inArena(options.threads, [&] {
     setup(ctx);
@@ -146,16 +147,17 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
 }
 
 PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& prev,
-                  const std::vector<uint32_t>& changed, const PackOptions& options) {
+                  const std::vector<uint32_t>& changed, const PackOptions& options,
+                  const PackConstraints& constraints) {
   const auto t0 = std::chrono::steady_clock::now();
-  checkInput(coat, options);
+  checkInput(coat, options, constraints);
   const size_t n = coat.size();
   // The previous result must describe the same feathers in the same order.
   if (prev.elevation.size() != n || prev.pointOffset.size() != n + 1 || prev.packedKeys.keyOffset.size() != n + 1 ||
       prev.order != presentInLayerOrder(coat) || changed.size() * 2 > n)
-    return pack(skin, coat, options);
+    return pack(skin, coat, options, constraints);
   const std::vector<uint8_t> isChanged = changedMask(changed, n);
-  Context ctx(skin, coat, options);
+  Context ctx(skin, coat, options, constraints);
   PackResult res;
   detail::inArena(options.threads, [&] {
     setup(ctx);
@@ -202,9 +204,10 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
 }
 
 PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& base,
-                    const std::vector<uint32_t>& changed, const PackOptions& options) {
+                    const std::vector<uint32_t>& changed, const PackOptions& options,
+                  const PackConstraints& constraints) {
   const auto t0 = std::chrono::steady_clock::now();
-  checkInput(coat, options);
+  checkInput(coat, options, constraints);
   const size_t n = coat.size();
   auto present = [&](uint32_t i) { return coat.present.empty() || coat.present[i] != 0; };
   if (base.elevation.size() != n || base.pointOffset.size() != n + 1 || base.groupOffset.size() != n + 1 ||
@@ -228,7 +231,7 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
       throw Error("packOver: the skin differs from the one the base pack was packed on", {}, "base");
   }
 
-  Context ctx(skin, coat, options);
+  Context ctx(skin, coat, options, constraints);
   PackResult res;
   detail::inArena(options.threads, [&] {
     beginContext(ctx, order);

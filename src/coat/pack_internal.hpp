@@ -174,10 +174,12 @@ struct Scratch {
 };
 
 struct Context {
-  Context(const SkinMesh& s, const CoatFeathers& c, const PackOptions& o) : skin(s), coat(c), opt(o) {}
+  Context(const SkinMesh& s, const CoatFeathers& c, const PackOptions& o, const PackConstraints& k)
+      : skin(s), coat(c), opt(o), constraints(k) {}
   const SkinMesh& skin;
   const CoatFeathers& coat;
   const PackOptions& opt;
+  const PackConstraints& constraints;
   double clearance = 0, skinClearance = 0, medianReach = 0;
   tbb::enumerable_thread_specific<detail::HugeArena> arenas;  // storage of local's arrays
   std::vector<LocalFeather> local;
@@ -206,8 +208,8 @@ struct Context {
   // Skin samples (built by setup, or a base pack's for packOver); null without skin.
   std::shared_ptr<const detail::PackSkinSamples> skinData;
   std::vector<double> fixed;
-  std::vector<double> minElevation;  // per feather from styling (NaN = none); empty = none
-  std::vector<double> shaftBand;     // per feather from styling (NaN = PackOptions::shaftBand); empty = none
+  std::vector<double> minElevation;  // per feather (PackConstraints; NaN = none); empty = none
+  std::vector<double> shaftBand;     // per feather (PackConstraints; NaN = PackOptions::shaftBand); empty = none
 };
 
 inline dvec3 toFrame(const FeatherFrame& F, const dvec3& q) {
@@ -291,7 +293,7 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out);
 
 // ---- pack_setup.cpp: input checks, feather-local data, reach classes, dependencies, skin samples
 double median(std::vector<double> v);
-void checkInput(const CoatFeathers& c, const PackOptions& o);
+void checkInput(const CoatFeathers& c, const PackOptions& o, const PackConstraints& k);
 void buildReachClasses(Context& ctx, const std::vector<double>& radius, double med);
 void buildDependencies(Context& ctx, const std::vector<uint32_t>& items, const std::vector<double>& radius, size_t grain);
 void buildSkinSamples(Context& ctx, double medReach);

@@ -13,8 +13,9 @@ constexpr double kDeg = 3.14159265358979323846 / 180.0;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 }  // namespace
 
-PackOptions parsePackOptions(JsonReader& r) {
-  PackOptions o;
+PackingSettings parsePackingSettings(JsonReader& r) {
+  PackingSettings settings;
+  PackOptions& o = settings.options;
   o.method = r.oneOf("method", "drape", {"drape", "height_field"}) == "drape" ? PackMethod::Drape : PackMethod::HeightField;
   o.drapeMaxSlopeDeg = r.number("drape_max_slope_deg", o.drapeMaxSlopeDeg, 0.0, 60.0);
   o.clearance = r.number("clearance", 0.0, 0.0, kInf);
@@ -39,13 +40,14 @@ PackOptions parsePackOptions(JsonReader& r) {
   o.skin = r.boolean("skin", o.skin);
   o.skinSampleSpacing = r.number("skin_sample_spacing", 0.0, 0.0, 1e6);
   o.threads = static_cast<int>(r.integer("threads", 0, 0, 1024));
-  o.moultOver = r.oneOf("moult_pack", "over", {"over", "full"}) == "over";
-  for (JsonReader& s : r.objects("styling")) o.styling.push_back(parseStyleSelection(s));
+  settings.moultOver = r.oneOf("moult_pack", "over", {"over", "full"}) == "over";
+  for (JsonReader& s : r.objects("styling")) settings.styling.push_back(parseStyleSelection(s));
   r.finish();
-  return o;
+  return settings;
 }
 
-Json packOptionsToJson(const PackOptions& o) {
+Json packingSettingsToJson(const PackingSettings& settings) {
+  const PackOptions& o = settings.options;
   const PackOptions d;
   Json j = Json::object();
   if (o.method != d.method) j["method"] = o.method == PackMethod::Drape ? "drape" : "height_field";
@@ -71,10 +73,10 @@ Json packOptionsToJson(const PackOptions& o) {
   if (o.skin != d.skin) j["skin"] = o.skin;
   if (o.skinSampleSpacing != d.skinSampleSpacing) j["skin_sample_spacing"] = o.skinSampleSpacing;
   if (o.threads != d.threads) j["threads"] = o.threads;
-  if (o.moultOver != d.moultOver) j["moult_pack"] = o.moultOver ? "over" : "full";
-  if (!o.styling.empty()) {
+  if (settings.moultOver != PackingSettings().moultOver) j["moult_pack"] = settings.moultOver ? "over" : "full";
+  if (!settings.styling.empty()) {
     Json a = Json::array();
-    for (const auto& s : o.styling) a.push_back(styleSelectionToJson(s));
+    for (const auto& s : settings.styling) a.push_back(styleSelectionToJson(s));
     j["styling"] = a;
   }
   return j;

@@ -22,7 +22,7 @@ double median(std::vector<double> v) {
   return v[m];
 }
 
-void checkInput(const CoatFeathers& c, const PackOptions& o) {
+void checkInput(const CoatFeathers& c, const PackOptions& o, const PackConstraints& k) {
   const size_t n = c.size();
   auto need = [&](size_t got, const char* what) {
     if (got != n)
@@ -35,10 +35,11 @@ void checkInput(const CoatFeathers& c, const PackOptions& o) {
   if (!c.tract.empty()) need(c.tract.size(), "tract");
   if (!c.age.empty()) need(c.age.size(), "age");
   if (!c.present.empty()) need(c.present.size(), "present");
-  if (!o.fixedElevation.empty() && o.fixedElevation.size() != n)
-    throw Error("fixedElevation has " + std::to_string(o.fixedElevation.size()) + " entries, expected " +
-                    std::to_string(n),
-                {}, "fixedElevation");
+  for (const auto& [v, what] : {std::pair{&k.fixedElevation, "fixedElevation"}, {&k.minElevation, "minElevation"},
+                                {&k.shaftBand, "shaftBand"}})
+    if (!v->empty() && v->size() != n)
+      throw Error(std::string(what) + " has " + std::to_string(v->size()) + " entries, expected " + std::to_string(n),
+                  {}, what);
   std::vector<uint8_t> seen(n, 0);
   for (size_t k = 0; k < c.layerOrder.size(); ++k) {
     const uint32_t i = c.layerOrder[k];
@@ -134,10 +135,9 @@ std::vector<uint8_t> changedMask(const std::vector<uint32_t>& changed, size_t n)
 }
 
 void beginContext(Context& ctx, std::vector<uint32_t> order) {
-  const PackOptions& o = ctx.opt;
-  ctx.fixed = o.fixedElevation;
-  ctx.minElevation = resolveMinElevation(ctx.coat, o.styling);
-  ctx.shaftBand = resolveShaftBand(ctx.coat, o.styling);
+  ctx.fixed = ctx.constraints.fixedElevation;
+  ctx.minElevation = ctx.constraints.minElevation;
+  ctx.shaftBand = ctx.constraints.shaftBand;
   ctx.order = std::move(order);
   ctx.pos.assign(ctx.coat.size(), UINT32_MAX);
   for (size_t k = 0; k < ctx.order.size(); ++k) ctx.pos[ctx.order[k]] = static_cast<uint32_t>(k);

@@ -165,23 +165,25 @@ ControlBinding bindControls(const coat::SkinMesh& rest, const coat::Follicles& f
 
 ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const ControlBinding& binding,
                                const coat::SkinMesh& posed, const coat::Follicles& follicles, double t,
-                               const coat::PackOptions& pack, coat::CoatFeathers& coat,
-                               std::vector<double>& fixedElevation) {
+                               const coat::PackOptions& pack, const coat::PackConstraints& constraints,
+                               coat::CoatFeathers& coat, std::vector<double>& fixedElevation) {
   coat::PackResult natural;
-  const NaturalPackFn own = [&natural](const coat::SkinMesh& s, const coat::CoatFeathers& c,
-                                       const coat::PackOptions& o) -> const coat::PackResult& {
-    natural = coat::pack(s, c, o);
+  const NaturalPackFn own = [&natural](const coat::SkinMesh& s, const coat::CoatFeathers& c, const coat::PackOptions& o,
+                                       const coat::PackConstraints& k) -> const coat::PackResult& {
+    natural = coat::pack(s, c, o, k);
     return natural;
   };
-  ControlResult res = evaluateControls(controls, binding, posed, follicles, t, pack, coat, fixedElevation, own);
+  ControlResult res =
+      evaluateControls(controls, binding, posed, follicles, t, pack, constraints, coat, fixedElevation, own);
   if (res.naturalPacked) res.natural = std::move(natural);
   return res;
 }
 
 ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const ControlBinding& binding,
                                const coat::SkinMesh& posed, const coat::Follicles& follicles, double t,
-                               const coat::PackOptions& pack, coat::CoatFeathers& coat,
-                               std::vector<double>& fixedElevation, const NaturalPackFn& naturalPack) {
+                               const coat::PackOptions& pack, const coat::PackConstraints& constraints,
+                               coat::CoatFeathers& coat, std::vector<double>& fixedElevation,
+                               const NaturalPackFn& naturalPack) {
   ControlResult res;
   const size_t n = coat.size();
   PTERYLA_CHECK_EQ(binding.control.size(), follicles.size(), "control binding was made for other follicles");
@@ -245,9 +247,9 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
 
   const std::vector<double>* natural = nullptr;
   if (needNatural) {
-    coat::PackOptions o = pack;
-    o.fixedElevation = fixedElevation;
-    natural = &naturalPack(posed, coat, o).elevation;
+    coat::PackConstraints k = constraints;
+    k.fixedElevation = fixedElevation;
+    natural = &naturalPack(posed, coat, pack, k).elevation;
     PTERYLA_CHECK_EQ(natural->size(), n, "the natural pack must have one elevation per feather");
     res.naturalPacked = true;
   }

@@ -99,15 +99,21 @@ void Pipeline::Impl::computeAges() {
 
 // Packing options (and their styling selections) are read here so a packing edit only repacks.
 void Pipeline::Impl::computeControls() {
-  packOptions = coat::PackOptions{};
+  coat::PackingSettings packing;
   if (!scene.packing.empty()) {
     JsonReader r(scene.packing, scene.file, "packing");
-    packOptions = coat::parsePackOptions(r);
+    packing = coat::parsePackingSettings(r);
   }
+  packOptions = packing.options;
+  moultOver = packing.moultOver;
   fixedElevation.assign(coatNow.size(), std::nan(""));
-  if (!packOptions.styling.empty()) {
+  constraints = coat::PackConstraints{};
+  // Styling is resolved here, once per frame, into fixed elevations, frames and the packer's constraints.
+  if (!packing.styling.empty()) {
     try {
-      fixedElevation = coat::applyStyling(coatNow, packOptions.styling, fixedElevation).fixedElevation;
+      fixedElevation = coat::applyStyling(coatNow, packing.styling, fixedElevation).fixedElevation;
+      constraints.minElevation = coat::resolveMinElevation(coatNow, packing.styling);
+      constraints.shaftBand = coat::resolveShaftBand(coatNow, packing.styling);
     } catch (const Error& e) {
       if (!e.file().empty()) throw;
       throw Error(e.detail(), scene.file, "packing." + e.element());  // "styling[0].ids[3]" is under packing
@@ -118,13 +124,13 @@ void Pipeline::Impl::computeControls() {
     for (size_t i = 0; i < coatNow.size(); ++i)
       if (auto it = hostElevations.find(follicles.id[coatNow.follicle[i]]); it != hostElevations.end())
         fixedElevation[i] = it->second;
-  applyControls(scene, time, posed, posedFollicles, timeState, coatNow, fixedElevation);
+  applyControls(scene, time, posed, posedFollicles, timeState, coatNow, constraints, fixedElevation);
+  constraints.fixedElevation = fixedElevation;
 }
 
 void Pipeline::Impl::computePack() {
   report(progress, "pack", 0);
-  coat::PackOptions o = packOptions;
-  o.fixedElevation = fixedElevation;
+  const coat::PackOptions& o = packOptions;
   // A growing feather is packed with its barbs (age 1 for the packer) as it will be meshed: once its
   // shaft is full grown, as grown at its age (the packer sees its barb lengths, angles and opening, and
   // computeMesh meshes the packed grown parameters as they are); while its shaft still grows, as the
@@ -159,15 +165,16 @@ void Pipeline::Impl::computePack() {
     flatPack.stats.packed = coatNow.layerOrder.size();
     packed = &flatPack;
     packedCoat = &coatNow;
-  } else if (o.moultOver && moulting(coatNow)) {
+  } else if (moultOver && moulting(coatNow)) {
     // A moult frame: the mature coat is packed as a frame without a moult would be, and the lost and
     // growing feathers are packed over it (docs/moult.md). With "moult_pack": "full" the frame is
     // repacked like any other (below).
-    packed = &packMoultFrame(scene, posed, matureCoat(coatNow, timeState), *packInput, o, timeState, packGrownAge);
+    packed = &packMoultFrame(scene, posed, matureCoat(coatNow, timeState), *packInput, o, constraints, timeState,
+                             packGrownAge);
     packedCoat = packInput;
   } else {
     // Repacks incrementally from the last frame's pack or this frame's natural pack when it can.
-    packed = &packFrame(scene, posed, *packInput, o, timeState, packGrownAge);
+    packed = &packFrame(scene, posed, *packInput, o, constraints, timeState, packGrownAge);
     packedCoat = packInput;
   }
   report(progress, "pack", 1);
@@ -480,13 +487,12 @@ QualityMetrics Pipeline::check() {
 double Pipeline::timeFullPack(int repeats) {
   elevations();  // the pack stage has run: its inputs are this frame's
   Impl& m = *impl_;
-  coat::PackOptions o = m.packOptions;
-  o.fixedElevation = m.fixedElevation;
+  const coat::PackOptions& o = m.packOptions;
   const coat::CoatFeathers& c = m.timeState.packReport.moult ? m.timeState.mature : (m.packGrownAge.empty() ? m.coatNow : m.packCoat);
   double best = std::numeric_limits<double>::infinity();
   for (int r = 0; r < std::max(1, repeats); ++r) {
     const auto t0 = std::chrono::steady_clock::now();
-    const coat::PackResult result = coat::pack(m.posed, c, o);
+    const coat::PackResult result = coat::pack(m.posed, c, o, m.constraints);
     best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   return best;

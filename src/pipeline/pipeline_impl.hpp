@@ -70,7 +70,10 @@ struct Pipeline::Impl {
   coat::SurfaceDirections directions;
   coat::DirectionOptions directionOptions;
   coat::OrderOptions orderOptions;
-  coat::PackOptions packOptions;
+  coat::PackOptions packOptions;        // the scene's "packing" knobs (PackingSettings::options)
+  coat::PackConstraints constraints;    // the frame's per-feather constraints: fixedElevation below, and
+                                        // the styling's minimum elevations and shaft bands
+  bool moultOver = true;                // PackingSettings::moultOver
   coat::CoatFeathers coatNow;     // at the current time: posed frames, ages, presence
   coat::CoatFeathers packCoat;    // coatNow with growing feathers as grown (the pack input when any grows)
   std::vector<double> packGrownAge;  // per feather, the age packCoat's parameters are grown to (empty = none)

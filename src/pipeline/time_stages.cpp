@@ -91,10 +91,10 @@ void parseControls(const Scene& scene, TimeState& state) {
                     "controls[" + std::to_string(c) + "].tracts[" + std::to_string(k) + "]");
     }
   }
-  state.packOptions = coat::PackOptions{};
+  state.packing = coat::PackingSettings{};
   if (!scene.packing.empty()) {
     JsonReader r(scene.packing, scene.file, "packing");
-    state.packOptions = coat::parsePackOptions(r);
+    state.packing = coat::parsePackingSettings(r);
   }
   state.controlsKey = std::move(key);
   state.controlsParsed = true;
@@ -105,8 +105,8 @@ bool sameBits(const void* a, const void* b, size_t bytes) { return bytes == 0 ||
 
 bool sameFixed(double a, double b) { return (std::isnan(a) && std::isnan(b)) || sameBits(&a, &b, sizeof(double)); }
 
-double fixedAt(const coat::PackOptions& o, size_t i) {
-  return o.fixedElevation.empty() ? std::numeric_limits<double>::quiet_NaN() : o.fixedElevation[i];
+double fixedAt(const coat::PackConstraints& k, size_t i) {
+  return k.fixedElevation.empty() ? std::numeric_limits<double>::quiet_NaN() : k.fixedElevation[i];
 }
 
 uint8_t unopenedAt(const coat::CoatFeathers& c, size_t i, const coat::PackOptions& o) {
@@ -120,12 +120,15 @@ uint8_t presentAt(const coat::CoatFeathers& c, size_t i) { return c.present.empt
 // fully. The memo then holds this pack.
 const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative, const coat::SkinMesh& skin,
                                      const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                                     uint64_t generation, const Json& packing, bool& incremental, size_t& changedCount,
-                                     size_t& recomputed, const std::vector<double>& grownAge = {}) {
-  std::optional<std::vector<uint32_t>> changed = memo.changes(skin, coat, options, generation, packing, grownAge);
+                                     const coat::PackConstraints& constraints, uint64_t generation, const Json& packing,
+                                     bool& incremental, size_t& changedCount, size_t& recomputed,
+                                     const std::vector<double>& grownAge = {}) {
+  std::optional<std::vector<uint32_t>> changed =
+      memo.changes(skin, coat, options, constraints, generation, packing, grownAge);
   const PackMemo* seed = changed ? &memo : nullptr;
   if (alternative && alternative != &memo) {
-    std::optional<std::vector<uint32_t>> alt = alternative->changes(skin, coat, options, generation, packing, grownAge);
+    std::optional<std::vector<uint32_t>> alt =
+        alternative->changes(skin, coat, options, constraints, generation, packing, grownAge);
     if (alt && (!changed || alt->size() < changed->size())) {
       changed = std::move(alt);
       seed = alternative;
@@ -137,23 +140,25 @@ const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative
     recomputed = 0;
     return memo.result;  // same inputs, same pack
   }
-  coat::PackResult result = seed ? (changed->empty() ? seed->result : coat::repack(skin, coat, seed->result, *changed, options))
-                                 : coat::pack(skin, coat, options);
+  coat::PackResult result =
+      seed ? (changed->empty() ? seed->result : coat::repack(skin, coat, seed->result, *changed, options, constraints))
+           : coat::pack(skin, coat, options, constraints);
   recomputed = result.stats.recomputed;
-  memo.remember(skin, coat, options, generation, packing, std::move(result), grownAge);
+  memo.remember(skin, coat, options, constraints, generation, packing, std::move(result), grownAge);
   return memo.result;
 }
 
 }  // namespace
 
 std::optional<std::vector<uint32_t>> PackMemo::changes(const coat::SkinMesh& skinNow, const coat::CoatFeathers& coat,
-                                                       const coat::PackOptions& options, uint64_t gen,
+                                                       const coat::PackOptions& options,
+                                                       const coat::PackConstraints& constraints, uint64_t gen,
                                                        const Json& packingNow,
                                                        const std::vector<double>& grownAgeNow) const {
   const size_t n = coat.size();
   if (!valid || gen != generation || frames.size() != n || coat.frames.size() != n || packingNow != packing)
     return std::nullopt;
-  if (!options.fixedElevation.empty() && options.fixedElevation.size() != n) return std::nullopt;
+  if (!constraints.fixedElevation.empty() && constraints.fixedElevation.size() != n) return std::nullopt;
   if (skinNow.positions.size() != skin.size() ||
       !sameBits(skinNow.positions.data(), skin.data(), skin.size() * sizeof(glm::dvec3)))
     return std::nullopt;
@@ -161,7 +166,7 @@ std::optional<std::vector<uint32_t>> PackMemo::changes(const coat::SkinMesh& ski
   for (size_t i = 0; i < n; ++i) {
     const bool same = sameBits(&coat.frames[i], &frames[i], sizeof(coat::FeatherFrame)) &&
                       presentAt(coat, i) == present[i] && unopenedAt(coat, i, options) == unopened[i] &&
-                      sameFixed(fixedAt(options, i), fixed[i]) &&
+                      sameFixed(fixedAt(constraints, i), fixed[i]) &&
                       sameBits(&(grownAgeNow.empty() ? kMature : grownAgeNow[i]), &(grownAge.empty() ? kMature : grownAge[i]),
                                sizeof(double));
     if (!same) out.push_back(static_cast<uint32_t>(i));
@@ -170,8 +175,8 @@ std::optional<std::vector<uint32_t>> PackMemo::changes(const coat::SkinMesh& ski
 }
 
 void PackMemo::remember(const coat::SkinMesh& skinNow, const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                        uint64_t gen, const Json& packingNow, coat::PackResult&& r,
-                        const std::vector<double>& grownAgeNow) {
+                        const coat::PackConstraints& constraints, uint64_t gen, const Json& packingNow,
+                        coat::PackResult&& r, const std::vector<double>& grownAgeNow) {
   const size_t n = coat.size();
   valid = true;
   generation = gen;
@@ -184,7 +189,7 @@ void PackMemo::remember(const coat::SkinMesh& skinNow, const coat::CoatFeathers&
   for (size_t i = 0; i < n; ++i) {
     present[i] = presentAt(coat, i);
     unopened[i] = unopenedAt(coat, i, options);
-    fixed[i] = fixedAt(options, i);
+    fixed[i] = fixedAt(constraints, i);
   }
   grownAge = grownAgeNow;
   result = std::move(r);
@@ -223,7 +228,8 @@ void featherAges(const Scene& scene, double t, const std::vector<coat::TractPara
 }
 
 void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, const coat::Follicles& follicles,
-                   TimeState& state, coat::CoatFeathers& coat, std::vector<double>& fixedElevation) {
+                   TimeState& state, coat::CoatFeathers& coat, const coat::PackConstraints& constraints,
+                   std::vector<double>& fixedElevation) {
   state.controlResult = moult::ControlResult{};
   state.packReport = PackReport{};
   if (scene.controls.empty()) return;
@@ -236,23 +242,25 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
   // packs its lost and growing feathers over the mature coat (packMoultFrame), so raises start from the
   // mature coat's elevations, and that pack changes only with the pose and the controls' turns.
   const moult::NaturalPackFn natural = [&](const coat::SkinMesh& skin, const coat::CoatFeathers& c,
-                                           const coat::PackOptions& o) -> const coat::PackResult& {
-    const coat::CoatFeathers& input = o.moultOver && moulting(c) ? matureCoat(c, state) : c;
-    return packWithMemo(state.natural, {}, skin, input, o, state.generation, scene.packing,
+                                           const coat::PackOptions& o,
+                                           const coat::PackConstraints& k) -> const coat::PackResult& {
+    const coat::CoatFeathers& input = state.packing.moultOver && moulting(c) ? matureCoat(c, state) : c;
+    return packWithMemo(state.natural, {}, skin, input, o, k, state.generation, scene.packing,
                         state.packReport.naturalIncremental, state.packReport.naturalChanged,
                         state.packReport.naturalRecomputed);
   };
-  state.controlResult = moult::evaluateControls(state.controls, binding, posed, follicles, t, state.packOptions, coat,
-                                                fixedElevation, natural);
+  state.controlResult = moult::evaluateControls(state.controls, binding, posed, follicles, t, state.packing.options,
+                                                constraints, coat, fixedElevation, natural);
 }
 
 const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
-                                  const coat::PackOptions& options, TimeState& state, const std::vector<double>& grownAge) {
+                                  const coat::PackOptions& options, const coat::PackConstraints& constraints,
+                                  TimeState& state, const std::vector<double>& grownAge) {
   PackReport& r = state.packReport;
   // Controls that ran a natural pack this frame make it a candidate seed: it differs from this frame's
   // pack in the raised feathers only.
   const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
-  return packWithMemo(state.frame, alternative, posed, coat, options, state.generation, scene.packing,
+  return packWithMemo(state.frame, alternative, posed, coat, options, constraints, state.generation, scene.packing,
                       r.finalIncremental, r.finalChanged, r.finalRecomputed, grownAge);
 }
 
@@ -275,12 +283,14 @@ const coat::CoatFeathers& matureCoat(const coat::CoatFeathers& coat, TimeState& 
 
 const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& mature,
                                        const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                                       TimeState& state, const std::vector<double>& grownAge) {
+                                       const coat::PackConstraints& constraints, TimeState& state,
+                                       const std::vector<double>& grownAge) {
   PackReport& r = state.packReport;
   r.moult = true;
   const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
-  const coat::PackResult& base = packWithMemo(state.frame, alternative, posed, mature, options, state.generation,
-                                              scene.packing, r.finalIncremental, r.finalChanged, r.finalRecomputed);
+  const coat::PackResult& base = packWithMemo(state.frame, alternative, posed, mature, options, constraints,
+                                              state.generation, scene.packing, r.finalIncremental, r.finalChanged,
+                                              r.finalRecomputed);
   // What differs from the mature coat: lost feathers, and growing ones (grown packing parameters, or the
   // packer's unopened class).
   std::vector<uint32_t> changed;
@@ -290,15 +300,16 @@ const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh&
   }
   r.moultChanged = changed.size();
   const std::optional<std::vector<uint32_t>> diff =
-      state.moultFrame.changes(posed, coat, options, state.generation, scene.packing, grownAge);
+      state.moultFrame.changes(posed, coat, options, constraints, state.generation, scene.packing, grownAge);
   if (diff && diff->empty() && state.moultBaseVersion == state.frame.version) {
     r.moultRecomputed = 0;
     return state.moultFrame.result;
   }
-  coat::PackResult result = coat::packOver(posed, coat, base, changed, options);
+  coat::PackResult result = coat::packOver(posed, coat, base, changed, options, constraints);
   r.moultRecomputed = result.stats.recomputed;
   state.moultBaseVersion = state.frame.version;
-  state.moultFrame.remember(posed, coat, options, state.generation, scene.packing, std::move(result), grownAge);
+  state.moultFrame.remember(posed, coat, options, constraints, state.generation, scene.packing, std::move(result),
+                            grownAge);
   return state.moultFrame.result;
 }
 

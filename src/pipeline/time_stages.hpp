@@ -41,13 +41,16 @@ struct PackMemo {
   void clear() { *this = PackMemo{}; }
   // Feathers whose packing input differs from the memo's, or nullopt when the memo cannot seed a repack
   // (empty, other rest state, options, skin or feather count).
+  // The styling's constraints follow from the "packing" section and the rest state; fixed elevations are
+  // compared per feather.
   std::optional<std::vector<uint32_t>> changes(const coat::SkinMesh& skin, const coat::CoatFeathers& coat,
-                                               const coat::PackOptions& options, uint64_t generation,
+                                               const coat::PackOptions& options,
+                                               const coat::PackConstraints& constraints, uint64_t generation,
                                                const Json& packing, const std::vector<double>& grownAge = {}) const;
   // Stores `result` with the inputs it was packed from.
   void remember(const coat::SkinMesh& skin, const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                uint64_t generation, const Json& packing, coat::PackResult&& result,
-                const std::vector<double>& grownAge = {});
+                const coat::PackConstraints& constraints, uint64_t generation, const Json& packing,
+                coat::PackResult&& result, const std::vector<double>& grownAge = {});
 };
 
 // How the last frame's packs were made (diagnostics for tests and benchmarks).
@@ -86,7 +89,7 @@ struct TimeState {
   bool controlsParsed = false;
   std::vector<moult::ControlSpec> controls;
   std::vector<std::vector<uint32_t>> controlTracts;  // per control: tract indices (empty = any)
-  coat::PackOptions packOptions;
+  coat::PackingSettings packing;
   moult::ControlResult controlResult;     // of the last evaluation (its natural pack lives in `natural`)
 
   // Packs remembered across frames (see PackMemo): the controls' natural pack and the frame's pack.
@@ -111,16 +114,18 @@ void poseSkin(const Scene& scene, double t, const coat::SkinMesh& rest, coat::Sk
 void featherAges(const Scene& scene, double t, const std::vector<coat::TractParameterization>& params,
                  const coat::Follicles& follicles, TimeState& state, coat::CoatFeathers& coat);
 // Expressive controls at time t: lifted feathers get fixed elevations (NaN = free) and directions.
+// `constraints`: the styling's (its fixedElevation is ignored: `fixedElevation` stands for it).
 void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, const coat::Follicles& follicles,
-                   TimeState& state, coat::CoatFeathers& coat, std::vector<double>& fixedElevation);
+                   TimeState& state, coat::CoatFeathers& coat, const coat::PackConstraints& constraints,
+                   std::vector<double>& fixedElevation);
 
 // The frame's pack (state.frame.result): an incremental repack (bit-identical to a full pack,
 // coat/pack.hpp) from whichever remembered pack differs in fewer feathers, the previous frame's pack or
 // this frame's natural pack (which differs in the raised feathers only); a full pack when neither fits.
 // grownAge: per feather, the age `coat`'s parameters were grown to (PackMemo::grownAge; empty = all 1).
 const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
-                                  const coat::PackOptions& options, TimeState& state,
-                                  const std::vector<double>& grownAge = {});
+                                  const coat::PackOptions& options, const coat::PackConstraints& constraints,
+                                  TimeState& state, const std::vector<double>& grownAge = {});
 
 // True when some feather of `coat` is lost or growing at this time.
 bool moulting(const coat::CoatFeathers& coat);
@@ -135,6 +140,7 @@ const coat::CoatFeathers& matureCoat(const coat::CoatFeathers& coat, TimeState& 
 // feathers over it. Reused when neither the mature pack nor this frame's lost/growing feathers changed.
 const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& mature,
                                        const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                                       TimeState& state, const std::vector<double>& grownAge);
+                                       const coat::PackConstraints& constraints, TimeState& state,
+                                       const std::vector<double>& grownAge);
 
 }  // namespace pteryla::pipeline

@@ -229,11 +229,12 @@ TEST(Pack, FixedAngleFeathersKeepTheirAngleAndOthersPackAgainstThem) {
   comb.center = {1, 0, 0};
   comb.radius = 0.35;
   comb.elevation = 50.0 * feather::kPi / 180.0;
-  o.fixedElevation = resolveStyling(s.coat, {comb});
-  const PackResult styled = pack(s.skin, s.coat, o);
+  PackConstraints combed;
+  combed.fixedElevation = resolveStyling(s.coat, {comb});
+  const PackResult styled = pack(s.skin, s.coat, o, combed);
   size_t fixedCount = 0, othersChanged = 0;
   for (uint32_t i = 0; i < s.coat.size(); ++i) {
-    if (!std::isnan(o.fixedElevation[i])) {
+    if (!std::isnan(combed.fixedElevation[i])) {
       ++fixedCount;
       EXPECT_TRUE(sameBits(styled.elevation[i], *comb.elevation)) << "feather " << i;
     } else if (!sameBits(styled.elevation[i], free.elevation[i])) {
@@ -263,9 +264,10 @@ TEST(Pack, IncrementalRepackEqualsFullPack) {
   const StyleApplied ap = applyStyling(edited, {dir, fix});
   ASSERT_EQ(ap.changed.size(), 4u);
   PackOptions o2 = o;
-  o2.fixedElevation = ap.fixedElevation;
-  const PackResult full = pack(s.skin, edited, o2);
-  const PackResult inc = repack(s.skin, edited, before, ap.changed, o2);
+  PackConstraints fixed;
+  fixed.fixedElevation = ap.fixedElevation;
+  const PackResult full = pack(s.skin, edited, o2, fixed);
+  const PackResult inc = repack(s.skin, edited, before, ap.changed, o2, fixed);
   expectIdentical(full, inc);
   EXPECT_LT(inc.stats.recomputed, edited.size());
   EXPECT_GE(inc.stats.recomputed, ap.changed.size());
@@ -273,9 +275,9 @@ TEST(Pack, IncrementalRepackEqualsFullPack) {
   EXPECT_EQ(changedFeathers(s.coat, edited, {}, ap.fixedElevation), ap.changed);
   // Sequential incremental repack gives the same bits.
   o2.threads = 1;
-  expectIdentical(full, repack(s.skin, edited, before, ap.changed, o2));
+  expectIdentical(full, repack(s.skin, edited, before, ap.changed, o2, fixed));
   // Nothing changed: nothing recomputed, same result.
-  const PackResult same = repack(s.skin, edited, full, {}, o2);
+  const PackResult same = repack(s.skin, edited, full, {}, o2, fixed);
   EXPECT_EQ(same.stats.recomputed, 0u);
   expectIdentical(full, same);
 }
@@ -456,9 +458,15 @@ TEST(Pack, MissingFeathersAreSkippedAndBadInputThrows) {
   bad = s.coat;
   bad.layerOrder[1] = bad.layerOrder[0];
   EXPECT_THROW(pack(s.skin, bad), Error);
-  PackOptions o;
-  o.fixedElevation = {0.1};
-  EXPECT_THROW(pack(s.skin, s.coat, o), Error);
+  PackConstraints wrongLength;
+  wrongLength.fixedElevation = {0.1};
+  EXPECT_THROW(pack(s.skin, s.coat, {}, wrongLength), Error);
+  wrongLength = PackConstraints{};
+  wrongLength.minElevation = {0.1, 0.2};
+  EXPECT_THROW(pack(s.skin, s.coat, {}, wrongLength), Error);
+  wrongLength = PackConstraints{};
+  wrongLength.shaftBand = {0.5};
+  EXPECT_THROW(pack(s.skin, s.coat, {}, wrongLength), Error);
 }
 
 TEST(Pack, FlatPatchFeathersRestJustAboveTheSkin) {
@@ -492,27 +500,27 @@ TEST(PackOptionsJson, ParsesAndRejects) {
       {"select": "comb", "from": [0, 0, 0], "to": [1, 0, 0], "radius": 0.1, "direction": [0, 0, -1]}
     ]})");
   JsonReader r(j, "scene.json", "packing");
-  const PackOptions o = parsePackOptions(r);
+  const PackingSettings settings = parsePackingSettings(r);
+  const PackOptions& o = settings.options;
   EXPECT_DOUBLE_EQ(o.clearance, 0.002);
   EXPECT_NEAR(o.maxElevation, 80 * feather::kPi / 180, 1e-12);
   EXPECT_EQ(o.keyBarbsPerVane, 7);
-  EXPECT_FALSE(o.moultOver);
-  ASSERT_EQ(o.styling.size(), 3u);
-  EXPECT_EQ(o.styling[0].ids, (std::vector<uint32_t>{1, 2, 3}));
-  EXPECT_EQ(o.styling[1].kind, StyleKind::Sphere);
-  EXPECT_TRUE(o.styling[2].direction.has_value());
-  EXPECT_FALSE(o.styling[2].elevation.has_value());
+  EXPECT_FALSE(settings.moultOver);
+  ASSERT_EQ(settings.styling.size(), 3u);
+  EXPECT_EQ(settings.styling[0].ids, (std::vector<uint32_t>{1, 2, 3}));
+  EXPECT_EQ(settings.styling[1].kind, StyleKind::Sphere);
+  EXPECT_TRUE(settings.styling[2].direction.has_value());
+  EXPECT_FALSE(settings.styling[2].elevation.has_value());
   // Round trip.
-  const Json back = packOptionsToJson(o);
+  const Json back = packingSettingsToJson(settings);
   JsonReader r2(back, "x", "packing");
-  const PackOptions o2 = parsePackOptions(r2);
-  EXPECT_EQ(packOptionsToJson(o2), back);
+  EXPECT_EQ(packingSettingsToJson(parsePackingSettings(r2)), back);
 
   auto fails = [](const char* text, const char* where) {
     const Json jj = Json::parse(text);
     JsonReader rr(jj, "scene.json", "packing");
     try {
-      parsePackOptions(rr);
+      parsePackingSettings(rr);
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(where), std::string::npos) << e.what();
       return;
@@ -725,8 +733,10 @@ TEST(Pack, FlattenedBarbsKeepTheirArcLengthWhenAsked) {
   EXPECT_GT(changed, 20u);
   // Off by default, read and written as packing.keep_barb_arc_length.
   EXPECT_FALSE(PackOptions{}.keepBarbArcLength);
-  const Json j = packOptionsToJson(kept);
+  PackingSettings keptSettings;
+  keptSettings.options = kept;
+  const Json j = packingSettingsToJson(keptSettings);
   EXPECT_EQ(j.at("keep_barb_arc_length"), true);
   JsonReader r(j, "scene.json", "packing");
-  EXPECT_TRUE(parsePackOptions(r).keepBarbArcLength);
+  EXPECT_TRUE(parsePackingSettings(r).options.keepBarbArcLength);
 }

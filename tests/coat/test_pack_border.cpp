@@ -163,8 +163,9 @@ TEST(StyleMinElevation, SelectedFeathersPackAtOrAboveTheBoundOthersUnchangedBelo
   sel.center = {kC, kC, 0.0};
   sel.radius = 0.25;
   sel.minElevation = 0.6;
-  o.styling = {sel};
-  const PackResult r = pack(s.skin, s.coat, o);
+  PackConstraints bound;
+  bound.minElevation = resolveMinElevation(s.coat, {sel});
+  const PackResult r = pack(s.skin, s.coat, o, bound);
   const std::vector<uint32_t> chosen = selectFeathers(s.coat, sel);
   ASSERT_GT(chosen.size(), 5u);
   std::vector<uint8_t> isChosen(s.coat.size(), 0);
@@ -207,17 +208,17 @@ TEST(StyleShaftBand, OverridesTheGlobalBandForTheSelectedFeathersOnly) {
   all.center = {kC, kC, 0.0};
   all.radius = 100;
   all.shaftBand = 0.0;
-  PackOptions o = wide;
-  o.styling = {all};
-  const PackResult rAll = pack(s.skin, s.coat, o);
+  PackConstraints band;
+  band.shaftBand = resolveShaftBand(s.coat, {all});
+  const PackResult rAll = pack(s.skin, s.coat, wide, band);
   EXPECT_EQ(rAll.elevation, rNarrow.elevation);
   ASSERT_NE(rWide.elevation, rNarrow.elevation) << "the band must matter on this scene for the test to mean anything";
   // A subset: feathers under the first selected one are untouched; the first selected one sees the same
   // feathers under it with a narrower band, so it can only lie lower or equal.
   StyleSelection some = all;
   some.radius = 0.25;
-  o.styling = {some};
-  const PackResult r = pack(s.skin, s.coat, o);
+  band.shaftBand = resolveShaftBand(s.coat, {some});
+  const PackResult r = pack(s.skin, s.coat, wide, band);
   const std::vector<uint32_t> chosen = selectFeathers(s.coat, some);
   ASSERT_GT(chosen.size(), 5u);
   std::vector<uint8_t> isChosen(s.coat.size(), 0);

@@ -48,7 +48,7 @@ void readSections(const pteryla::pipeline::Scene& s) {
   }
   if (!s.packing.empty()) {
     JsonReader r(s.packing, s.file, "packing");
-    (void)pteryla::coat::parsePackOptions(r);
+    (void)pteryla::coat::parsePackingSettings(r);
   }
   if (!s.moult.empty()) {
     JsonReader r(s.moult, s.file, "moult");

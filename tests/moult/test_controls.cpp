@@ -211,7 +211,7 @@ TEST(Controls, LiftStandsShaftsUpAndTheRestRepacksFreeOfThem) {
   {
     coat::CoatFeathers c = s.coat;
     std::vector<double> fixed;
-    const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.0, po, c, fixed);
+    const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.0, po, {}, c, fixed);
     EXPECT_EQ(r.raised, 0u);
     EXPECT_EQ(r.turned, 0u);
     for (double e : fixed) EXPECT_TRUE(std::isnan(e));
@@ -220,22 +220,23 @@ TEST(Controls, LiftStandsShaftsUpAndTheRestRepacksFreeOfThem) {
   {
     coat::CoatFeathers c = s.coat;
     std::vector<double> fixed;
-    const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.5, po, c, fixed);
+    const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.5, po, {}, c, fixed);
     ASSERT_TRUE(r.naturalPacked);
     for (uint32_t i : r.changed) EXPECT_NEAR(fixed[i], 0.5 * (before.elevation[i] + M_PI / 2), 1e-9);
   }
   coat::CoatFeathers c = s.coat;
   std::vector<double> fixed;
-  const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 2.0, po, c, fixed);
+  const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 2.0, po, {}, c, fixed);
   EXPECT_GT(r.raised, 5u);
   size_t below = 0;  // bound feathers not already upright
   for (size_t i = 0; i < c.size(); ++i)
     if (b.control[c.follicle[i]] == 0 && r.natural.elevation[i] < M_PI / 2) ++below;
   EXPECT_EQ(r.raised, below);
-  po.fixedElevation = fixed;
-  const coat::PackResult after = coat::pack(s.skin, c, po);
+  coat::PackConstraints raised;
+  raised.fixedElevation = fixed;
+  const coat::PackResult after = coat::pack(s.skin, c, po, raised);
   // Repacking from the natural pack gives the same result.
-  const coat::PackResult again = coat::repack(s.skin, c, r.natural, r.changed, po);
+  const coat::PackResult again = coat::repack(s.skin, c, r.natural, r.changed, po, raised);
   EXPECT_EQ(again.elevation, after.elevation);
   size_t pushed = 0;
   for (size_t i = 0; i < c.size(); ++i) {
@@ -260,7 +261,7 @@ TEST(Controls, AimTurnsTowardTheControlAndTwistIsSeeded) {
   const ControlBinding b = bindControls(s.skin, s.follicles, cs);
   coat::CoatFeathers c = s.coat;
   std::vector<double> fixed;
-  const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.0, po, c, fixed);
+  const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.0, po, {}, c, fixed);
   EXPECT_GT(r.turned, 5u);
   const glm::dvec3 at = coat::pointAt(s.skin, b.anchor[0]);
   for (size_t i = 0; i < c.size(); ++i) {
@@ -283,7 +284,7 @@ TEST(Controls, AimTurnsTowardTheControlAndTwistIsSeeded) {
     t[0].twistAngle = 0.5;
     coat::CoatFeathers cc = s.coat;
     std::vector<double> fx;
-    evaluateControls(t, b, s.skin, s.follicles, 0.0, po, cc, fx);
+    evaluateControls(t, b, s.skin, s.follicles, 0.0, po, {}, cc, fx);
     std::vector<double> ang;
     for (size_t i = 0; i < cc.size(); ++i)
       ang.push_back(std::acos(std::clamp(glm::dot(cc.frames[i].tangent, s.coat.frames[i].tangent), -1.0, 1.0)));
@@ -359,24 +360,24 @@ TEST(Controls, CallerSuppliedNaturalPackGivesTheSameRaises) {
   const ControlBinding b = bindControls(s.skin, s.follicles, cs);
   coat::PackResult supplied;
   int calls = 0;
-  const NaturalPackFn natural = [&](const coat::SkinMesh& skin, const coat::CoatFeathers& c,
-                                    const coat::PackOptions& o) -> const coat::PackResult& {
+  const NaturalPackFn natural = [&](const coat::SkinMesh& skin, const coat::CoatFeathers& c, const coat::PackOptions& o,
+                                    const coat::PackConstraints& k) -> const coat::PackResult& {
     ++calls;
     EXPECT_EQ(o.threads, 1);
-    supplied = coat::pack(skin, c, o);
+    supplied = coat::pack(skin, c, o, k);
     return supplied;
   };
   {
     coat::CoatFeathers c = s.coat;
     std::vector<double> fixed;
-    const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.0, po, c, fixed, natural);
+    const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.0, po, {}, c, fixed, natural);
     EXPECT_EQ(calls, 0);  // lift 0: nothing rises, no pack needed
     EXPECT_FALSE(r.naturalPacked);
   }
   coat::CoatFeathers own = s.coat, viaFn = s.coat;
   std::vector<double> fixedOwn, fixedFn;
-  const ControlResult a = evaluateControls(cs, b, s.skin, s.follicles, 0.6, po, own, fixedOwn);
-  const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.6, po, viaFn, fixedFn, natural);
+  const ControlResult a = evaluateControls(cs, b, s.skin, s.follicles, 0.6, po, {}, own, fixedOwn);
+  const ControlResult r = evaluateControls(cs, b, s.skin, s.follicles, 0.6, po, {}, viaFn, fixedFn, natural);
   EXPECT_EQ(calls, 1);
   EXPECT_TRUE(r.naturalPacked);
   EXPECT_TRUE(r.natural.elevation.empty());

@@ -85,29 +85,30 @@ TEST(Drape, BareMeshScenesDrapeAndTheMethodRoundTrips) {
                          "packing": {"method": "drape", "drape_max_slope_deg": 10}})");
   const Scene s = sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
   JsonReader r(s.packing, "scene_test.json", "packing");
-  const coat::PackOptions o = coat::parsePackOptions(r);
+  const coat::PackingSettings settings = coat::parsePackingSettings(r);
+  const coat::PackOptions& o = settings.options;
   EXPECT_EQ(o.method, coat::PackMethod::Drape);
   EXPECT_EQ(o.drapeMaxSlopeDeg, 10.0);
-  const Json written = coat::packOptionsToJson(o);  // the reader keeps a reference
+  const Json written = coat::packingSettingsToJson(settings);  // the reader keeps a reference
   JsonReader back(written, "scene_test.json", "packing");
-  const coat::PackOptions o2 = coat::parsePackOptions(back);
+  const coat::PackOptions o2 = coat::parsePackingSettings(back).options;
   EXPECT_EQ(o2.method, coat::PackMethod::Drape);
   EXPECT_EQ(o2.drapeMaxSlopeDeg, 10.0);
   Json hf = j;
   hf["packing"]["method"] = "height_field";
   JsonReader rh(hf["packing"], "scene_test.json", "packing");
-  const Json hfWritten = coat::packOptionsToJson(coat::parsePackOptions(rh));
+  const Json hfWritten = coat::packingSettingsToJson(coat::parsePackingSettings(rh));
   EXPECT_EQ(hfWritten.value("method", ""), "height_field");
   Json bad = j;
   bad["packing"]["method"] = "stack";
   const Scene sb = sceneFromJson(bad, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
   JsonReader rb(sb.packing, "scene_test.json", "packing");
-  EXPECT_THROW(coat::parsePackOptions(rb), Error);
+  EXPECT_THROW(coat::parsePackingSettings(rb), Error);
   // No method: draped (a bare mesh, or a scene that does not choose).
   const Scene bare = loadScene(std::string(PTERYLA_DATA_DIR) + "/meshes/sphere_250.obj");
   const Json bareOptions = bare.packing.is_null() ? Json::object() : bare.packing;
   JsonReader rn(bareOptions, "sphere_250.obj", "packing");
-  EXPECT_EQ(coat::parsePackOptions(rn).method, coat::PackMethod::Drape);
+  EXPECT_EQ(coat::parsePackingSettings(rn).options.method, coat::PackMethod::Drape);
   EXPECT_EQ(coat::PackOptions{}.method, coat::PackMethod::Drape);
 }
 

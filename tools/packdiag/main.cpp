@@ -145,14 +145,17 @@ int main(int argc, char** argv) {
     }
 
     // Re-pack with the scene's options for the statistics (deterministic: must equal the pipeline's).
-    coat::PackOptions po;
+    coat::PackingSettings packing;
     if (j.contains("packing")) {
       JsonReader r(j["packing"], path, "packing");
-      po = coat::parsePackOptions(r);
+      packing = coat::parsePackingSettings(r);
     }
-    po.fixedElevation = coat::resolveStyling(coat, po.styling);
+    coat::PackConstraints styled;
+    styled.fixedElevation = coat::resolveStyling(coat, packing.styling);
+    styled.minElevation = coat::resolveMinElevation(coat, packing.styling);
+    styled.shaftBand = coat::resolveShaftBand(coat, packing.styling);
     t0 = std::chrono::steady_clock::now();
-    const coat::PackResult pr = coat::pack(skin, coat, po);
+    const coat::PackResult pr = coat::pack(skin, coat, packing.options, styled);
     size_t same = 0;
     for (size_t i = 0; i < n; ++i) same += pr.elevation[i] == elev[i] ? 1 : 0;
     const auto& st = pr.stats;
@@ -168,7 +171,7 @@ int main(int argc, char** argv) {
       for (size_t i = 0; i < n; ++i) {
         if (tracts[coat.tract[i]].name != listTract) continue;
         const auto& f = coat.frames[i];
-        const double fixed = i < po.fixedElevation.size() ? po.fixedElevation[i] : NAN;
+        const double fixed = i < styled.fixedElevation.size() ? styled.fixedElevation[i] : NAN;
         std::printf("  feather %zu layer %u at (%.4f %.4f %.4f) T (%.3f %.3f %.3f) N (%.3f %.3f %.3f) elevation %.2f deg "
                     "fixed %.2f len %.3f\n",
                     i, layerPos[i], f.origin.x, f.origin.y, f.origin.z, f.tangent.x, f.tangent.y, f.tangent.z, f.normal.x,
@@ -188,7 +191,7 @@ int main(int argc, char** argv) {
         const double reach = coat.params[k].totalLength() + coat.params[b].totalLength();
         if (glm::length(coat.frames[k].origin - coat.frames[b].origin) > reach) continue;
         without.present[k] = 0;
-        const coat::PackResult r = coat::packOver(skin, without, pr, {b}, po);
+        const coat::PackResult r = coat::packOver(skin, without, pr, {b}, packing.options, styled);
         without.present[k] = 1;
         drops.push_back({pr.elevation[b] - r.elevation[b], k});
       }
@@ -207,7 +210,7 @@ int main(int argc, char** argv) {
     coat::CheckOptions co;
     co.seed = p.scene().seed;
     co.attribute = true;
-    coat::setFeatherBases(co, coat, po.baseAllowance);
+    coat::setFeatherBases(co, coat, packing.options.baseAllowance);
     std::vector<uint32_t> allFaces;
     for (const auto& t : tracts) allFaces.insert(allFaces.end(), t.faces.begin(), t.faces.end());
     std::sort(allFaces.begin(), allFaces.end());

@@ -81,16 +81,25 @@ struct PackOptions {
   bool skin = true;            // pack against the skin surface
   double skinSampleSpacing = 0;  // scene units between skin samples; 0 = auto (0.05 x median feather reach)
   int threads = 0;             // 0 = all available, 1 = sequential
-  // Per feather: a fixed elevation in radians, NaN = computed by packing. Empty = none fixed.
-  // Styling selections are resolved into this by resolveStyling() (style.hpp).
-  std::vector<double> fixedElevation;
-  // Parsed selections. pack() applies their minimum elevations and shaft bands itself (resolveMinElevation,
-  // resolveShaftBand); their fixed elevations and direction edits reach it only through fixedElevation and
-  // the coat's frames (applyStyling, style.hpp).
-  std::vector<StyleSelection> styling;
   bool captureFields = false;  // keep every key barb height field in PackResult::barbFields (tests, debugging)
-  // How the pipeline packs a moult frame (docs/moult.md; pack() ignores it): true = the lost and growing
-  // feathers over the mature coat (packOver, fast), false = a full repack of every feather (tighter).
+};
+
+// Per-feather constraints on a pack, resolved outside the packer: styling selections
+// (styleConstraints, style.hpp), a host's fixed elevations, expressive controls. Each vector is empty
+// (no constraint) or has one entry per feather, NaN where that feather has none.
+struct PackConstraints {
+  std::vector<double> fixedElevation;  // radians: the feather is placed at this elevation, not packed
+  std::vector<double> minElevation;    // radians: a lower bound on its packed elevation (with PackOptions')
+  std::vector<double> shaftBand;       // replaces PackOptions::shaftBand for this feather
+};
+
+// The scene file's "packing" object (docs/packing.md): the packer's knobs, the styling selections the
+// pipeline resolves into PackConstraints, and how the pipeline packs a moult frame.
+struct PackingSettings {
+  PackOptions options;
+  std::vector<StyleSelection> styling;
+  // Moult frames (docs/moult.md): true = the lost and growing feathers over the mature coat (packOver,
+  // fast), false = a full repack of every feather (tighter).
   bool moultOver = true;
 };
 
@@ -213,16 +222,18 @@ struct PackResult {
 
 // Packs every present feather of `coat` (in coat.layerOrder, or index order when it is empty) against
 // the feathers packed before it and the skin. Throws Error for inconsistent input (array sizes, indices).
-PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options = {});
+PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options = {},
+                const PackConstraints& constraints = {});
 
 // Incremental repack after a small change: `changed` lists the feathers whose input differs from the
 // one `previous` was computed from (frame, params, age, presence or fixed elevation). Only feathers whose
 // dependency chain reaches a changed feather are recomputed; the result equals pack() bit for bit. Falls
-// back to a full pack when the layer order or feather count changed. The skin and the options (other than
-// fixedElevation, whose changes belong in `changed`) must be those `previous` was packed with; after a skin
-// deformation every frame changes: call pack().
+// back to a full pack when the layer order or feather count changed. The skin, the options and the
+// constraints (other than fixed elevations, whose changes belong in `changed`) must be those `previous`
+// was packed with; after a skin deformation every frame changes: call pack().
 PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& previous,
-                  const std::vector<uint32_t>& changed, const PackOptions& options = {});
+                  const std::vector<uint32_t>& changed, const PackOptions& options = {},
+                  const PackConstraints& constraints = {});
 
 // Packs only the feathers in `changed` over `base`: every other present feather keeps its pose, barbs and
 // points from `base` exactly, and the changed ones are packed in layer order against what lies under them
@@ -235,10 +246,11 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
 // on the same skin with the same options and feather count, and every present feather of `coat` must be
 // packed in `base` in the same relative layer order; else Error.
 PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& base,
-                    const std::vector<uint32_t>& changed, const PackOptions& options = {});
+                    const std::vector<uint32_t>& changed, const PackOptions& options = {},
+                    const PackConstraints& constraints = {});
 
 // Feathers whose packing input differs between two coats of equal size (frame, params, age, presence),
-// plus those whose fixed elevation differs between two option sets.
+// plus those whose fixed elevation differs between two constraint sets.
 std::vector<uint32_t> changedFeathers(const CoatFeathers& before, const CoatFeathers& after,
                                       const std::vector<double>& fixedBefore = {},
                                       const std::vector<double>& fixedAfter = {});
@@ -268,8 +280,8 @@ struct PlacedKeyBarb {
 std::vector<PlacedKeyBarb> placedKeyBarbs(const CoatFeathers& coat, const PackResult& result, uint32_t feather);
 
 // Reads a scene's "packing" object (docs/packing.md). Unknown keys are errors.
-PackOptions parsePackOptions(JsonReader& r);
-Json packOptionsToJson(const PackOptions& o);
+PackingSettings parsePackingSettings(JsonReader& r);
+Json packingSettingsToJson(const PackingSettings& s);
 // `o` with the packer's default sampling (key barbs per vane, barb and shaft samples, field bins, skin
 // sample spacing) and everything else (clearances, styling, threads...) kept: what a scene's denser
 // sampling costs (bench_pack, pack_digest).

@@ -37,7 +37,7 @@ struct StyleSelection {
 };
 
 struct StyleApplied {
-  std::vector<double> fixedElevation;  // per feather, NaN = free (for PackOptions::fixedElevation)
+  std::vector<double> fixedElevation;  // per feather, NaN = free (for PackConstraints::fixedElevation)
   std::vector<uint32_t> changed;       // feathers whose frame or fixed elevation the selections changed
   std::vector<uint32_t> selectedCount; // feathers selected by each selection
 };
@@ -54,11 +54,11 @@ StyleApplied applyStyling(CoatFeathers& coat, const std::vector<StyleSelection>&
 // Only the fixed elevations of the selections (no frame edits).
 std::vector<double> resolveStyling(const CoatFeathers& coat, const std::vector<StyleSelection>& selections);
 // Per feather the minimum elevation of the selections (later ones win; NaN = none); empty when no
-// selection has one. pack() applies these itself from PackOptions::styling.
+// selection has one: PackConstraints::minElevation.
 std::vector<double> resolveMinElevation(const CoatFeathers& coat, const std::vector<StyleSelection>& selections);
 
 // Per feather the shaft band of the selections (later ones win; NaN = packing.shaft_band); empty when no
-// selection has one. pack() applies these itself from PackOptions::styling.
+// selection has one: PackConstraints::shaftBand.
 std::vector<double> resolveShaftBand(const CoatFeathers& coat, const std::vector<StyleSelection>& selections);
 // One selection object of "packing.styling" (docs/packing.md).
 StyleSelection parseStyleSelection(JsonReader& r);

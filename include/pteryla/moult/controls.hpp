@@ -82,24 +82,28 @@ struct ControlResult {
 
 // Evaluates the controls at time t on the posed coat: turns (coat.frames tangent/binormal about the
 // normal) and raises (fixedElevation, one entry per feather, NaN = free; entries already fixed, e.g. by
-// styling, are raised from their value). `pack` are the scene's packing options (used for the natural
-// elevations; its fixedElevation is ignored).
+// styling, are raised from their value). `pack` and `constraints` are the scene's packing options and
+// its styling's minimum elevations and shaft bands (used for the natural elevations; the constraints'
+// fixedElevation is ignored: `fixedElevation` stands for it).
 ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const ControlBinding& binding,
                                const coat::SkinMesh& posed, const coat::Follicles& follicles, double t,
-                               const coat::PackOptions& pack, coat::CoatFeathers& coat,
-                               std::vector<double>& fixedElevation);
+                               const coat::PackOptions& pack, const coat::PackConstraints& constraints,
+                               coat::CoatFeathers& coat, std::vector<double>& fixedElevation);
 
 // The same with the natural pack supplied by the caller (e.g. an incremental repack from the previous
-// frame's natural pack): naturalPack(posed, coat, options) must return what coat::pack(posed, coat,
-// options) returns, valid until evaluateControls returns. It is called at most once, only when some
-// bound feather rises from a free elevation; ControlResult::naturalPacked then says so, but
-// ControlResult::natural stays empty (the caller owns that pack).
+// frame's natural pack): naturalPack(posed, coat, options, constraints) must return what
+// coat::pack(posed, coat, options, constraints) returns, valid until evaluateControls returns. It is
+// called at most once, only when some bound feather rises from a free elevation;
+// ControlResult::naturalPacked then says so, but ControlResult::natural stays empty (the caller owns that
+// pack).
 using NaturalPackFn = std::function<const coat::PackResult&(const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
-                                                            const coat::PackOptions& options)>;
+                                                            const coat::PackOptions& options,
+                                                            const coat::PackConstraints& constraints)>;
 ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const ControlBinding& binding,
                                const coat::SkinMesh& posed, const coat::Follicles& follicles, double t,
-                               const coat::PackOptions& pack, coat::CoatFeathers& coat,
-                               std::vector<double>& fixedElevation, const NaturalPackFn& naturalPack);
+                               const coat::PackOptions& pack, const coat::PackConstraints& constraints,
+                               coat::CoatFeathers& coat, std::vector<double>& fixedElevation,
+                               const NaturalPackFn& naturalPack);
 
 // JSON (docs/controls.md): one control object; calls r.finish().
 ControlSpec readControl(JsonReader& r);
