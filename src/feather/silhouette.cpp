@@ -149,28 +149,23 @@ void saveGrayImage(const std::string& path, const GrayImage& img) {
   out->close();
 }
 
-SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteImageOptions& opt) {
+Segmentation segmentFeather(const GrayImage& img) {
   const int w = img.width, h = img.height;
   if (w < 4 || h < 4 || img.pixels.size() != static_cast<size_t>(w) * h) throw Error("image must be at least 4x4 pixels", {}, "image");
-  if (opt.rachis.size() < 2) throw Error("mark the rachis with at least 2 points (base, tip)", {}, "rachis");
-  for (const auto& q : opt.rachis)
-    if (!std::isfinite(q.x) || !std::isfinite(q.y) || q.x < 0 || q.y < 0 || q.x > w - 1 || q.y > h - 1)
-      throw Error("rachis points must lie inside the image", {}, "rachis");
-  if (opt.samples < 2) throw Error("need at least 2 samples", {}, "samples");
-  SilhouetteImageResult res;
-
+  Segmentation seg;
   // 1. Background level: median of the border pixels.
   std::vector<float> border;
   for (int x = 0; x < w; ++x) { border.push_back(img.at(x, 0)); border.push_back(img.at(x, h - 1)); }
   for (int y = 1; y + 1 < h; ++y) { border.push_back(img.at(0, y)); border.push_back(img.at(w - 1, y)); }
   std::nth_element(border.begin(), border.begin() + border.size() / 2, border.end());
-  res.background = border[border.size() / 2];
+  seg.background = border[border.size() / 2];
 
   // 2. Segmentation: Otsu threshold on the distance to the background.
-  std::vector<float> dist(img.pixels.size());
+  std::vector<float>& dist = seg.distance;
+  dist.resize(img.pixels.size());
   float dmax = 0;
   for (size_t i = 0; i < dist.size(); ++i) {
-    dist[i] = std::abs(img.pixels[i] - static_cast<float>(res.background));
+    dist[i] = std::abs(img.pixels[i] - static_cast<float>(seg.background));
     dmax = std::max(dmax, dist[i]);
   }
   if (dmax <= 1e-6f) throw Error("the image has no feather: every pixel matches the background", {}, "image");
@@ -191,9 +186,28 @@ SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteIm
     const double var = wB * wF * (mB - mF) * (mB - mF);
     if (var > bestVar) { bestVar = var; bestBin = i; }
   }
-  res.threshold = (bestBin + 1.0) / kBins * dmax;
-  res.mask.resize(dist.size());
-  for (size_t i = 0; i < dist.size(); ++i) res.mask[i] = dist[i] > res.threshold ? 1 : 0;
+  seg.threshold = (bestBin + 1.0) / kBins * dmax;
+  seg.mask.resize(dist.size());
+  for (size_t i = 0; i < dist.size(); ++i) seg.mask[i] = dist[i] > seg.threshold ? 1 : 0;
+  return seg;
+}
+
+SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteImageOptions& opt) {
+  const int w = img.width, h = img.height;
+  if (w < 4 || h < 4 || img.pixels.size() != static_cast<size_t>(w) * h) throw Error("image must be at least 4x4 pixels", {}, "image");
+  if (opt.rachis.size() < 2) throw Error("mark the rachis with at least 2 points (base, tip)", {}, "rachis");
+  for (const auto& q : opt.rachis)
+    if (!std::isfinite(q.x) || !std::isfinite(q.y) || q.x < 0 || q.y < 0 || q.x > w - 1 || q.y > h - 1)
+      throw Error("rachis points must lie inside the image", {}, "rachis");
+  if (opt.samples < 2) throw Error("need at least 2 samples", {}, "samples");
+  SilhouetteImageResult res;
+
+  // 1-2. Background level and segmentation.
+  const Segmentation seg = segmentFeather(img);
+  res.background = seg.background;
+  res.threshold = seg.threshold;
+  res.mask = seg.mask;
+  const std::vector<float>& dist = seg.distance;
 
   // 3. Rachis: resample the marked polyline, optionally move samples onto the rachis ridge, fit an arc.
   std::vector<double> cum{0.0};

@@ -5,6 +5,7 @@
 // directions.
 #include <glm/vec2.hpp>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,17 @@ struct GrayImage {
 // Loads any OpenImageIO-readable image as luminance. Throws Error(path) on failure.
 GrayImage loadGrayImage(const std::string& path);
 void saveGrayImage(const std::string& path, const GrayImage& img);
+
+// Feather/background segmentation (basic thresholding, [GW92]): the background level is the median of the
+// border pixels, the threshold Otsu's on |pixel - background|; mask = 1 where the distance exceeds it.
+// Throws Error (element "image") for images under 4x4 pixels or without any pixel off the background.
+struct Segmentation {
+  double background = 0;
+  double threshold = 0;
+  std::vector<float> distance;  // |pixel - background|, width*height
+  std::vector<uint8_t> mask;    // 1 = feather, width*height
+};
+Segmentation segmentFeather(const GrayImage& img);
 
 struct SilhouetteImageOptions {
   // Rachis as marked by the user, pixel coordinates (x right, y down), from the rachis base (superior
