@@ -170,9 +170,11 @@ void traceToRoot(const VaneModel& m, double s, double d, double len, const Width
 
 // Fits the model to the windows (weighted least squares, alternating with traceToRoot). False when too
 // few windows span the rachis; bent = false when they do not span the vane's width enough for the bend.
+// used: windows kept (not outliers); rms: their root mean square residual, radians.
 template <class Width>
 bool fitVane(const std::vector<OrientationWindow>& windows, const PixelArc& arc, int v, double len, const Width& width,
-             VaneModel& m, int& used) {
+             VaneModel& m, int& used, double& rms) {
+  rms = 0;
   used = 0;
   if (windows.size() < 2) return false;
   std::vector<double> first;
@@ -231,7 +233,19 @@ bool fitVane(const std::vector<OrientationWindow>& windows, const PixelArc& arc,
     }
     if (it >= 2 && std::abs(m.a0 - prev.a0) + std::abs(m.a1 - prev.a1) + std::abs(m.k0 - prev.k0) + std::abs(m.k1 - prev.k1) < 1e-5) break;
   }
-  return ok;
+  double sum = 0;
+  used = 0;
+  for (size_t i = 0; i < windows.size(); ++i) {
+    if (keep[i] == 0) continue;
+    double sRoot = 0, u = 0;
+    traceToRoot(m, windows[i].s, windows[i].d, len, width, sRoot, u);
+    const double rp = sRoot / len;
+    if (rp < 0 || rp > 1) continue;
+    const double e = angleToRachis(arc, v, sRoot, windows[i].dir) - (m.angle(rp) - m.bend(rp) * u);
+    sum += e * e, ++used;
+  }
+  rms = used > 0 ? std::sqrt(sum / used) : 0;
+  return ok && used >= 2;
 }
 
 // Sharpness of the window's intensity projected across direction `angle` (image radians): the
@@ -544,9 +558,8 @@ ScanResult acquireScan(const GrayImage& img, const ScanOptions& opt) {
     }
   constexpr double kBands[3][2] = {{0.12, 0.37}, {0.37, 0.62}, {0.62, 0.87}};
   const double halfWindow = 0.05 * len;
-  VaneModel models[2];
-  for (int v = 0; v < 2; ++v) {
-    std::vector<OrientationWindow> windows;
+  std::vector<OrientationWindow> windows[2];
+  for (int v = 0; v < 2; ++v)
     for (double rpc = 0.12; rpc < 0.93; rpc += 0.1) {
       const double sc = rpc * len, width = VaneWidth{&perp, len, v}(rpc);
       for (const auto& band : kBands) {
@@ -554,24 +567,44 @@ ScanResult acquireScan(const GrayImage& img, const ScanOptions& opt) {
         if (d1 - d0 < 3) continue;
         double coherence = 0;
         const glm::dvec2 dir = windowOrientation(img.pixels, perp.mask, gx, gy, w, h, arc, v, sc - halfWindow, sc + halfWindow, d0, d1, coherence);
-        if (coherence >= 0.3) windows.push_back({sc, 0.5 * (d0 + d1), coherence, dir});
+        if (coherence >= 0.3) windows[v].push_back({sc, 0.5 * (d0 + d1), coherence, dir});
       }
     }
+  VaneModel models[2];
+  // Fits vane v's angles and key barbs to its windows; returns a note when it could not.
+  const auto fitOrientation = [&](int v) -> std::string {
     ScanVaneFit& fit = res.vanes[v];
     VaneParams& vp = p.vane(v);
     VaneModel& model = models[v];
-    fit.measured = fitVane(windows, arc, v, len, VaneWidth{&perp, len, v}, model, fit.windows);
-    const char* vaneName = v == 0 ? "left" : "right";
+    fit = ScanVaneFit();
+    double rms = 0;
+    fit.measured = fitVane(windows[v], arc, v, len, VaneWidth{&perp, len, v}, model, fit.windows, rms);
+    // A fit that ran into its limits, kept under half the windows or leaves them scattered is no measurement
+    // (barbs too fine for the scan's resolution, or disordered).
+    const bool atLimit = std::min(model.a0, model.a1) <= 0.051 || std::max(model.a0, model.a1) >= kPi - 0.051 ||
+                         std::max(std::abs(model.k0), std::abs(model.k1)) >= 1.49;
+    const bool consistent = !atLimit && 2 * fit.windows >= static_cast<int>(windows[v].size()) && rms <= 4 * kPi / 180;
+    const std::string vaneName = v == 0 ? "left" : "right";
+    std::string note;
+    if (fit.measured && !consistent) {
+      fit.measured = false;
+      char why[160];
+      std::snprintf(why, sizeof why, " vane: barb orientation inconsistent (%d of %zu windows agree, rms %.1f deg%s)", fit.windows,
+                    windows[v].size(), rms * 180 / kPi, atLimit ? ", fit at its limits" : "");
+      note = vaneName + why + ": default angles and straight key barbs";
+    } else if (!fit.measured) {
+      note = vaneName + " vane: barb orientation not measurable (" + std::to_string(windows[v].size()) +
+             " coherent windows): default angles and straight key barbs";
+    }
     if (!fit.measured) {
-      res.notes.push_back(std::string(vaneName) + " vane: barb orientation not measurable (" + std::to_string(windows.size()) +
-                          " coherent windows): default angles and straight key barbs");
-      fit.baseAngle = vp.baseAngle, fit.tipAngle = vp.tipAngle;
+      const FeatherParams defaults;
+      vp.baseAngle = fit.baseAngle = defaults.vane(v).baseAngle;
+      vp.tipAngle = fit.tipAngle = defaults.vane(v).tipAngle;
       vp.keyBarbs = {{0.0, bentBarb(0)}, {1.0, bentBarb(0)}};
       model = VaneModel();
       model.a0 = vp.baseAngle, model.a1 = vp.tipAngle;
-      continue;
+      return note;
     }
-    if (!model.bent) res.notes.push_back(std::string(vaneName) + " vane: too few windows across the vane for barb curvature: straight key barbs");
     fit.baseAngle = std::clamp(model.a0, 0.05, kPi - 0.05);
     fit.tipAngle = std::clamp(model.a1, 0.05, kPi - 0.05);
     fit.bendBase = std::clamp(model.k0, -1.5, 1.5);
@@ -579,77 +612,109 @@ ScanResult acquireScan(const GrayImage& img, const ScanOptions& opt) {
     vp.baseAngle = fit.baseAngle;
     vp.tipAngle = fit.tipAngle;
     vp.keyBarbs = {{0.0, bentBarb(fit.bendBase)}, {1.0, bentBarb(fit.bendTip)}};
-  }
+    return model.bent ? std::string() : vaneName + " vane: too few windows across the vane for barb curvature: straight key barbs";
+  };
 
   // Barb spacing: periodicity along lines parallel to the rachis at 30%, 50%, 70% of each vane's width.
-  std::vector<glm::dvec2> spacing;  // (rp of the roots, period in pixels)
-  std::vector<double> weights;
-  const double step = 0.25, halfLine = 0.08 * len;
-  for (int v = 0; v < 2; ++v) {
-    const VaneWidth vaneWidth{&perp, len, v};
-    for (double rpc = 0.15; rpc < 0.86; rpc += 0.1) {
-      const double sc = rpc * len, width = vaneWidth(rpc);
-      std::vector<std::vector<double>> lines;
-      double dSum = 0;
-      for (double f : {0.3, 0.5, 0.7}) {
-        const double d = f * width;
-        if (d < clear + 1 || width < 8) continue;
-        std::vector<double> line;
-        for (double s = sc - halfLine; s <= sc + halfLine; s += step) {
-          const glm::dvec2 q = arc.point(s) + d * arc.side(v, s);
-          line.push_back(sample(img.pixels, w, h, q.x, q.y));
+  // Returns a note when there is none.
+  const auto measureSpacing = [&]() -> std::string {
+    std::vector<glm::dvec2> spacing;  // (rp of the roots, period in pixels)
+    std::vector<double> weights;
+    const double step = 0.25, halfLine = 0.08 * len;
+    for (int v = 0; v < 2; ++v) {
+      const VaneWidth vaneWidth{&perp, len, v};
+      for (double rpc = 0.15; rpc < 0.86; rpc += 0.1) {
+        const double sc = rpc * len, width = vaneWidth(rpc);
+        std::vector<std::vector<double>> lines;
+        double dSum = 0;
+        for (double f : {0.3, 0.5, 0.7}) {
+          const double d = f * width;
+          if (d < clear + 1 || width < 8) continue;
+          std::vector<double> line;
+          for (double s = sc - halfLine; s <= sc + halfLine; s += step) {
+            const glm::dvec2 q = arc.point(s) + d * arc.side(v, s);
+            line.push_back(sample(img.pixels, w, h, q.x, q.y));
+          }
+          lines.push_back(std::move(line));
+          dSum += d;
         }
-        lines.push_back(std::move(line));
-        dSum += d;
-      }
-      if (lines.empty()) continue;
-      const double per = period(lines, step, 2.0);
-      if (per <= 0) continue;
-      // The barbs crossing a line at distance d are rooted further down (traceToRoot); where their angle
-      // falls toward the tip they fan out, so the line sees the spacing stretched by dx/dsRoot.
-      const double d = dSum / lines.size();
-      double sRoot = 0, s0 = 0, s1 = 0, u = 0;
-      traceToRoot(models[v], sc, d, len, vaneWidth, sRoot, u);
-      traceToRoot(models[v], sc - 2, d, len, vaneWidth, s0, u);
-      traceToRoot(models[v], sc + 2, d, len, vaneWidth, s1, u);
-      const double rpRoot = sRoot / len, stretch = 4 / std::max(1e-6, s1 - s0);
-      if (rpRoot < 0 || rpRoot > 1 || !(stretch > 0.2 && stretch < 5)) continue;
-      spacing.emplace_back(rpRoot, per / stretch);
-      weights.push_back(1.0);
-    }
-  }
-  res.spacingWindows = static_cast<int>(spacing.size());
-  if (spacing.size() >= 2) {
-    // Robust line fit: least squares, drop windows off by more than 25% (a missed or doubled period), refit.
-    double a = 0, b = 0;
-    for (int pass = 0; pass < 2; ++pass) {
-      std::array<std::array<double, 2>, 2> m{};
-      std::array<double, 2> r{}, q{};
-      for (size_t i = 0; i < spacing.size(); ++i) {
-        const double u = spacing[i].x, wgt = weights[i];
-        m[0][0] += wgt * (1 - u) * (1 - u), m[0][1] += wgt * (1 - u) * u, m[1][1] += wgt * u * u;
-        r[0] += wgt * (1 - u) * spacing[i].y, r[1] += wgt * u * spacing[i].y;
-      }
-      m[1][0] = m[0][1];
-      if (!solve<2>(m, r, q)) break;
-      a = q[0], b = q[1];
-      for (size_t i = 0; i < spacing.size(); ++i) {
-        const double pred = a + (b - a) * spacing[i].x;
-        weights[i] = std::abs(spacing[i].y - pred) <= 0.25 * pred ? 1.0 : 0.0;
+        if (lines.empty()) continue;
+        const double per = period(lines, step, 2.0);
+        if (per <= 0) continue;
+        // The barbs crossing a line at distance d are rooted further down (traceToRoot); where their angle
+        // falls toward the tip they fan out, so the line sees the spacing stretched by dx/dsRoot.
+        const double d = dSum / lines.size();
+        double sRoot = 0, s0 = 0, s1 = 0, u = 0;
+        traceToRoot(models[v], sc, d, len, vaneWidth, sRoot, u);
+        traceToRoot(models[v], sc - 2, d, len, vaneWidth, s0, u);
+        traceToRoot(models[v], sc + 2, d, len, vaneWidth, s1, u);
+        const double rpRoot = sRoot / len, stretch = 4 / std::max(1e-6, s1 - s0);
+        if (rpRoot < 0 || rpRoot > 1 || !(stretch > 0.2 && stretch < 5)) continue;
+        spacing.emplace_back(rpRoot, per / stretch);
+        weights.push_back(1.0);
       }
     }
-    if (a > 0.5 && b > 0.5) {
-      res.spacingBasePixels = a, res.spacingTipPixels = b;
-      p.spacingBase = a / ppu, p.spacingTip = b / ppu;
+    res.spacingBasePixels = res.spacingTipPixels = 0;
+    if (spacing.size() >= 2) {
+      // Robust line fit: least squares, drop windows off by more than 25% (a missed or doubled period), refit.
+      double a = 0, b = 0;
+      for (int pass = 0; pass < 2; ++pass) {
+        std::array<std::array<double, 2>, 2> m{};
+        std::array<double, 2> r{}, q{};
+        for (size_t i = 0; i < spacing.size(); ++i) {
+          const double u = spacing[i].x, wgt = weights[i];
+          m[0][0] += wgt * (1 - u) * (1 - u), m[0][1] += wgt * (1 - u) * u, m[1][1] += wgt * u * u;
+          r[0] += wgt * (1 - u) * spacing[i].y, r[1] += wgt * u * spacing[i].y;
+        }
+        m[1][0] = m[0][1];
+        if (!solve<2>(m, r, q)) break;
+        a = q[0], b = q[1];
+        for (size_t i = 0; i < spacing.size(); ++i) {
+          const double pred = a + (b - a) * spacing[i].x;
+          weights[i] = std::abs(spacing[i].y - pred) <= 0.25 * pred ? 1.0 : 0.0;
+        }
+      }
+      // Trusted when most windows agree with the line and it stays above the 2-pixel search limit.
+      size_t agree = 0;
+      for (double wgt : weights) agree += wgt > 0 ? 1 : 0;
+      if (a > 2 && b > 2 && std::max(a, b) < 3 * std::min(a, b) && agree >= 3 && 3 * agree >= 2 * spacing.size()) {
+        res.spacingBasePixels = a, res.spacingTipPixels = b;
+        p.spacingBase = a / ppu, p.spacingTip = b / ppu;
+        res.spacingWindows = static_cast<int>(agree);
+      }
     }
-  } else if (spacing.size() == 1) {
-    res.spacingBasePixels = res.spacingTipPixels = spacing[0].y;
-    p.spacingBase = p.spacingTip = spacing[0].y / ppu;
-  }
-  if (res.spacingBasePixels <= 0) {
+    if (res.spacingBasePixels > 0) return std::string();
     p.spacingBase = p.spacingTip = 0.01 * p.rachisLength;
-    res.notes.push_back("no barb periodicity found: barb spacing 1% of the rachis length");
+    res.spacingWindows = 0;
+    return "no consistent barb periodicity (" + std::to_string(spacing.size()) + " windows): barb spacing 1% of the rachis length";
+  };
+
+  std::string notes[3] = {fitOrientation(0), fitOrientation(1), measureSpacing()};
+  // Barbs closer than 3.5 pixels (across their direction) alias with the pixel grid into patterns of
+  // another orientation (on synthetic scans the error reaches 5 degrees at 2.8 pixels): with the spacing
+  // known, drop those windows and fit again.
+  if (res.spacingBasePixels > 0) {
+    bool dropped = false;
+    for (int v = 0; v < 2; ++v) {
+      const VaneWidth vaneWidth{&perp, len, v};
+      std::vector<OrientationWindow> kept;
+      for (const OrientationWindow& o : windows[v]) {
+        double sRoot = 0, u = 0;
+        traceToRoot(models[v], o.s, o.d, len, vaneWidth, sRoot, u);
+        const double rp = std::clamp(sRoot / len, 0.0, 1.0);
+        const double across = (res.spacingBasePixels + (res.spacingTipPixels - res.spacingBasePixels) * rp) *
+                              std::sin(std::clamp(models[v].angle(rp) - models[v].bend(rp) * u, 0.05, kPi - 0.05));
+        if (across >= 3.5) kept.push_back(o);
+      }
+      dropped = dropped || kept.size() < windows[v].size();
+      windows[v] = std::move(kept);
+    }
+    if (dropped) notes[0] = fitOrientation(0), notes[1] = fitOrientation(1), notes[2] = measureSpacing();
   }
+  for (const std::string& n : notes)
+    if (!n.empty()) res.notes.push_back(n);
+  if (res.spacingBasePixels > 0 && !(res.vanes[0].measured && res.vanes[1].measured))
+    res.notes.push_back("barb spacing corrected for the barbs' fanning with default angles: off by up to 15%");
 
   // Pass 2: barb lengths along each barb's chord (a key barb of chord 1 reaches exactly the barb length),
   // which leaves the root at the barb angle minus half the bend, measured from the rachis edge.

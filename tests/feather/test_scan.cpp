@@ -221,3 +221,31 @@ TEST(Scan, BadInputNamesTheProblem) {
     EXPECT_NE(std::string(e.what()).find("base from the tip"), std::string::npos) << e.what();
   }
 }
+
+TEST(Scan, BarbsTooFineForTheScanKeepTheDefaultsAndSaySo) {
+  // At 85 pixels per cm neighbouring barbs are under 3.5 pixels apart across their direction over most
+  // of the vanes: their orientation aliases with the pixel grid, so no angle is trusted.
+  const FeatherParams truth = scanTruth();
+  const SyntheticScan scan = renderScan(truth, 85, 0.3, 13);
+  ScanOptions opt;
+  opt.rachis = {scan.base, scan.tip};
+  opt.pixelsPerUnit = 85;
+  const ScanResult r = acquireScan(scan.gray(), opt);
+  printFit(r);
+  const FeatherParams defaults;
+  for (int v = 0; v < 2; ++v) {
+    EXPECT_FALSE(r.vanes[v].measured);
+    EXPECT_EQ(r.feather.vane(v).baseAngle, defaults.vane(v).baseAngle);
+    EXPECT_EQ(r.feather.vane(v).tipAngle, defaults.vane(v).tipAngle);
+  }
+  int angleNotes = 0, spacingNotes = 0;
+  for (const auto& n : r.notes) {
+    angleNotes += n.find("barb orientation") != std::string::npos;
+    spacingNotes += n.find("spacing") != std::string::npos;
+  }
+  EXPECT_EQ(angleNotes, 2);
+  EXPECT_EQ(spacingNotes, 1);
+  // The silhouette and the rachis do not depend on resolving barbs.
+  EXPECT_NEAR(r.feather.rachisLength, truth.rachisLength, kLengthTol * truth.rachisLength);
+  EXPECT_NEAR(r.feather.rachisLateralCurvature, truth.rachisLateralCurvature, kCurvatureTol);
+}

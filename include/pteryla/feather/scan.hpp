@@ -48,8 +48,10 @@ struct ScanOptions {
 struct ScanVaneFit {
   double baseAngle = 0, tipAngle = 0;  // radians between the rachis (toward the tip) and the barb root
   double bendBase = 0, bendTip = 0;    // turning of the barb over its length, radians, > 0 toward the tip
-  int windows = 0;                     // orientation windows used (coherent enough)
-  bool measured = false;               // false: too few windows, the defaults of FeatherParams were kept
+  int windows = 0;                     // orientation windows the fit kept (coherent, not outliers)
+  // false: too few windows, or a fit at its limits, keeping under half the windows or with residuals over
+  // 4 degrees rms (barbs too fine for the resolution, or disordered): the default angles were kept.
+  bool measured = false;
 };
 
 struct ScanResult {
@@ -60,7 +62,7 @@ struct ScanResult {
   double calamusLengthPixels = 0;    // 0 when no calamus was seen
   double rachisWidthPixels = 0;      // 0 when not measured
   double spacingBasePixels = 0, spacingTipPixels = 0;  // fitted barb spacing along the rachis at rp 0, 1
-  int spacingWindows = 0;            // autocorrelation windows with a clear period
+  int spacingWindows = 0;            // autocorrelation windows agreeing with the fitted spacing (0: not measured)
   ScanVaneFit vanes[2];              // left, right
   SilhouetteImageResult silhouette;  // the final silhouette pass (mask, background, relative lengths)
   std::vector<std::string> notes;    // what could not be measured and which default was kept
