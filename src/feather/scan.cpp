@@ -474,21 +474,35 @@ std::vector<glm::dvec2> detectRachis(const GrayImage& img) {
     dir = std::cos(t) * dir + std::sin(t) * imageLeft(dir);
   }
   track.resize(lastInside + 1);
-  // The shaft thins out before the vanes end: carry on straight while still in the feather (gaps of 2
-  // pixels allowed) to the feather's tip.
-  if (track.size() >= 2) {
-    const glm::dvec2 from = track.back();
-    const glm::dvec2 ahead = glm::normalize(track.back() - track[track.size() > 12 ? track.size() - 12 : 0]);
-    double lastIn = 0;
-    for (double t = 0.5; t - lastIn <= 2.0; t += 0.5)
-      if (inFeather(from + t * ahead)) lastIn = t;
-    if (lastIn > 0) track.push_back(from + lastIn * ahead);
+  if (track.size() < 12) throw Error("no shaft found beyond the calamus; mark the rachis (base, tip)", {}, "rachis");
+  // Where the shaft thins out the track follows noise and barbs as readily as the shaft: fit a circular
+  // arc to its first 85% and follow that arc, from there, to where it leaves the feather (gaps of 2
+  // pixels allowed): the tip.
+  const size_t firm = std::max<size_t>(2, track.size() * 85 / 100);
+  const glm::dvec2 a = track.front(), b = track[firm - 1];
+  const double chord = glm::length(b - a);
+  const glm::dvec2 ce = (b - a) / chord, cl = imageLeft(ce);
+  double sagNum = 0, sagDen = 0;  // the chord's sag, as silhouette.cpp fits it
+  for (size_t i = 0; i < firm; ++i) {
+    const double u = glm::dot(track[i] - a, ce) / chord, basis = 4 * u * (1 - u);
+    sagNum += glm::dot(track[i] - a, cl) * basis, sagDen += basis * basis;
   }
-  if (track.size() < 4) throw Error("no shaft found beyond the calamus; mark the rachis (base, tip)", {}, "rachis");
-  // Every 8th point is enough for the arc fit (extractSilhouette resamples the polyline).
+  const double turning = std::clamp(-4 * std::atan(2 * (sagDen > 0 ? sagNum / sagDen : 0) / chord), -kPi, kPi);
+  const double arcLen = std::abs(turning) < 1e-9 ? chord : chord * (turning / 2) / std::sin(turning / 2);
+  PixelArc firmArc({a, b}, turning, arcLen);
+  const auto along = [&](double s) {  // the arc's circle continued beyond its end
+    if (s <= firmArc.len) return firmArc.point(s);
+    PixelArc longer = firmArc;
+    longer.len = s, longer.theta = firmArc.theta * s / firmArc.len;
+    return longer.point(s);
+  };
+  double lastIn = arcLen;
+  for (double s = arcLen; s - lastIn <= 2.0 && s < 2 * arcLen; s += 0.5)
+    if (inFeather(along(s))) lastIn = s;
+  // The polyline handed on: the arc, every 8 pixels, to the tip.
   std::vector<glm::dvec2> out;
-  for (size_t i = 0; i + 1 < track.size(); i += 8) out.push_back(track[i]);
-  out.push_back(track.back());
+  for (double s = 0; s < lastIn; s += 8) out.push_back(along(s));
+  out.push_back(along(lastIn));
   return out;
 }
 

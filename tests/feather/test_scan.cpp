@@ -102,17 +102,26 @@ TEST(Scan, RecoversAKnownFeatherFromAMarkedRachis) {
 
 TEST(Scan, DetectsTheRachisWithoutAMark) {
   const FeatherParams truth = scanTruth();
+  const FeatherParams bent = scanTruth(0.4, 0.15);
+  struct Case {
+    const FeatherParams* feather;
+    double rotation;
+    uint64_t seed;
+  };
+  for (const Case& c : {Case{&truth, -0.5, 8}, Case{&truth, 1.5, 9}, Case{&bent, 0.3, 7}, Case{&bent, 3.0, 10}}) {
+    SCOPED_TRACE("rotation " + std::to_string(c.rotation));
+    const SyntheticScan scan = renderScan(*c.feather, kPixelsPerUnit, c.rotation, c.seed);
+    const std::vector<glm::dvec2> found = detectRachis(scan.gray());
+    ASSERT_GE(found.size(), 2u);
+    // The base is where the vanes begin; the tip, where the shaft's arc leaves the feather, is looser
+    // (the shaft tapers to nothing and the tip barbs reach past it).
+    EXPECT_LT(glm::length(found.front() - scan.base), 4.0) << found.front().x << "," << found.front().y;
+    EXPECT_LT(glm::length(found.back() - scan.tip), 8.0) << found.back().x << "," << found.back().y;
+  }
   const SyntheticScan scan = renderScan(truth, kPixelsPerUnit, -0.5, 8);
-  const GrayImage gray = scan.gray();
-  const std::vector<glm::dvec2> found = detectRachis(gray);
-  ASSERT_GE(found.size(), 2u);
-  // The base is where the vanes begin; the tip, where the traced shaft leaves the feather, is looser (the
-  // shaft tapers to nothing).
-  EXPECT_LT(glm::length(found.front() - scan.base), 4.0) << found.front().x << "," << found.front().y;
-  EXPECT_LT(glm::length(found.back() - scan.tip), 8.0) << found.back().x << "," << found.back().y;
   ScanOptions opt;
   opt.pixelsPerUnit = kPixelsPerUnit;
-  const ScanResult r = acquireScan(gray, opt);
+  const ScanResult r = acquireScan(scan.gray(), opt);
   EXPECT_TRUE(r.rachisDetected);
   expectRecovered(truth, r, 0, 0);
 }

@@ -70,11 +70,13 @@ struct ScanResult {
 
 // The rachis of the largest segmented region, as a polyline from base to tip (pixels). The base end is
 // the end of the region's principal axis with the longer stretch of bare shaft (the calamus: the region
-// at most max(5 px, 6% of its widest) across), the base point the calamus centre where the vanes begin;
-// from there the shaft's ridge (as dark or light against the background as the calamus) is followed to
-// where it leaves the feather. Throws Error (element "rachis") when neither end has a calamus at least
-// 3% of the feather long and 1.5 times the other end's (then mark the rachis by hand), and Error
-// (element "image") when nothing is segmented.
+// at most max(5 px, 6% of its widest) across), the base point the calamus centre where the vanes begin.
+// From there the shaft's ridge (as dark or light against the background as the calamus) is followed
+// until it fades; a circular arc fitted to the first 85% of that track, continued to where it leaves
+// the feather, is the result (the track's end, where the shaft is thinner than the barbs, is not
+// trusted). Throws Error (element "rachis") when neither end has a calamus at least 3% of the feather
+// long and 1.5 times the other end's (then mark the rachis by hand), and Error (element "image") when
+// nothing is segmented.
 std::vector<glm::dvec2> detectRachis(const GrayImage& img);
 
 // Measures a feather from a scan. Throws Error (element "image", "rachis" or an option name) for an
