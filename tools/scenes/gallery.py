@@ -174,6 +174,10 @@ def write_markdown(results):
     corpus = os.path.join(ROOT, "docs", "gallery", "corpus.md")
     if os.path.exists(corpus):
         lines += open(corpus).read().rstrip("\n").split("\n") + [""]
+    # A feather measured from a scan (issue #30): hand-kept too (docs/gallery/scan.md gives its commands).
+    scan = os.path.join(ROOT, "docs", "gallery", "scan.md")
+    if os.path.exists(scan):
+        lines += open(scan).read().rstrip("\n").split("\n") + [""]
     # The bird first on the page (it is processed last: it is the slowest and changes most).
     for key, title, text, scene, images, _, _ in sorted(SECTIONS, key=lambda s: s[0] != "bird"):
         r = results.get(key)
