@@ -3,8 +3,9 @@
 // and 9.1.1 (texture, shaft curvature and silhouette from the scan; the texture re-sampled). Segmentation
 // and the rachis arc come from silhouette.cpp ([GW92] thresholding). Barb orientation is the dominant
 // orientation of the structure tensor (Bigun & Granlund 1987; Kass & Witkin 1987) of the Gaussian-smoothed
-// scan; barb spacing the first strong peak of the autocorrelation of the intensity along lines parallel
-// to the rachis.
+// scan, refined to the direction of sharpest projection (as in projection-profile skew detection); barb
+// spacing the first strong peak of the autocorrelation of the intensity along lines parallel to the
+// rachis.
 #include "pteryla/feather/scan.hpp"
 
 #include <glm/geometric.hpp>
@@ -372,7 +373,10 @@ std::vector<glm::dvec2> detectRachis(const GrayImage& img) {
   const Segmentation seg = segmentFeather(img);
   size_t count = 0;
   const std::vector<uint8_t> mask = largestRegion(seg.mask, w, h, count);
-  if (count < 50) throw Error("no feather found: the largest region off the background has only " + std::to_string(count) + " pixels", {}, "image");
+  if (count < 50)
+    throw Error("no feather found: the largest region off the background has only " + std::to_string(count) +
+                    (count == 1 ? " pixel" : " pixels") + " (expected one feather on a plain background)",
+                {}, "image");
   // Principal axis of the region.
   glm::dvec2 c(0.0);
   for (size_t i = 0; i < mask.size(); ++i)
@@ -481,6 +485,7 @@ std::vector<glm::dvec2> detectRachis(const GrayImage& img) {
   const size_t firm = std::max<size_t>(2, track.size() * 85 / 100);
   const glm::dvec2 a = track.front(), b = track[firm - 1];
   const double chord = glm::length(b - a);
+  if (chord < 8) throw Error("no shaft found beyond the calamus; mark the rachis (base, tip)", {}, "rachis");
   const glm::dvec2 ce = (b - a) / chord, cl = imageLeft(ce);
   double sagNum = 0, sagDen = 0;  // the chord's sag, as silhouette.cpp fits it
   for (size_t i = 0; i < firm; ++i) {
