@@ -9,8 +9,9 @@
 //  - rachis: marked by the user, or detectRachis(); refined and fitted as a circular arc (silhouette.hpp);
 //  - spacing: the period of the intensity along lines parallel to the rachis inside each vane
 //    (autocorrelation peak, sub-pixel), fitted linearly in rp;
-//  - barb angles and key barbs: the dominant orientation (structure tensor of the smoothed image) in
-//    windows at several rp and several distances from the rachis; each window's barbs are traced back
+//  - barb angles and key barbs: the dominant orientation (seeded by the structure tensor of the smoothed
+//    image, refined to the sharpest projection) in windows at several rp and several distances from the
+//    rachis, leaving out windows whose barbs are under 3.5 pixels apart; each window's barbs are traced back
 //    to their root, and the model angle(rp, f) = a(rp) - bend(rp) f (f = fraction of the way across the
 //    vane, a and bend linear in rp) is fitted by least squares. a(0), a(1) are the base and tip angles;
 //    bend(0) and bend(1) become two key barbs, at rp 0 and rp 1, each a circular arc turning by its bend
