@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -203,7 +204,72 @@ int cmdExport(const Common& c, const ExportArgs& a) {
   return 0;
 }
 
+namespace {
+
+// --rachis "x0,y0,x1,y1[,...]": pixel coordinates, base to tip.
+std::vector<std::array<double, 2>> parseRachis(const std::string& text) {
+  const std::string expected = "expected x0,y0,x1,y1 (pixels, from the rachis base to its tip; more pairs for a polyline)";
+  std::vector<double> v;
+  const char* p = text.data();
+  const char* end = text.data() + text.size();
+  while (true) {
+    double x = 0;
+    const auto r = std::from_chars(p, end, x);
+    if (r.ec != std::errc() || !std::isfinite(x)) throw Error(expected + ", got '" + text + "'", "", "--rachis");
+    v.push_back(x);
+    p = r.ptr;
+    if (p == end) break;
+    if (*p != ',') throw Error(expected + ", got '" + text + "'", "", "--rachis");
+    ++p;
+  }
+  if (v.size() < 4 || v.size() % 2) throw Error(expected + ", got " + std::to_string(v.size()) + " numbers", "", "--rachis");
+  std::vector<std::array<double, 2>> pts;
+  for (size_t i = 0; i < v.size(); i += 2) pts.push_back({{v[i], v[i + 1]}});
+  return pts;
+}
+
+int featherFromScan(const Common& c, const FeatherArgs& a) {
+  ScanSettings settings;
+  if (a.rachis) settings.rachis = parseRachis(*a.rachis);
+  if (a.pixelsPerUnit) {
+    if (!(*a.pixelsPerUnit > 0 && std::isfinite(*a.pixelsPerUnit)))
+      throw Error("expected scan pixels per scene unit > 0", "", "--pixels-per-unit");
+    settings.pixelsPerUnit = *a.pixelsPerUnit;
+  }
+  settings.texture = a.texture;
+  settings.writeTexture = !a.noTexture;
+  ScanSummary r;
+  try {
+    r = writeFeatherFromScan(a.fromScan, a.out, settings);
+  } catch (const Error& e) {
+    // The host API names its settings; the CLI names its options.
+    const std::string& el = e.element();
+    const std::string option = el == "scan" ? "--from-scan" : el == "rachis" ? "--rachis" : el == "texture" ? "--texture"
+                               : el == "pixelsPerUnit" ? "--pixels-per-unit" : el == "out" ? "--out" : el;
+    throw Error(e.detail(), e.file(), option);
+  }
+  constexpr double kDeg = 180.0 / 3.14159265358979323846;
+  const std::string resolution = r.resolution == "pixelsPerUnit" ? "--pixels-per-unit"
+                                 : r.resolution == "300 dpi assumed" ? "no resolution in the image: 300 dpi assumed"
+                                                                     : r.resolution;
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "measured %s (rachis %s, %.1f pixels per unit from %s): rachis %.4g, lateral curvature %.1f deg, "
+                "spacing %.4g..%.4g, angles left %.1f..%.1f deg, right %.1f..%.1f deg",
+                a.fromScan.c_str(), r.rachisDetected ? "found" : "marked", r.pixelsPerUnit, resolution.c_str(),
+                r.rachisLength, r.lateralCurvature * kDeg, r.spacingBase, r.spacingTip, r.leftBaseAngle * kDeg,
+                r.leftTipAngle * kDeg, r.rightBaseAngle * kDeg, r.rightTipAngle * kDeg);
+  info(c, line);
+  for (const auto& n : r.notes) info(c, "note: " + n);
+  info(c, "wrote " + a.out + (r.texture.empty() ? "" : " and its texture " + r.texture));
+  return 0;
+}
+
+}  // namespace
+
 int cmdFeather(const Common& c, const FeatherArgs& a) {
+  if (!a.fromScan.empty()) return featherFromScan(c, a);
+  if (a.file.empty()) throw Error("expected a feather file (.json), or --from-scan IMAGE", "", "file");
   checkOutExtension(a.out, {".obj", ".ply", ".png"}, "a mesh or an image");
   if (!(a.lod > 0 && a.lod <= 1)) throw Error("expected a fraction in (0, 1]", "", "--lod");
   FeatherOutput output;

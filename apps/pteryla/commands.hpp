@@ -63,6 +63,12 @@ struct FeatherArgs {
   double age = 1.0;
   double lod = 1.0;
   std::string size = "512x512";
+  // --from-scan IMAGE: measure a feather from a flatbed scan and write it to `out` (.json) instead.
+  std::string fromScan;
+  std::optional<std::string> rachis;     // "x0,y0,x1,y1[,...]" pixels, base to tip; absent = detect
+  std::optional<double> pixelsPerUnit;   // empty: the scan's resolution metadata, else 300 dpi (per cm)
+  std::string texture;                   // texture file; empty = OUT's name + "_texture.png"
+  bool noTexture = false;
 };
 
 // Each returns the process exit code; bad input throws pteryla::Error (main maps it to exit 2).
@@ -70,6 +76,7 @@ int cmdRender(const Common&, const RenderArgs&);
 int cmdCheck(const Common&, const SceneArgs&);
 int cmdBench(const Common&, const BenchArgs&);
 int cmdExport(const Common&, const ExportArgs&);
+// Builds a feather file's geometry or image, or with --from-scan measures a feather from a scan.
 int cmdFeather(const Common&, const FeatherArgs&);
 int cmdFrames(const Common&, const FramesArgs&);
 int cmdFarmSlurm(const Common&, const FarmArgs&);

@@ -123,13 +123,41 @@ int main(int argc, char** argv) {
   (void)optTo;
 
   FeatherArgs feather;
-  auto* cFeather = app.add_subcommand("feather", "Build one feather from a feather file: geometry (.obj/.ply) or an image (.png)");
-  cFeather->add_option("file", feather.file, "Feather file (.json, docs/feather-format.md)")->required();
-  cFeather->add_option("--out,-o", feather.out, "Output: .obj/.ply mesh or .png image")->required();
-  cFeather->add_option("--age", feather.age, "Feather age in [0,1] (growth); values in (1,2] add wear")
+  auto* cFeather = app.add_subcommand(
+      "feather", "Build one feather from a feather file: geometry (.obj/.ply) or an image (.png).\n"
+                 "With --from-scan IMAGE instead, measure a feather from a flatbed scan (tip up = left vane on the\n"
+                 "left, dorsal side shown) and write a feather file (.json): rachis length and lateral curvature,\n"
+                 "calamus, silhouette, barb spacing, barb angles and two key barbs per vane, and the scan resampled\n"
+                 "into the feather's texture space as its colour texture (docs/feather-format.md, \"Feathers from scans\")");
+  auto* optFile = cFeather->add_option("file", feather.file, "Feather file (.json, docs/feather-format.md)");
+  cFeather->add_option("--out,-o", feather.out, "Output: .obj/.ply mesh or .png image; with --from-scan a .json feather file")
+      ->required();
+  auto* optAge = cFeather->add_option("--age", feather.age, "Feather age in [0,1] (growth); values in (1,2] add wear")
       ->check(CLI::Range(0.0, 2.0));
-  cFeather->add_option("--lod", feather.lod, "Fraction of geometry in (0,1]")->check(CLI::Range(0.0, 1.0));
-  cFeather->add_option("--size", feather.size, "Image size WxH for .png output");
+  auto* optLod = cFeather->add_option("--lod", feather.lod, "Fraction of geometry in (0,1]")->check(CLI::Range(0.0, 1.0));
+  auto* optSize = cFeather->add_option("--size", feather.size, "Image size WxH for .png output");
+  auto* optScan = cFeather->add_option("--from-scan", feather.fromScan,
+                                       "Scan image (any format OpenImageIO reads) to measure instead of a feather file");
+  optFile->excludes(optScan);
+  for (auto* o : {optAge, optLod, optSize}) o->excludes(optScan);
+  cFeather->add_option("--rachis", feather.rachis,
+                       "With --from-scan: the rachis as pixel coordinates x0,y0,x1,y1 (x right, y down), from its base "
+                       "(where the vanes begin) to its tip; more pairs mark a polyline. Default: found automatically, "
+                       "which needs the bare calamus visible at the base and a shaft that contrasts with the vanes; "
+                       "otherwise give it")
+      ->needs(optScan);
+  cFeather->add_option("--pixels-per-unit", feather.pixelsPerUnit,
+                       "With --from-scan: scan pixels per scene unit (default: the image's resolution metadata as pixels "
+                       "per centimetre, else 300 dpi = 118.11)")
+      ->needs(optScan);
+  auto* optTexture = cFeather->add_option("--texture", feather.texture,
+                                          "With --from-scan: where to write the colour texture (.png; default: OUT's "
+                                          "name + _texture.png beside it); the feather file refers to it by a path "
+                                          "relative to itself, so move the two together")
+                         ->needs(optScan);
+  cFeather->add_flag("--no-texture", feather.noTexture, "With --from-scan: write no texture (the feather keeps its default look)")
+      ->needs(optScan)
+      ->excludes(optTexture);
 
   FramesArgs frames;
   auto* cFrames = app.add_subcommand(

@@ -299,6 +299,29 @@ struct FeatherOutput {
 };
 PTERYLA_API size_t writeFeather(const std::string& featherFile, const std::string& out, const FeatherOutput& output = {});
 
+// A feather measured from a flatbed scan (Streit 2003, 5.2.3; docs/feather-format.md, "Feathers from
+// scans"), as `pteryla feather --from-scan` makes it: writes the feather file `out` (.json) and, unless
+// told not to, the scan resampled into the feather's texture space as its colour texture beside it.
+struct ScanSettings {
+  std::vector<std::array<double, 2>> rachis;  // pixels (x right, y down), base to tip; empty = found
+  double pixelsPerUnit = 0;  // scan pixels per scene unit; 0 = the image's resolution (per cm), else 300 dpi
+  std::string texture;       // the texture file (.png); "" = out's name + "_texture.png"
+  bool writeTexture = true;  // false: no texture (the feather keeps its default look)
+};
+struct ScanSummary {
+  bool rachisDetected = false;     // the rachis was found, not given
+  double pixelsPerUnit = 0;        // what the measurement used, and where it came from:
+  std::string resolution;          // "pixelsPerUnit", "the image's resolution" or "300 dpi assumed"
+  double rachisLength = 0, lateralCurvature = 0;  // scene units, radians
+  double spacingBase = 0, spacingTip = 0;         // barb spacing (scene units)
+  double leftBaseAngle = 0, leftTipAngle = 0, rightBaseAngle = 0, rightTipAngle = 0;  // radians
+  std::string texture;             // the texture written ("" = none)
+  std::vector<std::string> notes;  // what could not be measured and which default was kept
+};
+// Throws pteryla::Error naming the file and "scan", "rachis", "pixelsPerUnit", "texture" or "out".
+PTERYLA_API ScanSummary writeFeatherFromScan(const std::string& scanImage, const std::string& out,
+                                             const ScanSettings& settings = {});
+
 class PTERYLA_API Session {
  public:
   // Checks the skin (pteryla::Error naming "positions", "triangles", "vertex 5", "face 17", ...) and the

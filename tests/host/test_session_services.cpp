@@ -222,3 +222,35 @@ TEST(HostServices, OneFeatherAsAMeshOrAnImage) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string elementOfScanError(const std::string& image, const std::string& out, const pteryla::ScanSettings& s = {}) {
+  try {
+    pteryla::writeFeatherFromScan(image, out, s);
+  } catch (const pteryla::Error& e) {
+    return e.element();
+  }
+  return "(accepted)";
+}
+
+}  // namespace
+
+// The scan door refuses what it cannot measure, naming the setting (the CLI maps them to its options),
+// before writing anything.
+TEST(HostServices, FeatherFromScanNamesWhatItRefuses) {
+  const std::string out = tempPath("services_scan/f.json");
+  fs::remove_all(fs::path(out).parent_path());
+  EXPECT_EQ(elementOfScanError(kData + "/textures/no_such.png", out), "scan");
+  EXPECT_EQ(elementOfScanError(kData + "/textures/barb_alpha.png", tempPath("f.obj")), "out");
+  pteryla::ScanSettings outside;
+  outside.rachis = {{{0, 0}}, {{1e6, 3}}};
+  EXPECT_EQ(elementOfScanError(kData + "/textures/barb_alpha.png", out, outside), "rachis");
+  pteryla::ScanSettings badResolution;
+  badResolution.pixelsPerUnit = -2;
+  EXPECT_EQ(elementOfScanError(kData + "/textures/barb_alpha.png", out, badResolution), "pixelsPerUnit");
+  pteryla::ScanSettings badTexture;
+  badTexture.texture = tempPath("t.jpg");
+  EXPECT_EQ(elementOfScanError(kData + "/textures/barb_alpha.png", out, badTexture), "texture");
+  EXPECT_FALSE(fs::exists(fs::path(out).parent_path()));
+}
