@@ -43,8 +43,9 @@ struct PySession {
   // Every call that may rewrite the frame's memory or run the pipeline goes through here first.
   void requireMutable(const char* call) const {
     if (shared->busy)
-      throw Error(std::string(call) + ": the session is evaluating in another thread; a session is used by one thread "
-                                      "at a time",
+      throw Error(std::string(call) +
+                      ": the session is evaluating in another thread; a session is used by one thread "
+                      "at a time",
                   "", "session");
     if (shared->liveViews > 0)
       throw Error(std::string(call) + ": " + std::to_string(shared->liveViews) +
@@ -53,8 +54,7 @@ struct PySession {
                   "", "frame");
   }
   void requireIdle(const char* call) const {
-    if (shared->busy)
-      throw Error(std::string(call) + ": the session is evaluating in another thread", "", "session");
+    if (shared->busy) throw Error(std::string(call) + ": the session is evaluating in another thread", "", "session");
   }
 };
 
@@ -81,8 +81,7 @@ std::string shapeText(const py::array& a) {
 
 void requireShape(const py::array& a, py::ssize_t cols, const char* element, const char* what) {
   const bool ok = cols == 0 ? a.ndim() == 1 : a.ndim() == 2 && a.shape(1) == cols;
-  if (!ok)
-    throw Error(std::string("expected ") + what + ", got shape " + shapeText(a), "", element);
+  if (!ok) throw Error(std::string("expected ") + what + ", got shape " + shapeText(a), "", element);
 }
 
 // float32 or float64 (n, 3), finite.
@@ -142,24 +141,34 @@ std::string pathFrom(py::handle h) { return py::str(py::module_::import("os").at
 
 std::string orderingName(pteryla::CoatSetup::Ordering o) {
   switch (o) {
-    case pteryla::CoatSetup::Ordering::Axis: return "axis";
-    case pteryla::CoatSetup::Ordering::Tracts: return "tracts";
-    case pteryla::CoatSetup::Ordering::Flow: return "flow";
+    case pteryla::CoatSetup::Ordering::Axis:
+      return "axis";
+    case pteryla::CoatSetup::Ordering::Tracts:
+      return "tracts";
+    case pteryla::CoatSetup::Ordering::Flow:
+      return "flow";
   }
   return "axis";
 }
 
 void setOrdering(pteryla::CoatSetup& c, const std::string& v) {
-  if (v == "axis") c.ordering = pteryla::CoatSetup::Ordering::Axis;
-  else if (v == "tracts") c.ordering = pteryla::CoatSetup::Ordering::Tracts;
-  else if (v == "flow") c.ordering = pteryla::CoatSetup::Ordering::Flow;
-  else throw Error("unknown ordering '" + v + "' (expected axis, tracts or flow)", "", "ordering.method");
+  if (v == "axis")
+    c.ordering = pteryla::CoatSetup::Ordering::Axis;
+  else if (v == "tracts")
+    c.ordering = pteryla::CoatSetup::Ordering::Tracts;
+  else if (v == "flow")
+    c.ordering = pteryla::CoatSetup::Ordering::Flow;
+  else
+    throw Error("unknown ordering '" + v + "' (expected axis, tracts or flow)", "", "ordering.method");
 }
 
 void setPacking(pteryla::CoatSetup& c, const std::string& v) {
-  if (v == "drape") c.packing = pteryla::CoatSetup::Packing::Drape;
-  else if (v == "height_field") c.packing = pteryla::CoatSetup::Packing::HeightField;
-  else throw Error("unknown packing '" + v + "' (expected drape or height_field)", "", "packing.method");
+  if (v == "drape")
+    c.packing = pteryla::CoatSetup::Packing::Drape;
+  else if (v == "height_field")
+    c.packing = pteryla::CoatSetup::Packing::HeightField;
+  else
+    throw Error("unknown packing '" + v + "' (expected drape or height_field)", "", "packing.method");
 }
 
 template <class T>
@@ -311,8 +320,7 @@ PySession makeSession(py::handle positions, py::handle triangles, py::handle set
   if (p.shape(0) == 0) throw Error("the skin has no vertices", "", "positions");
   skin.positions.assign(p.data(), p.data() + p.size());
   const uint64_t nv = uint64_t(p.shape(0));
-  skin.triangles =
-      indicesFrom(triangles, 3, nv, "triangles", "shape (m, 3): 3 vertex indices per triangle", "face");
+  skin.triangles = indicesFrom(triangles, 3, nv, "triangles", "shape (m, 3): 3 vertex indices per triangle", "face");
   if (skin.triangles.empty()) throw Error("the skin has no triangles", "", "triangles");
   if (!groupNames.is_none()) skin.groupNames = groupNames.cast<std::vector<std::string>>();
   if (!faceGroups.is_none()) {
@@ -409,11 +417,12 @@ the Setup's seed; an int re-scatters only this tract).)")
                      "This tract's own follicle seed (None: derived from Setup.seed and the tract's index).")
       .def_readwrite("moult", &pteryla::TractSetup::moult, "False: keeps its feathers when Setup.moult is enabled.")
       .def("__repr__", [](const pteryla::TractSetup& t) {
-        return "pteryla.Tract(" + py::repr(py::str(t.name)).cast<std::string>() + ", count=" +
-               std::to_string(t.count) + ", density=" + py::repr(py::float_(t.density)).cast<std::string>() + ")";
+        return "pteryla.Tract(" + py::repr(py::str(t.name)).cast<std::string>() + ", count=" + std::to_string(t.count) +
+               ", density=" + py::repr(py::float_(t.density)).cast<std::string>() + ")";
       });
 
-  py::class_<pteryla::MoultSetup>(m, "Moult", R"(Feather replacement over time (docs/moult.md): a window moves through each
+  py::class_<pteryla::MoultSetup>(m, "Moult",
+                                  R"(Feather replacement over time (docs/moult.md): a window moves through each
 tract's feathers from start to start + duration; feathers in it are lost, then regrow.
 
 Fields: enabled (False: no moult), start, duration (> 0), window (0, 1], sequence ('centre_out',
@@ -443,7 +452,8 @@ Fields: enabled (False: no moult), start, duration (> 0), window (0, 1], sequenc
       .def_readwrite("random", &pteryla::MoultSetup::random)
       .def_readwrite("seed", &pteryla::MoultSetup::seed);
 
-  py::class_<pteryla::ControlSetup>(m, "Control", R"(An expressive control (docs/controls.md): at a skin point, it raises,
+  py::class_<pteryla::ControlSetup>(m, "Control",
+                                    R"(An expressive control (docs/controls.md): at a skin point, it raises,
 aims, turns, twists and lags the feathers within radius as its keys say.
 
 Control(at, radius, *, name='', falloff=0, tracts=[], keys=[{'t': 0, 'lift': 1}], interpolation='linear',
@@ -474,11 +484,16 @@ seed=1, twist_angle=45, max_lift=90). A key is a dict with 't' and any of 'lift'
                    haveT = true;
                  } else if (name == "offset") {
                    key.offset = item.second.cast<std::array<double, 3>>();
-                 } else if (name == "lift") key.lift = item.second.cast<double>();
-                 else if (name == "aim") key.aim = item.second.cast<double>();
-                 else if (name == "direction") key.direction = item.second.cast<double>();
-                 else if (name == "random") key.random = item.second.cast<double>();
-                 else if (name == "dynamic") key.dynamic = item.second.cast<double>();
+                 } else if (name == "lift")
+                   key.lift = item.second.cast<double>();
+                 else if (name == "aim")
+                   key.aim = item.second.cast<double>();
+                 else if (name == "direction")
+                   key.direction = item.second.cast<double>();
+                 else if (name == "random")
+                   key.random = item.second.cast<double>();
+                 else if (name == "dynamic")
+                   key.dynamic = item.second.cast<double>();
                  else
                    throw pteryla::Error("unknown key (expected t, lift, aim, direction, random, dynamic, offset)", "",
                                         where + "." + name);
@@ -531,8 +546,7 @@ moult: pteryla.Moult (default: off); controls: list of pteryla.Control.)")
       .def_readwrite("tracts", &pteryla::CoatSetup::tracts)
       .def_readwrite("axis", &pteryla::CoatSetup::axis)
       .def_property(
-          "ordering", [](const pteryla::CoatSetup& c) { return orderingName(c.ordering); },
-          &setOrdering,
+          "ordering", [](const pteryla::CoatSetup& c) { return orderingName(c.ordering); }, &setOrdering,
           "Layer order for packing: 'axis', 'tracts' or 'flow' (docs/coat.md).")
       .def_readwrite("tract_order", &pteryla::CoatSetup::tractOrder)
       .def_property(
@@ -540,8 +554,7 @@ moult: pteryla.Moult (default: off); controls: list of pteryla.Control.)")
           [](const pteryla::CoatSetup& c) {
             return c.packing == pteryla::CoatSetup::Packing::Drape ? "drape" : "height_field";
           },
-          &setPacking,
-          "'drape' or 'height_field' (docs/packing.md).")
+          &setPacking, "'drape' or 'height_field' (docs/packing.md).")
       .def_readwrite("seed", &pteryla::CoatSetup::seed, "Same skin + set-up + seed = same coat, bit for bit.")
       .def_readwrite("moult", &pteryla::CoatSetup::moult, "pteryla.Moult (enabled False: no moult).")
       .def_readwrite("controls", &pteryla::CoatSetup::controls, "Expressive controls: list of pteryla.Control.");
@@ -587,12 +600,14 @@ Session.from_scene_file(path): a scene file (docs/scene-format.md) or a bare mes
           [](py::object path) {
             const std::string p = pathFrom(path);
             PySession s;
-            s.session = withoutGil(s, [&] { return std::make_unique<pteryla::Session>(pteryla::Session::fromSceneFile(p)); });
+            s.session =
+                withoutGil(s, [&] { return std::make_unique<pteryla::Session>(pteryla::Session::fromSceneFile(p)); });
             return s;
           },
           py::arg("path"), "A session from a scene file (.json) or a bare mesh (.obj/.ply/.off/.stl).")
-      .def_property_readonly("vertex_count", [](const PySession& s) { return s.session->vertexCount(); },
-                             "Vertices of the rest skin (what set_pose expects).")
+      .def_property_readonly(
+          "vertex_count", [](const PySession& s) { return s.session->vertexCount(); },
+          "Vertices of the rest skin (what set_pose expects).")
       .def_property_readonly("face_count", [](const PySession& s) { return s.session->faceCount(); })
       .def(
           "set_pose",
@@ -647,9 +662,12 @@ Session.from_scene_file(path): a scene file (docs/scene-format.md) or a bare mes
           [](const PySession& s) { return s.session->poseMode() == pteryla::PoseMode::Follow ? "follow" : "repack"; },
           [](PySession& s, const std::string& mode) {
             s.requireMutable("pose_mode");
-            if (mode == "follow") s.session->setPoseMode(pteryla::PoseMode::Follow);
-            else if (mode == "repack") s.session->setPoseMode(pteryla::PoseMode::Repack);
-            else throw pteryla::Error("expected 'repack' or 'follow', got '" + mode + "'", "", "pose_mode");
+            if (mode == "follow")
+              s.session->setPoseMode(pteryla::PoseMode::Follow);
+            else if (mode == "repack")
+              s.session->setPoseMode(pteryla::PoseMode::Repack);
+            else
+              throw pteryla::Error("expected 'repack' or 'follow', got '" + mode + "'", "", "pose_mode");
           },
           R"(How set_pose moves the coat: 'repack' (default) re-lays it on the posed skin (a full evaluation
 per pose); 'follow' lays it once on the rest skin (or the scene's skeleton pose) and lets the posed

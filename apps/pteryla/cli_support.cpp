@@ -38,7 +38,10 @@ Progress makeProgress(const Common& c) {
       std::fprintf(stderr, "\r%-12s [%.*s%*s] %3d%%", stage.c_str(), filled, "####################", 20 - filled, "",
                    pct);
       g_open = true;
-      if (pct == 100) { std::fputc('\n', stderr); g_open = false; }
+      if (pct == 100) {
+        std::fputc('\n', stderr);
+        g_open = false;
+      }
     } else if (pct == 0 || pct == 100 || pct % 25 == 0) {
       std::fprintf(stderr, "%s %d%%\n", stage.c_str(), pct);
     }
@@ -76,8 +79,6 @@ void info(const Common& c, const std::string& msg) {
   if (!c.quiet) std::fprintf(stderr, "%s\n", msg.c_str());
 }
 
-
-
 uint64_t parseSeed(const std::string& text) {
   uint64_t v = 0;
   const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
@@ -89,7 +90,8 @@ uint64_t parseSeed(const std::string& text) {
 Loaded load(const Common& c, const SceneArgs& a) {
   int width = 0, height = 0;
   if (!a.size.empty()) parseSize(a.size, "--size", width, height);
-  if (a.lod && !(*a.lod > 0 && *a.lod <= 1)) throw Error("expected a fraction in (0, 1], got " + std::to_string(*a.lod), "", "--lod");
+  if (a.lod && !(*a.lod > 0 && *a.lod <= 1))
+    throw Error("expected a fraction in (0, 1], got " + std::to_string(*a.lod), "", "--lod");
   if (a.time && !std::isfinite(*a.time)) throw Error("expected a finite time", "", "--time");
   SceneFileOptions options;
   if (!a.seed.empty()) options.seed = parseSeed(a.seed);

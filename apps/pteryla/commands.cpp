@@ -62,10 +62,12 @@ int cmdRender(const Common& c, const RenderArgs& a) {
   ensureParentDir(a.out);
   render::saveImage(a.out, image);
   endProgress(c);
-  if (!l.session.evaluate()) throw InternalError("the render's own frame could not be read back");  // no work: up to date
+  if (!l.session.evaluate())
+    throw InternalError("the render's own frame could not be read back");  // no work: up to date
   const Frame& f = l.session.frame();
   info(c, "wrote " + a.out + " (" + std::to_string(l.width) + "x" + std::to_string(l.height) + ", " +
-              std::to_string(f.ranges.size) + " feathers, " + std::to_string(f.indices.size / 3) + " feather triangles)");
+              std::to_string(f.ranges.size) + " feathers, " + std::to_string(f.indices.size / 3) +
+              " feather triangles)");
   return 0;
 }
 
@@ -75,7 +77,8 @@ int cmdCheck(const Common& c, const SceneArgs& a) {
   endProgress(c);
   std::printf(
       "{\"follicles\": %s, \"hex_fraction\": %s, \"nn_cv\": %s, \"feathers\": %s, \"intersecting_pairs\": %s, "
-      "\"intersecting_pairs_unpacked\": %s, \"intersecting_pairs_proxy\": %s, \"skin_penetrations\": %s, \"coverage\": %s, "
+      "\"intersecting_pairs_unpacked\": %s, \"intersecting_pairs_proxy\": %s, \"skin_penetrations\": %s, \"coverage\": "
+      "%s, "
       "\"elevation_p50\": %s, \"elevation_p90\": %s, \"fixed_feathers\": %s, \"hidden_feathers\": %s, "
       "\"intersecting_feathers\": %s, \"penetrating_feathers\": %s}\n",
       jsonCountOrNull(m.follicles).c_str(), jsonNumberOrNull(m.hexFraction).c_str(), jsonNumberOrNull(m.nnCv).c_str(),
@@ -172,11 +175,13 @@ int cmdExport(const Common& c, const ExportArgs& a) {
   const bool usd = ext == ".usda";
   if (a.asGiven && !usd && a.as != "cards")
     throw Error("--as " + a.as + " needs a .usda file: glTF, OBJ and PLY carry the coat as cards", a.out, "--as");
-  if (a.from.has_value() != a.to.has_value()) throw Error("--from and --to go together", "", a.from ? "--to" : "--from");
+  if (a.from.has_value() != a.to.has_value())
+    throw Error("--from and --to go together", "", a.from ? "--to" : "--from");
   if (a.from && a.time) throw Error("give either --time or a range --from/--to", "", "--time");
   if (a.from) settings.times = exportFrameTimes(*a.from, *a.to, a.fps);
   settings.fps = a.fps;
-  if (!(a.metersPerUnit > 0 && std::isfinite(a.metersPerUnit))) throw Error("expected a positive number", "", "--meters-per-unit");
+  if (!(a.metersPerUnit > 0 && std::isfinite(a.metersPerUnit)))
+    throw Error("expected a positive number", "", "--meters-per-unit");
   settings.metersPerUnit = a.metersPerUnit;
   if ((ext == ".obj" || ext == ".ply") && settings.times.size() > 1)
     throw Error("OBJ and PLY hold one frame: export a range as .glb, .gltf or .usda", a.out, "--from");
@@ -196,9 +201,12 @@ int cmdExport(const Common& c, const ExportArgs& a) {
   os.precision(3);
   os << "wrote " << a.out << " (" << r.bytes << " bytes, " << r.frames << (r.frames == 1 ? " frame, " : " frames, ")
      << r.feathers << " feathers";
-  if (usd && a.as == "curves") os << ", " << r.curves << " curves";
-  else if (usd && a.as == "instances") os << ", " << r.instances << " instances of " << r.prototypes << " prototypes";
-  else os << ", " << r.triangles << " triangles";
+  if (usd && a.as == "curves")
+    os << ", " << r.curves << " curves";
+  else if (usd && a.as == "instances")
+    os << ", " << r.instances << " instances of " << r.prototypes << " prototypes";
+  else
+    os << ", " << r.triangles << " triangles";
   os << "; " << std::fixed << r.seconds << " s, of which writing " << r.writeSeconds << " s)";
   info(c, os.str());
   return 0;
@@ -208,7 +216,8 @@ namespace {
 
 // --rachis "x0,y0,x1,y1[,...]": pixel coordinates, base to tip.
 std::vector<std::array<double, 2>> parseRachis(const std::string& text) {
-  const std::string expected = "expected x0,y0,x1,y1 (pixels, from the rachis base to its tip; more pairs for a polyline)";
+  const std::string expected =
+      "expected x0,y0,x1,y1 (pixels, from the rachis base to its tip; more pairs for a polyline)";
   std::vector<double> v;
   const char* p = text.data();
   const char* end = text.data() + text.size();
@@ -222,7 +231,8 @@ std::vector<std::array<double, 2>> parseRachis(const std::string& text) {
     if (*p != ',') throw Error(expected + ", got '" + text + "'", "", "--rachis");
     ++p;
   }
-  if (v.size() < 4 || v.size() % 2) throw Error(expected + ", got " + std::to_string(v.size()) + " numbers", "", "--rachis");
+  if (v.size() < 4 || v.size() % 2)
+    throw Error(expected + ", got " + std::to_string(v.size()) + " numbers", "", "--rachis");
   std::vector<std::array<double, 2>> pts;
   for (size_t i = 0; i < v.size(); i += 2) pts.push_back({{v[i], v[i + 1]}});
   return pts;
@@ -244,12 +254,16 @@ int featherFromScan(const Common& c, const FeatherArgs& a) {
   } catch (const Error& e) {
     // The host API names its settings; the CLI names its options.
     const std::string& el = e.element();
-    const std::string option = el == "scan" ? "--from-scan" : el == "rachis" ? "--rachis" : el == "texture" ? "--texture"
-                               : el == "pixelsPerUnit" ? "--pixels-per-unit" : el == "out" ? "--out" : el;
+    const std::string option = el == "scan"            ? "--from-scan"
+                               : el == "rachis"        ? "--rachis"
+                               : el == "texture"       ? "--texture"
+                               : el == "pixelsPerUnit" ? "--pixels-per-unit"
+                               : el == "out"           ? "--out"
+                                                       : el;
     throw Error(e.detail(), e.file(), option);
   }
   constexpr double kDeg = 180.0 / 3.14159265358979323846;
-  const std::string resolution = r.resolution == "pixelsPerUnit" ? "--pixels-per-unit"
+  const std::string resolution = r.resolution == "pixelsPerUnit"     ? "--pixels-per-unit"
                                  : r.resolution == "300 dpi assumed" ? "no resolution in the image: 300 dpi assumed"
                                                                      : r.resolution;
   char line[400];
@@ -305,7 +319,8 @@ int cmdDiff(const Common& c, const DiffArgs& a) {
     j["golden_height"] = expected.height;
   }
   j["match"] = d.matches;
-  j["tolerance"] = {{"pixel", a.tolerance.pixel}, {"fraction", a.tolerance.fraction}, {"max_error", a.tolerance.maxError}};
+  j["tolerance"] = {
+      {"pixel", a.tolerance.pixel}, {"fraction", a.tolerance.fraction}, {"max_error", a.tolerance.maxError}};
   std::printf("%s\n", j.dump().c_str());
   if (!d.sameSize) {
     info(c, a.actual + " is " + std::to_string(actual.width) + "x" + std::to_string(actual.height) + ", " + a.expected +
@@ -317,9 +332,8 @@ int cmdDiff(const Common& c, const DiffArgs& a) {
     render::saveImage(a.out, render::differenceImage(actual, expected, a.tolerance));
   }
   char line[256];
-  std::snprintf(line, sizeof line, "%zu pixels (%s) changed by more than %.3g/255; max error %d/255",
-                d.changedPixels, perCent(d.changedFraction).c_str(), a.tolerance.pixel * 255.0,
-                int(std::lround(d.maxError * 255.0)));
+  std::snprintf(line, sizeof line, "%zu pixels (%s) changed by more than %.3g/255; max error %d/255", d.changedPixels,
+                perCent(d.changedFraction).c_str(), a.tolerance.pixel * 255.0, int(std::lround(d.maxError * 255.0)));
   std::string msg = line;
   if (d.maxX >= 0) msg += " at (" + std::to_string(d.maxX) + "," + std::to_string(d.maxY) + ")";
   info(c, msg + (d.matches ? ": match" : ": differ"));

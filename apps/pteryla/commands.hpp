@@ -26,8 +26,8 @@ struct ExportArgs : SceneArgs {
   std::string out;
   std::optional<double> from, to;  // a frame range (both or neither)
   double fps = 24;
-  std::string as = "curves";       // USD coat representation: curves, cards or instances
-  bool asGiven = false;            // --as was on the command line
+  std::string as = "curves";  // USD coat representation: curves, cards or instances
+  bool asGiven = false;       // --as was on the command line
   double metersPerUnit = 1.0;
 };
 struct FramesArgs : SceneArgs {
@@ -43,7 +43,7 @@ struct FramesArgs : SceneArgs {
   // --export .glb|.gltf|.usda: each frame is exported (exchange::exportCoat at that time) to
   // DIR/frame_NNNN<ext> instead of rendered; empty = PNG frames.
   std::string exportExt;
-  std::string as = "curves";     // USD coat representation (--as)
+  std::string as = "curves";  // USD coat representation (--as)
   bool asGiven = false;
   double metersPerUnit = 1.0;
   bool metersGiven = false;
@@ -51,7 +51,7 @@ struct FramesArgs : SceneArgs {
 struct FarmArgs : FramesArgs {
   int64_t farmChunk = 10;  // frames per array task
   std::string partition;
-  std::string mem;         // Slurm --mem for each task (e.g. 2G); empty = the cluster default
+  std::string mem;  // Slurm --mem for each task (e.g. 2G); empty = the cluster default
   bool dryRun = false;
 };
 struct DiffArgs {
@@ -65,9 +65,9 @@ struct FeatherArgs {
   std::string size = "512x512";
   // --from-scan IMAGE: measure a feather from a flatbed scan and write it to `out` (.json) instead.
   std::string fromScan;
-  std::optional<std::string> rachis;     // "x0,y0,x1,y1[,...]" pixels, base to tip; absent = detect
-  std::optional<double> pixelsPerUnit;   // empty: the scan's resolution metadata, else 300 dpi (per cm)
-  std::string texture;                   // texture file; empty = OUT's name + "_texture.png"
+  std::optional<std::string> rachis;    // "x0,y0,x1,y1[,...]" pixels, base to tip; absent = detect
+  std::optional<double> pixelsPerUnit;  // empty: the scan's resolution metadata, else 300 dpi (per cm)
+  std::string texture;                  // texture file; empty = OUT's name + "_texture.png"
   bool noTexture = false;
 };
 

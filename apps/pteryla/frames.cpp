@@ -21,7 +21,6 @@
 
 namespace pteryla::cli {
 
-
 // ------------------------------------------------------------------ frames, chunks and the farm
 //
 // A frame is a pure function of (scene, time), so a range can be split into chunks rendered anywhere.
@@ -93,7 +92,8 @@ uint64_t frameCount(const FramesArgs& a) {
 // Number of chunks of `chunk` frames; throws naming --chunk / --task when they are out of range.
 uint64_t checkChunking(const FramesArgs& a, uint64_t count) {
   if (a.chunk.has_value() != a.task.has_value())
-    throw Error("--chunk and --task go together (render chunk TASK of CHUNK frames)", "", a.chunk ? "--task" : "--chunk");
+    throw Error("--chunk and --task go together (render chunk TASK of CHUNK frames)", "",
+                a.chunk ? "--task" : "--chunk");
   if (!a.chunk) return 1;
   if (*a.chunk < 1) throw Error("expected a number of frames >= 1, got " + std::to_string(*a.chunk), "", "--chunk");
   const uint64_t tasks = (count + uint64_t(*a.chunk) - 1) / uint64_t(*a.chunk);
@@ -185,9 +185,10 @@ void writeManifest(const FramesArgs& a, int w, int h, uint64_t count, const std:
   m << ",\n  \"frames\": [";
   for (uint64_t k = 0; k < count; ++k) {
     const nlohmann::json& s = sidecars[k];
-    m << (k ? ",\n    " : "\n    ") << "{\"file\": \"" << frameName(k, frameExt(a)) << "\", \"time\": " << a.from + double(k) / a.fps
-      << ", \"sha256\": \"" << jsonEscape(s.value("sha256", "")) << "\", \"seconds\": " << jsonNumberOrNull(s.value("seconds", 0.0))
-      << ", \"host\": \"" << jsonEscape(s.value("host", "")) << "\"}";
+    m << (k ? ",\n    " : "\n    ") << "{\"file\": \"" << frameName(k, frameExt(a))
+      << "\", \"time\": " << a.from + double(k) / a.fps << ", \"sha256\": \"" << jsonEscape(s.value("sha256", ""))
+      << "\", \"seconds\": " << jsonNumberOrNull(s.value("seconds", 0.0)) << ", \"host\": \""
+      << jsonEscape(s.value("host", "")) << "\"}";
   }
   m << "\n  ]\n}\n";
   writeFileAtomic((fs::path(a.out) / "frames.json").string(), m.str());
@@ -212,8 +213,7 @@ void writeContactSheet(const std::string& path, const std::string& dir, uint64_t
   for (uint64_t i = 0; i < n; ++i) {
     const int x0 = kGap + int(i % cols) * (tw + kGap), y0 = kGap + int(i / cols) * (th + kGap);
     const render::Image& t = tiles[i];
-    for (int y = 0; y < t.height; ++y)
-      std::copy(t.pixel(0, y), t.pixel(0, y) + 4 * t.width, sheet.pixel(x0, y0 + y));
+    for (int y = 0; y < t.height; ++y) std::copy(t.pixel(0, y), t.pixel(0, y) + 4 * t.width, sheet.pixel(x0, y0 + y));
   }
   render::saveImage(path, sheet);
 }
@@ -225,7 +225,6 @@ struct GoldenReport {
   std::vector<std::string> problems;  // the first few, for the message
   nlohmann::json json;
 };
-
 
 GoldenReport compareWithGolden(const Common& c, const FramesArgs& a, uint64_t lo, uint64_t hi) {
   GoldenReport r;
@@ -310,8 +309,8 @@ int assembleFrames(const Common& c, const FramesArgs& a, uint64_t count, const L
     std::string list;
     for (const auto& p : problems) list += (list.empty() ? "" : ", ") + p;
     if (bad > problems.size()) list += ", ...";
-    throw Error(std::to_string(bad) + " of " + std::to_string(count) +
-                    " frames are missing or invalid: " + list + "; rerun their tasks (a rerun renders only these)",
+    throw Error(std::to_string(bad) + " of " + std::to_string(count) + " frames are missing or invalid: " + list +
+                    "; rerun their tasks (a rerun renders only these)",
                 a.out, "--assemble");
   }
   const size_t removed = removeFramesFrom(a.out, count, frameExt(a));
@@ -344,9 +343,11 @@ ExportSettings checkFramesExport(FramesArgs& a) {
   if (ext.front() != '.') ext.insert(ext.begin(), '.');
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
   if (ext != ".glb" && ext != ".gltf" && ext != ".usda")
-    throw Error("expected .glb, .gltf or .usda (a frame sequence of OBJ or PLY files is not offered: export one "
-                "frame with `pteryla export --time T`), got '" + a.exportExt + "'",
-                "", "--export");
+    throw Error(
+        "expected .glb, .gltf or .usda (a frame sequence of OBJ or PLY files is not offered: export one "
+        "frame with `pteryla export --time T`), got '" +
+            a.exportExt + "'",
+        "", "--export");
   a.exportExt = ext;
   settings.coatAs = a.as;
   checkExportSettings("frame" + ext, settings);  // the coat form's name
@@ -371,7 +372,8 @@ int cmdFrames(const Common& c, const FramesArgs& args) {
   const std::string ext = frameExt(a);
   const uint64_t count = frameCount(a);
   const uint64_t tasks = checkChunking(a, count);
-  if (a.assemble && a.chunk) throw Error("--assemble checks the whole range; it takes no --chunk/--task", "", "--assemble");
+  if (a.assemble && a.chunk)
+    throw Error("--assemble checks the whole range; it takes no --chunk/--task", "", "--assemble");
   if (!a.golden.empty()) {
     std::error_code ec;
     if (!fs::is_directory(a.golden, ec)) throw Error("expected a directory of golden frames", a.golden, "--golden");
@@ -408,8 +410,10 @@ int cmdFrames(const Common& c, const FramesArgs& args) {
       const auto t0 = std::chrono::steady_clock::now();
       l.session.setTime(timeOf(k));
       render::Image frame;
-      if (!exporting) frame = l.session.renderImage(look);
-      else if (!l.session.evaluate()) throw InternalError("a frame's evaluation was cancelled");  // before the directory exists
+      if (!exporting)
+        frame = l.session.renderImage(look);
+      else if (!l.session.evaluate())
+        throw InternalError("a frame's evaluation was cancelled");  // before the directory exists
       // The first frame is made before the directory exists: a scene that fails creates nothing.
       if (i == 0) {
         std::error_code ec;
@@ -447,8 +451,8 @@ int cmdFrames(const Common& c, const FramesArgs& args) {
     endProgress(c);
     if (!a.golden.empty() && compareWithGolden(c, a, lo, hi).failed) return 1;
     info(c, "chunk " + std::to_string(*a.task) + " of " + std::to_string(tasks) + " (frames " + std::to_string(lo) +
-                "-" + std::to_string(hi - 1) + "): " + (exporting ? "exported " : "rendered ") + std::to_string(todo.size()) + skippedText + " in " +
-                a.out);
+                "-" + std::to_string(hi - 1) + "): " + (exporting ? "exported " : "rendered ") +
+                std::to_string(todo.size()) + skippedText + " in " + a.out);
     return 0;
   }
   std::error_code ec;
@@ -458,7 +462,8 @@ int cmdFrames(const Common& c, const FramesArgs& args) {
   GoldenReport golden;
   if (!a.golden.empty()) golden = compareWithGolden(c, a, 0, count);
   writeManifest(a, l.width, l.height, count, sidecars, "", golden.json);
-  info(c, std::string(exporting ? "exported " : "wrote ") + std::to_string(todo.size()) + " frames to " + a.out + skippedText +
+  info(c, std::string(exporting ? "exported " : "wrote ") + std::to_string(todo.size()) + " frames to " + a.out +
+              skippedText +
               (removed ? " (removed " + std::to_string(removed) + " stale frames of an earlier run)" : ""));
   return golden.failed ? 1 : 0;
 }
@@ -502,21 +507,24 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& args) {
   FarmArgs a = args;
   checkFramesExport(a);  // normalises a.exportExt
   const uint64_t count = frameCount(a);
-  if (a.farmChunk < 1) throw Error("expected a number of frames >= 1, got " + std::to_string(a.farmChunk), "", "--chunk");
-  if (a.lod && !(*a.lod > 0 && *a.lod <= 1)) throw Error("expected a fraction in (0, 1], got " + std::to_string(*a.lod), "", "--lod");
+  if (a.farmChunk < 1)
+    throw Error("expected a number of frames >= 1, got " + std::to_string(a.farmChunk), "", "--chunk");
+  if (a.lod && !(*a.lod > 0 && *a.lod <= 1))
+    throw Error("expected a fraction in (0, 1], got " + std::to_string(*a.lod), "", "--lod");
   if (!a.seed.empty()) parseSeed(a.seed);
   int w = 0, h = 0;
   if (!a.size.empty()) parseSize(a.size, "--size", w, h);
   if (a.partition.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.,-") !=
       std::string::npos)
     throw Error("expected a partition name (letters, digits, _ . , -), got '" + a.partition + "'", "", "--partition");
-  if (!a.mem.empty() && (a.mem.find_first_not_of("0123456789KMGTkmgt") != std::string::npos ||
-                         a.mem.find_first_of("0123456789") != 0))
+  if (!a.mem.empty() &&
+      (a.mem.find_first_not_of("0123456789KMGTkmgt") != std::string::npos || a.mem.find_first_of("0123456789") != 0))
     throw Error("expected a Slurm memory size such as 2G or 4000M, got '" + a.mem + "'", "", "--mem");
   if (!a.dryRun && findOnPath("sbatch").empty())
-    throw Error("sbatch not found on PATH: run on a Slurm login node (Debian: slurm-client), or use --dry-run to only "
-                "write the scripts",
-                "", "farm slurm");
+    throw Error(
+        "sbatch not found on PATH: run on a Slurm login node (Debian: slurm-client), or use --dry-run to only "
+        "write the scripts",
+        "", "farm slurm");
   Session::fromSceneFile(a.scene);  // a scene that does not load fails here, not on every node
   const uint64_t tasks = (count + uint64_t(a.farmChunk) - 1) / uint64_t(a.farmChunk);
   const std::string exe = fs::read_symlink("/proc/self/exe").string();
@@ -559,9 +567,10 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& args) {
       "\n#SBATCH --requeue\n# " + std::to_string(count) + " frames in " + std::to_string(tasks) + " chunks of " +
       std::to_string(a.farmChunk) + "; a requeued task renders only its frames without a valid sidecar.\nexec " +
       common + " --chunk " + std::to_string(a.farmChunk) + " --task \"$SLURM_ARRAY_TASK_ID\"\n";
-  const std::string assembleScript = header("pteryla-assemble", "assemble_%j.log") +
-                                     "# Checks every frame's checksum, writes frames.json and contact_sheet.png.\nexec " +
-                                     common + " --assemble" + goldenArgs + "\n";
+  const std::string assembleScript =
+      header("pteryla-assemble", "assemble_%j.log") +
+      "# Checks every frame's checksum, writes frames.json and contact_sheet.png.\nexec " + common + " --assemble" +
+      goldenArgs + "\n";
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw Error("cannot create directory: " + ec.message(), dir, "--out");

@@ -16,7 +16,9 @@ void addSceneOptions(CLI::App* sub, SceneArgs& a, bool withSize) {
   sub->add_option("scene", a.scene, "Scene file (.json) or a bare mesh (.obj/.ply/.off/.stl) to feather with defaults")
       ->required();
   sub->add_option("--time,-t", a.time, "Time on the scene's timeline (moult, skinning, controls); default: scene time");
-  sub->add_option("--lod", a.lod, "Fraction of feather geometry in (0,1]; default: the scene's render.lod (with render.lod_by_screen_size, the level of the largest feathers on screen)");
+  sub->add_option("--lod", a.lod,
+                  "Fraction of feather geometry in (0,1]; default: the scene's render.lod (with "
+                  "render.lod_by_screen_size, the level of the largest feathers on screen)");
   sub->add_option("--seed", a.seed, "Override the scene's master seed (an integer in [0, 2^64-1])");
   if (withSize) sub->add_option("--size", a.size, "Image size WxH; default: the scene's render.size");
 }
@@ -60,11 +62,12 @@ void addFrameExportOptions(CLI::App* sub, FramesArgs& a) {
 
 int main(int argc, char** argv) {
   pteryla::keepFreedMemoryInProcess();
-  CLI::App app{"pteryla: bird feather coats (Streit 2003) from the command line.\n"
-               "Scenes are JSON files (docs/scene-format.md) or bare meshes.\n"
-               "Exit codes: 0 success, 2 bad input (including requests above --max-memory and failed writes;\n"
-               "every output is written to a temporary file and renamed, so a failed write keeps the old file),\n"
-               "1 internal failure. Limits: docs/limits.md."};
+  CLI::App app{
+      "pteryla: bird feather coats (Streit 2003) from the command line.\n"
+      "Scenes are JSON files (docs/scene-format.md) or bare meshes.\n"
+      "Exit codes: 0 success, 2 bad input (including requests above --max-memory and failed writes;\n"
+      "every output is written to a temporary file and renamed, so a failed write keeps the old file),\n"
+      "1 internal failure. Limits: docs/limits.md."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "pteryla 0.1.0");
   Common common;
@@ -79,102 +82,120 @@ int main(int argc, char** argv) {
   auto* cRender = app.add_subcommand("render", "Render a scene to a PNG headlessly (OSMesa)");
   addSceneOptions(cRender, render, true);
   cRender->add_option("--out,-o", render.out, "Output image (.png, .jpg, .tif, .exr)")->required();
-  cRender->add_option("--style", render.style, "Render style: shaded or scratchboard; default: the scene's render.style")
+  cRender
+      ->add_option("--style", render.style, "Render style: shaded or scratchboard; default: the scene's render.style")
       ->check(CLI::IsMember({"shaded", "scratchboard"}));
 
   SceneArgs check;
   auto* cCheck = app.add_subcommand(
-      "check", "Print one JSON object of quality metrics on stdout: follicles, hex_fraction, nn_cv, feathers,\n"
-               "intersecting_pairs, intersecting_pairs_unpacked (every feather at 10 degrees, unflattened),\n"
-               "intersecting_pairs_proxy, skin_penetrations, coverage, elevation_p50, elevation_p90 (degrees),\n"
-               "fixed_feathers, hidden_feathers (draped coats), intersecting_feathers and penetrating_feathers\n"
-               "(the feathers, by index, with a triangle crossing another feather's or a vertex under the skin)\n"
-               "(null = not computed)");
+      "check",
+      "Print one JSON object of quality metrics on stdout: follicles, hex_fraction, nn_cv, feathers,\n"
+      "intersecting_pairs, intersecting_pairs_unpacked (every feather at 10 degrees, unflattened),\n"
+      "intersecting_pairs_proxy, skin_penetrations, coverage, elevation_p50, elevation_p90 (degrees),\n"
+      "fixed_feathers, hidden_feathers (draped coats), intersecting_feathers and penetrating_feathers\n"
+      "(the feathers, by index, with a triangle crossing another feather's or a vertex under the skin)\n"
+      "(null = not computed)");
   addSceneOptions(cCheck, check, false);
 
   BenchArgs bench;
   auto* cBench = app.add_subcommand(
-      "bench", "Print one JSON object of per-stage seconds of the first evaluation (load, distribute,\n"
-               "interpolate, pack, mesh, render), pack_repeat (best of 3 more full packs, warm memory), frame\n"
-               "(a timeline step), triangles and peak_rss_mb on stdout; with --check also check_mesh (meshing\n"
-               "at full detail) and check (`pteryla check`'s measurement of that mesh)");
+      "bench",
+      "Print one JSON object of per-stage seconds of the first evaluation (load, distribute,\n"
+      "interpolate, pack, mesh, render), pack_repeat (best of 3 more full packs, warm memory), frame\n"
+      "(a timeline step), triangles and peak_rss_mb on stdout; with --check also check_mesh (meshing\n"
+      "at full detail) and check (`pteryla check`'s measurement of that mesh)");
   addSceneOptions(cBench, bench, true);
   cBench->add_flag("--check", bench.check, "Also time the checker: the mesh at full detail, then Pipeline::check");
 
   ExportArgs exportArgs;
   auto* cExport = app.add_subcommand(
-      "export", "Write the skin and the coat for other tools (docs/export.md), by the extension of --out:\n"
-                ".glb / .gltf  glTF 2.0: skin + vane cards with textures, KHR_materials_anisotropy, per-vertex\n"
-                "              _FEATHER_ID _TRACT _LAYER _AGE; a frame range as a node-animated sequence\n"
-                ".usda         USD: skin Mesh + the coat --as curves (BasisCurves), cards (Mesh) or instances\n"
-                "              (PointInstancer); a frame range as time samples\n"
-                ".obj / .ply   one frame of skin + cards\n"
-                "The file is written to a temporary and renamed: a failed export keeps any previous file.");
+      "export",
+      "Write the skin and the coat for other tools (docs/export.md), by the extension of --out:\n"
+      ".glb / .gltf  glTF 2.0: skin + vane cards with textures, KHR_materials_anisotropy, per-vertex\n"
+      "              _FEATHER_ID _TRACT _LAYER _AGE; a frame range as a node-animated sequence\n"
+      ".usda         USD: skin Mesh + the coat --as curves (BasisCurves), cards (Mesh) or instances\n"
+      "              (PointInstancer); a frame range as time samples\n"
+      ".obj / .ply   one frame of skin + cards\n"
+      "The file is written to a temporary and renamed: a failed export keeps any previous file.");
   addSceneOptions(cExport, exportArgs, false);
   cExport->add_option("--out,-o", exportArgs.out, "Output file: .glb, .gltf, .usda, .obj or .ply")->required();
-  auto* optFrom = cExport->add_option("--from", exportArgs.from, "Start time of a frame range (with --to; frame k at FROM + k/FPS)");
+  auto* optFrom = cExport->add_option("--from", exportArgs.from,
+                                      "Start time of a frame range (with --to; frame k at FROM + k/FPS)");
   auto* optTo = cExport->add_option("--to", exportArgs.to, "End time of the range (inclusive)");
   cExport->add_option("--fps", exportArgs.fps, "Frames per unit of time for a range (default 24)");
   auto* optAs = cExport->add_option("--as", exportArgs.as,
                                     "USD coat representation: curves (default; rachis + barbs as BasisCurves), cards "
                                     "(vane Mesh) or instances (PointInstancer over prototype feathers)");
-  cExport->add_option("--meters-per-unit", exportArgs.metersPerUnit, "Scene units in metres (USD metersPerUnit; default 1)");
+  cExport->add_option("--meters-per-unit", exportArgs.metersPerUnit,
+                      "Scene units in metres (USD metersPerUnit; default 1)");
   (void)optFrom;
   (void)optTo;
 
   FeatherArgs feather;
   auto* cFeather = app.add_subcommand(
-      "feather", "Build one feather from a feather file: geometry (.obj/.ply) or an image (.png).\n"
-                 "With --from-scan IMAGE instead, measure a feather from a flatbed scan (tip up = left vane on the\n"
-                 "left, dorsal side shown) and write a feather file (.json): rachis length and lateral curvature,\n"
-                 "calamus, silhouette, barb spacing, barb angles and two key barbs per vane, and the scan resampled\n"
-                 "into the feather's texture space as its colour texture (docs/feather-format.md, \"Feathers from scans\")");
+      "feather",
+      "Build one feather from a feather file: geometry (.obj/.ply) or an image (.png).\n"
+      "With --from-scan IMAGE instead, measure a feather from a flatbed scan (tip up = left vane on the\n"
+      "left, dorsal side shown) and write a feather file (.json): rachis length and lateral curvature,\n"
+      "calamus, silhouette, barb spacing, barb angles and two key barbs per vane, and the scan resampled\n"
+      "into the feather's texture space as its colour texture (docs/feather-format.md, \"Feathers from scans\")");
   auto* optFile = cFeather->add_option("file", feather.file, "Feather file (.json, docs/feather-format.md)");
-  cFeather->add_option("--out,-o", feather.out, "Output: .obj/.ply mesh or .png image; with --from-scan a .json feather file")
+  cFeather
+      ->add_option("--out,-o", feather.out,
+                   "Output: .obj/.ply mesh or .png image; with --from-scan a .json feather file")
       ->required();
   auto* optAge = cFeather->add_option("--age", feather.age, "Feather age in [0,1] (growth); values in (1,2] add wear")
-      ->check(CLI::Range(0.0, 2.0));
-  auto* optLod = cFeather->add_option("--lod", feather.lod, "Fraction of geometry in (0,1]")->check(CLI::Range(0.0, 1.0));
+                     ->check(CLI::Range(0.0, 2.0));
+  auto* optLod =
+      cFeather->add_option("--lod", feather.lod, "Fraction of geometry in (0,1]")->check(CLI::Range(0.0, 1.0));
   auto* optSize = cFeather->add_option("--size", feather.size, "Image size WxH for .png output");
-  auto* optScan = cFeather->add_option("--from-scan", feather.fromScan,
-                                       "Scan image (any format OpenImageIO reads) to measure instead of a feather file");
+  auto* optScan =
+      cFeather->add_option("--from-scan", feather.fromScan,
+                           "Scan image (any format OpenImageIO reads) to measure instead of a feather file");
   optFile->excludes(optScan);
   for (auto* o : {optAge, optLod, optSize}) o->excludes(optScan);
-  cFeather->add_option("--rachis", feather.rachis,
-                       "With --from-scan: the rachis as pixel coordinates x0,y0,x1,y1 (x right, y down), from its base "
-                       "(where the vanes begin) to its tip; more pairs mark a polyline. Default: found automatically, "
-                       "which needs the bare calamus visible at the base and a shaft that contrasts with the vanes; "
-                       "otherwise give it")
+  cFeather
+      ->add_option("--rachis", feather.rachis,
+                   "With --from-scan: the rachis as pixel coordinates x0,y0,x1,y1 (x right, y down), from its base "
+                   "(where the vanes begin) to its tip; more pairs mark a polyline. Default: found automatically, "
+                   "which needs the bare calamus visible at the base and a shaft that contrasts with the vanes; "
+                   "otherwise give it")
       ->needs(optScan);
-  cFeather->add_option("--pixels-per-unit", feather.pixelsPerUnit,
-                       "With --from-scan: scan pixels per scene unit (default: the image's resolution metadata as pixels "
-                       "per centimetre, else 300 dpi = 118.11)")
+  cFeather
+      ->add_option("--pixels-per-unit", feather.pixelsPerUnit,
+                   "With --from-scan: scan pixels per scene unit (default: the image's resolution metadata as pixels "
+                   "per centimetre, else 300 dpi = 118.11)")
       ->needs(optScan);
-  auto* optTexture = cFeather->add_option("--texture", feather.texture,
-                                          "With --from-scan: where to write the colour texture (.png; default: OUT's "
-                                          "name + _texture.png beside it); the feather file refers to it by a path "
-                                          "relative to itself, so move the two together")
+  auto* optTexture = cFeather
+                         ->add_option("--texture", feather.texture,
+                                      "With --from-scan: where to write the colour texture (.png; default: OUT's "
+                                      "name + _texture.png beside it); the feather file refers to it by a path "
+                                      "relative to itself, so move the two together")
                          ->needs(optScan);
-  cFeather->add_flag("--no-texture", feather.noTexture, "With --from-scan: write no texture (the feather keeps its default look)")
+  cFeather
+      ->add_flag("--no-texture", feather.noTexture,
+                 "With --from-scan: write no texture (the feather keeps its default look)")
       ->needs(optScan)
       ->excludes(optTexture);
 
   FramesArgs frames;
   auto* cFrames = app.add_subcommand(
-      "frames", "Render a time range to a PNG sequence DIR/frame_0000.png ... (frame k at time FROM + k/FPS; at\n"
-                "most 100000 frames), or with --export .glb|.gltf|.usda export each frame to DIR/frame_0000.glb ...\n"
-                "Each frame gets a sidecar frame_NNNN.png.json (SHA-256, seconds, host) written after it. Frames\n"
-                "whose sidecar matches are skipped, so a rerun redoes only missing or corrupt ones.\n"
-                "A whole-range run writes the manifest DIR/frames.json and removes frame_NNNN files of an\n"
-                "earlier, longer run. --chunk K --task I makes only chunk I (0-based) of K frames and touches\n"
-                "nothing else; --assemble then checks every frame and writes the manifest and (PNG frames)\n"
-                "DIR/contact_sheet.png (docs/farm.md)");
+      "frames",
+      "Render a time range to a PNG sequence DIR/frame_0000.png ... (frame k at time FROM + k/FPS; at\n"
+      "most 100000 frames), or with --export .glb|.gltf|.usda export each frame to DIR/frame_0000.glb ...\n"
+      "Each frame gets a sidecar frame_NNNN.png.json (SHA-256, seconds, host) written after it. Frames\n"
+      "whose sidecar matches are skipped, so a rerun redoes only missing or corrupt ones.\n"
+      "A whole-range run writes the manifest DIR/frames.json and removes frame_NNNN files of an\n"
+      "earlier, longer run. --chunk K --task I makes only chunk I (0-based) of K frames and touches\n"
+      "nothing else; --assemble then checks every frame and writes the manifest and (PNG frames)\n"
+      "DIR/contact_sheet.png (docs/farm.md)");
   addSceneOptions(cFrames, frames, true);
   cFrames->add_option("--from", frames.from, "Start time")->required();
   cFrames->add_option("--to", frames.to, "End time (inclusive)")->required();
   cFrames->add_option("--fps", frames.fps, "Frames per unit of time")->check(CLI::Range(0.001, 10000.0));
   cFrames->add_option("--out,-o", frames.out, "Output directory")->required();
-  cFrames->add_option("--style", frames.style, "shaded or scratchboard")->check(CLI::IsMember({"shaded", "scratchboard"}));
+  cFrames->add_option("--style", frames.style, "shaded or scratchboard")
+      ->check(CLI::IsMember({"shaded", "scratchboard"}));
   cFrames->add_option("--chunk", frames.chunk, "Frames per chunk (>= 1); with --task, render only that chunk");
   cFrames->add_option("--task", frames.task,
                       "0-based chunk index: renders frames [TASK*CHUNK, (TASK+1)*CHUNK) of the range (the last chunk "
@@ -188,9 +209,10 @@ int main(int argc, char** argv) {
 
   DiffArgs diff;
   auto* cDiff = app.add_subcommand(
-      "diff", "Compare a rendered image with a golden one: print one JSON object (mean_error, max_error, max_at,\n"
-              "changed_pixels, changed_fraction, match) on stdout; exit 0 when they match within the tolerance,\n"
-              "1 when they differ or differ in size, 2 when an image cannot be read (docs/ci.md)");
+      "diff",
+      "Compare a rendered image with a golden one: print one JSON object (mean_error, max_error, max_at,\n"
+      "changed_pixels, changed_fraction, match) on stdout; exit 0 when they match within the tolerance,\n"
+      "1 when they differ or differ in size, 2 when an image cannot be read (docs/ci.md)");
   cDiff->add_option("actual", diff.actual, "The image to judge (any format OpenImageIO reads)")->required();
   cDiff->add_option("golden", diff.expected, "The reference image")->required();
   cDiff->add_option("--out,-o", diff.out, "Also write a picture of the difference (x8, changed pixels red)");
@@ -200,9 +222,10 @@ int main(int argc, char** argv) {
   auto* cFarm = app.add_subcommand("farm", "Split a frame range over a cluster scheduler (docs/farm.md)");
   cFarm->require_subcommand(1);
   auto* cSlurm = cFarm->add_subcommand(
-      "slurm", "Write DIR/slurm/frames.sbatch (a job array: task I runs `pteryla frames ... --chunk K --task I`)\n"
-               "and DIR/slurm/assemble.sbatch (runs `pteryla frames ... --assemble` after every task succeeded),\n"
-               "then submit both with sbatch (--dependency=afterok). Paths in the scripts are absolute.");
+      "slurm",
+      "Write DIR/slurm/frames.sbatch (a job array: task I runs `pteryla frames ... --chunk K --task I`)\n"
+      "and DIR/slurm/assemble.sbatch (runs `pteryla frames ... --assemble` after every task succeeded),\n"
+      "then submit both with sbatch (--dependency=afterok). Paths in the scripts are absolute.");
   addSceneOptions(cSlurm, farm, true);
   cSlurm->add_option("--from", farm.from, "Start time")->required();
   cSlurm->add_option("--to", farm.to, "End time (inclusive)")->required();

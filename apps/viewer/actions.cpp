@@ -32,8 +32,9 @@ void needTract(const Scene& s, size_t t) {
 }
 void needControl(const Scene& s, size_t c) {
   if (c >= s.controls.size())
-    throw Error("control index " + std::to_string(c) + " out of range (" + std::to_string(s.controls.size()) + " controls)",
-                s.file, "controls");
+    throw Error(
+        "control index " + std::to_string(c) + " out of range (" + std::to_string(s.controls.size()) + " controls)",
+        s.file, "controls");
 }
 void fixTracts(Scene& s) {
   if (s.tracts.empty()) s.tracts = Json::array({Json{{"name", "all"}}});
@@ -97,7 +98,10 @@ void addTract(Document& d, const std::string& name, const std::vector<std::strin
     for (size_t i = 0; i < s.tracts.size(); ++i)
       if (tractName(s, i) == name) throw Error("a tract named '" + name + "' exists already", s.file, "tracts");
     Json t = {{"name", name}};
-    if (groups.empty()) t["all"] = true; else t["groups"] = groups;
+    if (groups.empty())
+      t["all"] = true;
+    else
+      t["groups"] = groups;
     s.tracts.push_back(t);
   });
 }
@@ -135,9 +139,11 @@ void addKeyFeather(Document& d, size_t t, const std::string& f, uint64_t follicl
     if (!s.feathers.contains(f)) throw Error("no feather named '" + f + "'", s.file, "feathers");
     Json& keys = tractOf(s, t)["key_feathers"];
     if (keys.is_array())
-      keys.erase(std::remove_if(keys.begin(), keys.end(), [&](const Json& k) {
-                   return k.contains("follicle") && k["follicle"].is_number() && k["follicle"].get<uint64_t>() == follicleId;
-                 }),
+      keys.erase(std::remove_if(keys.begin(), keys.end(),
+                                [&](const Json& k) {
+                                  return k.contains("follicle") && k["follicle"].is_number() &&
+                                         k["follicle"].get<uint64_t>() == follicleId;
+                                }),
                  keys.end());
     keys.push_back({{"feather", f}, {"follicle", follicleId}});
   });
@@ -153,7 +159,8 @@ void addKeyFeatherAt(Document& d, size_t t, const std::string& f, const glm::dve
 void removeKeyFeather(Document& d, size_t t, size_t k) {
   d.edit("remove key feather", [&](Scene& s) {
     Json& keys = tractOf(s, t)["key_feathers"];
-    if (!keys.is_array() || k >= keys.size()) throw Error("no key feather " + std::to_string(k), s.file, "key_feathers");
+    if (!keys.is_array() || k >= keys.size())
+      throw Error("no key feather " + std::to_string(k), s.file, "key_feathers");
     keys.erase(keys.begin() + static_cast<long>(k));
     if (keys.empty()) tractOf(s, t).erase("key_feathers");
   });
@@ -170,7 +177,8 @@ void addStylingVector(Document& d, const glm::dvec3& at, const glm::dvec3& dir) 
 void setStylingVector(Document& d, size_t k, const glm::dvec3& at, const glm::dvec3& dir) {
   d.edit("styling vector " + std::to_string(k), [&](Scene& s) {
     Json& v = s.directions["vectors"];
-    if (!v.is_array() || k >= v.size()) throw Error("no styling vector " + std::to_string(k), s.file, "directions.vectors");
+    if (!v.is_array() || k >= v.size())
+      throw Error("no styling vector " + std::to_string(k), s.file, "directions.vectors");
     v[k]["at"] = vec3Json(at);
     v[k]["direction"] = vec3Json(dir);
   });
@@ -179,7 +187,8 @@ void setStylingVector(Document& d, size_t k, const glm::dvec3& at, const glm::dv
 void removeStylingVector(Document& d, size_t k) {
   d.edit("remove styling vector", [&](Scene& s) {
     Json& v = s.directions["vectors"];
-    if (!v.is_array() || k >= v.size()) throw Error("no styling vector " + std::to_string(k), s.file, "directions.vectors");
+    if (!v.is_array() || k >= v.size())
+      throw Error("no styling vector " + std::to_string(k), s.file, "directions.vectors");
     v.erase(v.begin() + static_cast<long>(k));
     if (v.empty()) s.directions.erase("vectors");
   });
@@ -206,7 +215,8 @@ void addBrush(Document& d, const glm::dvec3& c, double radius, double elevationD
 void removeBrush(Document& d, size_t k) {
   d.edit("remove brush", [&](Scene& s) {
     Json& v = s.packing["styling"];
-    if (!v.is_array() || k >= v.size()) throw Error("no styling selection " + std::to_string(k), s.file, "packing.styling");
+    if (!v.is_array() || k >= v.size())
+      throw Error("no styling selection " + std::to_string(k), s.file, "packing.styling");
     v.erase(v.begin() + static_cast<long>(k));
     if (v.empty()) s.packing.erase("styling");
   });
@@ -214,7 +224,10 @@ void removeBrush(Document& d, size_t k) {
 
 void setPackingValue(Document& d, const std::string& key, const Json& value) {
   d.edit("packing." + key, [&](Scene& s) {
-    if (value.is_null()) s.packing.erase(key); else s.packing[key] = value;
+    if (value.is_null())
+      s.packing.erase(key);
+    else
+      s.packing[key] = value;
   });
 }
 
@@ -246,7 +259,8 @@ Json& keyAt(Json& ctl, double time) {
   for (auto& k : keys)
     if (k.is_object() && k.contains("t") && k["t"].is_number() && k["t"].get<double>() == time) return k;
   keys.push_back({{"t", time}});
-  std::sort(keys.begin(), keys.end(), [](const Json& x, const Json& y) { return x.value("t", 0.0) < y.value("t", 0.0); });
+  std::sort(keys.begin(), keys.end(),
+            [](const Json& x, const Json& y) { return x.value("t", 0.0) < y.value("t", 0.0); });
   for (auto& k : keys)
     if (k.value("t", 0.0) == time) return k;
   return keys.back();
@@ -266,7 +280,8 @@ ControlNow controlAt(const Scene& s, size_t c, double time) {
   } catch (const std::exception&) {
     for (int i = 0; i < 5; ++i)
       out.value[i] = ctl.contains(kControlBehaviours[i]) && ctl[kControlBehaviours[i]].is_number()
-                         ? ctl[kControlBehaviours[i]].get<double>() : 0.0;
+                         ? ctl[kControlBehaviours[i]].get<double>()
+                         : 0.0;
   }
   return out;
 }
@@ -278,8 +293,10 @@ void setControlValue(Document& d, size_t c, const std::string& behaviour, double
   d.edit(behaviour + " " + std::to_string(c), [&](Scene& s) {
     needControl(s, c);
     Json& ctl = s.controls[c];
-    if (keyedIn(ctl, behaviour)) keyAt(ctl, time)[behaviour] = value;
-    else ctl[behaviour] = value;
+    if (keyedIn(ctl, behaviour))
+      keyAt(ctl, time)[behaviour] = value;
+    else
+      ctl[behaviour] = value;
   });
 }
 

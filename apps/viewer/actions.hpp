@@ -16,9 +16,9 @@ namespace pteryla::viewer::actions {
 
 // Tracts and follicles. `tract` indexes scene().tracts (an empty list first becomes [{"name": "all"}]).
 void ensureTracts(Document& d);
-void setTractCount(Document& d, size_t tract, size_t count);          // exact follicle count
-void setTractDensity(Document& d, size_t tract, double density);      // follicles per unit area
-void setRelaxIterations(Document& d, size_t tract, int iterations);   // 0 = scattered only
+void setTractCount(Document& d, size_t tract, size_t count);                                // exact follicle count
+void setTractDensity(Document& d, size_t tract, double density);                            // follicles per unit area
+void setRelaxIterations(Document& d, size_t tract, int iterations);                         // 0 = scattered only
 void setRelaxNumber(Document& d, size_t tract, const std::string& key, const Json& value);  // relax.<key>
 void addBias(Document& d, size_t tract, const glm::dvec3& at, const glm::dvec3& direction, double sigma, double stretch,
              double densityGain = 0);

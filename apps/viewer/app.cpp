@@ -40,7 +40,9 @@ void closeCallback(GLFWwindow* w) {
   if (auto* app = static_cast<App*>(glfwGetWindowUserPointer(w))) app->onCloseRequested();
 }
 
-void glfwErrorCallback(int code, const char* what) { std::fprintf(stderr, "pteryla-viewer: GLFW error %d: %s\n", code, what); }
+void glfwErrorCallback(int code, const char* what) {
+  std::fprintf(stderr, "pteryla-viewer: GLFW error %d: %s\n", code, what);
+}
 
 // AddressSanitizer builds only (tools/test.sh). LeakSanitizer checks at exit, after glfwTerminate made
 // libGL unload what it loaded for the context: Mesa's DRI driver (swrast_dri.so under Xvfb, Debian 12)
@@ -103,7 +105,9 @@ App::~App() {
   glfwTerminate();
 }
 
-bool App::scripted() const { return !options_.script.empty() || !options_.screenshot.empty() || options_.benchmarkOrbit > 0; }
+bool App::scripted() const {
+  return !options_.script.empty() || !options_.screenshot.empty() || options_.benchmarkOrbit > 0;
+}
 
 bool App::initWindow() {
   glfwSetErrorCallback(glfwErrorCallback);
@@ -171,10 +175,16 @@ int App::run() {
     } catch (const Error& e) {
       // Anything that escapes the panel guards or the view sync: report and keep running (scripts stop).
       endFrameAfterError();
-      if (scripted()) fail(e.what(), 2); else showError(e.what());
+      if (scripted())
+        fail(e.what(), 2);
+      else
+        showError(e.what());
     } catch (const std::exception& e) {
       endFrameAfterError();
-      if (scripted()) fail(e.what(), 1); else showError(e.what());
+      if (scripted())
+        fail(e.what(), 1);
+      else
+        showError(e.what());
     }
     if (glfwWindowShouldClose(window_)) quit_ = true;
   }
@@ -221,7 +231,10 @@ void App::offerRecovery() {
     showError(std::string("a recovery file cannot be read (it is kept): ") + e.what());  // the viewer still starts
     return;
   }
-  if (options_.recover) restoreOffered(); else popupToOpen_ = "Recover unsaved work";
+  if (options_.recover)
+    restoreOffered();
+  else
+    popupToOpen_ = "Recover unsaved work";
 }
 
 void App::restoreOffered() {
@@ -243,11 +256,17 @@ void App::onCloseRequested() {
 
 void App::frame() {
   const bool active = doc_.busy() || view_.playing || scripted() || shotWanted_ || dragging_;
-  if (active) glfwPollEvents(); else glfwWaitEventsTimeout(0.1);
+  if (active)
+    glfwPollEvents();
+  else
+    glfwWaitEventsTimeout(0.1);
 
   doc_.update();
   if (auto e = doc_.takeError()) {
-    if (scripted()) fail("evaluation failed: " + *e, 2); else showError(*e);
+    if (scripted())
+      fail("evaluation failed: " + *e, 2);
+    else
+      showError(*e);
   }
   autosaveTick();
   advancePlayback(*panels_);
@@ -317,7 +336,8 @@ void App::updateFps() {
 void App::layoutViewport() {
   const float panel = view_.hidePanels ? 0.0f : std::min(kPanelWidth, 0.45f * float(windowSize_.x));
   view_.viewOrigin = {panel, menuHeight_};
-  view_.viewSize = {std::max(1, int(float(windowSize_.x) - panel)), std::max(1, int(float(windowSize_.y) - menuHeight_ - kStatusHeight))};
+  view_.viewSize = {std::max(1, int(float(windowSize_.x) - panel)),
+                    std::max(1, int(float(windowSize_.y) - menuHeight_ - kStatusHeight))};
   const float sx = windowSize_.x > 0 ? float(fbSize_.x) / float(windowSize_.x) : 1.0f;
   const float sy = windowSize_.y > 0 ? float(fbSize_.y) / float(windowSize_.y) : 1.0f;
   viewPixels_ = {int(std::lround(float(view_.viewSize.x) * sx)), int(std::lround(float(view_.viewSize.y) * sy))};
@@ -440,18 +460,44 @@ bool App::cameraMoving() const {
 std::vector<float> App::viewKey() const {
   const render::Camera& c = camera_.camera();
   const pipeline::Scene& s = doc_.scene();
-  std::vector<float> k = {float(viewPixels_.x), float(viewPixels_.y), c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z,
-                          c.up.x, c.up.y, c.up.z, c.fovYDegrees, c.zNear, c.zFar, float(uploadVersion_),
-                          float(view_.showSkin), float(view_.showCoat), float(view_.wireframe), float(s.render.ambient),
-                          float(s.render.background.x), float(s.render.background.y), float(s.render.background.z),
-                          float(s.render.skinColor.x), float(s.render.skinColor.y), float(s.render.skinColor.z),
-                          float(s.render.shadows), float(s.render.shadowStrength), float(s.render.msaa),
-                          float(s.render.exposure), float(s.render.tone == "filmic"), float(s.render.lightRig == "studio"),
-                          float(s.render.ground), float(s.render.groundColor.x), float(s.render.groundColor.y),
+  std::vector<float> k = {float(viewPixels_.x),
+                          float(viewPixels_.y),
+                          c.eye.x,
+                          c.eye.y,
+                          c.eye.z,
+                          c.target.x,
+                          c.target.y,
+                          c.target.z,
+                          c.up.x,
+                          c.up.y,
+                          c.up.z,
+                          c.fovYDegrees,
+                          c.zNear,
+                          c.zFar,
+                          float(uploadVersion_),
+                          float(view_.showSkin),
+                          float(view_.showCoat),
+                          float(view_.wireframe),
+                          float(s.render.ambient),
+                          float(s.render.background.x),
+                          float(s.render.background.y),
+                          float(s.render.background.z),
+                          float(s.render.skinColor.x),
+                          float(s.render.skinColor.y),
+                          float(s.render.skinColor.z),
+                          float(s.render.shadows),
+                          float(s.render.shadowStrength),
+                          float(s.render.msaa),
+                          float(s.render.exposure),
+                          float(s.render.tone == "filmic"),
+                          float(s.render.lightRig == "studio"),
+                          float(s.render.ground),
+                          float(s.render.groundColor.x),
+                          float(s.render.groundColor.y),
                           float(s.render.groundColor.z)};
   for (const auto& l : s.lights)
-    for (float v : {float(l.direction.x), float(l.direction.y), float(l.direction.z), float(l.color.x), float(l.color.y),
-                    float(l.color.z), float(l.intensity)})
+    for (float v : {float(l.direction.x), float(l.direction.y), float(l.direction.z), float(l.color.x),
+                    float(l.color.y), float(l.color.z), float(l.intensity)})
       k.push_back(v);
   return k;
 }
@@ -515,8 +561,10 @@ void App::captureScreenshot(int fbw, int fbh, bool afterUi) {
   if (doc_.hasScene() && (!doc_.upToDate() || doc_.resultVersion() != syncedResult_ || viewImage_.empty())) {
     if (doc_.failed() || doc_.halted()) {
       shotWanted_ = false;
-      if (scripted()) fail("screenshot: the scene did not evaluate", 2);
-      else showError("screenshot skipped: the scene did not evaluate");
+      if (scripted())
+        fail("screenshot: the scene did not evaluate", 2);
+      else
+        showError("screenshot skipped: the scene did not evaluate");
     }
     return;
   }
@@ -533,14 +581,18 @@ void App::captureScreenshot(int fbw, int fbh, bool afterUi) {
       render::ScratchboardSettings ss;
       ss.width = viewPixels_.x;
       ss.height = viewPixels_.y;
-      img = render::renderScratchboard(p.coatMesh().mesh, p.skinTriMesh(), camera_.camera(), render::sceneLights(p.scene()), ss);
+      img = render::renderScratchboard(p.coatMesh().mesh, p.skinTriMesh(), camera_.camera(),
+                                       render::sceneLights(p.scene()), ss);
     } else {
       img = viewImage_;  // exactly the 3D view on screen, without the panels
     }
     render::saveImage(shotPath_, img);
     std::fprintf(stderr, "pteryla-viewer: wrote %s (%dx%d)\n", shotPath_.c_str(), img.width, img.height);
   } catch (const Error& e) {
-    if (scripted()) fail(e.what(), 2); else showError(e.what());
+    if (scripted())
+      fail(e.what(), 2);
+    else
+      showError(e.what());
   }
 }
 
@@ -584,16 +636,17 @@ void App::benchmarkStep() {
       const bool movingNav = navReady_ && view_.fastNavigation &&
                              useNavigationCoat(view_.forceNavigation, view_.adaptiveNavigation, benchMovingRenderMs_,
                                                view_.fullCoatBudgetMs);
-      std::printf("{\"orbit_frames\": %d, \"seconds\": %.4f, \"fps\": %.2f, \"render_ms\": %.1f, \"fps_navigation\": %.2f, "
-                  "\"render_ms_navigation\": %.1f, \"fps_moving_full_coat\": %.2f, \"render_ms_moving_full_coat\": %.1f, "
-                  "\"navigation_scale\": %d, \"navigation_triangles\": %zu, \"navigation_stride\": %zu, \"width\": %d, "
-                  "\"height\": %d, \"lod\": %.3f, \"feathers\": %zu, \"coat_triangles\": %zu, \"drawn_triangles\": %zu, "
-                  "\"moving_coat\": \"%s\", \"fps_moving\": %.2f, \"gl\": \"%s\"}\n",
-                  n, secs, double(n) / secs, 1000.0 * benchRenderSeconds_ / n, benchNavFps_, benchNavRenderMs_, benchMovingFps_,
-                  benchMovingRenderMs_, std::clamp(view_.navigationScale, 1, 8), navReady_ ? navTriangles_ : s.coatTriangles,
-                  navStride_, viewPixels_.x, viewPixels_.y, doc_.lod(), s.coatFeathers, s.coatTriangles, st.triangles,
-                  movingNav ? "navigation" : "full", movingNav ? benchNavFps_ : benchMovingFps_,
-                  renderer_->glVersion().c_str());
+      std::printf(
+          "{\"orbit_frames\": %d, \"seconds\": %.4f, \"fps\": %.2f, \"render_ms\": %.1f, \"fps_navigation\": %.2f, "
+          "\"render_ms_navigation\": %.1f, \"fps_moving_full_coat\": %.2f, \"render_ms_moving_full_coat\": %.1f, "
+          "\"navigation_scale\": %d, \"navigation_triangles\": %zu, \"navigation_stride\": %zu, \"width\": %d, "
+          "\"height\": %d, \"lod\": %.3f, \"feathers\": %zu, \"coat_triangles\": %zu, \"drawn_triangles\": %zu, "
+          "\"moving_coat\": \"%s\", \"fps_moving\": %.2f, \"gl\": \"%s\"}\n",
+          n, secs, double(n) / secs, 1000.0 * benchRenderSeconds_ / n, benchNavFps_, benchNavRenderMs_, benchMovingFps_,
+          benchMovingRenderMs_, std::clamp(view_.navigationScale, 1, 8), navReady_ ? navTriangles_ : s.coatTriangles,
+          navStride_, viewPixels_.x, viewPixels_.y, doc_.lod(), s.coatFeathers, s.coatTriangles, st.triangles,
+          movingNav ? "navigation" : "full", movingNav ? benchNavFps_ : benchMovingFps_,
+          renderer_->glVersion().c_str());
       std::fflush(stdout);
       quit_ = true;
       return;

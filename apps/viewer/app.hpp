@@ -37,11 +37,11 @@ inline constexpr float kStatusHeight = 30.0f;
 inline constexpr float kPanelWidth = 420.0f;
 
 struct ViewerOptions {
-  std::string scene;              // scene file or bare mesh to open ("" = none)
-  std::string script;             // --script
-  std::string screenshot;         // --screenshot: capture after `frames` frames and the evaluation, then quit
-  int frames = 1;                 // --frames
-  int benchmarkOrbit = 0;         // --benchmark-orbit N: N frames of a full orbit, prints fps, quits
+  std::string scene;       // scene file or bare mesh to open ("" = none)
+  std::string script;      // --script
+  std::string screenshot;  // --screenshot: capture after `frames` frames and the evaluation, then quit
+  int frames = 1;          // --frames
+  int benchmarkOrbit = 0;  // --benchmark-orbit N: N frames of a full orbit, prints fps, quits
   int width = 1280, height = 800;
   std::optional<double> lod;
   bool vsync = true;

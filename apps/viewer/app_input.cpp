@@ -32,7 +32,8 @@ void App::handleInput() {
   if (!doc_.hasScene() || !cameraReady_) return;
   const glm::vec2 mouse = glm::vec2(io.MousePos.x, io.MousePos.y) - view_.viewOrigin;  // view pixels
   const float h = float(view_.viewSize.y);
-  const bool inView = mouse.x >= 0 && mouse.y >= 0 && mouse.x < float(view_.viewSize.x) && mouse.y < float(view_.viewSize.y);
+  const bool inView =
+      mouse.x >= 0 && mouse.y >= 0 && mouse.x < float(view_.viewSize.x) && mouse.y < float(view_.viewSize.y);
   const bool overUi = (io.WantCaptureMouse || !inView) && !dragging_ && !toolDrag_;
   if (!overUi && io.MouseWheel != 0.0f) {
     lastWheel_ = std::chrono::steady_clock::now();

@@ -27,14 +27,14 @@ glm::vec2 App::scriptPoint(const ScriptCommand& c, size_t arg) const {
 void App::scriptStep() {
   if (quit_) return;
   if (!fakeMouse_.empty()) return;  // a scripted click or drag is being played
-  if (doc_.failed()) return;  // frame() reports the error and fails the script
-  if (shotWanted_) return;    // a screenshot is waiting for its frame
+  if (doc_.failed()) return;        // frame() reports the error and fails the script
+  if (shotWanted_) return;          // a screenshot is waiting for its frame
   if (view_.ui.pending) {
     // A `ui` command waits for its panel to take the request (the header opens on the same frame).
     view_.panelRequests[view_.ui.panel] = 1;
     if (++view_.ui.frames > 30)
-      fail(options_.script + ": ui: no widget '" + view_.ui.widget + (view_.ui.value.empty() ? "" : " " + view_.ui.value) +
-               "' in the panel '" + view_.ui.panel + "'",
+      fail(options_.script + ": ui: no widget '" + view_.ui.widget +
+               (view_.ui.value.empty() ? "" : " " + view_.ui.value) + "' in the panel '" + view_.ui.panel + "'",
            2);
     return;
   }
@@ -79,27 +79,45 @@ void App::scriptStep() {
       cameraMoved_ = true;
     } else if (c.verb == "panel") {
       needArgs(c, 2, 2, "panel NAME|* open|closed", file);
-      if (c.args[1] != "open" && c.args[1] != "closed") throw Error("usage: panel NAME|* open|closed", file, "line " + std::to_string(c.line));
+      if (c.args[1] != "open" && c.args[1] != "closed")
+        throw Error("usage: panel NAME|* open|closed", file, "line " + std::to_string(c.line));
       view_.panelRequests[c.args[0]] = c.args[1] == "open" ? 1 : 0;
       scriptWaitFrames_ = 1;
     } else if (c.verb == "show") {
       needArgs(c, 2, 2, "show WHAT on|off", file);
       const std::string& w = c.args[0];
-      if (c.args[1] != "on" && c.args[1] != "off") throw Error("usage: show WHAT on|off", file, "line " + std::to_string(c.line));
+      if (c.args[1] != "on" && c.args[1] != "off")
+        throw Error("usage: show WHAT on|off", file, "line " + std::to_string(c.line));
       const bool on = c.args[1] == "on";
-      bool* flag = w == "designer" ? &view_.showDesigner : w == "json" ? &view_.showJsonInspector : w == "help" ? &view_.showHelp
-                 : w == "panels" ? nullptr : w == "follicles" ? &view_.showFollicles : w == "directions" ? &view_.showDirections
-                 : w == "tract" ? &view_.showTract : w == "wireframe" ? &view_.wireframe : w == "coat" ? &view_.showCoat
-                 : w == "skin" ? &view_.showSkin : w == "navigation" ? &view_.forceNavigation
-                 : w == "problems" ? &view_.showProblems : nullptr;
-      if (w == "panels") view_.hidePanels = !on;
-      else if (!flag) throw Error("unknown view item '" + w + "' (designer, json, help, panels, follicles, directions, tract, wireframe, coat, skin, navigation, problems)", file, "line " + std::to_string(c.line));
-      else *flag = on;
+      bool* flag = w == "designer"     ? &view_.showDesigner
+                   : w == "json"       ? &view_.showJsonInspector
+                   : w == "help"       ? &view_.showHelp
+                   : w == "panels"     ? nullptr
+                   : w == "follicles"  ? &view_.showFollicles
+                   : w == "directions" ? &view_.showDirections
+                   : w == "tract"      ? &view_.showTract
+                   : w == "wireframe"  ? &view_.wireframe
+                   : w == "coat"       ? &view_.showCoat
+                   : w == "skin"       ? &view_.showSkin
+                   : w == "navigation" ? &view_.forceNavigation
+                   : w == "problems"   ? &view_.showProblems
+                                       : nullptr;
+      if (w == "panels")
+        view_.hidePanels = !on;
+      else if (!flag)
+        throw Error("unknown view item '" + w +
+                        "' (designer, json, help, panels, follicles, directions, tract, wireframe, coat, skin, "
+                        "navigation, problems)",
+                    file, "line " + std::to_string(c.line));
+      else
+        *flag = on;
       scriptWaitFrames_ = 1;
     } else if (c.verb == "click" || c.verb == "drag") {
       // View pixels from the view's top-left corner, or percentages of the view ("50%").
-      if (c.verb == "click") needArgs(c, 2, 2, "click X Y", file);
-      else needArgs(c, 4, 6, "drag X1 Y1 X2 Y2 [left|right|middle [STEPS]]", file);
+      if (c.verb == "click")
+        needArgs(c, 2, 2, "click X Y", file);
+      else
+        needArgs(c, 4, 6, "drag X1 Y1 X2 Y2 [left|right|middle [STEPS]]", file);
       const glm::vec2 a = scriptPoint(c, 0), b = c.verb == "drag" ? scriptPoint(c, 2) : a;
       int button = 0;
       if (c.args.size() > 4) {
@@ -123,17 +141,20 @@ void App::scriptStep() {
       fakeMouseNext_ = 0;
     } else if (c.verb == "tool") {
       needArgs(c, 1, 2, "tool orbit|key|vector|edit-vectors|bias|brush|control|pin [FEATHER]", file);
-      static const std::pair<const char*, Tool> tools[] = {{"orbit", Tool::Orbit},      {"key", Tool::PlaceKey},
-                                                           {"vector", Tool::AddVector}, {"edit-vectors", Tool::EditVectors},
-                                                           {"bias", Tool::AddBias},     {"brush", Tool::Brush},
-                                                           {"control", Tool::AddControl}, {"pin", Tool::Pin}};
+      static const std::pair<const char*, Tool> tools[] = {
+          {"orbit", Tool::Orbit},        {"key", Tool::PlaceKey},
+          {"vector", Tool::AddVector},   {"edit-vectors", Tool::EditVectors},
+          {"bias", Tool::AddBias},       {"brush", Tool::Brush},
+          {"control", Tool::AddControl}, {"pin", Tool::Pin}};
       bool found = false;
       for (const auto& t : tools)
         if (c.args[0] == t.first) {
           view_.tool = t.second;
           found = true;
         }
-      if (!found) throw Error("unknown tool '" + c.args[0] + "' (orbit, key, vector, edit-vectors, bias, brush, control, pin)", file, "line " + std::to_string(c.line));
+      if (!found)
+        throw Error("unknown tool '" + c.args[0] + "' (orbit, key, vector, edit-vectors, bias, brush, control, pin)",
+                    file, "line " + std::to_string(c.line));
       if (c.args.size() == 2) view_.toolFeather = c.args[1];
     } else if (c.verb == "ui") {
       needArgs(c, 2, 3, "ui PANEL WIDGET [VALUE]", file);
@@ -144,7 +165,8 @@ void App::scriptStep() {
     } else if (c.verb == "sleep") {
       needArgs(c, 1, 1, "sleep SECONDS", file);
       const double secs = scriptNumber(c, 0, file);
-      if (!(secs >= 0 && secs <= 3600)) throw Error("sleep: seconds must be in [0, 3600]", file, "line " + std::to_string(c.line));
+      if (!(secs >= 0 && secs <= 3600))
+        throw Error("sleep: seconds must be in [0, 3600]", file, "line " + std::to_string(c.line));
       scriptSleepUntil_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(long(secs * 1000.0));
     } else if (c.verb == "autosave") {
       needArgs(c, 0, 0, "autosave", file);

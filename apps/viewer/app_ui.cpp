@@ -36,7 +36,10 @@ void recoverImGuiStack(int windows) {
   while (g.CurrentWindowStack.Size > windows) {
     ImGui::ErrorCheckEndWindowRecover(nullptr);  // may end a table's own child window
     if (g.CurrentWindowStack.Size <= windows) break;
-    if (g.CurrentWindow->Flags & ImGuiWindowFlags_ChildWindow) ImGui::EndChild(); else ImGui::End();
+    if (g.CurrentWindow->Flags & ImGuiWindowFlags_ChildWindow)
+      ImGui::EndChild();
+    else
+      ImGui::End();
   }
   ImGui::ErrorCheckEndWindowRecover(nullptr);
 }
@@ -119,7 +122,8 @@ void App::requestSave() {
 void App::requestSaveAs() {
   if (!doc_.hasScene()) return;
   if (saveAsPath_.empty())
-    saveAsPath_ = doc_.path().empty() ? (std::filesystem::current_path() / (doc_.scene().name + ".json")).string() : doc_.path();
+    saveAsPath_ =
+        doc_.path().empty() ? (std::filesystem::current_path() / (doc_.scene().name + ".json")).string() : doc_.path();
   popupToOpen_ = "Save scene as";
 }
 
@@ -150,7 +154,10 @@ void App::buildUi() {
   if (!io.WantCaptureKeyboard) {
     const bool ctrl = io.KeyCtrl;
     if (ctrl && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Z))) {
-      if (io.KeyShift) doc_.redo(); else doc_.undo();
+      if (io.KeyShift)
+        doc_.redo();
+      else
+        doc_.undo();
     }
     if (ctrl && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Y))) doc_.redo();
     if (ctrl && ImGui::IsKeyPressed('S')) requestSave();
@@ -205,8 +212,9 @@ void App::panelColumn() {
   const ImGuiViewport* vp = ImGui::GetMainViewport();
   ImGui::SetNextWindowPos(vp->WorkPos, ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(view_.viewOrigin.x, vp->WorkSize.y - kStatusHeight), ImGuiCond_Always);
-  ImGui::Begin("Panels", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
-                                      ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoBringToFrontOnFocus);
+  ImGui::Begin("Panels", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
+                   ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoBringToFrontOnFocus);
   if (!doc_.hasScene()) {
     ImGui::TextWrapped("No scene. Open a scene file (.json) or a bare mesh (.obj, .ply, .off, .stl).");
     static std::string path;
@@ -326,8 +334,10 @@ void App::dialogs() {
     if (ImGui::Button("Save")) {
       ImGui::CloseCurrentPopup();
       try {
-        if (doc_.saveAs(saveAsPath_, false)) afterSave();
-        else popupToOpen_ = "Replace file?";
+        if (doc_.saveAs(saveAsPath_, false))
+          afterSave();
+        else
+          popupToOpen_ = "Replace file?";
       } catch (const std::exception& e) {
         pending_ = Pending::None;
         showError(e.what());
@@ -384,8 +394,10 @@ void App::dialogs() {
     if (ImGui::Button("Discard")) {
       ImGui::CloseCurrentPopup();
       autosave_.discard();  // the user threw the changes away: no recovery for them
-      if (pending_ == Pending::Quit) quit_ = true;
-      else if (pending_ == Pending::Open) openNow(pendingPath_);
+      if (pending_ == Pending::Quit)
+        quit_ = true;
+      else if (pending_ == Pending::Open)
+        openNow(pendingPath_);
       pending_ = Pending::None;
     }
     ImGui::SameLine();
@@ -446,8 +458,8 @@ void App::scratchboardWindow() {
       render::ScratchboardSettings ss;
       ss.width = std::max(64, fbSize_.x / 2);
       ss.height = std::max(64, fbSize_.y / 2);
-      const render::Image img =
-          render::renderScratchboard(p.coatMesh().mesh, p.skinTriMesh(), camera_.camera(), render::sceneLights(doc_.scene()), ss);
+      const render::Image img = render::renderScratchboard(p.coatMesh().mesh, p.skinTriMesh(), camera_.camera(),
+                                                           render::sceneLights(doc_.scene()), ss);
       if (!scratchTexture_) scratchTexture_ = std::make_unique<render::ImageTexture>(*context_);
       scratchTexture_->upload(img);
       scratchError_.clear();

@@ -225,8 +225,7 @@ void Document::update() {
   if (failed_ || halted_) return;
   // Anything that left a stage dirty behind the Document's back is evaluated too (the GL view must
   // never pull a dirty pipeline on the UI thread).
-  if (!needEval_ && !pending_ && pipeline_->dirty(Stage::Mesh))
-    needEval_ = true;
+  if (!needEval_ && !pending_ && pipeline_->dirty(Stage::Mesh)) needEval_ = true;
   if (!(needEval_ || pending_ || timeDirty_ || lodDirty_ || checkWanted_)) return;
   // Hand edits to the pipeline (the worker is idle).
   try {

@@ -38,9 +38,9 @@ namespace pteryla::viewer {
 // What the panels and overlays read from the last evaluation (copied off the worker thread).
 struct Snapshot {
   uint64_t skinVersion = 0, follicleVersion = 0, coatVersion = 0;  // bump when the part changes
-  TriMesh skin;                           // posed skin (triangles, for picking and the wire overlay)
+  TriMesh skin;  // posed skin (triangles, for picking and the wire overlay)
   glm::vec3 skinLo{0}, skinHi{0};
-  std::vector<std::string> groupNames;    // skin mesh groups (tract building blocks)
+  std::vector<std::string> groupNames;  // skin mesh groups (tract building blocks)
   std::vector<std::string> tractNames;
   std::vector<std::vector<uint32_t>> tractFaces;  // triangles of each tract
   // Follicles at rest (before any pose).
@@ -56,11 +56,11 @@ struct Snapshot {
   size_t coatTriangles = 0, coatFeathers = 0;
   glm::vec3 coatLo{0}, coatHi{0};
   bool haveCoat = false;
-  double stageSeconds[pipeline::kStageCount] = {};           // last evaluation time of each stage
+  double stageSeconds[pipeline::kStageCount] = {};  // last evaluation time of each stage
 };
 
 struct JobProgress {
-  std::string stage;                      // "distribute", "pack", ...
+  std::string stage;  // "distribute", "pack", ...
   double fraction = 0;
 };
 
@@ -107,15 +107,15 @@ class Document {
 
   void setTime(double t);
   double time() const { return time_; }
-  void setLod(double fraction);           // (0, 1]
+  void setLod(double fraction);  // (0, 1]
   double lod() const { return lod_; }
 
   // Call once per frame on the UI thread: collects a finished job, hands pending edits to the pipeline
   // and starts an evaluation when something is out of date. Never blocks on a running job.
   void update();
   bool busy() const { return running_; }
-  bool upToDate() const;                  // idle, no pending edit, last evaluation complete and ok
-  bool failed() const { return failed_; } // the last evaluation threw (until the next edit)
+  bool upToDate() const;                   // idle, no pending edit, last evaluation complete and ok
+  bool failed() const { return failed_; }  // the last evaluation threw (until the next edit)
   JobProgress progress() const;
   // Stops the running job at its next progress report and holds evaluation until the next edit or
   // resume() (the user's Cancel).
@@ -164,7 +164,7 @@ class Document {
   std::thread worker_;
   bool running_ = false;
   std::atomic<bool> done_{false}, cancel_{false};
-  mutable std::mutex mutex_;              // guards the fields below, shared with the worker
+  mutable std::mutex mutex_;  // guards the fields below, shared with the worker
   JobProgress progress_;
   std::shared_ptr<Snapshot> snapshot_, workerSnapshot_;
   std::optional<std::string> jobError_, error_;

@@ -20,17 +20,29 @@ bool leafEditor(const char* label, Json& j) {
   ImGui::SetNextItemWidth(-FLT_MIN);
   if (j.is_boolean()) {
     bool b = j.get<bool>();
-    if (ImGui::Checkbox(label, &b)) { j = b; changed = true; }
+    if (ImGui::Checkbox(label, &b)) {
+      j = b;
+      changed = true;
+    }
   } else if (j.is_number_integer()) {
     int64_t v = j.get<int64_t>();
-    if (ImGui::DragScalar(label, ImGuiDataType_S64, &v, 1.0f)) { j = v; changed = true; }
+    if (ImGui::DragScalar(label, ImGuiDataType_S64, &v, 1.0f)) {
+      j = v;
+      changed = true;
+    }
   } else if (j.is_number()) {
     double v = j.get<double>();
     const float speed = static_cast<float>(std::max(std::abs(v) * 0.01, 1e-4));
-    if (ImGui::DragScalar(label, ImGuiDataType_Double, &v, speed, nullptr, nullptr, "%.6g")) { j = v; changed = true; }
+    if (ImGui::DragScalar(label, ImGuiDataType_Double, &v, speed, nullptr, nullptr, "%.6g")) {
+      j = v;
+      changed = true;
+    }
   } else if (j.is_string()) {
     std::string s = j.get<std::string>();
-    if (ImGui::InputText(label, &s, ImGuiInputTextFlags_EnterReturnsTrue)) { j = s; changed = true; }
+    if (ImGui::InputText(label, &s, ImGuiInputTextFlags_EnterReturnsTrue)) {
+      j = s;
+      changed = true;
+    }
   } else if (isTriple(j)) {
     double v[3] = {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
     const float speed = static_cast<float>(std::max((std::abs(v[0]) + std::abs(v[1]) + std::abs(v[2])) * 0.003, 1e-4));
@@ -57,7 +69,10 @@ bool addKeyPopup(Json& j) {
     ImGui::InputText("value (JSON)", &value);
     if (ImGui::Button("Add") && (j.is_array() || !key.empty())) {
       const Json v = parseLooseValue(value);
-      if (j.is_array()) j.push_back(v); else j[key] = v;
+      if (j.is_array())
+        j.push_back(v);
+      else
+        j[key] = v;
       changed = true;
       ImGui::CloseCurrentPopup();
     }

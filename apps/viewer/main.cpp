@@ -19,12 +19,14 @@ int main(int argc, char** argv) {
   cli.add_option("--script", o.script, "Run a scripted session (see --script-help)");
   cli.add_flag("--script-help", scriptHelp, "List the script commands");
   cli.add_option("--screenshot", o.screenshot, "Capture the 3D view to this image once evaluated, then quit");
-  cli.add_option("--frames", o.frames, "With --screenshot: draw at least this many frames first")->check(CLI::Range(1, 1000000));
+  cli.add_option("--frames", o.frames, "With --screenshot: draw at least this many frames first")
+      ->check(CLI::Range(1, 1000000));
   cli.add_option("--benchmark-orbit", o.benchmarkOrbit,
                  "Orbit the camera once in N frames after the evaluation, print the frame rate as JSON, quit")
       ->check(CLI::Range(1, 1000000));
   cli.add_option("--size", size, "Window size WxH (default 1280x800)");
-  cli.add_option("--lod", lod, "Level of detail in (0,1] (default: the scene's render.lod)")->check(CLI::Range(1e-3, 1.0));
+  cli.add_option("--lod", lod, "Level of detail in (0,1] (default: the scene's render.lod)")
+      ->check(CLI::Range(1e-3, 1.0));
   cli.add_flag("--no-vsync", noVsync, "Do not wait for the display's refresh");
   cli.add_option("--autosave-seconds", o.autosaveSeconds,
                  "Write unsaved changes to a recovery file every N seconds (default 60, 0 = off; docs/viewer.md)")

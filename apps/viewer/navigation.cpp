@@ -72,7 +72,8 @@ NavigationCoat makeNavigationCoat(const pipeline::CoatMesh& coat, size_t budget)
     copySpan(out.mesh.featherId, m.featherId, lo[r], hi[r]);
     pipeline::CoatDrawRange nd = d;
     nd.firstIndex = static_cast<uint32_t>(out.mesh.indices.size());
-    for (uint32_t i = d.firstIndex; i < d.firstIndex + d.indexCount; ++i) out.mesh.indices.push_back(m.indices[i] - lo[r] + base);
+    for (uint32_t i = d.firstIndex; i < d.firstIndex + d.indexCount; ++i)
+      out.mesh.indices.push_back(m.indices[i] - lo[r] + base);
     out.ranges.push_back(nd);
   }
   return out;

@@ -14,8 +14,8 @@ namespace pteryla::viewer {
 namespace {
 
 ImU32 tractColour(uint32_t t, int alpha = 255) {
-  static const ImU32 base[] = {IM_COL32(230, 90, 70, 255),  IM_COL32(70, 160, 230, 255), IM_COL32(90, 200, 100, 255),
-                               IM_COL32(230, 190, 60, 255), IM_COL32(180, 100, 220, 255), IM_COL32(60, 200, 200, 255),
+  static const ImU32 base[] = {IM_COL32(230, 90, 70, 255),   IM_COL32(70, 160, 230, 255),  IM_COL32(90, 200, 100, 255),
+                               IM_COL32(230, 190, 60, 255),  IM_COL32(180, 100, 220, 255), IM_COL32(60, 200, 200, 255),
                                IM_COL32(240, 130, 200, 255), IM_COL32(150, 150, 150, 255)};
   const ImU32 c = base[t % 8];
   return (c & 0x00FFFFFFu) | (static_cast<ImU32>(alpha) << 24);
@@ -70,7 +70,8 @@ void drawOverlays(ImDrawList* dl, PanelContext& ctx) {
   const pipeline::Scene& scene = ctx.doc.scene();
   const ViewState& v = ctx.view;
   const Projector proj{ctx.camera.camera(), v.viewSize, v.viewOrigin};
-  dl->PushClipRect(ImVec2(v.viewOrigin.x, v.viewOrigin.y), ImVec2(v.viewOrigin.x + float(v.viewSize.x), v.viewOrigin.y + float(v.viewSize.y)), true);
+  dl->PushClipRect(ImVec2(v.viewOrigin.x, v.viewOrigin.y),
+                   ImVec2(v.viewOrigin.x + float(v.viewSize.x), v.viewOrigin.y + float(v.viewSize.y)), true);
   const float arrowLen = overlayArrowLength(snap);
 
   // Selected tract: its triangles, translucent, front-facing only.
@@ -169,7 +170,8 @@ void drawOverlays(ImDrawList* dl, PanelContext& ctx) {
         }
         if (glm::length(dir) > 0) dir = glm::normalize(dir);
         const bool sel = int(k) == v.selectedVector;
-        arrow(dl, proj, at, at + dir * arrowLen, sel ? IM_COL32(255, 255, 255, 255) : IM_COL32(80, 220, 255, 255), 2.5f);
+        arrow(dl, proj, at, at + dir * arrowLen, sel ? IM_COL32(255, 255, 255, 255) : IM_COL32(80, 220, 255, 255),
+              2.5f);
       }
     }
     if (d.contains("axis") && d["axis"].is_array()) {
@@ -179,14 +181,16 @@ void drawOverlays(ImDrawList* dl, PanelContext& ctx) {
     }
     // A vector being added with the drag tool.
     if (v.dragActive && v.dragVector < 0)
-      arrow(dl, proj, v.dragAt, v.dragAt + (glm::length(v.dragDirection) > 0 ? glm::normalize(v.dragDirection) : glm::vec3(0)) * arrowLen,
+      arrow(dl, proj, v.dragAt,
+            v.dragAt + (glm::length(v.dragDirection) > 0 ? glm::normalize(v.dragDirection) : glm::vec3(0)) * arrowLen,
             IM_COL32(255, 255, 255, 255), 2.5f);
   }
 
   // Relaxation bias vectors of the tracts.
   if (v.showVectors) {
     for (const auto& tr : scene.tracts) {
-      if (!tr.is_object() || !tr.contains("relax") || !tr["relax"].is_object() || !tr["relax"].contains("bias")) continue;
+      if (!tr.is_object() || !tr.contains("relax") || !tr["relax"].is_object() || !tr["relax"].contains("bias"))
+        continue;
       for (const auto& b : tr["relax"]["bias"]) {
         const glm::vec3 at = glm::vec3(actions::jsonVec3(b.value("at", Json())));
         glm::vec3 dir = glm::vec3(actions::jsonVec3(b.value("direction", Json()), glm::dvec3(1, 0, 0)));

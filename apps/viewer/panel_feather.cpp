@@ -140,8 +140,8 @@ struct FeatherDesigner::Impl {
     m.fit(o, size, lo, hi);
     for (const auto& b : curves.barbs) {
       feather::barbPolyline(curves, b, 6, line);
-      const ImU32 col = b.part == 1 ? IM_COL32(160, 200, 255, 160)
-                        : b.isKey   ? IM_COL32(255, 210, 120, 255)
+      const ImU32 col = b.part == 1   ? IM_COL32(160, 200, 255, 160)
+                        : b.isKey     ? IM_COL32(255, 210, 120, 255)
                         : b.vane == 0 ? IM_COL32(215, 190, 150, 150)
                                       : IM_COL32(190, 170, 140, 150);
       for (size_t i = 1; i < line.size(); ++i)
@@ -149,8 +149,8 @@ struct FeatherDesigner::Impl {
     }
     for (const auto& s : curves.shafts)
       for (size_t i = 1; i < s.points.size(); ++i)
-        dl->AddLine(m.to(s.points[i - 1].x, s.points[i - 1].y), m.to(s.points[i].x, s.points[i].y), IM_COL32(250, 250, 240, 255),
-                    std::max(1.5f, float(s.widths[i - 1] * m.scale)));
+        dl->AddLine(m.to(s.points[i - 1].x, s.points[i - 1].y), m.to(s.points[i].x, s.points[i].y),
+                    IM_COL32(250, 250, 240, 255), std::max(1.5f, float(s.widths[i - 1] * m.scale)));
     dl->AddText(ImVec2(o.x + 6, o.y + 4), IM_COL32(200, 200, 200, 200),
                 (std::to_string(curves.barbs.size()) + " barbs (key barbs highlighted)").c_str());
   }
@@ -169,12 +169,14 @@ struct FeatherDesigner::Impl {
     dl->AddLine(m.to(-0.1, 0), m.to(1.1, 0), IM_COL32(70, 70, 80, 255));
     dl->AddLine(m.to(1, -0.55), m.to(1, 0.55), IM_COL32(70, 70, 80, 255));
     const char* names[] = {"x along barb", "y toward tip", "z dorsal"};
-    dl->AddText(ImVec2(o.x + 4, o.y + 2), IM_COL32(180, 180, 180, 200), (std::string(names[axisU]) + " / " + names[axisV]).c_str());
+    dl->AddText(ImVec2(o.x + 4, o.y + 2), IM_COL32(180, 180, 180, 200),
+                (std::string(names[axisU]) + " / " + names[axisV]).c_str());
     // Curve.
     std::vector<glm::dvec3> pts;
     feather::sampleBezier(kb.cvs, 32, pts);
     for (size_t i = 1; i < pts.size(); ++i)
-      dl->AddLine(m.to(pts[i - 1][axisU], pts[i - 1][axisV]), m.to(pts[i][axisU], pts[i][axisV]), IM_COL32(255, 210, 120, 255), 2.0f);
+      dl->AddLine(m.to(pts[i - 1][axisU], pts[i - 1][axisV]), m.to(pts[i][axisU], pts[i][axisV]),
+                  IM_COL32(255, 210, 120, 255), 2.0f);
     for (size_t i = 1; i < kb.cvs.size(); ++i)
       dl->AddLine(m.to(kb.cvs[i - 1][axisU], kb.cvs[i - 1][axisV]), m.to(kb.cvs[i][axisU], kb.cvs[i][axisV]),
                   IM_COL32(120, 120, 140, 200));
@@ -204,7 +206,10 @@ struct FeatherDesigner::Impl {
     for (size_t i = 0; i < kb.cvs.size(); ++i) {
       const ImVec2 p = m.to(kb.cvs[i][axisU], kb.cvs[i][axisV]);
       const bool sel = (dragView == view && int(i) == dragCv) || (hovered && int(i) == hot);
-      dl->AddCircleFilled(p, sel ? 6.0f : 4.5f, i == 0 ? IM_COL32(150, 150, 150, 255) : sel ? IM_COL32(255, 255, 255, 255) : IM_COL32(90, 200, 255, 255));
+      dl->AddCircleFilled(p, sel ? 6.0f : 4.5f,
+                          i == 0 ? IM_COL32(150, 150, 150, 255)
+                          : sel  ? IM_COL32(255, 255, 255, 255)
+                                 : IM_COL32(90, 200, 255, 255));
     }
     return changed;
   }
@@ -259,7 +264,10 @@ void FeatherDesigner::draw(PanelContext& ctx, bool* open) {
     len("calamus length (c_l)", p.calamusLength, 0.0, 100.0);
     {
       float f = float(p.calamusWidthRatio);
-      if (ImGui::SliderFloat("calamus width ratio (c_wr)", &f, 0.1f, 2.0f)) { p.calamusWidthRatio = f; ch = true; }
+      if (ImGui::SliderFloat("calamus width ratio (c_wr)", &f, 0.1f, 2.0f)) {
+        p.calamusWidthRatio = f;
+        ch = true;
+      }
     }
     len("rachis length (r_l)", p.rachisLength, 1e-4, 1000.0);
     len("rachis width (r_w)", p.rachisWidth, 1e-5, 100.0);
@@ -288,7 +296,10 @@ void FeatherDesigner::draw(PanelContext& ctx, bool* open) {
     ch |= ImGui::SliderInt("split reach (barbs)", &p.splits.reach, 0, 20);
     {
       int seed = int(p.seed);
-      if (ImGui::InputInt("seed", &seed) && seed >= 0) { p.seed = uint64_t(seed); ch = true; }
+      if (ImGui::InputInt("seed", &seed) && seed >= 0) {
+        p.seed = uint64_t(seed);
+        ch = true;
+      }
     }
 
     ImGui::TableNextColumn();

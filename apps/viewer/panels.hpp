@@ -24,14 +24,14 @@
 namespace pteryla::viewer {
 
 enum class Tool {
-  Orbit,          // left drag orbits (default)
-  PlaceKey,       // click a follicle: key feather `toolFeather` there
-  AddVector,      // press on the skin and drag: styling vector
-  EditVectors,    // drag the tip of a styling vector
-  AddBias,        // press on the skin and drag: relaxation bias vector of the selected tract
-  Brush,          // click on the skin: fixed-angle packing brush
-  AddControl,     // click on the skin: expressive control
-  Pin,            // click on the skin: pinned follicle in the selected tract
+  Orbit,        // left drag orbits (default)
+  PlaceKey,     // click a follicle: key feather `toolFeather` there
+  AddVector,    // press on the skin and drag: styling vector
+  EditVectors,  // drag the tip of a styling vector
+  AddBias,      // press on the skin and drag: relaxation bias vector of the selected tract
+  Brush,        // click on the skin: fixed-angle packing brush
+  AddControl,   // click on the skin: expressive control
+  Pin,          // click on the skin: pinned follicle in the selected tract
 };
 
 // A panel widget a script drives (`ui PANEL WIDGET [VALUE]`, app_script.cpp): the panel checks
@@ -54,8 +54,8 @@ struct ViewState {
   int selectedControl = -1;
   int selectedVector = -1;
   Tool tool = Tool::Orbit;
-  std::string toolFeather;         // PlaceKey
-  float brushRadius = 0.1f;        // scene units (set from the skin size on load)
+  std::string toolFeather;   // PlaceKey
+  float brushRadius = 0.1f;  // scene units (set from the skin size on load)
   float brushElevationDeg = 45.0f;
   float controlRadius = 0.2f;
   float biasSigma = 0.2f, biasStretch = 1.5f;
@@ -97,11 +97,11 @@ struct ViewState {
 // What panels can ask of the app.
 struct AppRequests {
   std::function<void()> frameAll;
-  std::function<void(const std::string&)> screenshot;   // path
-  std::function<void(const std::string&)> open;          // path (asks about unsaved changes)
-  std::function<void()> save;                            // Save (Save As when the scene has no file)
+  std::function<void(const std::string&)> screenshot;  // path
+  std::function<void(const std::string&)> open;        // path (asks about unsaved changes)
+  std::function<void()> save;                          // Save (Save As when the scene has no file)
   std::function<void()> saveAs;
-  std::function<void(const std::string&)> error;         // shows the error modal
+  std::function<void(const std::string&)> error;  // shows the error modal
 };
 
 struct PanelContext {

@@ -64,10 +64,16 @@ void metricsTable(const std::optional<pipeline::QualityMetrics>& m) {
     return;
   }
   auto num = [](const char* name, const std::optional<double>& v) {
-    if (v) ImGui::Text("%-28s %.4f", name, *v); else ImGui::Text("%-28s -", name);
+    if (v)
+      ImGui::Text("%-28s %.4f", name, *v);
+    else
+      ImGui::Text("%-28s -", name);
   };
   auto cnt = [](const char* name, const std::optional<size_t>& v) {
-    if (v) ImGui::Text("%-28s %zu", name, *v); else ImGui::Text("%-28s -", name);
+    if (v)
+      ImGui::Text("%-28s %zu", name, *v);
+    else
+      ImGui::Text("%-28s -", name);
   };
   cnt("follicles", m->follicles);
   num("hex fraction", m->hexFraction);
@@ -99,11 +105,15 @@ void drawTractsPanel(PanelContext& ctx) {
     for (size_t i = 0; i < s.tracts.size(); ++i) {
       ImGui::TableNextRow();
       ImGui::TableNextColumn();
-      if (ImGui::Selectable(tractName(s, i).c_str(), ctx.view.selectedTract == int(i), ImGuiSelectableFlags_SpanAllColumns) ||
+      if (ImGui::Selectable(tractName(s, i).c_str(), ctx.view.selectedTract == int(i),
+                            ImGuiSelectableFlags_SpanAllColumns) ||
           uiRequested(ctx, "Tracts", "select", tractName(s, i)))
         ctx.view.selectedTract = int(i);
       ImGui::TableNextColumn();
-      if (i < snap.tractFaces.size()) ImGui::Text("%zu", snap.tractFaces[i].size()); else ImGui::TextDisabled("-");
+      if (i < snap.tractFaces.size())
+        ImGui::Text("%zu", snap.tractFaces[i].size());
+      else
+        ImGui::TextDisabled("-");
       ImGui::TableNextColumn();
       ImGui::Text("%zu", folliclesInTract(snap, i));
     }
@@ -117,14 +127,17 @@ void drawTractsPanel(PanelContext& ctx) {
     int count = byCount && tj["count"].is_number() ? tj["count"].get<int>() : int(folliclesInTract(snap, size_t(t)));
     if (ImGui::InputInt("Follicle count", &count, 10, 100, ImGuiInputTextFlags_EnterReturnsTrue) && count > 0)
       guarded(ctx, [&] { actions::setTractCount(doc, size_t(t), size_t(count)); });
-    if (ImGui::InputFloat("Density (per area)", &density, 0, 0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue) && density > 0)
+    if (ImGui::InputFloat("Density (per area)", &density, 0, 0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue) &&
+        density > 0)
       guarded(ctx, [&] { actions::setTractDensity(doc, size_t(t), density); });
-    ImGui::TextDisabled(byCount ? "using an exact count" : (tj.contains("density") ? "using a density" : "automatic count"));
+    ImGui::TextDisabled(byCount ? "using an exact count"
+                                : (tj.contains("density") ? "using a density" : "automatic count"));
     if (ImGui::Button("Remove tract")) guarded(ctx, [&] { actions::removeTract(doc, size_t(t)); });
     if (ImGui::TreeNode("Tract JSON")) {
       Json copy = tj;
       if (jsonEditor("tract", copy))
-        guarded(ctx, [&] { doc.edit("tract " + std::to_string(t), [&](Scene& sc) { sc.tracts.at(size_t(t)) = copy; }); });
+        guarded(ctx,
+                [&] { doc.edit("tract " + std::to_string(t), [&](Scene& sc) { sc.tracts.at(size_t(t)) = copy; }); });
       ImGui::TreePop();
     }
   }
@@ -136,7 +149,10 @@ void drawTractsPanel(PanelContext& ctx) {
     for (const auto& g : snap.groupNames) {
       bool on = chosen.count(g) > 0;
       if (ImGui::Checkbox(g.c_str(), &on)) {
-        if (on) chosen.insert(g); else chosen.erase(g);
+        if (on)
+          chosen.insert(g);
+        else
+          chosen.erase(g);
       }
     }
     ImGui::EndChild();
@@ -218,7 +234,8 @@ void drawKeyFeathersPanel(PanelContext& ctx) {
   const Scene s = doc.scene();
   sectionTitle("Feather library");
   for (auto it = s.feathers.begin(); it != s.feathers.end(); ++it) {
-    ImGui::BulletText("%s: %s", it.key().c_str(), it->is_string() ? it->get<std::string>().c_str() : "(designed in the scene)");
+    ImGui::BulletText("%s: %s", it.key().c_str(),
+                      it->is_string() ? it->get<std::string>().c_str() : "(designed in the scene)");
   }
   static std::string newName = "covert", newPath;
   ImGui::InputText("name", &newName);
@@ -234,7 +251,8 @@ void drawKeyFeathersPanel(PanelContext& ctx) {
   const std::string current = tj.value("feather", std::string());
   if (ImGui::BeginCombo("Tract feather", current.empty() ? "(default)" : current.c_str())) {
     for (const auto& n : names)
-      if (ImGui::Selectable(n.c_str(), n == current)) guarded(ctx, [&] { actions::setTractFeather(doc, size_t(t), n); });
+      if (ImGui::Selectable(n.c_str(), n == current))
+        guarded(ctx, [&] { actions::setTractFeather(doc, size_t(t), n); });
     ImGui::EndCombo();
   }
   if (ctx.view.toolFeather.empty() && !names.empty()) ctx.view.toolFeather = names.front();
@@ -287,7 +305,9 @@ void drawDirectionsPanel(PanelContext& ctx) {
       bool ch = ImGui::DragFloat3("at", a, 0.005f);
       ch |= ImGui::DragFloat3("direction", di, 0.01f);
       if (ch && (di[0] != 0 || di[1] != 0 || di[2] != 0))
-        guarded(ctx, [&] { actions::setStylingVector(doc, k, glm::dvec3(a[0], a[1], a[2]), glm::dvec3(di[0], di[1], di[2])); });
+        guarded(ctx, [&] {
+          actions::setStylingVector(doc, k, glm::dvec3(a[0], a[1], a[2]), glm::dvec3(di[0], di[1], di[2]));
+        });
       if (ImGui::SmallButton("remove")) guarded(ctx, [&] { actions::removeStylingVector(doc, k); });
       ImGui::PopID();
     }
@@ -295,10 +315,12 @@ void drawDirectionsPanel(PanelContext& ctx) {
   float falloff = d.value("falloff", 0.0f);
   if (ImGui::SliderFloat("Falloff", &falloff, 0.0f, 2.0f))
     guarded(ctx, [&] { doc.edit("falloff", [&](Scene& sc) { sc.directions["falloff"] = falloff; }); });
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("0: inverse-distance-squared blend; > 0: Gaussian fall-off (scene units)");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("0: inverse-distance-squared blend; > 0: Gaussian fall-off (scene units)");
   if (ImGui::TreeNode("Directions JSON")) {
     Json copy = d;
-    if (jsonEditor("directions", copy)) guarded(ctx, [&] { doc.edit("directions", [&](Scene& sc) { sc.directions = copy; }); });
+    if (jsonEditor("directions", copy))
+      guarded(ctx, [&] { doc.edit("directions", [&](Scene& sc) { sc.directions = copy; }); });
     ImGui::TreePop();
   }
 }
@@ -323,7 +345,8 @@ void drawPackingPanel(PanelContext& ctx) {
   if (ImGui::SliderFloat("Max elevation (deg)", &maxE, 0.0f, 180.0f))
     guarded(ctx, [&] { actions::setPackingValue(doc, "max_elevation_deg", maxE); });
   bool barbs = p.value("elevate_barbs", true);
-  if (ImGui::Checkbox("Elevate barbs (6.3.3)", &barbs)) guarded(ctx, [&] { actions::setPackingValue(doc, "elevate_barbs", barbs); });
+  if (ImGui::Checkbox("Elevate barbs (6.3.3)", &barbs))
+    guarded(ctx, [&] { actions::setPackingValue(doc, "elevate_barbs", barbs); });
   bool skin = p.value("skin", true);
   ImGui::SameLine();
   if (ImGui::Checkbox("Pack against skin", &skin)) guarded(ctx, [&] { actions::setPackingValue(doc, "skin", skin); });
@@ -331,8 +354,9 @@ void drawPackingPanel(PanelContext& ctx) {
   if (ImGui::Checkbox("Moult frames: repack every feather", &moultFull))
     guarded(ctx, [&] { actions::setPackingValue(doc, "moult_pack", moultFull ? "full" : "over"); });
   if (ImGui::IsItemHovered())
-    ImGui::SetTooltip("Off: lost and growing feathers are packed over the mature coat (fast scrubbing).\n"
-                      "On: every feather is repacked (tighter, a full pack per frame; for final renders).");
+    ImGui::SetTooltip(
+        "Off: lost and growing feathers are packed over the mature coat (fast scrubbing).\n"
+        "On: every feather is repacked (tighter, a full pack per frame; for final renders).");
 
   sectionTitle("Fixed-angle brush (8.3)");
   ImGui::SliderFloat("Radius", &ctx.view.brushRadius, 0.001f, 2.0f, "%.3f", ImGuiSliderFlags_Logarithmic);

@@ -42,7 +42,7 @@ bool moultEditor(const char* id, Json& m) {
   num("random", 0.0f, 0.0f, 1.0f);
   num("size_exponent", 0.0f, 0.0f, 8.0f);
   num("boundary_slowdown", 0.0f, 0.0f, 10.0f);
-  num("old_age", 1.0f, 1.0f, 2.0f);    // wear of the old plumage (docs/growth.md)
+  num("old_age", 1.0f, 1.0f, 2.0f);      // wear of the old plumage (docs/growth.md)
   num("wear_time", 0.0f, 0.0f, 100.0f);  // time a renewed feather takes to wear fully
   const std::string seq = m.value("sequence", std::string("centre_out"));
   if (ImGui::BeginCombo("sequence", seq.c_str())) {
@@ -138,11 +138,15 @@ void drawTimelinePanel(PanelContext& ctx) {
   const Json& tj = s.tracts[size_t(sel)];
   if (!tj.contains("moult")) {
     if (ImGui::Button("Add moult settings to this tract"))
-      guarded(ctx, [&] { doc.edit("tract moult", [&](Scene& sc) { sc.tracts.at(size_t(sel))["moult"] = Json::object(); }); });
+      guarded(ctx, [&] {
+        doc.edit("tract moult", [&](Scene& sc) { sc.tracts.at(size_t(sel))["moult"] = Json::object(); });
+      });
   } else {
     Json copy = tj["moult"].is_object() ? tj["moult"] : Json::object();
     if (moultEditor("tract_moult", copy))
-      guarded(ctx, [&] { doc.edit("tract moult " + std::to_string(sel), [&](Scene& sc) { sc.tracts.at(size_t(sel))["moult"] = copy; }); });
+      guarded(ctx, [&] {
+        doc.edit("tract moult " + std::to_string(sel), [&](Scene& sc) { sc.tracts.at(size_t(sel))["moult"] = copy; });
+      });
     if (ImGui::SmallButton("Remove moult settings"))
       guarded(ctx, [&] { doc.edit("tract moult", [&](Scene& sc) { sc.tracts.at(size_t(sel)).erase("moult"); }); });
   }
@@ -162,7 +166,8 @@ void drawControlsPanel(PanelContext& ctx) {
   }
   for (size_t k = 0; k < s.controls.size(); ++k) {
     const Json& c = s.controls[k];
-    const std::string name = c.is_object() ? c.value("name", "control " + std::to_string(k)) : "control " + std::to_string(k);
+    const std::string name =
+        c.is_object() ? c.value("name", "control " + std::to_string(k)) : "control " + std::to_string(k);
     if (ImGui::Selectable((name + "##" + std::to_string(k)).c_str(), v.selectedControl == int(k)) ||
         uiRequested(ctx, "Expressive controls", "select", name))
       v.selectedControl = int(k);
@@ -180,7 +185,8 @@ void drawControlsPanel(PanelContext& ctx) {
     const char* b = actions::kControlBehaviours[i];
     float value = float(now.value[i]);
     const std::string label = std::string(b) + (now.keyed[i] ? " (keyed)" : "");
-    if (ImGui::SliderFloat(label.c_str(), &value, 0.0f, 1.0f) || uiRequestedNumber(ctx, "Expressive controls", b, value))
+    if (ImGui::SliderFloat(label.c_str(), &value, 0.0f, 1.0f) ||
+        uiRequestedNumber(ctx, "Expressive controls", b, value))
       guarded(ctx, [&] { actions::setControlValue(doc, k, b, value, doc.time()); });
   }
   glm::dvec3 at = actions::jsonVec3(c.value("at", Json()));
@@ -191,7 +197,8 @@ void drawControlsPanel(PanelContext& ctx) {
   if (moved) guarded(ctx, [&] { actions::setControlPoint(doc, k, glm::dvec3(a[0], a[1], a[2]), radius); });
 
   sectionTitle("Keyframes");
-  if (ImGui::Button("Key all behaviours at current time")) guarded(ctx, [&] { actions::addControlKeyframe(doc, k, doc.time()); });
+  if (ImGui::Button("Key all behaviours at current time"))
+    guarded(ctx, [&] { actions::addControlKeyframe(doc, k, doc.time()); });
   if (c.contains("keys") && c["keys"].is_array()) {
     for (size_t i = 0; i < c["keys"].size(); ++i) {
       ImGui::PushID(int(i));
@@ -199,7 +206,8 @@ void drawControlsPanel(PanelContext& ctx) {
       const double kt = key.value("t", 0.0);
       std::string values;
       for (const char* b : actions::kControlBehaviours)
-        if (key.contains(b) && key[b].is_number()) values += std::string(" ") + b + " " + std::to_string(key[b].get<double>()).substr(0, 4);
+        if (key.contains(b) && key[b].is_number())
+          values += std::string(" ") + b + " " + std::to_string(key[b].get<double>()).substr(0, 4);
       ImGui::Text("t=%.3f%s", kt, values.c_str());
       ImGui::SameLine();
       if (ImGui::SmallButton("go")) guarded(ctx, [&] { doc.setTime(kt); });
@@ -213,7 +221,9 @@ void drawControlsPanel(PanelContext& ctx) {
     const std::string cur = c.value("interpolation", std::string("linear"));
     int idx = cur == "smooth" ? 1 : cur == "step" ? 2 : 0;
     if (ImGui::Combo("interpolation", &idx, interps, 3))
-      guarded(ctx, [&] { doc.edit("interpolation", [&](Scene& sc) { sc.controls.at(k)["interpolation"] = interps[idx]; }); });
+      guarded(ctx, [&] {
+        doc.edit("interpolation", [&](Scene& sc) { sc.controls.at(k)["interpolation"] = interps[idx]; });
+      });
   }
   if (ImGui::Button("Remove control")) {
     guarded(ctx, [&] { actions::removeControl(doc, k); });
@@ -222,7 +232,8 @@ void drawControlsPanel(PanelContext& ctx) {
   }
   if (ImGui::TreeNode("Control JSON")) {
     Json copy = c;
-    if (jsonEditor("control", copy)) guarded(ctx, [&] { doc.edit("control " + std::to_string(k), [&](Scene& sc) { sc.controls.at(k) = copy; }); });
+    if (jsonEditor("control", copy))
+      guarded(ctx, [&] { doc.edit("control " + std::to_string(k), [&](Scene& sc) { sc.controls.at(k) = copy; }); });
     ImGui::TreePop();
   }
 }

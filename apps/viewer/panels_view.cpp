@@ -176,7 +176,8 @@ void drawRenderPanel(PanelContext& ctx) {
   bool shadows = s.render.shadows;
   if (ImGui::Checkbox("Shadows", &shadows))
     guarded(ctx, [&] { doc.edit("shadows", [&](Scene& sc) { sc.render.shadows = shadows; }); });
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("The first light casts the coat's and the skin's shadows (render.shadows)");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("The first light casts the coat's and the skin's shadows (render.shadows)");
   if (shadows) {
     float strength = static_cast<float>(s.render.shadowStrength);
     if (ImGui::SliderFloat("Shadow strength", &strength, 0.0f, 1.0f))
@@ -196,8 +197,10 @@ void drawRenderPanel(PanelContext& ctx) {
   bool ground = s.render.ground;
   if (ImGui::Checkbox("Ground", &ground))
     guarded(ctx, [&] { doc.edit("ground", [&](Scene& sc) { sc.render.ground = ground; }); });
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("A plane under the model that takes its contact shadow (render.ground)");
-  if (ground) colour("Ground colour", s.render.groundColor, [](Scene& sc, const glm::dvec3& c) { sc.render.groundColor = c; });
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("A plane under the model that takes its contact shadow (render.ground)");
+  if (ground)
+    colour("Ground colour", s.render.groundColor, [](Scene& sc, const glm::dvec3& c) { sc.render.groundColor = c; });
   int msaa = s.render.msaa == 8 ? 3 : s.render.msaa == 4 ? 2 : s.render.msaa == 2 ? 1 : 0;
   const char* samples[] = {"off", "2x", "4x", "8x"};
   if (ImGui::Combo("Anti-aliasing", &msaa, samples, 4))

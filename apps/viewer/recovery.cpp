@@ -73,10 +73,8 @@ std::string writeRecovery(const Document& doc) {
   pipeline::Scene s = doc.scene();
   s.time = doc.time();
   s.render.lod = doc.lod();
-  const Json j = {{"pteryla_recovery", kFormat},
-                  {"scene_path", doc.path()},
-                  {"saved_at", utcNow()},
-                  {"scene", sceneJson(s)}};
+  const Json j = {
+      {"pteryla_recovery", kFormat}, {"scene_path", doc.path()}, {"saved_at", utcNow()}, {"scene", sceneJson(s)}};
   std::error_code ec;
   fs::create_directories(fs::path(path).parent_path(), ec);
   if (ec) throw Error("cannot create the recovery directory: " + ec.message(), fs::path(path).parent_path().string());
@@ -102,8 +100,8 @@ std::string writeRecovery(const Document& doc) {
 
 Recovery readRecovery(const std::string& file) {
   const Json j = readJsonFile(file);
-  if (!j.is_object() || j.value("pteryla_recovery", 0) != kFormat || !j.contains("scene") ||
-      !j["scene"].is_object() || !j.value("scene_path", Json()).is_string())
+  if (!j.is_object() || j.value("pteryla_recovery", 0) != kFormat || !j.contains("scene") || !j["scene"].is_object() ||
+      !j.value("scene_path", Json()).is_string())
     throw Error("not a pteryla recovery file", file);
   Recovery r;
   r.file = file;
@@ -170,7 +168,8 @@ void Autosaver::forgetIfSaved(const Document& doc) {
 
 bool Autosaver::tick(const Document& doc, double now) {
   forgetIfSaved(doc);
-  if (interval_ <= 0 || !doc.hasScene() || !doc.modified() || (!written_.empty() && writtenChange_ == doc.changeCount())) {
+  if (interval_ <= 0 || !doc.hasScene() || !doc.modified() ||
+      (!written_.empty() && writtenChange_ == doc.changeCount())) {
     pendingSince_ = -1.0;
     return false;
   }

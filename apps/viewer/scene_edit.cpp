@@ -54,7 +54,8 @@ void setScenePointer(Scene& s, const std::string& pointer, const Json& value) {
       } else {
         if (!isIndex(leaf)) throw Error("expected an array index", s.file, pointer);
         const size_t idx = std::stoul(leaf);
-        if (idx >= node->size()) throw Error("array index out of range (size " + std::to_string(node->size()) + ")", s.file, pointer);
+        if (idx >= node->size())
+          throw Error("array index out of range (size " + std::to_string(node->size()) + ")", s.file, pointer);
         (*node)[idx] = value;
       }
     } else if (node->is_object()) {
@@ -129,8 +130,10 @@ std::optional<std::pair<double, double>> sceneTimeSpan(const Scene& s) {
   for (const auto& tr : s.tracts) {
     if (!tr.is_object() || !tr.contains("moult")) continue;
     const Json& m = tr["moult"];
-    if (m.is_boolean() && m.get<bool>()) moultSpan(s.moult.empty() ? Json::object() : s.moult, t);
-    else moultSpan(m, t);
+    if (m.is_boolean() && m.get<bool>())
+      moultSpan(s.moult.empty() ? Json::object() : s.moult, t);
+    else
+      moultSpan(m, t);
   }
   if (t.empty()) return std::nullopt;
   const auto [lo, hi] = std::minmax_element(t.begin(), t.end());
@@ -153,7 +156,8 @@ std::vector<size_t> resolveTracts(const Scene& s, const std::string& ref, const 
   if (!ref.empty() && std::all_of(ref.begin(), ref.end(), [](char c) { return c >= '0' && c <= '9'; })) {
     const size_t i = std::stoul(ref);
     if (i >= s.tracts.size())
-      throw Error("tract index " + ref + " out of range (" + std::to_string(s.tracts.size()) + " tracts)", s.file, where);
+      throw Error("tract index " + ref + " out of range (" + std::to_string(s.tracts.size()) + " tracts)", s.file,
+                  where);
     return {i};
   }
   for (size_t i = 0; i < s.tracts.size(); ++i)

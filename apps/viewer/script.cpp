@@ -51,7 +51,10 @@ std::vector<ScriptCommand> parseScript(const std::string& text, const std::strin
     for (size_t i = 0; i < line.size(); ++i) {
       const char ch = line[i];
       if (inQuote) {
-        if (ch == '"') inQuote = false; else cur += ch;
+        if (ch == '"')
+          inQuote = false;
+        else
+          cur += ch;
       } else if (ch == '"') {
         inQuote = true;
         have = true;
@@ -87,7 +90,9 @@ std::vector<ScriptCommand> loadScript(const std::string& path) {
 }
 
 bool isViewCommand(const std::string& v) {
-  return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "click" || v == "drag" || v == "ui" || v == "autosave" || v == "crash" || v == "sleep" || v == "tool" || v == "orbit" || v == "zoom" || v == "frame" || v == "frames" || v == "quit";
+  return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "click" || v == "drag" ||
+         v == "ui" || v == "autosave" || v == "crash" || v == "sleep" || v == "tool" || v == "orbit" || v == "zoom" ||
+         v == "frame" || v == "frames" || v == "quit";
 }
 
 double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file) {
@@ -100,8 +105,8 @@ double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file)
     used = 0;
   }
   if (used != s.size() || s.empty() || !std::isfinite(v))
-    throw Error("argument " + std::to_string(arg + 1) + " of '" + c.verb + "': expected a number, got '" + s + "'", file,
-                where(c));
+    throw Error("argument " + std::to_string(arg + 1) + " of '" + c.verb + "': expected a number, got '" + s + "'",
+                file, where(c));
   return v;
 }
 
@@ -114,7 +119,8 @@ namespace {
 size_t count(const ScriptCommand& c, size_t arg, const std::string& file) {
   const double v = scriptNumber(c, arg, file);
   if (v < 0 || v != std::floor(v) || v > 1e15)
-    throw Error("argument " + std::to_string(arg + 1) + " of '" + c.verb + "': expected a non-negative integer", file, where(c));
+    throw Error("argument " + std::to_string(arg + 1) + " of '" + c.verb + "': expected a non-negative integer", file,
+                where(c));
   return static_cast<size_t>(v);
 }
 
@@ -202,7 +208,8 @@ void run(Document& doc, const ScriptCommand& c, const std::string& file, std::os
     actions::addControl(doc, vec(c, 0, file), scriptNumber(c, 3, file));
   } else if (v == "lift" || v == "aim" || v == "direction" || v == "random" || v == "dynamic" || v == "blend") {
     needArgs(c, 2, 2, v + " CONTROL VALUE", file);
-    actions::setControlValue(doc, count(c, 0, file), v == "blend" ? "dynamic" : v, scriptNumber(c, 1, file), doc.time());
+    actions::setControlValue(doc, count(c, 0, file), v == "blend" ? "dynamic" : v, scriptNumber(c, 1, file),
+                             doc.time());
   } else if (v == "keyframe") {
     needArgs(c, 2, 2, "keyframe CONTROL T", file);
     actions::addControlKeyframe(doc, count(c, 0, file), scriptNumber(c, 1, file));

@@ -13,7 +13,7 @@
 namespace pteryla::viewer {
 
 struct ScriptCommand {
-  int line = 0;                   // 1-based line in the script
+  int line = 0;  // 1-based line in the script
   std::string verb;
   std::vector<std::string> args;
 };

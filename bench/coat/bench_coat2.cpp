@@ -73,11 +73,13 @@ Bird makeBird() {
     ScatterOptions o;
     o.seed = 5;
     o.tractIndex = t;
-    o.count = std::max<size_t>(8, static_cast<size_t>(std::lround(kFollicles * tractArea(b.skin, b.tracts[t]) / total)));
+    o.count =
+        std::max<size_t>(8, static_cast<size_t>(std::lround(kFollicles * tractArea(b.skin, b.tracts[t]) / total)));
     o.density.uniform = 1.0;
     b.follicles.append(scatterFollicles(b.skin, b.tracts[t], o));
   }
-  for (uint32_t t = 0; t < b.tracts.size(); ++t) b.params.push_back(parameterizeTract(b.skin, b.tracts[t], t, b.follicles));
+  for (uint32_t t = 0; t < b.tracts.size(); ++t)
+    b.params.push_back(parameterizeTract(b.skin, b.tracts[t], t, b.follicles));
   std::vector<std::string> names;
   for (const auto& e : std::filesystem::directory_iterator(data + "/feathers")) {
     if (!e.is_regular_file() || e.path().extension() != ".json") continue;
@@ -99,7 +101,8 @@ Bird makeBird() {
       b.keys[t].keys.push_back({b.params[t].follicles[slot], names[next++ % names.size()]});
     b.keyCount += b.keys[t].keys.size();
   }
-  b.directions.field.axis = {{0.97, 0.327, 0}, {0.74, 0.37, 0}, {0.44, 0.14, 0}, {-0.08, 0, 0}, {-0.56, 0.03, 0}, {-1.02, 0.07, 0}};
+  b.directions.field.axis = {{0.97, 0.327, 0}, {0.74, 0.37, 0},  {0.44, 0.14, 0},
+                             {-0.08, 0, 0},    {-0.56, 0.03, 0}, {-1.02, 0.07, 0}};
   b.dirs = computeSurfaceDirections(b.skin, b.tracts, b.follicles, b.directions);
   return b;
 }

@@ -36,7 +36,9 @@ struct Fnv {
     }
   }
   template <class T>
-  void pod(const T& v) { bytes(&v, sizeof(T)); }
+  void pod(const T& v) {
+    bytes(&v, sizeof(T));
+  }
   template <class T, class A>
   void vec(const std::vector<T, A>& v) {
     pod(v.size());
@@ -88,11 +90,12 @@ void digest(const char* name, const CoatFeathers& coat, const PackResult& r, boo
     all.pod(f.h);
     std::printf("%-22s fields %zu %016llx\n", name, r.barbFields.size(), static_cast<unsigned long long>(f.h));
   }
-  std::printf("%-22s all %016llx elev %016llx params %016llx points %016llx | free %zu elevated %zu lifted %zu "
-              "unresolved %zu cand %zu deps %zu skin %zu\n",
-              name, static_cast<unsigned long long>(all.h), static_cast<unsigned long long>(elev.h),
-              static_cast<unsigned long long>(params.h), static_cast<unsigned long long>(pts.h), s.free,
-              s.barbsElevated, s.barbsLifted, s.barbsUnresolved, s.candidatePoints, s.dependencies, s.skinSamples);
+  std::printf(
+      "%-22s all %016llx elev %016llx params %016llx points %016llx | free %zu elevated %zu lifted %zu "
+      "unresolved %zu cand %zu deps %zu skin %zu\n",
+      name, static_cast<unsigned long long>(all.h), static_cast<unsigned long long>(elev.h),
+      static_cast<unsigned long long>(params.h), static_cast<unsigned long long>(pts.h), s.free, s.barbsElevated,
+      s.barbsLifted, s.barbsUnresolved, s.candidatePoints, s.dependencies, s.skinSamples);
 }
 
 }  // namespace

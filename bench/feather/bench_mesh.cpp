@@ -103,10 +103,17 @@ void BM_CoatMesh(benchmark::State& state) {
   state.counters["feathers"] = static_cast<double>(in.size());
   state.counters["triangles"] = static_cast<double>(tris);
   state.counters["vertices"] = static_cast<double>(mesh.vertexCount());
-  state.counters["tri/s"] = benchmark::Counter(static_cast<double>(tris) * state.iterations(), benchmark::Counter::kIsRate);
+  state.counters["tri/s"] =
+      benchmark::Counter(static_cast<double>(tris) * state.iterations(), benchmark::Counter::kIsRate);
 }
 // Real time is the target; the CPU column is the whole process (all TBB threads), useful on a busy machine.
-BENCHMARK(BM_CoatMesh)->Arg(100)->Arg(60)->Arg(20)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_CoatMesh)
+    ->Arg(100)
+    ->Arg(60)
+    ->Arg(20)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 // Same coat, one feather after the other on one thread (appendFeatherMesh).
 void BM_CoatMeshSerial(benchmark::State& state) {

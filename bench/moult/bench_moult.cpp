@@ -60,8 +60,8 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   }
   const double times[] = {3.0, 5.5, 4.25, 6.0, 2.5, 7.75, 5.0, 3.5};
   size_t k = 0;
-  double packChanged = 0, packRecomputed = 0, naturalRecomputed = 0, meshRegenerated = 0, meshReused = 0, incremental = 0,
-         moultChanged = 0, moultRecomputed = 0;
+  double packChanged = 0, packRecomputed = 0, naturalRecomputed = 0, meshRegenerated = 0, meshReused = 0,
+         incremental = 0, moultChanged = 0, moultRecomputed = 0;
   p->resetTimings();
   for (auto _ : state) {
     p->setTime(consecutive ? 4.0 + double(++k) / 24.0 : times[k++ % 8]);
@@ -126,7 +126,12 @@ void BM_FrameBirdScene(benchmark::State& state) {
   }
   runFrames(state, std::move(s), state.range(2) != 0);
 }
-BENCHMARK(BM_FrameBirdScene)->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})->ArgNames({"skeleton", "controls", "scrub"})->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_FrameBirdScene)
+    ->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})
+    ->ArgNames({"skeleton", "controls", "scrub"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 void BM_FrameSynthetic(benchmark::State& state) {
   Json j = Json::parse(R"({"pteryla": 1, "seed": 4, "mesh": "../meshes/bird.obj",
@@ -140,7 +145,12 @@ void BM_FrameSynthetic(benchmark::State& state) {
   if (state.range(0)) j["skeleton"] = birdWings();
   runFrames(state, pipeline::sceneFromJson(j, kData + "/scenes/bench_synthetic.json"), state.range(1) != 0);
 }
-BENCHMARK(BM_FrameSynthetic)->ArgsProduct({{0, 1}, {0, 1}})->ArgNames({"skeleton", "scrub"})->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_FrameSynthetic)
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->ArgNames({"skeleton", "scrub"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 // The schedule alone: plan + ages for 3,000 feathers.
 void BM_MoultSchedule(benchmark::State& state) {
@@ -226,6 +236,13 @@ void BM_CheckBird(benchmark::State& state) {
   state.counters["triangles"] = double(triangles);
   state.counters["pairs"] = double(pairs);
 }
-BENCHMARK(BM_CheckBird)->Arg(0)->Arg(1)->ArgName("part")->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime()->Iterations(3);
+BENCHMARK(BM_CheckBird)
+    ->Arg(0)
+    ->Arg(1)
+    ->ArgName("part")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime()
+    ->Iterations(3);
 
 }  // namespace

@@ -117,7 +117,14 @@ void BM_Frame(benchmark::State& state) {
 }
 // Args: geometry percent, BRDF per fragment (0: per vertex, the default), occlusion culling (1: on,
 // the default).
-BENCHMARK(BM_Frame)->Args({100, 0, 1})->Args({60, 0, 1})->Args({100, 1, 1})->Args({100, 0, 0})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+BENCHMARK(BM_Frame)
+    ->Args({100, 0, 1})
+    ->Args({60, 0, 1})
+    ->Args({100, 1, 1})
+    ->Args({100, 0, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(5);
 
 void BM_SceneFrame(benchmark::State& state) {
   static std::map<int, std::unique_ptr<pteryla::pipeline::Pipeline>> cache;

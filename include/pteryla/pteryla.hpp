@@ -73,7 +73,7 @@ struct SkinArrays {
 
 // A feather tract (Streit 2003, 6.1): a set of skin faces carrying one kind of feather.
 struct TractSetup {
-  std::string name;                // required, unique
+  std::string name;                 // required, unique
   std::vector<std::string> groups;  // faces of these groups, united with `faces`;
   std::vector<uint32_t> faces;      // ... these faces (triangle indices). Neither: the whole skin
   size_t count = 0;                 // exact number of follicles, or
@@ -91,14 +91,14 @@ struct TractSetup {
 // moves through each tract's feathers from `start` to `start + duration`; feathers in it are lost, then
 // regrow. Tracts with TractSetup::moult false keep their feathers.
 struct MoultSetup {
-  bool enabled = false;               // off: no feather is ever lost
-  double start = 0;                   // time the window enters the order
-  double duration = 1;                // time until the last feather is renewed (> 0)
-  double window = 0.2;                // (0, 1]: feathers moulting at once, as a fraction of the tract
+  bool enabled = false;                 // off: no feather is ever lost
+  double start = 0;                     // time the window enters the order
+  double duration = 1;                  // time until the last feather is renewed (> 0)
+  double window = 0.2;                  // (0, 1]: feathers moulting at once, as a fraction of the tract
   std::string sequence = "centre_out";  // docs/moult.md: centre_out, boundary_in, increasing_u, radial, random ...
-  double gap = 0.05;                  // [0, 1): fraction of a feather's window with no feather
-  double random = 0;                  // [0, 1]: jitter of the order
-  uint64_t seed = 1;                  // of sequence "random" and the jitter
+  double gap = 0.05;                    // [0, 1): fraction of a feather's window with no feather
+  double random = 0;                    // [0, 1]: jitter of the order
+  uint64_t seed = 1;                    // of sequence "random" and the jitter
 };
 
 // One key of an expressive control's animation (docs/controls.md): the attributes it sets at time t, each
@@ -115,15 +115,15 @@ struct ControlKey {
 // of the coat is packed against the raised feathers); a draped coat takes the turns only.
 struct ControlSetup {
   std::string name;
-  std::array<double, 3> at{{0, 0, 0}};  // rest coordinates, snapped to the skin
-  double radius = 0;                   // > 0
-  double falloff = 0;                  // [0, 1]: outer fraction of the radius where the weight fades
-  std::vector<std::string> tracts;     // tracts it may bind (empty: any)
-  std::vector<ControlKey> keys;        // at least one
+  std::array<double, 3> at{{0, 0, 0}};   // rest coordinates, snapped to the skin
+  double radius = 0;                     // > 0
+  double falloff = 0;                    // [0, 1]: outer fraction of the radius where the weight fades
+  std::vector<std::string> tracts;       // tracts it may bind (empty: any)
+  std::vector<ControlKey> keys;          // at least one
   std::string interpolation = "linear";  // "linear", "smooth" or "step" between keys
-  uint64_t seed = 1;                   // random twist multipliers
-  double twistAngleDeg = 45;           // twist at random = 1, [0, 180]
-  double maxLiftDeg = 90;              // elevation at lift = 1, [0, 90]
+  uint64_t seed = 1;                     // random twist multipliers
+  double twistAngleDeg = 45;             // twist at random = 1, [0, 180]
+  double maxLiftDeg = 90;                // elevation at lift = 1, [0, 90]
 };
 
 // The coat set-up a Session is built from. It covers what maps cleanly onto the scene format; the
@@ -131,19 +131,19 @@ struct ControlSetup {
 // operations, styling vectors, per-tract directions, packer knobs and styling, per-tract moult
 // schedules, skeleton, control springs) is only reachable through a scene file: Session::fromSceneFile.
 struct CoatSetup {
-  std::vector<TractSetup> tracts;                 // empty: one tract "all" over the whole skin
+  std::vector<TractSetup> tracts;  // empty: one tract "all" over the whole skin
   // Body axis, head to tail (>= 2 distinct points): feathers point along it (6.3.1) and, with
   // Ordering::Axis, are layered along it like roof tiles. Empty: the longest axis of the skin's
   // bounding box, as for a bare mesh.
   std::vector<std::array<double, 3>> axis;
-  enum class Ordering { Axis, Tracts, Flow };     // layer order for packing (docs/coat.md)
+  enum class Ordering { Axis, Tracts, Flow };  // layer order for packing (docs/coat.md)
   Ordering ordering = Ordering::Axis;
-  std::vector<std::string> tractOrder;            // Ordering::Tracts: tract names, bottom layer first
-  enum class Packing { Drape, HeightField };      // docs/packing.md
+  std::vector<std::string> tractOrder;        // Ordering::Tracts: tract names, bottom layer first
+  enum class Packing { Drape, HeightField };  // docs/packing.md
   Packing packing = Packing::Drape;
-  uint64_t seed = 1;                              // same skin + set-up + seed = same coat, bit for bit
-  MoultSetup moult;                               // off by default
-  std::vector<ControlSetup> controls;             // expressive controls (none by default)
+  uint64_t seed = 1;                   // same skin + set-up + seed = same coat, bit for bit
+  MoultSetup moult;                    // off by default
+  std::vector<ControlSetup> controls;  // expressive controls (none by default)
 };
 
 // Progress of evaluate(): stage name ("distribute", "interpolate", "pack", "mesh"; the skin and the
@@ -209,27 +209,27 @@ struct Frame {
   View<double> elevations;      // radians: the rotation about B the feather was placed at (0 = flat
                                 //   along T); a draped coat is placed flat and bent over the skin
   // The coat mesh: all present feathers, bottom layer first.
-  View<float> positions;        // 3 per vertex
-  View<float> vertexNormals;    // 3 per vertex, unit
-  View<float> uvs;              // 2 per vertex: feather-global texture coordinates (Streit 7.1.1)
-  View<float> alphas;           // 1 per vertex: opacity (7.1.2), or empty
+  View<float> positions;          // 3 per vertex
+  View<float> vertexNormals;      // 3 per vertex, unit
+  View<float> uvs;                // 2 per vertex: feather-global texture coordinates (Streit 7.1.1)
+  View<float> alphas;             // 1 per vertex: opacity (7.1.2), or empty
   View<uint32_t> vertexFeathers;  // feather index per vertex
-  View<uint32_t> indices;       // 3 per triangle
-  View<FeatherRange> ranges;    // one per present feather, bottom layer first
-  View<Material> materials;     // indexed by FeatherRange::material
+  View<uint32_t> indices;         // 3 per triangle
+  View<FeatherRange> ranges;      // one per present feather, bottom layer first
+  View<Material> materials;       // indexed by FeatherRange::material
 };
 
 // The independent checker's numbers (pteryla check; docs/packing.md). Unset = not measured.
 struct Metrics {
   std::optional<size_t> follicles, feathers;
-  std::optional<double> hexFraction, nnCv;                // follicle layout: hexagonal cells, spacing CV
-  std::optional<size_t> intersectingPairs;                // triangle pairs of different feathers
-  std::optional<size_t> intersectingPairsUnpacked;        // ... of the coat before packing
-  std::optional<size_t> intersectingPairsProxy;           // ... of the packed coat meshed like that one
-  std::optional<size_t> skinPenetrations;                 // coat vertices under the skin
-  std::optional<double> coverage;                         // fraction of tract area under feathers
-  std::optional<double> elevationP50, elevationP90;       // degrees
-  std::optional<size_t> fixedFeathers, hiddenFeathers;    // draped coats: trimmed, and left empty
+  std::optional<double> hexFraction, nnCv;              // follicle layout: hexagonal cells, spacing CV
+  std::optional<size_t> intersectingPairs;              // triangle pairs of different feathers
+  std::optional<size_t> intersectingPairsUnpacked;      // ... of the coat before packing
+  std::optional<size_t> intersectingPairsProxy;         // ... of the packed coat meshed like that one
+  std::optional<size_t> skinPenetrations;               // coat vertices under the skin
+  std::optional<double> coverage;                       // fraction of tract area under feathers
+  std::optional<double> elevationP50, elevationP90;     // degrees
+  std::optional<size_t> fixedFeathers, hiddenFeathers;  // draped coats: trimmed, and left empty
   // The feathers (Frame indices) with a triangle crossing another feather's, and with a vertex under the
   // skin; ascending (empty when intersectingPairs / skinPenetrations is 0 or unset).
   std::vector<uint32_t> intersectingFeathers, penetratingFeathers;
@@ -244,15 +244,15 @@ struct ExportSettings {
   double metersPerUnit = 1;       // USD metersPerUnit
 };
 struct ExportSummary {
-  size_t bytes = 0;   // size of the file written
+  size_t bytes = 0;  // size of the file written
   size_t frames = 0;
-  size_t feathers = 0;     // in the last frame written
-  size_t triangles = 0;    // coat and skin triangles of the last frame (cards, glTF, OBJ, PLY)
-  size_t curves = 0;       // USD curves: rachis and barb curves of the last frame
-  size_t instances = 0;    // USD instances: feathers instanced, and
-  size_t prototypes = 0;   //   the prototype feathers they share
-  double seconds = 0;      // evaluating the frames and writing
-  double writeSeconds = 0; // of which writing the file
+  size_t feathers = 0;      // in the last frame written
+  size_t triangles = 0;     // coat and skin triangles of the last frame (cards, glTF, OBJ, PLY)
+  size_t curves = 0;        // USD curves: rachis and barb curves of the last frame
+  size_t instances = 0;     // USD instances: feathers instanced, and
+  size_t prototypes = 0;    //   the prototype feathers they share
+  double seconds = 0;       // evaluating the frames and writing
+  double writeSeconds = 0;  // of which writing the file
 };
 // The times of a frame range from..to (inclusive) at `fps` frames per unit of time, as `pteryla export
 // --from --to --fps` and `pteryla frames` sample it. Throws pteryla::Error naming "from", "to" or "fps"
@@ -265,8 +265,8 @@ PTERYLA_API void checkExportSettings(const std::string& path, const ExportSettin
 
 // Session::render: an image of the frame through Mesa's off-screen OpenGL (llvmpipe; no display or GPU).
 struct RenderSettings {
-  int width = 0, height = 0;      // pixels, each in [1, 16384]; 0 and 0 = the scene's render.size (960x720)
-  std::string style;              // "" = the scene's render.style; "shaded" or "scratchboard" (docs/render.md)
+  int width = 0, height = 0;  // pixels, each in [1, 16384]; 0 and 0 = the scene's render.size (960x720)
+  std::string style;          // "" = the scene's render.style; "shaded" or "scratchboard" (docs/render.md)
 };
 // What Session::render drew.
 struct RenderSummary {
@@ -293,11 +293,12 @@ struct SceneFileOptions {
 // through Mesa's off-screen OpenGL). The output's directory is created once the feather is built, so a
 // bad file leaves nothing behind. Throws pteryla::Error naming the file or setting. Returns the triangles.
 struct FeatherOutput {
-  double age = 1;           // growth age: (0, 1] grows (Streit 8.1), above 1 wears
-  double lod = 1;           // fraction of barbs meshed, (0, 1]
+  double age = 1;                 // growth age: (0, 1] grows (Streit 8.1), above 1 wears
+  double lod = 1;                 // fraction of barbs meshed, (0, 1]
   int width = 512, height = 512;  // .png only, each in [1, 16384]
 };
-PTERYLA_API size_t writeFeather(const std::string& featherFile, const std::string& out, const FeatherOutput& output = {});
+PTERYLA_API size_t writeFeather(const std::string& featherFile, const std::string& out,
+                                const FeatherOutput& output = {});
 
 // A feather measured from a flatbed scan (Streit 2003, 5.2.3; docs/feather-format.md, "Feathers from
 // scans"), as `pteryla feather --from-scan` makes it: writes the feather file `out` (.json) and, unless
@@ -309,13 +310,13 @@ struct ScanSettings {
   bool writeTexture = true;  // false: no texture (the feather keeps its default look)
 };
 struct ScanSummary {
-  bool rachisDetected = false;     // the rachis was found, not given
-  double pixelsPerUnit = 0;        // what the measurement used, and where it came from:
-  std::string resolution;          // "pixelsPerUnit", "the image's resolution" or "300 dpi assumed"
+  bool rachisDetected = false;                    // the rachis was found, not given
+  double pixelsPerUnit = 0;                       // what the measurement used, and where it came from:
+  std::string resolution;                         // "pixelsPerUnit", "the image's resolution" or "300 dpi assumed"
   double rachisLength = 0, lateralCurvature = 0;  // scene units, radians
   double spacingBase = 0, spacingTip = 0;         // barb spacing (scene units)
   double leftBaseAngle = 0, leftTipAngle = 0, rightBaseAngle = 0, rightTipAngle = 0;  // radians
-  std::string texture;             // the texture written ("" = none)
+  std::string texture;                                                                // the texture written ("" = none)
   std::vector<std::string> notes;  // what could not be measured and which default was kept
 };
 // Throws pteryla::Error naming the file and "scan", "rachis", "pixelsPerUnit", "texture" or "out".

@@ -74,7 +74,7 @@ struct BlockPool {
   std::mutex m;
   std::vector<std::pair<char*, size_t>> free;  // oldest first
   size_t freeBytes = 0;
-  std::unordered_map<char*, size_t> live;      // block -> mapped size
+  std::unordered_map<char*, size_t> live;  // block -> mapped size
 };
 
 BlockPool& blockPool() {

@@ -1,9 +1,9 @@
 // Independent interpenetration and coverage check of a feather coat at full geometry (Streit 2003, 6.3.4
 // and 9.1.2 state the packing's goal: no feather-skin or feather-feather interpenetration; Figure 9.17
 // shows where the height-field method can fail). Uses only the coat's triangles and the skin:
-// Moeller's triangle-triangle test between the BVHs of feathers whose bounds meet, pseudo-normal signed distance (Baerentzen & Aanaes, "Signed
-// distance computation using the angle weighted pseudonormal", IEEE TVCG 11(3), 2005), and ray casting
-// along the skin normal for coverage.
+// Moeller's triangle-triangle test between the BVHs of feathers whose bounds meet, pseudo-normal signed distance
+// (Baerentzen & Aanaes, "Signed distance computation using the angle weighted pseudonormal", IEEE TVCG 11(3), 2005),
+// and ray casting along the skin normal for coverage.
 #include "pteryla/coat/check.hpp"
 
 #include <algorithm>
@@ -30,9 +30,7 @@ using glm::dvec3;
 
 namespace {
 
-uint32_t triFeather(const TriMesh& m, size_t t) {
-  return m.featherId.empty() ? 0u : m.featherId[m.indices[3 * t]];
-}
+uint32_t triFeather(const TriMesh& m, size_t t) { return m.featherId.empty() ? 0u : m.featherId[m.indices[3 * t]]; }
 
 // Reports `fraction` of the check (scaled into [lo, hi]) on the calling thread; false = stop.
 struct Progress {
@@ -48,7 +46,8 @@ struct Progress {
 // stops within one batch. Returns false when cancelled.
 template <class F>
 bool batched(size_t n, size_t grain, const Progress& progress, F&& f) {
-  const size_t batches = progress.fn ? std::min<size_t>(32, std::max<size_t>(1, n / std::max<size_t>(1, 4 * grain))) : 1;
+  const size_t batches =
+      progress.fn ? std::min<size_t>(32, std::max<size_t>(1, n / std::max<size_t>(1, 4 * grain))) : 1;
   for (size_t b = 0; b < batches; ++b) {
     const size_t begin = n * b / batches, end = n * (b + 1) / batches;
     if (begin < end) tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, grain), f);
@@ -63,10 +62,10 @@ bool batched(size_t n, size_t grain, const Progress& progress, F&& f) {
 // different feathers whose boxes overlap, the candidates a single BVH over the coat would give.
 struct CoatBvh {
   const TriMesh& coat;
-  std::vector<uint32_t> order;     // triangles by feather (ascending within one)
-  std::vector<uint32_t> begin;     // per group: its first slot in order; groups.size() + 1 entries
-  std::vector<uint32_t> featherOf; // per group
-  std::vector<uint32_t> indices;   // order's index triples, each feather's contiguous
+  std::vector<uint32_t> order;      // triangles by feather (ascending within one)
+  std::vector<uint32_t> begin;      // per group: its first slot in order; groups.size() + 1 entries
+  std::vector<uint32_t> featherOf;  // per group
+  std::vector<uint32_t> indices;    // order's index triples, each feather's contiguous
   std::vector<detail::TriangleBvh> trees;
   std::vector<glm::dvec3> boxCorners;  // per group lo, hi: the feather tree's bounds
   std::vector<uint32_t> boxIndices;    // (lo, hi, lo): a "triangle" whose box is the feather's bounds
@@ -137,9 +136,12 @@ struct CoatBvh {
     return out;
   }
   bool anyHit(const glm::dvec3& origin, const glm::dvec3& dir, double tMin, double tMax) const {
-    return top.anyLeafHit(origin, dir, tMin, tMax, [&](uint32_t g) { return trees[g].anyHit(origin, dir, tMin, tMax); });
+    return top.anyLeafHit(origin, dir, tMin, tMax,
+                          [&](uint32_t g) { return trees[g].anyHit(origin, dir, tMin, tMax); });
   }
-  glm::dvec3 vertex(uint32_t t, int c) const { return dvec3(coat.positions[coat.indices[3 * static_cast<size_t>(t) + c]]); }
+  glm::dvec3 vertex(uint32_t t, int c) const {
+    return dvec3(coat.positions[coat.indices[3 * static_cast<size_t>(t) + c]]);
+  }
 };
 
 // Counts intersecting triangle pairs of different feathers; with `attribution`, also lists the feather
@@ -212,7 +214,7 @@ struct SkinSign {
   std::vector<std::array<dvec3, 3>> edgeN;  // per face edge c (corners c, c+1)
   std::vector<std::array<uint8_t, 3>> edgeBoundary;
   std::vector<uint8_t> vertexBoundary;
-  std::vector<uint32_t> flat;               // faces as a flat index array for the BVH
+  std::vector<uint32_t> flat;  // faces as a flat index array for the BVH
 };
 
 SkinSign buildSign(const SkinMesh& s) {
@@ -358,7 +360,8 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
     throw Error("coat mesh featherId must have one entry per vertex", {}, "featherId");
   for (size_t k = 0; k < tractFaces.size(); ++k)
     if (tractFaces[k] >= skin.faces.size())
-      throw Error("tract face " + std::to_string(tractFaces[k]) + " out of range", {}, "tractFaces[" + std::to_string(k) + "]");
+      throw Error("tract face " + std::to_string(tractFaces[k]) + " out of range", {},
+                  "tractFaces[" + std::to_string(k) + "]");
   if (!o.featherOrigins.empty() && o.featherOrigins.size() != o.featherBaseRadius.size())
     throw Error("featherOrigins and featherBaseRadius differ in size", {}, "featherBaseRadius");
   CheckResult res;
@@ -440,7 +443,10 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
             k = std::min(k, faces.size() - 1);
             const uint32_t f = faces[k];
             double a = hashUniform(o.seed, s, 1), b = hashUniform(o.seed, s, 2);
-            if (a + b > 1) { a = 1 - a; b = 1 - b; }
+            if (a + b > 1) {
+              a = 1 - a;
+              b = 1 - b;
+            }
             const dvec3 bary(1 - a - b, a, b);
             const dvec3 p = pointAt(skin, f, bary);
             const dvec3 n = normalAt(skin, f, bary);
@@ -488,7 +494,8 @@ void setFeatherBases(CheckOptions& o, const CoatFeathers& coat, double baseAllow
 TriMesh proxyCoatMesh(const CoatFeathers& coat, const std::vector<double>& elevation,
                       const std::vector<feather::FeatherParams>& params, const ProxyMeshOptions& o) {
   const size_t n = coat.size();
-  PTERYLA_CHECK(elevation.size() == n && params.size() == n, "proxyCoatMesh needs one elevation and params per feather");
+  PTERYLA_CHECK(elevation.size() == n && params.size() == n,
+                "proxyCoatMesh needs one elevation and params per feather");
   std::vector<TriMesh> parts(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8), [&](const tbb::blocked_range<size_t>& r) {
     feather::FeatherCurves curves;

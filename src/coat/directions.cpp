@@ -170,8 +170,8 @@ SurfaceDirections computeSurfaceDirections(const SkinMesh& rest, const std::vect
     const glm::dvec3 nrm = normalAt(rest, face, bary);
     const auto& f = rest.faces[face];
     bool fb = false;
-    const glm::dvec3 dir = tangentOrFallback(fieldDirection(spec, p), nrm, spec.fallback,
-                                             rest.positions[f[1]] - rest.positions[f[0]], fb);
+    const glm::dvec3 dir =
+        tangentOrFallback(fieldDirection(spec, p), nrm, spec.fallback, rest.positions[f[1]] - rest.positions[f[0]], fb);
     out.faceCoords[i] = directionToFaceCoords(rest, face, bary, dir);
     out.usedFallback[i] = fb;
   });
@@ -196,8 +196,8 @@ DirectionSpec parseDirectionSpec(JsonReader& r) {
     s.axis = readPoints(r, "axis");
     if (s.axis.size() < 2) r.fail("axis", "a body axis needs at least two points (head to tail)");
     for (size_t i = 1; i < s.axis.size(); ++i)
-      if (s.axis[i] == s.axis[i - 1]) r.fail("axis", "consecutive points " + std::to_string(i - 1) + " and " +
-                                                         std::to_string(i) + " coincide");
+      if (s.axis[i] == s.axis[i - 1])
+        r.fail("axis", "consecutive points " + std::to_string(i - 1) + " and " + std::to_string(i) + " coincide");
   }
   if (r.has("vectors")) {
     if (!r.json().at("vectors").is_array()) r.fail("vectors", "expected an array of {\"at\", \"direction\"} objects");

@@ -9,7 +9,6 @@
 #include <limits>
 #include <unordered_map>
 
-
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -108,8 +107,10 @@ void buildChart(const Surface& S, const FeatherFrame& F, const feather::FeatherP
   std::vector<uint8_t> raw(static_cast<size_t>(C.fineX()) * C.fineY(), 0);
   for (size_t k = 0; k < count; ++k) {
     const dvec3 d = dvec3(mesh.positions[verts[k]]) - F.origin;
-    const int a = std::clamp(static_cast<int>(std::floor((scale * glm::dot(d, F.tangent) - C.x0) / C.hx * Chart::kSub)), 0, C.fineX() - 1);
-    const int b = std::clamp(static_cast<int>(std::floor((scale * glm::dot(d, F.binormal) - C.y0) / C.hy * Chart::kSub)), 0, C.fineY() - 1);
+    const int a = std::clamp(static_cast<int>(std::floor((scale * glm::dot(d, F.tangent) - C.x0) / C.hx * Chart::kSub)),
+                             0, C.fineX() - 1);
+    const int b = std::clamp(
+        static_cast<int>(std::floor((scale * glm::dot(d, F.binormal) - C.y0) / C.hy * Chart::kSub)), 0, C.fineY() - 1);
     raw[static_cast<size_t>(a) * C.fineY() + b] = 1;
   }
   C.fine.assign(raw.size(), 0);
@@ -187,13 +188,15 @@ double shrinkScale(const FeatherFrame& F, const TriMesh& mesh, const uint32_t* v
   const double cx = std::max(x1 - x0, 1e-12) / rx, cy = std::max(y1 - y0, 1e-12) / ry;
   std::vector<uint8_t> raw(static_cast<size_t>(rx) * ry, 0), m(raw.size(), 0);
   for (const auto& q : loc)
-    raw[static_cast<size_t>(std::clamp(int((q.x - x0) / cx), 0, rx - 1)) * ry + std::clamp(int((q.y - y0) / cy), 0, ry - 1)] = 1;
+    raw[static_cast<size_t>(std::clamp(int((q.x - x0) / cx), 0, rx - 1)) * ry +
+        std::clamp(int((q.y - y0) / cy), 0, ry - 1)] = 1;
   for (int a = 0; a < rx; ++a)
     for (int b = 0; b < ry; ++b)
       for (int da = -1; da <= 1; ++da)
         for (int db = -1; db <= 1; ++db) {
           const int aa = a + da, bb = b + db;
-          if (aa >= 0 && bb >= 0 && aa < rx && bb < ry && raw[static_cast<size_t>(aa) * ry + bb]) m[static_cast<size_t>(a) * ry + b] = 1;
+          if (aa >= 0 && bb >= 0 && aa < rx && bb < ry && raw[static_cast<size_t>(aa) * ry + bb])
+            m[static_cast<size_t>(a) * ry + b] = 1;
         }
   auto covered = [&](double x, double y) {
     const double fa = std::floor((x - x0) / cx), fb = std::floor((y - y0) / cy);
@@ -248,7 +251,8 @@ void gatherSamples(Chart& C, const CoatTop& top, double reqRadius) {
       C.locate(x, y, a, b, u, v);
       for (const Node* c : {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)})
         if (!c->ok || !c->active) return;
-      C.under.push_back({s, static_cast<uint16_t>(a), static_cast<uint16_t>(b), static_cast<float>(u), static_cast<float>(v)});
+      C.under.push_back(
+          {s, static_cast<uint16_t>(a), static_cast<uint16_t>(b), static_cast<float>(u), static_cast<float>(v)});
     });
   }
   // Each sample once (the first node that reached it).
@@ -365,7 +369,8 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
     const uint32_t* tri = &mesh.indices[3 * t];
     const uint32_t f = mesh.featherId[tri[0]];
     for (int k = 0; k < 3; ++k)
-      flatEdge[f] = std::max(flatEdge[f], double(glm::length(mesh.positions[tri[k]] - mesh.positions[tri[(k + 1) % 3]])));
+      flatEdge[f] =
+          std::max(flatEdge[f], double(glm::length(mesh.positions[tri[k]] - mesh.positions[tri[(k + 1) % 3]])));
   }
   // Scale factors: no feather covers a later follicle's root zone.
   std::vector<double> scale(n, 1.0);
@@ -453,9 +458,7 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k)
         for (Node& nd : charts[order[k]].nodes)
-          if (nd.ok && nd.active &&
-              S.skinWithin(nd.c + nd.h * nd.n, 0.5 * nd.h * (1 - 1e-9)))
-            nd.ok = 0;
+          if (nd.ok && nd.active && S.skinWithin(nd.c + nd.h * nd.n, 0.5 * nd.h * (1 - 1e-9))) nd.ok = 0;
     });
   });
   // Move every vertex; remember its surface point for trimming.
@@ -509,7 +512,8 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
           surfacePoint[v] = glm::vec3(c);
           auto turn = [&](const glm::vec3& e) {
             const dvec3 ed(e);
-            return glm::vec3(glm::dot(ed, F.tangent) * tt + glm::dot(ed, F.binormal) * bb + glm::dot(ed, F.normal) * nn);
+            return glm::vec3(glm::dot(ed, F.tangent) * tt + glm::dot(ed, F.binormal) * bb +
+                             glm::dot(ed, F.normal) * nn);
           };
           if (hasN) mesh.normals[v] = turn(mesh.normals[v]);
           if (hasT) mesh.tangents[v] = turn(mesh.tangents[v]);
@@ -548,7 +552,8 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
           const uint32_t i = mesh.featherId[tri[0]];
           if (rank[i] < 0 || bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) continue;
           const dvec3 a(surfacePoint[tri[0]]), b(surfacePoint[tri[1]]), c(surfacePoint[tri[2]]);
-          const dvec3 lo = glm::min(a, glm::min(b, c)) - dvec3(reachMax), hi = glm::max(a, glm::max(b, c)) + dvec3(reachMax);
+          const dvec3 lo = glm::min(a, glm::min(b, c)) - dvec3(reachMax),
+                      hi = glm::max(a, glm::max(b, c)) + dvec3(reachMax);
           grid.query(lo, hi, [&](uint32_t j) {
             if (static_cast<int64_t>(j) <= rank[i] || overFollicle[t]) return;
             const uint32_t f = order[j];
@@ -580,7 +585,8 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   };
   for (size_t t = 0; t < nt; ++t) {
     const uint32_t* tri = &mesh.indices[3 * t];
-    if (rank[mesh.featherId[tri[0]]] >= 0 && (overFollicle[t] || bad[tri[0]] || bad[tri[1]] || bad[tri[2]])) collapse(t);
+    if (rank[mesh.featherId[tri[0]]] >= 0 && (overFollicle[t] || bad[tri[0]] || bad[tri[1]] || bad[tri[2]]))
+      collapse(t);
   }
   // Trimmed vertices serve only collapsed triangles: park them at their follicle.
   for (uint32_t v = 0; v < nv; ++v)

@@ -21,19 +21,19 @@ namespace pteryla::coat::draping {
 using glm::dvec3;
 
 constexpr double kFoldCos = 0.766;  // cos 40 degrees
-constexpr double kFacing = 0.35;  // cos 70 degrees: samples facing away belong to another part
+constexpr double kFacing = 0.35;    // cos 70 degrees: samples facing away belong to another part
 // A feather follows skin curved no tighter than this x its length (a rachis is stiff; measured on the
 // bird and the corpus: 0.5 stood coats off fingers and ears, armadillo coverage 0.926 vs 0.956 at 0.15).
 constexpr double kStiffness = 0.15;
-constexpr double kWrapCos = 0.0;    // a feather follows the skin at most a quarter turn from its follicle
+constexpr double kWrapCos = 0.0;  // a feather follows the skin at most a quarter turn from its follicle
 
 struct Node {
-  dvec3 c{0};        // surface point
-  dvec3 n{0, 0, 1};  // skin normal there
-  dvec3 t{1, 0, 0};  // the feather's direction transported into the tangent plane
-  double h = 0;      // height over the skin
-  double sag = 0;    // how far the feather's triangles (chords) may dip below their vertices' surface here
-  uint8_t ok = 0;    // the chart reached the skin here
+  dvec3 c{0};          // surface point
+  dvec3 n{0, 0, 1};    // skin normal there
+  dvec3 t{1, 0, 0};    // the feather's direction transported into the tangent plane
+  double h = 0;        // height over the skin
+  double sag = 0;      // how far the feather's triangles (chords) may dip below their vertices' surface here
+  uint8_t ok = 0;      // the chart reached the skin here
   uint8_t active = 0;  // next to feather material
   uint8_t free = 0;    // past the skin's edge: the feather goes straight on (c is not on the skin)
 };
@@ -41,8 +41,8 @@ struct Node {
 struct Chart {
   double x0 = 0, y0 = 0, hx = 1, hy = 1, diag = 0;
   int nx = 0, ny = 0;
-  double ramp = 0;   // the height ramps up from the skin over x in [0, ramp] (the calamus)
-  double scale = 1;  // the feather's flat layout is scaled by this (shortened over later follicles)
+  double ramp = 0;                // the height ramps up from the skin over x in [0, ramp] (the calamus)
+  double scale = 1;               // the feather's flat layout is scaled by this (shortened over later follicles)
   std::vector<uint8_t> material;  // per cell ((nx - 1) x (ny - 1)): holds feather vertices
   // Finer material mask: kSub x kSub sub-cells per cell, set where a vertex lies, dilated by one sub-cell.
   static constexpr int kSub = 4;
@@ -50,7 +50,8 @@ struct Chart {
   int fineX() const { return (nx - 1) * kSub; }
   int fineY() const { return (ny - 1) * kSub; }
   bool covers(double x, double y) const {
-    const int a = static_cast<int>(std::floor((x - x0) / hx * kSub)), b = static_cast<int>(std::floor((y - y0) / hy * kSub));
+    const int a = static_cast<int>(std::floor((x - x0) / hx * kSub)),
+              b = static_cast<int>(std::floor((y - y0) / hy * kSub));
     if (a < 0 || b < 0 || a >= fineX() || b >= fineY()) return false;
     return fine[static_cast<size_t>(a) * fineY() + b] != 0;
   }

@@ -72,7 +72,8 @@ void checkDensity(const SkinMesh& mesh, const DensityField& d) {
   if (!d.perVertex.empty()) {
     if (d.perVertex.size() != mesh.positions.size())
       throw Error("per-vertex density has " + std::to_string(d.perVertex.size()) + " values for " +
-                  std::to_string(mesh.positions.size()) + " vertices", mesh.file, "density");
+                      std::to_string(mesh.positions.size()) + " vertices",
+                  mesh.file, "density");
     for (size_t v = 0; v < d.perVertex.size(); ++v)
       if (!std::isfinite(d.perVertex[v]) || d.perVertex[v] < 0)
         throw Error("density must be finite and >= 0 (got " + std::to_string(d.perVertex[v]) + ")", mesh.file,
@@ -113,7 +114,8 @@ size_t expectedFollicleCount(const SkinMesh& mesh, const Tract& tract, const Den
 }
 
 Follicles scatterFollicles(const SkinMesh& mesh, const Tract& tract, const ScatterOptions& opt) {
-  if (tract.faces.empty()) throw Error("tract '" + tract.name + "' has no faces", mesh.file, "tract '" + tract.name + "'");
+  if (tract.faces.empty())
+    throw Error("tract '" + tract.name + "' has no faces", mesh.file, "tract '" + tract.name + "'");
   // With an explicit count a uniform density only needs to be "uniform": weight faces by area.
   DensityField shape = opt.density;
   if (opt.count > 0 && shape.perVertex.empty() && shape.uniform == 0.0) shape.uniform = 1.0;
@@ -137,8 +139,8 @@ Follicles scatterFollicles(const SkinMesh& mesh, const Tract& tract, const Scatt
   constexpr size_t kMaxFollicles = 50'000'000;
   if (n > kMaxFollicles)
     throw Error("tract '" + tract.name + "' would get " + std::to_string(n) + " follicles (limit " +
-                std::to_string(kMaxFollicles) + "): density too high for the mesh units?", mesh.file,
-                "tract '" + tract.name + "'");
+                    std::to_string(kMaxFollicles) + "): density too high for the mesh units?",
+                mesh.file, "tract '" + tract.name + "'");
 
   const uint64_t base = opt.firstId == kAutoFollicleId ? (static_cast<uint64_t>(opt.tractIndex) << 40) : opt.firstId;
   Follicles out;
@@ -172,8 +174,8 @@ Follicles scatterFollicles(const SkinMesh& mesh, const Tract& tract, const Scatt
         b = glm::dvec3(1.0 - s, s * (1.0 - v), s * v);
         if (!linear || attempt >= 64) break;
         const auto& t = mesh.faces[f];
-        const double rho = b.x * opt.density.perVertex[t[0]] + b.y * opt.density.perVertex[t[1]] +
-                           b.z * opt.density.perVertex[t[2]];
+        const double rho =
+            b.x * opt.density.perVertex[t[0]] + b.y * opt.density.perVertex[t[1]] + b.z * opt.density.perVertex[t[2]];
         if (rng.uniform() * rmax <= rho) break;
       }
       out.face[k] = f;
@@ -190,7 +192,8 @@ size_t addPinnedFollicle(Follicles& follicles, const SkinMesh& mesh, const Surfa
                          uint64_t id) {
   if (at.face >= mesh.faces.size())
     throw Error("pinned follicle face " + std::to_string(at.face) + " is out of range (" +
-                std::to_string(mesh.faces.size()) + " faces)", mesh.file, "follicle " + std::to_string(id));
+                    std::to_string(mesh.faces.size()) + " faces)",
+                mesh.file, "follicle " + std::to_string(id));
   const glm::dvec3 b = at.bary;
   const double s = b.x + b.y + b.z;
   if (!(b.x >= 0 && b.y >= 0 && b.z >= 0) || !(std::abs(s - 1.0) < 1e-6))
@@ -198,8 +201,8 @@ size_t addPinnedFollicle(Follicles& follicles, const SkinMesh& mesh, const Surfa
   return follicles.push(mesh, at.face, b / s, tract, id, true);
 }
 
-size_t addPinnedFollicleNear(Follicles& follicles, const SkinMesh& mesh, const Tract& tract,
-                             const glm::dvec3& position, uint32_t tractIndex, uint64_t id) {
+size_t addPinnedFollicleNear(Follicles& follicles, const SkinMesh& mesh, const Tract& tract, const glm::dvec3& position,
+                             uint32_t tractIndex, uint64_t id) {
   if (tract.faces.empty()) throw Error("tract '" + tract.name + "' has no faces", mesh.file);
   const SurfacePoint p = closestSurfacePoint(mesh, position, &tract.faces);
   return follicles.push(mesh, p.face, p.bary, tractIndex, id, true);

@@ -179,7 +179,8 @@ std::vector<KeyFeather> resolveKeyFeathers(const Follicles& follicles, const Tra
     const std::string element = s.element.empty() ? tractWhere + ".key_feathers" : s.element;
     checkName(s.feather, element + ".feather");
     if (param.follicles.empty())
-      throw Error("key feather '" + s.feather + "' on tract '" + tractName + "', which has no follicles", file, element);
+      throw Error("key feather '" + s.feather + "' on tract '" + tractName + "', which has no follicles", file,
+                  element);
     uint32_t chosen = UINT32_MAX;
     if (s.byFollicle) {
       for (uint32_t f : param.follicles)
@@ -229,7 +230,8 @@ std::vector<BlendWeights> tractBlendWeights(const TractParameterization& param, 
   std::vector<int32_t> keyAt(param.follicles.size(), -1);
   for (size_t i = 0; i < keys.size(); ++i) {
     const auto it = std::lower_bound(param.follicles.begin(), param.follicles.end(), keys[i].follicle);
-    PTERYLA_CHECK(it != param.follicles.end() && *it == keys[i].follicle, "key feather on a follicle outside its tract");
+    PTERYLA_CHECK(it != param.follicles.end() && *it == keys[i].follicle,
+                  "key feather on a follicle outside its tract");
     const size_t slot = static_cast<size_t>(it - param.follicles.begin());
     keyUv[i] = param.follicleUv[slot];
     keyAt[slot] = static_cast<int32_t>(i);
@@ -336,7 +338,9 @@ InterpolateStats interpolateCoatFeathers(const Follicles& follicles, const std::
         kind[i] = 2;
       }
       const double jitter = tracts[s.tract].scaleJitter;
-      if (jitter > 0) scaleFeather(coat.params[i], 1.0 + jitter * (2.0 * hashUniform(options.seed, follicles.id[f], kJitterStream) - 1.0));
+      if (jitter > 0)
+        scaleFeather(coat.params[i],
+                     1.0 + jitter * (2.0 * hashUniform(options.seed, follicles.id[f], kJitterStream) - 1.0));
     }
   });
   InterpolateStats st;
@@ -355,7 +359,8 @@ KeyFeatherSpec parseKeyFeather(JsonReader& r) {
   s.feather = r.string("feather");
   if (s.feather.empty()) r.fail("feather", "must name a feather");
   const bool hasF = r.has("follicle"), hasAt = r.has("at");
-  if (hasF == hasAt) r.fail(hasF ? "at" : "feather", "a key feather needs exactly one of \"follicle\" (an id) or \"at\" ([x,y,z])");
+  if (hasF == hasAt)
+    r.fail(hasF ? "at" : "feather", "a key feather needs exactly one of \"follicle\" (an id) or \"at\" ([x,y,z])");
   if (hasF) {
     s.byFollicle = true;
     s.follicleId = static_cast<uint64_t>(r.integer("follicle", 0, std::numeric_limits<int64_t>::max()));
@@ -369,7 +374,8 @@ KeyFeatherSpec parseKeyFeather(JsonReader& r) {
 std::vector<KeyFeatherSpec> parseKeyFeathers(JsonReader& tract) {
   std::vector<KeyFeatherSpec> out;
   if (!tract.has("key_feathers")) return out;
-  if (!tract.json().at("key_feathers").is_array()) tract.fail("key_feathers", "expected an array of key feather objects");
+  if (!tract.json().at("key_feathers").is_array())
+    tract.fail("key_feathers", "expected an array of key feather objects");
   for (auto& item : tract.objects("key_feathers")) out.push_back(parseKeyFeather(item));
   return out;
 }

@@ -82,7 +82,8 @@ bool integerToken(std::string_view t) {
 }
 bool floatToken(std::string_view t) {
   if (t.size() > 1 && t[0] == '+' && t[1] != '-') t.remove_prefix(1);
-  if (t.empty() || !(std::isdigit(static_cast<unsigned char>(t.back())) || t.back() == '.')) return false;  // "1e", "inf"
+  if (t.empty() || !(std::isdigit(static_cast<unsigned char>(t.back())) || t.back() == '.'))
+    return false;  // "1e", "inf"
   double v = 0;
   const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
   return (r.ec == std::errc() || r.ec == std::errc::result_out_of_range) && r.ptr == t.data() + t.size() &&
@@ -102,7 +103,7 @@ struct PlyElement {
   std::vector<PlyProp> props;
 };
 
-constexpr uint64_t kMaxListLength = 1u << 16;  // polygons with more corners are refused
+constexpr uint64_t kMaxListLength = 1u << 16;        // polygons with more corners are refused
 constexpr uint64_t kMaxOpenMeshCount = 0xFFFFFFFFu;  // OpenMesh reads counts into unsigned int
 
 // PLY as OpenMesh 9 reads it (Debian 12). Its header parser is token based, checks only for a bad
@@ -212,8 +213,7 @@ void checkPly(const std::string& path, const std::string& d) {
       if (!indices)
         throw Error("list property '" + p.name + "' (lists are read only as the face's vertex_indices)", path,
                     "element " + e.name);
-      if (!p.integral)
-        throw Error("vertex_indices with a floating-point item type", path, "element " + e.name);
+      if (!p.integral) throw Error("vertex_indices with a floating-point item type", path, "element " + e.name);
     }
   }
   if (!ascii) {
@@ -241,8 +241,10 @@ void checkPly(const std::string& path, const std::string& d) {
     throw Error("the header declares more data than the file holds (" + std::to_string(d.size() - pos) +
                     " bytes after the header; truncated file or wrong counts)",
                 path, "element " + (elements.empty() ? std::string("?") : elements.front().name));
-  requireMemory(vertices * 64.0 + faces * 128.0, "a mesh of " + std::to_string(uint64_t(vertices)) + " vertices and " +
-                std::to_string(uint64_t(faces)) + " faces", path, "header");
+  requireMemory(
+      vertices * 64.0 + faces * 128.0,
+      "a mesh of " + std::to_string(uint64_t(vertices)) + " vertices and " + std::to_string(uint64_t(faces)) + " faces",
+      path, "header");
 
   // Walk the body: every value readable whole, every list count sane and all data present.
   if (ascii) {
@@ -310,7 +312,8 @@ void checkPly(const std::string& path, const std::string& d) {
                             "' is not in [0, " + std::to_string(kMaxListLength) + "]",
                         path, e.name + " " + std::to_string(i));
           p += static_cast<size_t>(n) * static_cast<size_t>(pr.size);
-          if (p > d.size()) throw Error("file ends inside the data (truncated?)", path, e.name + " " + std::to_string(i));
+          if (p > d.size())
+            throw Error("file ends inside the data (truncated?)", path, e.name + " " + std::to_string(i));
         }
       if (p > d.size()) throw Error("file ends inside the data (truncated?)", path, "element " + e.name);
     }
@@ -347,7 +350,8 @@ void checkOff(const std::string& path, const std::string& d) {
   if (!after.empty() && !binary)
     throw Error("expected the keyword alone on the first line (the counts go on the next line), or 'OFF BINARY'", path,
                 "line 1");
-  if (nl == std::string::npos) throw Error("expected the counts 'vertices faces edges' on the second line", path, "line 2");
+  if (nl == std::string::npos)
+    throw Error("expected the counts 'vertices faces edges' on the second line", path, "line 2");
   size_t p = nl + 1;
 
   if (binary) {
@@ -359,21 +363,24 @@ void checkOff(const std::string& path, const std::string& d) {
       return true;
     };
     uint64_t nv = 0, nf = 0, ne = 0;
-    if (!u32(nv) || !u32(nf) || !u32(ne)) throw Error("binary OFF shorter than its counts (truncated?)", path, "header counts");
+    if (!u32(nv) || !u32(nf) || !u32(ne))
+      throw Error("binary OFF shorter than its counts (truncated?)", path, "header counts");
     const uint64_t vertexBytes = 12 + (normals ? 12 : 0) + (colour ? 12 : 0) + (st ? 8 : 0);
     if (double(nv) * double(vertexBytes) + double(nf) * 16.0 > double(d.size() - p))
       throw Error("the header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
-                      " faces but only " + std::to_string(d.size() - p) + " bytes follow (truncated file or wrong counts)",
+                      " faces but only " + std::to_string(d.size() - p) +
+                      " bytes follow (truncated file or wrong counts)",
                   path, "header counts");
     requireMemory(double(nv) * 64.0 + double(nf) * 128.0,
-                  "a mesh of " + std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces", path, "header counts");
+                  "a mesh of " + std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces", path,
+                  "header counts");
     p += static_cast<size_t>(nv * vertexBytes);
     for (uint64_t f = 0; f < nf; ++f) {
       uint64_t n = 0;
       if (!u32(n)) throw Error("file ends inside the faces (truncated?)", path, "face " + std::to_string(f));
       if (n > kMaxListLength)
-        throw Error("corner count " + std::to_string(n) + " is not in [0, " + std::to_string(kMaxListLength) + "]", path,
-                    "face " + std::to_string(f));
+        throw Error("corner count " + std::to_string(n) + " is not in [0, " + std::to_string(kMaxListLength) + "]",
+                    path, "face " + std::to_string(f));
       p += static_cast<size_t>(4 * n);
       if (p > d.size()) throw Error("file ends inside the faces (truncated?)", path, "face " + std::to_string(f));
     }
@@ -423,9 +430,10 @@ void checkOff(const std::string& path, const std::string& d) {
     uint64_t n = 0;
     if (!token(t)) throw Error("file ends inside the faces (truncated?)", path, "face " + std::to_string(f));
     if (!parseCount(t, n) || n > kMaxListLength)
-      throw Error("expected a corner count in [0, " + std::to_string(kMaxListLength) + "], got '" + std::string(t) +
-                      "'" + (colour ? "" : " (without C in the keyword, values after a face's indices are read as the next face)"),
-                  path, "face " + std::to_string(f) + " (line " + std::to_string(line) + ")");
+      throw Error(
+          "expected a corner count in [0, " + std::to_string(kMaxListLength) + "], got '" + std::string(t) + "'" +
+              (colour ? "" : " (without C in the keyword, values after a face's indices are read as the next face)"),
+          path, "face " + std::to_string(f) + " (line " + std::to_string(line) + ")");
     for (uint64_t c = 0; c < n; ++c) {
       if (!token(t)) throw Error("file ends inside the faces (truncated?)", path, "face " + std::to_string(f));
       if (!integerToken(t))
@@ -455,9 +463,12 @@ void checkStl(const std::string& path, const std::string& d) {
 void checkMeshFileStructure(const std::string& path) {
   const std::string ext = extensionOf(path);
   const std::string data = slurp(path);
-  if (ext == ".ply") checkPly(path, data);
-  else if (ext == ".off") checkOff(path, data);
-  else if (ext == ".stl") checkStl(path, data);
+  if (ext == ".ply")
+    checkPly(path, data);
+  else if (ext == ".off")
+    checkOff(path, data);
+  else if (ext == ".stl")
+    checkStl(path, data);
 }
 
 }  // namespace pteryla::coat::detail

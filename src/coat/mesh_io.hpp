@@ -17,9 +17,9 @@ struct RawMesh {
   std::vector<uint32_t> polyOffsets{0};  // polygon p = polyIndices[polyOffsets[p] .. polyOffsets[p+1])
   std::vector<int32_t> polyGroup;        // per polygon, -1 none (may be empty)
   std::vector<std::string> groupNames;
-  std::vector<glm::dvec2> cornerUVs;     // parallel to polyIndices, or empty
-  std::vector<glm::dvec3> vertexNormals; // per vertex, or empty (zero entries = missing)
-  std::vector<uint32_t> polyLine;        // OBJ line of each polygon (for messages), or empty
+  std::vector<glm::dvec2> cornerUVs;      // parallel to polyIndices, or empty
+  std::vector<glm::dvec3> vertexNormals;  // per vertex, or empty (zero entries = missing)
+  std::vector<uint32_t> polyLine;         // OBJ line of each polygon (for messages), or empty
   size_t polygonCount() const { return polyOffsets.size() - 1; }
 };
 

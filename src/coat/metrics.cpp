@@ -29,7 +29,7 @@ struct LocalCell {
   std::array<uint32_t, kMaxDegree> nb{};
   uint32_t degree = 0;
   bool complete = false;
-  double nn = 0;    // nearest-neighbour distance (3-D)
+  double nn = 0;  // nearest-neighbour distance (3-D)
   double psi6 = 0;
 };
 
@@ -177,7 +177,8 @@ FollicleNeighbours delaunayNeighbours(const Follicles& follicles, double spacing
     out.complete[i] = cells[i].complete;
   }
   out.indices.resize(out.offsets[n]);
-  for (size_t i = 0; i < n; ++i) std::copy_n(cells[i].nb.begin(), cells[i].degree, out.indices.begin() + out.offsets[i]);
+  for (size_t i = 0; i < n; ++i)
+    std::copy_n(cells[i].nb.begin(), cells[i].degree, out.indices.begin() + out.offsets[i]);
   return out;
 }
 
@@ -221,7 +222,8 @@ DistributionMetrics measureDistribution(const SkinMesh& mesh, const Tract& tract
   return m;
 }
 
-double hexFraction(const SkinMesh& mesh, const Tract& tract, const Follicles& follicles, const MetricsOptions& options) {
+double hexFraction(const SkinMesh& mesh, const Tract& tract, const Follicles& follicles,
+                   const MetricsOptions& options) {
   return measureDistribution(mesh, tract, follicles, options).hexFraction;
 }
 

@@ -81,9 +81,7 @@ class ObjParser {
   }
 
  private:
-  [[noreturn]] void fail(const std::string& what) const {
-    throw Error(what, path_, "line " + std::to_string(line_));
-  }
+  [[noreturn]] void fail(const std::string& what) const { throw Error(what, path_, "line " + std::to_string(line_)); }
 
   double number(Cursor& c, const char* what) {
     const std::string_view t = c.token();
@@ -109,8 +107,8 @@ class ObjParser {
       fail("face " + std::to_string(polyCount()) + ": cannot parse " + what + " index '" + std::string(t) + "'");
     long long resolved = i > 0 ? i - 1 : static_cast<long long>(count) + i;
     if (i == 0 || resolved < 0 || resolved >= static_cast<long long>(count))
-      fail("face " + std::to_string(polyCount()) + ": " + what + " index " + std::to_string(i) +
-           " is out of range (" + std::to_string(count) + " defined so far)");
+      fail("face " + std::to_string(polyCount()) + ": " + what + " index " + std::to_string(i) + " is out of range (" +
+           std::to_string(count) + " defined so far)");
     return static_cast<uint32_t>(resolved);
   }
 
@@ -222,9 +220,16 @@ class ObjParser {
     // One grouping kind: g if the file has any g statement with names, else o, else usemtl.
     const std::map<std::string, int32_t>* names = nullptr;
     const std::vector<int32_t>* ids = nullptr;
-    if (sawG_ && !gNames_.empty()) { names = &gNames_; ids = &polyG_; }
-    else if (sawO_ && !oNames_.empty()) { names = &oNames_; ids = &polyO_; }
-    else if (sawM_ && !mNames_.empty()) { names = &mNames_; ids = &polyM_; }
+    if (sawG_ && !gNames_.empty()) {
+      names = &gNames_;
+      ids = &polyG_;
+    } else if (sawO_ && !oNames_.empty()) {
+      names = &oNames_;
+      ids = &polyO_;
+    } else if (sawM_ && !mNames_.empty()) {
+      names = &mNames_;
+      ids = &polyM_;
+    }
     if (names) {
       raw_.groupNames.resize(names->size());
       for (const auto& [n, i] : *names) raw_.groupNames[static_cast<size_t>(i)] = n;

@@ -117,12 +117,15 @@ RawMesh readWithOpenMesh(const std::string& path) {
   }
   if (!ok) throw Error("OpenMesh could not read this file (malformed or unsupported " + extensionOf(path) + ")", path);
   RawMesh raw = std::move(imp.raw);
-  if (!imp.anyNormal) raw.vertexNormals.clear();
-  else raw.vertexNormals.resize(raw.positions.size(), glm::dvec3(0));
+  if (!imp.anyNormal)
+    raw.vertexNormals.clear();
+  else
+    raw.vertexNormals.resize(raw.positions.size(), glm::dvec3(0));
   if (imp.anyUV) {
     imp.vertexUV.resize(raw.positions.size(), glm::dvec2(0));
     raw.cornerUVs.reserve(raw.polyIndices.size());
-    for (uint32_t v : raw.polyIndices) raw.cornerUVs.push_back(v < imp.vertexUV.size() ? imp.vertexUV[v] : glm::dvec2(0));
+    for (uint32_t v : raw.polyIndices)
+      raw.cornerUVs.push_back(v < imp.vertexUV.size() ? imp.vertexUV[v] : glm::dvec2(0));
   }
   return raw;
 }

@@ -33,7 +33,8 @@ double axisArcLength(const std::vector<glm::dvec3>& axis, const glm::dvec3& p) {
   return s;
 }
 
-std::vector<double> flowPotential(const std::vector<glm::dvec3>& x, const std::vector<glm::dvec3>& dir, int neighbours) {
+std::vector<double> flowPotential(const std::vector<glm::dvec3>& x, const std::vector<glm::dvec3>& dir,
+                                  int neighbours) {
   const size_t n = x.size();
   PTERYLA_CHECK_EQ(dir.size(), n, "flowPotential: one direction per point");
   std::vector<double> phi(n, 0.0);
@@ -157,7 +158,8 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
       group[i] = res.tractRank[coat.tract[i]];
     }
   if (options.method == OrderMethod::Axis) {
-    if (options.axis.size() < 2) throw Error("ordering by axis needs an \"axis\" polyline (head to tail)", {}, "ordering.axis");
+    if (options.axis.size() < 2)
+      throw Error("ordering by axis needs an \"axis\" polyline (head to tail)", {}, "ordering.axis");
     for (size_t i = 0; i < n; ++i) res.key[i] = axisArcLength(options.axis, follicles.position[coat.follicle[i]]);
   } else if (options.method == OrderMethod::Flow) {
     PTERYLA_CHECK_EQ(coat.frames.size(), n, "orderLayers: flow ordering needs the feather frames");
@@ -179,7 +181,8 @@ OrderResult orderLayers(const SkinMesh& rest, const std::vector<Tract>& tracts,
       PTERYLA_CHECK(t < params.size(), "feather of an unknown tract");
       const TractParameterization& p = params[t];
       const auto it = std::lower_bound(p.follicles.begin(), p.follicles.end(), f);
-      PTERYLA_CHECK(it != p.follicles.end() && *it == f, "feather's follicle missing from its tract's parameterization");
+      PTERYLA_CHECK(it != p.follicles.end() && *it == f,
+                    "feather's follicle missing from its tract's parameterization");
       uv[i] = p.follicleUv[static_cast<size_t>(it - p.follicles.begin())];
       glm::dvec2 d(0.0);  // a hand-made parameterization without corner (u,v) contributes no direction
       if (!p.faces.empty()) {
@@ -221,7 +224,8 @@ OrderOptions parseOrdering(JsonReader& r) {
     const Json& a = r.raw("tracts");
     if (!a.is_array()) r.fail("tracts", "expected an array of tract names, bottom layer first");
     for (size_t i = 0; i < a.size(); ++i) {
-      if (!a[i].is_string()) throw Error("expected a tract name", r.file(), r.pathOf("tracts") + "[" + std::to_string(i) + "]");
+      if (!a[i].is_string())
+        throw Error("expected a tract name", r.file(), r.pathOf("tracts") + "[" + std::to_string(i) + "]");
       o.tractOrder.push_back(a[i].get<std::string>());
     }
   }
@@ -238,7 +242,8 @@ OrderOptions parseOrdering(JsonReader& r) {
     }
     if (o.axis.size() < 2) r.fail("axis", "needs at least two points (head to tail)");
   }
-  if (o.method == OrderMethod::Axis && o.axis.empty()) r.fail("axis", "\"method\": \"axis\" needs an \"axis\" polyline");
+  if (o.method == OrderMethod::Axis && o.axis.empty())
+    r.fail("axis", "\"method\": \"axis\" needs an \"axis\" polyline");
   r.finish();
   return o;
 }

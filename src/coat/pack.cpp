@@ -41,8 +41,8 @@
 
 namespace pteryla::coat {
 
-using glm::dvec3;
 using feather::kPi;
+using glm::dvec3;
 
 double HeightField1D::at(double s) const {
   const double b = std::floor((s - origin) / cell);
@@ -55,7 +55,9 @@ glm::dvec3 placeDirection(const FeatherFrame& f, double e, const glm::dvec3& d) 
   return d.x * a.x + d.y * a.y + d.z * a.z;
 }
 
-glm::dvec3 placePoint(const FeatherFrame& f, double e, const glm::dvec3& p) { return f.origin + placeDirection(f, e, p); }
+glm::dvec3 placePoint(const FeatherFrame& f, double e, const glm::dvec3& p) {
+  return f.origin + placeDirection(f, e, p);
+}
 
 namespace packing {
 // Runs task(i) for every feather of `items` (in layer order) after those of its dependencies that are
@@ -108,8 +110,8 @@ struct Run {
   explicit Run(PackResult& res)
       : chunkOffset(chunkOffsets(res.groupOffset)),
         chunkBounds(chunkOffset.back()),
-        out{res.elevation, res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds,
-            res.groupOffset, res.groupPoint, res.groupBounds, chunkOffset, chunkBounds} {}
+        out{res.elevation,   res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds,
+            res.groupOffset, res.groupPoint, res.groupBounds,  chunkOffset,     chunkBounds} {}
   tbb::enumerable_thread_specific<Scratch> scratch;
   const std::vector<uint32_t> chunkOffset;
   ChunkBounds chunkBounds;
@@ -185,7 +187,8 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
       bool dirty = isChanged[i] || touched[i];
       for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !dirty; ++k) dirty = outChanged[ctx.deps[k]] != 0;
       const uint32_t cnt = res.pointOffset[i + 1] - res.pointOffset[i];
-      const bool sameShape = prev.pointOffset[i + 1] - prev.pointOffset[i] == cnt && sameKeyLayout(prev.packedKeys, res.packedKeys, i);
+      const bool sameShape =
+          prev.pointOffset[i + 1] - prev.pointOffset[i] == cnt && sameKeyLayout(prev.packedKeys, res.packedKeys, i);
       if (!dirty && sameShape) {
         keepFeather(prev, res, run.out, i);
         return;
@@ -205,7 +208,7 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
 
 PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& base,
                     const std::vector<uint32_t>& changed, const PackOptions& options,
-                  const PackConstraints& constraints) {
+                    const PackConstraints& constraints) {
   const auto t0 = std::chrono::steady_clock::now();
   checkInput(coat, options, constraints);
   const size_t n = coat.size();
@@ -266,10 +269,11 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
     for (uint32_t i : order) source[i] = isChanged[i] ? Source::Local : Source::Kept;
     layoutResult(ctx, source, &base, res);
     Run run(res);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, static_cast<uint32_t>(n), 32), [&](const tbb::blocked_range<uint32_t>& r) {
-      for (uint32_t i = r.begin(); i < r.end(); ++i)
-        if (source[i] == Source::Kept) keepFeather(base, res, run.out, i);
-    });
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, static_cast<uint32_t>(n), 32),
+                      [&](const tbb::blocked_range<uint32_t>& r) {
+                        for (uint32_t i = r.begin(); i < r.end(); ++i)
+                          if (source[i] == Source::Kept) keepFeather(base, res, run.out, i);
+                      });
     // The packed feathers, each after the packed feathers it depends on.
     schedule(ctx, work, isChanged.data(), options.threads, [&](uint32_t i) { run.packOne(ctx, res, i); });
     finish(ctx, run.scratch, res, t0);

@@ -164,8 +164,10 @@ BarbFit fitBarb(const dvec3* cvs, size_t n, double len, double sExt, const doubl
   for (int it = 0; it < 24; ++it) {
     const double mid = 0.5 * (lo + hi);
     barbSamples(cvs, n, len, mu, mid, S, st);
-    if (clears(S, bh, nb, cell, sRoot)) hi = mid;
-    else lo = mid;
+    if (clears(S, bh, nb, cell, sRoot))
+      hi = mid;
+    else
+      lo = mid;
   }
   fit.alpha = hi;
   return fit;
@@ -192,8 +194,10 @@ struct LineRise {
   // lineMax(q, g, w, wl, rho, lo, hi, baseR) for loW = lo / wl, hiW = hi / wl.
   double top(double loW, double hiW) const {
     double xa = std::max(-rho, loW), xb = std::min(rho, hiW);
-    if (clipLo) xa = std::max(xa, clip);
-    else if (clipHi) xb = std::min(xb, clip);
+    if (clipLo)
+      xa = std::max(xa, clip);
+    else if (clipHi)
+      xb = std::min(xb, clip);
     if (xa > xb) return -kInf;
     double best = -kInf;
     auto take = [&](double a, double b) {
@@ -224,7 +228,6 @@ double lineMax(const dvec3& q, const dvec3& g, const dvec3& w, double wl, double
   if (wl < 1e-12) return (lo <= 0 && hi >= 0) ? 0.0 : -kInf;
   return LineRise(q, g, w, wl, rho, baseR).top(lo / wl, hi / wl);
 }
-
 
 // Signs of the plane distances glm::dot(q - root[j], w[j]) of n <= 64 key barbs (arrays per coordinate):
 // bit j of lt / gt is set when distance j is negative / positive. The same operations as glm::dot, two
@@ -323,7 +326,8 @@ inline void planeSigns(const dvec3& q, const double* rx, const double* ry, const
             if (o.captureFields) S.bhRaw[kk * fb + b] = std::max(S.bhRaw[kk * fb + b], h + top);
           };
           if (wl < 1e-12) {
-            for (int b = b0; b <= b1; ++b) put(b, lineMax(q, g, wv, wl, rho, b * bcell - s, (b + 1) * bcell - s, baseR));
+            for (int b = b0; b <= b1; ++b)
+              put(b, lineMax(q, g, wv, wl, rho, b * bcell - s, (b + 1) * bcell - s, baseR));
           } else {
             // lineMax per bin with its bin-independent part computed once; a bin's upper end is the next
             // bin's lower end.

@@ -128,10 +128,12 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
   auto emit = [&](const dvec3& local, double r) {
     const dvec3 f = R(local);
     const dvec3 w = F.origin + f.x * F.tangent + f.y * F.binormal + f.z * F.normal;
-    out.points[q++] = glm::vec4(static_cast<float>(w.x), static_cast<float>(w.y), static_cast<float>(w.z),
-                                static_cast<float>(r));
-    if (r == 0) rad2 = std::max(rad2, glm::dot(f, f));
-    else rad = std::max(rad, glm::length(f) + r);
+    out.points[q++] =
+        glm::vec4(static_cast<float>(w.x), static_cast<float>(w.y), static_cast<float>(w.z), static_cast<float>(r));
+    if (r == 0)
+      rad2 = std::max(rad2, glm::dot(f, f));
+    else
+      rad = std::max(rad, glm::length(f) + r);
   };
   uint32_t g = out.groupOffset[i];
   auto closeGroup = [&] {
@@ -148,8 +150,10 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     double r = 0, r2 = 0;
     for (uint32_t k = a; k < b; ++k) {
       const dvec3 d = dvec3(out.points[k]) - c;
-      if (out.points[k].w == 0) r2 = std::max(r2, glm::dot(d, d));
-      else r = std::max(r, glm::length(d) + out.points[k].w);
+      if (out.points[k].w == 0)
+        r2 = std::max(r2, glm::dot(d, d));
+      else
+        r = std::max(r, glm::length(d) + out.points[k].w);
     }
     r = std::max(r, std::sqrt(r2));
     out.groupBounds[g] = glm::vec4(static_cast<float>(c.x), static_cast<float>(c.y), static_cast<float>(c.z),
@@ -171,7 +175,8 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out) {
     for (int s = 1; s <= bs; s += 2) {
       glm::dvec3 c[2];
       bezierPair(cv, cn, static_cast<double>(s) / bs, static_cast<double>(s + 1) / bs, c[0], c[1]);
-      for (int m = 0; m < 2 && s + m <= bs; ++m) emit(k.root + k.len * (c[m].x * k.u + c[m].y * k.w + c[m].z * k.d), 0.0);
+      for (int m = 0; m < 2 && s + m <= bs; ++m)
+        emit(k.root + k.len * (c[m].x * k.u + c[m].y * k.w + c[m].z * k.d), 0.0);
     }
     closeGroup();
   }

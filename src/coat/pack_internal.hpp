@@ -40,8 +40,8 @@ struct PackSkinSamples {
 
 namespace packing {
 
-using glm::dvec3;
 using feather::kPi;
+using glm::dvec3;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -53,7 +53,7 @@ struct LocalKey {
   uint8_t vane = 0;
   dvec3 root{0}, u{1, 0, 0}, w{0, 1, 0}, d{0, 0, 1}, left{0, 1, 0};
   double len = 0;
-  double sExt = 0;  // extent along u (len * max cv.x)
+  double sExt = 0;      // extent along u (len * max cv.x)
   double rootDist = 0;  // |root|
   uint32_t cvOff = 0;
   uint16_t cvCount = 0;
@@ -62,20 +62,20 @@ struct LocalKey {
 struct LocalFeather {
   bool packable = false;
   bool unopened = false;
-  double reach = 0;            // bound on |p| for every point in any packed state
-  double yMin = 0, yMax = 0;   // lateral footprint (bound over packed states)
-  double vaneHalf = 0;         // largest lateral reach of a barb from its root (unpacked)
+  double reach = 0;           // bound on |p| for every point in any packed state
+  double yMin = 0, yMax = 0;  // lateral footprint (bound over packed states)
+  double vaneHalf = 0;        // largest lateral reach of a barb from its root (unpacked)
   double shaftYMin = 0, shaftYMax = 0;
   double totalLength = 0;
   // Arrays live in the pack's per-thread arenas (detail::HugeArena).
-  detail::ArenaArray<dvec3> shaft;    // polyline from the follicle to the tip, feather-local
+  detail::ArenaArray<dvec3> shaft;  // polyline from the follicle to the tip, feather-local
   detail::ArenaArray<double> shaftRad;
   detail::ArenaArray<LocalKey> keys;  // left vane first, ascending rp within a vane; afterfeather keys last
   uint32_t leftKeys = 0;
-  uint32_t mainKeys = 0;       // keys of the main feather (the packed ones); the rest are the afterfeather's
-  detail::ArenaArray<dvec3> after;    // afterfeather shaft polyline (not packed, but handed to later feathers)
+  uint32_t mainKeys = 0;            // keys of the main feather (the packed ones); the rest are the afterfeather's
+  detail::ArenaArray<dvec3> after;  // afterfeather shaft polyline (not packed, but handed to later feathers)
   detail::ArenaArray<double> afterRad;
-  detail::ArenaArray<dvec3> cvs;      // key barb control vertices, barb-local unit frame
+  detail::ArenaArray<dvec3> cvs;  // key barb control vertices, barb-local unit frame
   uint32_t pointCount = 0;
   // Vane outline, invariant under elevation (a rotation about B keeps y and the xz radius): per lateral bin
   // of [yMin, yMax], the smallest and largest xz radius of feather points with that lateral offset.
@@ -157,17 +157,17 @@ struct PlacedKey {
 };
 
 struct Scratch {
-  std::vector<PlacedKey> placed;          // per main key barb of the feather being packed
+  std::vector<PlacedKey> placed;  // per main key barb of the feather being packed
   std::vector<FeatherCandidate> cand;
   std::vector<SkinCandidate> skinCand;
   std::vector<double> psiMin, shaftRadBin, yLo, yHi;
-  std::vector<glm::dvec2> best;           // per shaft bin: direction of the largest angle so far
-  std::vector<double> bh, bhRaw;          // barb fields, keys x bins
-  std::vector<double> plane;              // per key: signed distance of the current candidate
+  std::vector<glm::dvec2> best;             // per shaft bin: direction of the largest angle so far
+  std::vector<double> bh, bhRaw;            // barb fields, keys x bins
+  std::vector<double> plane;                // per key: signed distance of the current candidate
   std::vector<double> keyRoot[3], keyW[3];  // per key: placed root and slicing-plane normal (arrays)
-  std::vector<glm::dvec3> curve, tmp;     // barb samples and transformed control vertices
-  std::vector<double> bern;               // Bernstein weights: samples x cvs
-  std::vector<double> bernT, cx, cz;      // the weights cvs x samples; curve x and z being summed
+  std::vector<glm::dvec3> curve, tmp;       // barb samples and transformed control vertices
+  std::vector<double> bern;                 // Bernstein weights: samples x cvs
+  std::vector<double> bernT, cx, cz;        // the weights cvs x samples; curve x and z being summed
   size_t bernCvs = 0, bernSamples = 0;
   PackStats stats;
   std::vector<BarbField> fields;
@@ -260,7 +260,6 @@ struct Output {
 
 constexpr uint32_t kChunk = 4;
 
-
 // A key barb's control vertex after flattening mu, stretching about the root cv0 (flattened likewise) by
 // `stretch` and lifting by alpha about the origin.
 inline dvec3 flattenCv(const dvec3& cv, const dvec3& cv0, double mu, double stretch, double ca, double sa) {
@@ -295,7 +294,8 @@ void packFeather(const Context& ctx, uint32_t i, Scratch& S, Output& out);
 double median(std::vector<double> v);
 void checkInput(const CoatFeathers& c, const PackOptions& o, const PackConstraints& k);
 void buildReachClasses(Context& ctx, const std::vector<double>& radius, double med);
-void buildDependencies(Context& ctx, const std::vector<uint32_t>& items, const std::vector<double>& radius, size_t grain);
+void buildDependencies(Context& ctx, const std::vector<uint32_t>& items, const std::vector<double>& radius,
+                       size_t grain);
 void buildSkinSamples(Context& ctx, double medReach);
 // The styling constraints and the layer order (ctx.order, ctx.pos) of a pack.
 void beginContext(Context& ctx, std::vector<uint32_t> order);

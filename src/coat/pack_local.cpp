@@ -24,7 +24,8 @@ void buildOutline(LocalFeather& L, const PackOptions& o) {
   const double w = (L.yMax - L.yMin) / nb;
   auto add = [&](const dvec3& p, double rad) {
     const double r = std::sqrt(p.x * p.x + p.z * p.z);
-    const int k0 = static_cast<int>(std::floor((p.y - rad - L.yMin) / w)), k1 = static_cast<int>(std::floor((p.y + rad - L.yMin) / w));
+    const int k0 = static_cast<int>(std::floor((p.y - rad - L.yMin) / w)),
+              k1 = static_cast<int>(std::floor((p.y + rad - L.yMin) / w));
     for (int k = std::max(0, k0); k <= std::min(nb - 1, k1); ++k) {
       lo[k] = std::min(lo[k], static_cast<float>(r - rad));
       hi[k] = std::max(hi[k], static_cast<float>(r + rad));
@@ -68,8 +69,14 @@ void buildOutline(LocalFeather& L, const PackOptions& o) {
   const double dr = 0.05 * L.reach + 4 * o.clearance + 2 * (L.shaftRad.empty() ? 0.0 : L.shaftRad.front());
   for (int k = 0; k < nb; ++k) {
     float a = lo[k], b = hi[k];
-    if (k > 0) { a = std::min(a, lo[k - 1]); b = std::max(b, hi[k - 1]); }
-    if (k + 1 < nb) { a = std::min(a, lo[k + 1]); b = std::max(b, hi[k + 1]); }
+    if (k > 0) {
+      a = std::min(a, lo[k - 1]);
+      b = std::max(b, hi[k - 1]);
+    }
+    if (k + 1 < nb) {
+      a = std::min(a, lo[k + 1]);
+      b = std::max(b, hi[k + 1]);
+    }
     L.rLo[k] = std::max(0.0f, static_cast<float>(a - dr));
     L.rHi[k] = static_cast<float>(b + dr);
   }
@@ -254,7 +261,8 @@ void buildLocal(const CoatFeathers& coat, uint32_t i, const PackOptions& o, deta
   L.yMax = yMax + 1e-9 * (1 + reach);
   buildOutline(L, o);
   const uint32_t barbPts = static_cast<uint32_t>(std::max(1, o.barbSamples));
-  L.pointCount = static_cast<uint32_t>(L.shaft.size() + L.after.size()) + static_cast<uint32_t>(L.keys.size()) * barbPts;
+  L.pointCount =
+      static_cast<uint32_t>(L.shaft.size() + L.after.size()) + static_cast<uint32_t>(L.keys.size()) * barbPts;
 }
 
 }  // namespace pteryla::coat::packing

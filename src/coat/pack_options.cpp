@@ -16,7 +16,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 PackingSettings parsePackingSettings(JsonReader& r) {
   PackingSettings settings;
   PackOptions& o = settings.options;
-  o.method = r.oneOf("method", "drape", {"drape", "height_field"}) == "drape" ? PackMethod::Drape : PackMethod::HeightField;
+  o.method =
+      r.oneOf("method", "drape", {"drape", "height_field"}) == "drape" ? PackMethod::Drape : PackMethod::HeightField;
   o.drapeMaxSlopeDeg = r.number("drape_max_slope_deg", o.drapeMaxSlopeDeg, 0.0, 60.0);
   o.clearance = r.number("clearance", 0.0, 0.0, kInf);
   o.skinClearance = r.number("skin_clearance", 0.0, 0.0, kInf);

@@ -7,8 +7,8 @@
 
 namespace pteryla::coat {
 
-using glm::dvec3;
 using feather::kPi;
+using glm::dvec3;
 
 namespace {
 // Feather i's packed keys: checks that `result` is a pack of `coat`.
@@ -47,7 +47,8 @@ feather::FeatherParams packedParams(const CoatFeathers& coat, const PackResult& 
   return p;
 }
 
-bool packedParamsEqual(const feather::FeatherParams& p, const CoatFeathers& coat, const PackResult& result, uint32_t i) {
+bool packedParamsEqual(const feather::FeatherParams& p, const CoatFeathers& coat, const PackResult& result,
+                       uint32_t i) {
   const PackedKeyBarbs& K = packedKeysOf(coat, result, i);
   if (!K.replaced[i]) return p == coat.params[i];
   for (int v = 0; v < 2; ++v) {
@@ -55,8 +56,8 @@ bool packedParamsEqual(const feather::FeatherParams& p, const CoatFeathers& coat
     const auto [k0, k1] = vaneKeys(K, i, v);
     if (kb.size() != k1 - k0) return false;
     for (uint32_t k = k0; k < k1; ++k)
-      if (!(kb[k - k0].rp == K.rp[k]) || !std::equal(kb[k - k0].cvs.begin(), kb[k - k0].cvs.end(), K.cvs.begin() + K.cvOffset[k],
-                                                      K.cvs.begin() + K.cvOffset[k + 1]))
+      if (!(kb[k - k0].rp == K.rp[k]) || !std::equal(kb[k - k0].cvs.begin(), kb[k - k0].cvs.end(),
+                                                     K.cvs.begin() + K.cvOffset[k], K.cvs.begin() + K.cvOffset[k + 1]))
         return false;
   }
   return p.equalExceptKeyBarbs(coat.params[i]);
@@ -91,7 +92,8 @@ std::vector<PlacedKeyBarb> placedKeyBarbs(const CoatFeathers& coat, const PackRe
       pk.root = placePoint(F, e, root);
       pk.along = placeDirection(F, e, u);
       pk.up = placeDirection(F, e, f.dorsal);
-      for (const auto& c : kb.cvs) pk.cvs.push_back(placePoint(F, e, root + len * (c.x * u + c.y * w + c.z * f.dorsal)));
+      for (const auto& c : kb.cvs)
+        pk.cvs.push_back(placePoint(F, e, root + len * (c.x * u + c.y * w + c.z * f.dorsal)));
       out.push_back(std::move(pk));
     }
   }

@@ -39,7 +39,8 @@ std::array<uint32_t, 3> localKeyCount(const LocalFeather& L) {
 // Copies feather i's packed key barbs from `from` (the same layout for i).
 void copyKeys(const PackedKeyBarbs& from, PackedKeyBarbs& to, uint32_t i) {
   const uint32_t a = from.keyOffset[i], b = from.keyOffset[i + 1], t = to.keyOffset[i];
-  PTERYLA_CHECK(b - a == to.keyOffset[i + 1] - t && from.cvOffset[b] - from.cvOffset[a] == to.cvOffset[t + b - a] - to.cvOffset[t],
+  PTERYLA_CHECK(b - a == to.keyOffset[i + 1] - t &&
+                    from.cvOffset[b] - from.cvOffset[a] == to.cvOffset[t + b - a] - to.cvOffset[t],
                 "copied key barbs with a different layout");
   std::copy(from.rp.begin() + a, from.rp.begin() + b, to.rp.begin() + t);
   std::copy(from.cvs.begin() + from.cvOffset[a], from.cvs.begin() + from.cvOffset[b], to.cvs.begin() + to.cvOffset[t]);
@@ -48,7 +49,8 @@ void copyKeys(const PackedKeyBarbs& from, PackedKeyBarbs& to, uint32_t i) {
 // Whether feather i has the same key barb layout in two results.
 bool sameKeyLayout(const PackedKeyBarbs& a, const PackedKeyBarbs& b, uint32_t i) {
   const uint32_t n = a.keyOffset[i + 1] - a.keyOffset[i];
-  if (n != b.keyOffset[i + 1] - b.keyOffset[i] || a.replaced[i] != b.replaced[i] || a.leftKeys[i] != b.leftKeys[i]) return false;
+  if (n != b.keyOffset[i + 1] - b.keyOffset[i] || a.replaced[i] != b.replaced[i] || a.leftKeys[i] != b.leftKeys[i])
+    return false;
   for (uint32_t k = 0; k < n; ++k)
     if (a.cvOffset[a.keyOffset[i] + k + 1] - a.cvOffset[a.keyOffset[i] + k] !=
         b.cvOffset[b.keyOffset[i] + k + 1] - b.cvOffset[b.keyOffset[i] + k])
@@ -101,7 +103,8 @@ void layoutResult(const Context& ctx, const std::vector<Source>& source, const P
         res.groupPoint.push_back(p);
         p += kept->groupPoint[g + 1] - kept->groupPoint[g];
       }
-      PTERYLA_CHECK_EQ(p - res.pointOffset[i], kept->pointOffset[i + 1] - kept->pointOffset[i], "kept point groups do not cover its points");
+      PTERYLA_CHECK_EQ(p - res.pointOffset[i], kept->pointOffset[i + 1] - kept->pointOffset[i],
+                       "kept point groups do not cover its points");
     }
     res.pointOffset[i + 1] = p;
     res.groupOffset[i + 1] = static_cast<uint32_t>(res.groupPoint.size());

@@ -35,16 +35,20 @@ void checkInput(const CoatFeathers& c, const PackOptions& o, const PackConstrain
   if (!c.tract.empty()) need(c.tract.size(), "tract");
   if (!c.age.empty()) need(c.age.size(), "age");
   if (!c.present.empty()) need(c.present.size(), "present");
-  for (const auto& [v, what] : {std::pair{&k.fixedElevation, "fixedElevation"}, {&k.minElevation, "minElevation"},
-                                {&k.shaftBand, "shaftBand"}})
+  for (const auto& [v, what] :
+       {std::pair{&k.fixedElevation, "fixedElevation"}, {&k.minElevation, "minElevation"}, {&k.shaftBand, "shaftBand"}})
     if (!v->empty() && v->size() != n)
       throw Error(std::string(what) + " has " + std::to_string(v->size()) + " entries, expected " + std::to_string(n),
                   {}, what);
   std::vector<uint8_t> seen(n, 0);
   for (size_t k = 0; k < c.layerOrder.size(); ++k) {
     const uint32_t i = c.layerOrder[k];
-    if (i >= n) throw Error("layer order names feather " + std::to_string(i) + " of " + std::to_string(n), {}, "layerOrder[" + std::to_string(k) + "]");
-    if (seen[i]) throw Error("layer order lists feather " + std::to_string(i) + " twice", {}, "layerOrder[" + std::to_string(k) + "]");
+    if (i >= n)
+      throw Error("layer order names feather " + std::to_string(i) + " of " + std::to_string(n), {},
+                  "layerOrder[" + std::to_string(k) + "]");
+    if (seen[i])
+      throw Error("layer order lists feather " + std::to_string(i) + " twice", {},
+                  "layerOrder[" + std::to_string(k) + "]");
     seen[i] = 1;
   }
   for (size_t i = 0; i < n; ++i) {
@@ -85,7 +89,8 @@ void buildReachClasses(Context& ctx, const std::vector<double>& radius, double m
 // Dependencies (ctx.depOff / ctx.deps, CSR over every feather; empty but for `items`): for each feather
 // in `items`, the feathers before it in layer order whose radius ball can touch its footprint, in index
 // order. Needs the reach classes and the items' feather-local data.
-void buildDependencies(Context& ctx, const std::vector<uint32_t>& items, const std::vector<double>& radius, size_t grain) {
+void buildDependencies(Context& ctx, const std::vector<uint32_t>& items, const std::vector<double>& radius,
+                       size_t grain) {
   const size_t n = ctx.coat.size();
   std::vector<std::vector<uint32_t>> depLists(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, items.size(), grain), [&](const tbb::blocked_range<size_t>& r) {
@@ -120,7 +125,8 @@ std::vector<uint32_t> presentInLayerOrder(const CoatFeathers& coat) {
   } else {
     order = coat.layerOrder;
   }
-  order.erase(std::remove_if(order.begin(), order.end(), [&](uint32_t i) { return !coat.present.empty() && coat.present[i] == 0; }),
+  order.erase(std::remove_if(order.begin(), order.end(),
+                             [&](uint32_t i) { return !coat.present.empty() && coat.present[i] == 0; }),
               order.end());
   return order;
 }
@@ -154,8 +160,10 @@ void setup(Context& ctx) {
     detail::HugeArena& arena = ctx.arenas.local();
     for (size_t i = r.begin(); i < r.end(); ++i) {
       ctx.local[i].packable = ctx.pos[i] != UINT32_MAX;
-      if (ctx.local[i].packable) buildLocal(coat, static_cast<uint32_t>(i), o, arena, ctx.local[i]);
-      else ctx.local[i].pointCount = 0;
+      if (ctx.local[i].packable)
+        buildLocal(coat, static_cast<uint32_t>(i), o, arena, ctx.local[i]);
+      else
+        ctx.local[i].pointCount = 0;
     }
   });
 
@@ -289,7 +297,8 @@ void buildSkinSamples(Context& ctx, double medReach) {
           if (!used[v]) continue;
           inc.clear();
           if (!sk.vertexFaceOffsets.empty()) {
-            for (uint32_t k = sk.vertexFaceOffsets[v]; k < sk.vertexFaceOffsets[v + 1]; ++k) inc.push_back(sk.vertexFaces[k]);
+            for (uint32_t k = sk.vertexFaceOffsets[v]; k < sk.vertexFaceOffsets[v + 1]; ++k)
+              inc.push_back(sk.vertexFaces[k]);
           } else {
             for (uint32_t f = 0; f < nf; ++f)
               if (sk.faces[f][0] == v || sk.faces[f][1] == v || sk.faces[f][2] == v) inc.push_back(f);
@@ -312,7 +321,8 @@ void buildSkinSamples(Context& ctx, double medReach) {
         }
       });
     };
-    tbb::parallel_invoke([&] { sd.grid.build(sd.pts.data(), sd.pts.size(), std::max(0.2 * medReach, 2 * h)); }, patches);
+    tbb::parallel_invoke([&] { sd.grid.build(sd.pts.data(), sd.pts.size(), std::max(0.2 * medReach, 2 * h)); },
+                         patches);
     for (float r : sd.rho) sd.maxRho = std::max(sd.maxRho, static_cast<double>(r));
     ctx.skinData = std::move(data);
   }

@@ -155,7 +155,8 @@ void shaftProfile(const LocalFeather& L, double rMax, int bins, bool extend, Scr
           // The calamus sits in its follicle: skin within the base allowance is not an obstacle (the
           // checker exempts the same zone).
           if (d2 > (L.reach + pad) * (L.reach + pad) || d2 < base2) return;
-          if (pad > 0 ? !L.nearOutline(b, std::sqrt(t * t + n * n), pad) : !L.inOutline(b, std::sqrt(t * t + n * n))) return;
+          if (pad > 0 ? !L.nearOutline(b, std::sqrt(t * t + n * n), pad) : !L.inOutline(b, std::sqrt(t * t + n * n)))
+            return;
           const dvec3& nw = sd.normal[k];
           S.skinCand.push_back({t, b, n, rho, sd.cone[k], dvec3(glm::dot(nw, T), glm::dot(nw, B), glm::dot(nw, N))});
         });

@@ -86,7 +86,7 @@ glm::dvec3 meanNormal(const SkinMesh& skin, const Tract& tract) {
 // Corners of the tract's faces grouped into wedges: one wedge per skin vertex, or several where seams cut
 // the faces around a vertex apart. wedgeVertex[w] is the skin vertex of wedge w.
 struct Wedges {
-  std::vector<uint32_t> corner;       // 3 per tract face
+  std::vector<uint32_t> corner;  // 3 per tract face
   std::vector<uint32_t> wedgeVertex;
 };
 
@@ -159,7 +159,9 @@ std::vector<uint64_t> genusZeroSeams(const SkinMesh& skin, const Tract& tract, c
   std::vector<uint32_t> off(n + 1, 0);
   for (const auto& p : pairs) ++off[p.first + 1];
   for (size_t i = 0; i < n; ++i) off[i + 1] += off[i];
-  auto len = [&](uint32_t a, uint32_t b) { return glm::length(skin.positions[lv.vertices[a]] - skin.positions[lv.vertices[b]]); };
+  auto len = [&](uint32_t a, uint32_t b) {
+    return glm::length(skin.positions[lv.vertices[a]] - skin.positions[lv.vertices[b]]);
+  };
 
   std::vector<double> dist(n);
   std::vector<int32_t> prev(n);
@@ -236,7 +238,8 @@ void projectWedges(const SkinMesh& skin, const Wedges& w, glm::dvec3 view, glm::
   view = glm::normalize(view);
   if (glm::length(up) == 0) up = std::abs(view.y) > 0.99 ? glm::dvec3(0, 0, 1) : glm::dvec3(0, 1, 0);
   glm::dvec3 right = glm::cross(view, up);
-  if (glm::length(right) < 1e-9) right = glm::cross(view, std::abs(view.y) > 0.99 ? glm::dvec3(0, 0, 1) : glm::dvec3(0, 1, 0));
+  if (glm::length(right) < 1e-9)
+    right = glm::cross(view, std::abs(view.y) > 0.99 ? glm::dvec3(0, 0, 1) : glm::dvec3(0, 1, 0));
   right = glm::normalize(right);
   const glm::dvec3 screenUp = glm::cross(right, view);
   uv.resize(w.wedgeVertex.size());
@@ -258,7 +261,8 @@ double backfacingFraction(const SkinMesh& skin, const Tract& tract, const glm::d
 void cgalParameterize(const SkinMesh& skin, const Tract& tract, const Wedges& w, ParamMethod method,
                       const ParameterizeOptions& opt, std::vector<glm::dvec2>& uv) {
   CgalMesh sm;
-  sm.reserve(static_cast<CgalMesh::size_type>(w.wedgeVertex.size()), 0, static_cast<CgalMesh::size_type>(tract.faces.size()));
+  sm.reserve(static_cast<CgalMesh::size_type>(w.wedgeVertex.size()), 0,
+             static_cast<CgalMesh::size_type>(tract.faces.size()));
   for (uint32_t v : w.wedgeVertex) {
     const glm::dvec3& p = skin.positions[v];
     sm.add_vertex(Kernel::Point_3(p.x, p.y, p.z));
@@ -310,10 +314,10 @@ std::string topologyText(const TractTopology& t) {
 
 struct TractAnalysis {
   LocalVertices lv;
-  std::vector<uint8_t> inTract;   // per skin face
-  std::vector<uint32_t> slot;     // per skin face: index in tract.faces
+  std::vector<uint8_t> inTract;  // per skin face
+  std::vector<uint32_t> slot;    // per skin face: index in tract.faces
   TractTopology topo;
-  std::vector<int32_t> loopOf;    // per local vertex: boundary loop id, -1 = interior
+  std::vector<int32_t> loopOf;  // per local vertex: boundary loop id, -1 = interior
 };
 
 TractAnalysis analyse(const SkinMesh& skin, const Tract& tract) {
@@ -403,10 +407,14 @@ TractAnalysis analyse(const SkinMesh& skin, const Tract& tract) {
 
 const char* paramMethodName(ParamMethod m) {
   switch (m) {
-    case ParamMethod::Projection: return "projection";
-    case ParamMethod::Lscm: return "lscm";
-    case ParamMethod::Arap: return "arap";
-    case ParamMethod::Auto: return "auto";
+    case ParamMethod::Projection:
+      return "projection";
+    case ParamMethod::Lscm:
+      return "lscm";
+    case ParamMethod::Arap:
+      return "arap";
+    case ParamMethod::Auto:
+      return "auto";
   }
   return "?";
 }
@@ -432,7 +440,8 @@ glm::dvec2 undistortUv(const std::vector<GridDistortion>& handles, const glm::dv
     if (step <= 1e-14 * (1 + glm::length(g))) return q;
   }
   throw Error("the grid distortion folds the parameterization near (" + std::to_string(g.x) + ", " +
-                  std::to_string(g.y) + "): overlapping handles move too far (keep each |move| under 0.6 x radius "
+                  std::to_string(g.y) +
+                  "): overlapping handles move too far (keep each |move| under 0.6 x radius "
                   "and spread overlapping ones)",
               "", where);
 }
@@ -458,10 +467,12 @@ TractTopology tractTopology(const SkinMesh& skin, const Tract& tract) { return a
 
 TractParameterization parameterizeTract(const SkinMesh& skin, const Tract& tract, uint32_t tractIndex,
                                         const Follicles& follicles, const ParameterizeOptions& options) {
-  if (tract.faces.empty()) throw Error("tract '" + tract.name + "' has no faces to parameterize", skin.file, where(tract));
+  if (tract.faces.empty())
+    throw Error("tract '" + tract.name + "' has no faces to parameterize", skin.file, where(tract));
   for (size_t k = 0; k < tract.faces.size(); ++k)
     if (tract.faces[k] >= skin.faceCount() || (k > 0 && tract.faces[k] <= tract.faces[k - 1]))
-      throw Error("tract faces must be ascending indices below " + std::to_string(skin.faceCount()), skin.file, where(tract));
+      throw Error("tract faces must be ascending indices below " + std::to_string(skin.faceCount()), skin.file,
+                  where(tract));
   TractParameterization out;
   out.faces = tract.faces;
   const TractAnalysis an = analyse(skin, tract);
@@ -474,7 +485,8 @@ TractParameterization parameterizeTract(const SkinMesh& skin, const Tract& tract
     const bool genusZero = topo.components == 1 && !topo.nonManifold &&
                            topo.eulerCharacteristic() == 2 - static_cast<long>(topo.boundaryLoops);
     if (topo.isDisk()) {
-      if (method == ParamMethod::Auto) method = ParamMethod::Lscm, out.note = "disk-like tract: least-squares conformal map";
+      if (method == ParamMethod::Auto)
+        method = ParamMethod::Lscm, out.note = "disk-like tract: least-squares conformal map";
     } else if (method == ParamMethod::Auto && options.autoSeams && genusZero) {
       const std::vector<uint64_t> seams = genusZeroSeams(skin, tract, an.lv, an.loopOf);
       wedges = cutWedges(skin, tract, an.inTract, an.slot, an.lv, seams);
@@ -485,15 +497,16 @@ TractParameterization parameterizeTract(const SkinMesh& skin, const Tract& tract
     } else {
       const glm::dvec3 mean = meanNormal(skin, tract);
       const double total = tractArea(skin, tract);
-      const bool flat = glm::length(mean) > 1e-9 * total &&
-                        backfacingFraction(skin, tract, -mean) <= options.autoMaxBackfacing;
+      const bool flat =
+          glm::length(mean) > 1e-9 * total && backfacingFraction(skin, tract, -mean) <= options.autoMaxBackfacing;
       if (method == ParamMethod::Auto && flat) {
         method = ParamMethod::Projection;
         view = -mean;
         out.note = "not a topological disk (" + topologyText(topo) + "): projected along the mean normal";
       } else {
         std::string why = "split it into disk-like tracts, or use \"method\": \"projection\" with a view_direction";
-        if (topo.components > 1) why = "define one tract per piece, or use \"method\": \"projection\" with a view_direction";
+        if (topo.components > 1)
+          why = "define one tract per piece, or use \"method\": \"projection\" with a view_direction";
         throw Error("tract '" + tract.name + "' is not a topological disk (" + topologyText(topo) +
                         "; needed: 1 component, 1 boundary loop, Euler characteristic 1), so " +
                         (method == ParamMethod::Auto ? std::string("it cannot be parameterized automatically")
@@ -510,12 +523,14 @@ TractParameterization parameterizeTract(const SkinMesh& skin, const Tract& tract
     if (glm::length(view) == 0) {
       view = -meanNormal(skin, tract);
       if (glm::length(view) <= 1e-9 * tractArea(skin, tract))
-        throw Error("tract '" + tract.name + "' has no dominant facing direction (closed or folded); give the "
-                    "projection a view_direction or split the tract",
+        throw Error("tract '" + tract.name +
+                        "' has no dominant facing direction (closed or folded); give the "
+                        "projection a view_direction or split the tract",
                     skin.file, where(tract));
     }
     if (!std::isfinite(view.x + view.y + view.z))
-      throw Error("projection view_direction must be finite and non-zero", skin.file, where(tract) + ".parameterization");
+      throw Error("projection view_direction must be finite and non-zero", skin.file,
+                  where(tract) + ".parameterization");
     out.viewDirection = glm::normalize(view);
     projectWedges(skin, wedges, out.viewDirection, options.up, uv);
   } else {
@@ -543,7 +558,8 @@ TractParameterization parameterizeTract(const SkinMesh& skin, const Tract& tract
     if (a <= 0) ++out.flippedFaces;
   }
   if (!(areaUv > 1e-300) || !std::isfinite(areaUv))
-    throw Error("tract '" + tract.name + "' maps to a degenerate (u,v) region (seen edge-on?)", skin.file, where(tract));
+    throw Error("tract '" + tract.name + "' maps to a degenerate (u,v) region (seen edge-on?)", skin.file,
+                where(tract));
   out.scale = std::sqrt(area3 / areaUv);
   out.cornerUv.resize(tract.faces.size());
   for (size_t k = 0; k < tract.faces.size(); ++k)
@@ -598,7 +614,8 @@ ParameterizeOptions parseParameterization(JsonReader& r) {
     d.at = h.vec2("at");
     d.move = h.vec2("move");
     d.radius = h.number("radius", 0.1, 1e-6, 10.0);
-    if (glm::length(d.move) > 0.6 * d.radius) h.fail("move", "must be at most 0.6 x radius (a larger move folds the grid)");
+    if (glm::length(d.move) > 0.6 * d.radius)
+      h.fail("move", "must be at most 0.6 x radius (a larger move folds the grid)");
     h.finish();
     o.distortion.push_back(d);
   }

@@ -48,7 +48,7 @@ struct FaceLimits {
 // Polygon with, per vertex j, the label of edge j -> j+1: the triangle edge (0..2) it lies on, or -1 for
 // a piece of a bisector.
 struct Poly {
-  std::vector<glm::dvec3> v;     // storage; the polygon is v[0 .. n)
+  std::vector<glm::dvec3> v;  // storage; the polygon is v[0 .. n)
   std::vector<int8_t> label;
   size_t n = 0;
   void fit(size_t m) {
@@ -90,17 +90,16 @@ struct ThreadScratch {
 
 // Moments of one restricted Voronoi cell about its site (relative coordinates).
 struct Cell {
-  double area = 0;            // plain area
-  double mass = 0;            // integral of the weight
-  glm::dvec3 m1{0};           // integral of weight * y
-  glm::dmat3 H{0.0};          // integral of weight * M (metric only)
-  glm::dvec3 hm1{0};          // integral of weight * M y (metric only)
-  double energy = 0;          // integral of weight * y^T M y
+  double area = 0;    // plain area
+  double mass = 0;    // integral of the weight
+  glm::dvec3 m1{0};   // integral of weight * y
+  glm::dmat3 H{0.0};  // integral of weight * M (metric only)
+  glm::dvec3 hm1{0};  // integral of weight * M y (metric only)
+  double energy = 0;  // integral of weight * y^T M y
 };
 
 // Dunavant (1985) degree-4 rule on a triangle: barycentric points and weights (sum 1).
-constexpr double kQa = 0.445948490915965, kQb = 0.108103018168070, kQc = 0.091576213509771,
-                 kQd = 0.816847572980459;
+constexpr double kQa = 0.445948490915965, kQb = 0.108103018168070, kQc = 0.091576213509771, kQd = 0.816847572980459;
 constexpr double kWa = 0.223381589678011, kWc = 0.109951743655322;
 constexpr double kQuad[6][4] = {{kQb, kQa, kQa, kWa}, {kQa, kQb, kQa, kWa}, {kQa, kQa, kQb, kWa},
                                 {kQd, kQc, kQc, kWc}, {kQc, kQd, kQc, kWc}, {kQc, kQc, kQd, kWc}};
@@ -180,12 +179,14 @@ class Relaxer {
     if (opt_.iterations < 0) fail("iterations must be >= 0", "relax.iterations");
     if (!(opt_.overRelaxation >= 1.0 && opt_.overRelaxation < 2.0))
       fail("overRelaxation must be in [1, 2)", "relax.overRelaxation");
-    if (!(opt_.boundaryBand >= 0 && std::isfinite(opt_.boundaryBand))) fail("boundaryBand must be >= 0", "relax.boundaryBand");
+    if (!(opt_.boundaryBand >= 0 && std::isfinite(opt_.boundaryBand)))
+      fail("boundaryBand must be >= 0", "relax.boundaryBand");
     if (!(opt_.edgeMargin >= 0 && opt_.edgeMargin < 0.5)) fail("edgeMargin must be in [0, 0.5)", "relax.edgeMargin");
     if (!(opt_.tolerance >= 0 && std::isfinite(opt_.tolerance))) fail("tolerance must be >= 0", "relax.tolerance");
     if (!opt_.density.perVertex.empty() && opt_.density.perVertex.size() != mesh_.positions.size())
       fail("per-vertex density has " + std::to_string(opt_.density.perVertex.size()) + " values for " +
-               std::to_string(mesh_.positions.size()) + " vertices", "relax.density");
+               std::to_string(mesh_.positions.size()) + " vertices",
+           "relax.density");
     for (size_t v = 0; v < opt_.density.perVertex.size(); ++v)
       if (!(opt_.density.perVertex[v] >= 0) || !std::isfinite(opt_.density.perVertex[v]))
         fail("density must be finite and >= 0", "vertex " + std::to_string(v));
@@ -283,8 +284,14 @@ class Relaxer {
         const double edge = glm::length(b - a);
         const double h = edge > 0 ? 2.0 * mesh_.faceAreas[fi] / edge : 0.0;
         const double m = h > 0 ? std::min(margin / h, 0.3) : 0.3;
-        if (bits[k] & (1u << ((c + 1) % 3))) { L.lo[c] = m; L.any = true; }  // edge opposite corner c
-        if (boundaryVertex[f[c]]) { L.hi[c] = 1.0 - m; L.any = true; }
+        if (bits[k] & (1u << ((c + 1) % 3))) {
+          L.lo[c] = m;
+          L.any = true;
+        }  // edge opposite corner c
+        if (boundaryVertex[f[c]]) {
+          L.hi[c] = 1.0 - m;
+          L.any = true;
+        }
       }
       if (metric_) {
         // Metric of the face, evaluated at its centroid with directions in the face plane.
@@ -385,8 +392,10 @@ class Relaxer {
     bool anyOut = false, anyIn = false;
     for (size_t j = 0; j < m; ++j) {
       fv[j] = glm::dot(n, av[j]) - d;
-      if (fv[j] > 0) anyOut = true;
-      else anyIn = true;
+      if (fv[j] > 0)
+        anyOut = true;
+      else
+        anyIn = true;
     }
     if (!anyOut) return kUnchanged;
     if (!anyIn) return kEmpty;
@@ -436,8 +445,7 @@ class Relaxer {
           const glm::dmat3& M = metric_faces_[lf];
           cell.H += A * M;
           cell.hm1 += M * m1;
-          cell.energy += A / 12.0 *
-                         (glm::dot(a, M * a) + glm::dot(b, M * b) + glm::dot(c, M * c) + glm::dot(s, M * s));
+          cell.energy += A / 12.0 * (glm::dot(a, M * a) + glm::dot(b, M * b) + glm::dot(c, M * c) + glm::dot(s, M * s));
         } else {
           cell.energy += A / 12.0 * (glm::dot(a, a) + glm::dot(b, b) + glm::dot(c, c) + glm::dot(s, s));
         }
@@ -576,8 +584,8 @@ class Relaxer {
       const uint32_t f = sc.queue[qi];
       const auto& tri = mesh_.faces[f];
       glm::dvec3 b;
-      const glm::dvec3 q = closestPointOnTriangle(t, mesh_.positions[tri[0]], mesh_.positions[tri[1]],
-                                                  mesh_.positions[tri[2]], &b);
+      const glm::dvec3 q =
+          closestPointOnTriangle(t, mesh_.positions[tri[0]], mesh_.positions[tri[1]], mesh_.positions[tri[2]], &b);
       const glm::dvec3 d = q - t;
       const double dd = glm::dot(d, d);
       if (dd < best) {
@@ -638,36 +646,36 @@ class Relaxer {
               }
             }
         for (uint32_t oi = runBegin[run]; oi < runBegin[run + 1]; ++oi) {
-        const size_t i = order[oi];
-        const glm::dvec3 x = pos_[i];
-        move[i] = 0;
-        if (newPos) {
-          (*newPos)[i] = x;
-          (*newFace)[i] = face_[i];
-          (*newBary)[i] = bary_[i];
-        }
-        const Cell cell = computeCell(i, sc);
-        cellEnergy[i] = cell.energy;
-        cellArea_[i] = cell.area;
-        if (!newPos || kind_[i] != kFree || !(cell.mass > 0)) continue;
-        const glm::dvec3 cRel = metric_ ? glm::inverse(cell.H) * cell.hm1 : cell.m1 / cell.mass;
-        const glm::dvec3 c = x + cRel;
-        auto cost = [&](const glm::dvec3& v) { return metric_ ? glm::dot(v, cell.H * v) : glm::dot(v, v); };
-        const double current = cost(x - c);
-        const double omegas[2] = {omega, 1.0};
-        for (int attempt = 0; attempt < (omega > 1.0 ? 2 : 1); ++attempt) {
-          const glm::dvec3 target = x + omegas[attempt] * (c - x);
-          uint32_t f = face_[i];
-          glm::dvec3 bb = bary_[i], p = x;
-          project(target, face_[i], x, sc, f, bb, p);
-          if (cost(p - c) <= current) {
-            (*newPos)[i] = p;
-            (*newFace)[i] = f;
-            (*newBary)[i] = bb;
-            move[i] = glm::length(p - x);
-            break;
+          const size_t i = order[oi];
+          const glm::dvec3 x = pos_[i];
+          move[i] = 0;
+          if (newPos) {
+            (*newPos)[i] = x;
+            (*newFace)[i] = face_[i];
+            (*newBary)[i] = bary_[i];
           }
-        }
+          const Cell cell = computeCell(i, sc);
+          cellEnergy[i] = cell.energy;
+          cellArea_[i] = cell.area;
+          if (!newPos || kind_[i] != kFree || !(cell.mass > 0)) continue;
+          const glm::dvec3 cRel = metric_ ? glm::inverse(cell.H) * cell.hm1 : cell.m1 / cell.mass;
+          const glm::dvec3 c = x + cRel;
+          auto cost = [&](const glm::dvec3& v) { return metric_ ? glm::dot(v, cell.H * v) : glm::dot(v, v); };
+          const double current = cost(x - c);
+          const double omegas[2] = {omega, 1.0};
+          for (int attempt = 0; attempt < (omega > 1.0 ? 2 : 1); ++attempt) {
+            const glm::dvec3 target = x + omegas[attempt] * (c - x);
+            uint32_t f = face_[i];
+            glm::dvec3 bb = bary_[i], p = x;
+            project(target, face_[i], x, sc, f, bb, p);
+            if (cost(p - c) <= current) {
+              (*newPos)[i] = p;
+              (*newFace)[i] = f;
+              (*newBary)[i] = bb;
+              move[i] = glm::length(p - x);
+              break;
+            }
+          }
         }
       }
     });
@@ -704,7 +712,8 @@ class Relaxer {
 
 }  // namespace
 
-RelaxResult relaxFollicles(const SkinMesh& mesh, const Tract& tract, Follicles& follicles, const RelaxOptions& options) {
+RelaxResult relaxFollicles(const SkinMesh& mesh, const Tract& tract, Follicles& follicles,
+                           const RelaxOptions& options) {
   Relaxer r(mesh, tract, follicles, options);
   return r.run();
 }

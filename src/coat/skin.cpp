@@ -58,7 +58,7 @@ std::string fmtVec(const glm::dvec3& v) {
 bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 struct HalfEdge {
-  uint64_t key;   // min(v0,v1) << 32 | max(v0,v1)
+  uint64_t key;  // min(v0,v1) << 32 | max(v0,v1)
   uint32_t face;
   uint32_t corner;
 };
@@ -96,8 +96,9 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
   if (nv == 0) throw Error("mesh has no vertices", file, "mesh");
   if (np == 0) throw Error("mesh has no faces", file, "mesh");
   if (!raw.polyGroup.empty() && raw.polyGroup.size() != np)
-    throw Error("face group list has " + std::to_string(raw.polyGroup.size()) + " entries for " + std::to_string(np) +
-                " faces", file, "groups");
+    throw Error(
+        "face group list has " + std::to_string(raw.polyGroup.size()) + " entries for " + std::to_string(np) + " faces",
+        file, "groups");
 
   SkinMesh m;
   m.file = file;
@@ -108,7 +109,8 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
     for (uint32_t k = raw.polyOffsets[p]; k < raw.polyOffsets[p + 1]; ++k)
       if (raw.polyIndices[k] >= nv)
         throw Error("vertex index " + std::to_string(raw.polyIndices[k]) + " is out of range (" + std::to_string(nv) +
-                    " vertices)", file, faceName(p));
+                        " vertices)",
+                    file, faceName(p));
   std::vector<uint8_t> badVertex(nv, 0);
   for (size_t v = 0; v < nv; ++v) {
     if (finite(raw.positions[v])) continue;
@@ -138,7 +140,10 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
       if (badVertex[v]) continue;
       const glm::dvec3& q = raw.positions[v];
       const double a = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)});
-      if (a > farAbs) { farAbs = a; far = v; }
+      if (a > farAbs) {
+        farAbs = a;
+        far = v;
+      }
     }
     if (farAbs > kMaxMeshCoordinate) {
       std::ostringstream os;
@@ -162,8 +167,8 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
       const double typical = edges[edges.size() / 2];
       if (farAbs > kMaxMeshRange * typical) {
         std::ostringstream os;
-        os << "vertex " << fmtVec(raw.positions[far]) << " lies " << farAbs / typical
-           << " typical edge lengths (" << typical << ") from the origin, more than " << kMaxMeshRange
+        os << "vertex " << fmtVec(raw.positions[far]) << " lies " << farAbs / typical << " typical edge lengths ("
+           << typical << ") from the origin, more than " << kMaxMeshRange
            << ": 32-bit float geometry cannot resolve feathers there (a mistyped vertex? otherwise move the mesh "
               "near the origin)";
         throw Error(os.str(), file, "vertex " + std::to_string(far));
@@ -211,7 +216,10 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
             const auto it = cells.find(cellOf(p, dx, dy, dz));
             if (it == cells.end()) continue;
             for (uint32_t r : it->second)
-              if (glm::length(raw.positions[r] - p) <= tol) { rep = r; break; }
+              if (glm::length(raw.positions[r] - p) <= tol) {
+                rep = r;
+                break;
+              }
           }
       if (rep != v) {
         remap[v] = rep;
@@ -232,8 +240,7 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
     const uint32_t b = raw.polyOffsets[p], e = raw.polyOffsets[p + 1];
     const uint32_t n = e - b;
     if (n < 3) {
-      if (!repair)
-        throw Error("polygon has " + std::to_string(n) + " vertices (at least 3 needed)", file, faceName(p));
+      if (!repair) throw Error("polygon has " + std::to_string(n) + " vertices (at least 3 needed)", file, faceName(p));
       ++m.repairs.droppedShortPolygons;
       continue;
     }
@@ -252,8 +259,13 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
       const auto& P = raw.positions;
       const double d02 = glm::length(P[raw.polyIndices[b]] - P[raw.polyIndices[b + 2]]);
       const double d13 = glm::length(P[raw.polyIndices[b + 1]] - P[raw.polyIndices[b + 3]]);
-      if (d13 < d02) { add(0, 1, 3); add(1, 2, 3); }
-      else { add(0, 1, 2); add(0, 2, 3); }
+      if (d13 < d02) {
+        add(0, 1, 3);
+        add(1, 2, 3);
+      } else {
+        add(0, 1, 2);
+        add(0, 2, 3);
+      }
     } else {
       for (uint32_t k = 1; k + 1 < n; ++k) add(0, k, k + 1);
     }
@@ -310,8 +322,8 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
           std::string list;
           for (size_t k = i; k < j; ++k) list += (k > i ? ", " : "") + std::to_string(triSrc[he[k].face]);
           throw Error("edge (" + std::to_string(a) + ", " + std::to_string(b) + ") is shared by " +
-                      std::to_string(j - i) + " faces (" + list +
-                      "): non-manifold edge (load with repair to drop the extra faces)",
+                          std::to_string(j - i) + " faces (" + list +
+                          "): non-manifold edge (load with repair to drop the extra faces)",
                       file, faceName(triSrc[he[i + 2].face]));
         }
         for (size_t k = i + 2; k < j; ++k)
@@ -338,8 +350,9 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
         if (!repair) {
           const uint32_t a = static_cast<uint32_t>(he[i].key >> 32), b = static_cast<uint32_t>(he[i].key & 0xFFFFFFFFu);
           throw Error("faces " + std::to_string(triSrc[he[i].face]) + " and " + std::to_string(triSrc[he[i + 1].face]) +
-                      " are oriented inconsistently across edge (" + std::to_string(a) + ", " + std::to_string(b) +
-                      ") (load with repair to re-orient)", file, faceName(triSrc[he[i + 1].face]));
+                          " are oriented inconsistently across edge (" + std::to_string(a) + ", " + std::to_string(b) +
+                          ") (load with repair to re-orient)",
+                      file, faceName(triSrc[he[i + 1].face]));
         }
         inconsistent = true;
       }
@@ -373,7 +386,10 @@ SkinMesh buildSkinMesh(RawMesh raw, const MeshLoadOptions& opt, const std::strin
           comp.push_back(f);
           for (uint32_t c = 0; c < 3; ++c) {
             const int32_t g = nb[f][c];
-            if (g < 0) { closed = false; continue; }
+            if (g < 0) {
+              closed = false;
+              continue;
+            }
             uint32_t a0, a1;
             edgeDir(f, c, state[f] == 1, a0, a1);
             // Find the corner of g holding the same edge.
@@ -500,12 +516,14 @@ SkinMesh makeSkinMesh(std::vector<glm::dvec3> positions, std::vector<std::array<
     raw.polyOffsets.push_back(static_cast<uint32_t>(raw.polyIndices.size()));
   }
   if (!faceGroup.empty() && faceGroup.size() != faces.size())
-    throw Error("faceGroup has " + std::to_string(faceGroup.size()) + " entries for " + std::to_string(faces.size()) +
-                " faces", file, "faceGroup");
+    throw Error(
+        "faceGroup has " + std::to_string(faceGroup.size()) + " entries for " + std::to_string(faces.size()) + " faces",
+        file, "faceGroup");
   for (size_t f = 0; f < faceGroup.size(); ++f)
     if (faceGroup[f] >= static_cast<int32_t>(groupNames.size()))
       throw Error("group index " + std::to_string(faceGroup[f]) + " out of range (" +
-                  std::to_string(groupNames.size()) + " groups)", file, "face " + std::to_string(f));
+                      std::to_string(groupNames.size()) + " groups)",
+                  file, "face " + std::to_string(f));
   raw.groupNames = std::move(groupNames);
   raw.polyGroup = std::move(faceGroup);
   return detail::buildSkinMesh(std::move(raw), options, file);
@@ -592,8 +610,8 @@ glm::dvec2 uvAt(const SkinMesh& m, uint32_t face, const glm::dvec3& b) {
   return b.x * t[0] + b.y * t[1] + b.z * t[2];
 }
 
-glm::dvec3 closestPointOnTriangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
-                                  const glm::dvec3& c, glm::dvec3* bary) {
+glm::dvec3 closestPointOnTriangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
+                                  glm::dvec3* bary) {
   auto out = [&](double u, double v, double w) {
     if (bary) *bary = {u, v, w};
     return u * a + v * b + w * c;

@@ -79,7 +79,8 @@ template <class V>
 std::vector<glm::dvec3> toLocal(const SkinMesh& skin, const std::vector<SurfacePoint>& at, const std::vector<V>& dirs) {
   if (dirs.size() != at.size())
     throw Error("expected " + std::to_string(at.size()) + " directions (one per bound point), got " +
-                std::to_string(dirs.size()), "", "directions");
+                    std::to_string(dirs.size()),
+                "", "directions");
   std::vector<glm::dvec3> local(dirs.size());
   forEach(dirs.size(), [&](size_t i) {
     const LocalFrame fr = frameAt(skin, at[i]);
@@ -94,7 +95,8 @@ void carryDirections(const SkinMesh& posed, const std::vector<SurfacePoint>& at,
                      std::vector<V>& out) {
   if (local.size() != at.size())
     throw Error("expected " + std::to_string(at.size()) + " directions (one per bound point), got " +
-                std::to_string(local.size()), "", "directions");
+                    std::to_string(local.size()),
+                "", "directions");
   out.resize(at.size());
   forEach(at.size(), [&](size_t i) {
     const LocalFrame fr = frameAt(posed, at[i]);
@@ -140,18 +142,22 @@ void SkinBinding::deform(const SkinMesh& posed, std::vector<glm::vec3>& out) con
   deformPoints(posed, at_, offset_, out);
 }
 
-std::vector<glm::dvec3> SkinBinding::localDirections(const SkinMesh& bindSkin, const std::vector<glm::dvec3>& dirs) const {
+std::vector<glm::dvec3> SkinBinding::localDirections(const SkinMesh& bindSkin,
+                                                     const std::vector<glm::dvec3>& dirs) const {
   return toLocal(bindSkin, at_, dirs);
 }
-std::vector<glm::dvec3> SkinBinding::localDirections(const SkinMesh& bindSkin, const std::vector<glm::vec3>& dirs) const {
+std::vector<glm::dvec3> SkinBinding::localDirections(const SkinMesh& bindSkin,
+                                                     const std::vector<glm::vec3>& dirs) const {
   return toLocal(bindSkin, at_, dirs);
 }
 
-void SkinBinding::carry(const SkinMesh& posed, const std::vector<glm::dvec3>& local, std::vector<glm::dvec3>& out) const {
+void SkinBinding::carry(const SkinMesh& posed, const std::vector<glm::dvec3>& local,
+                        std::vector<glm::dvec3>& out) const {
   requireSameSkin(posed, faceCount_);
   carryDirections(posed, at_, local, out);
 }
-void SkinBinding::carry(const SkinMesh& posed, const std::vector<glm::dvec3>& local, std::vector<glm::vec3>& out) const {
+void SkinBinding::carry(const SkinMesh& posed, const std::vector<glm::dvec3>& local,
+                        std::vector<glm::vec3>& out) const {
   requireSameSkin(posed, faceCount_);
   carryDirections(posed, at_, local, out);
 }

@@ -417,12 +417,19 @@ bool pointInTri2d(const double* p, const double (*t)[2]) {
 bool coplanar(const V3& n, const V3* a, const V3* b) {
   int i0 = 0, i1 = 1;
   const V3 an = glm::abs(n);
-  if (an.x >= an.y && an.x >= an.z) { i0 = 1; i1 = 2; }
-  else if (an.y >= an.z) { i0 = 0; i1 = 2; }
+  if (an.x >= an.y && an.x >= an.z) {
+    i0 = 1;
+    i1 = 2;
+  } else if (an.y >= an.z) {
+    i0 = 0;
+    i1 = 2;
+  }
   double pa[3][2], pb[3][2];
   for (int k = 0; k < 3; ++k) {
-    pa[k][0] = a[k][i0]; pa[k][1] = a[k][i1];
-    pb[k][0] = b[k][i0]; pb[k][1] = b[k][i1];
+    pa[k][0] = a[k][i0];
+    pa[k][1] = a[k][i1];
+    pb[k][0] = b[k][i0];
+    pb[k][1] = b[k][i1];
   }
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
@@ -456,7 +463,8 @@ bool trianglesIntersect(const V3& a0, const V3& a1, const V3& a2, const V3& b0, 
   const double lnb = glm::length(nb), lna = glm::length(na);
   if (!(lnb > 0) || !(lna > 0)) return false;
   double scale = 0;
-  for (int k = 0; k < 3; ++k) scale = std::max({scale, glm::length(A[k] - A[(k + 1) % 3]), glm::length(B[k] - B[(k + 1) % 3])});
+  for (int k = 0; k < 3; ++k)
+    scale = std::max({scale, glm::length(A[k] - A[(k + 1) % 3]), glm::length(B[k] - B[(k + 1) % 3])});
   const double eps = 1e-12 * scale;
   double da[3], db[3];
   for (int k = 0; k < 3; ++k) {

@@ -154,7 +154,10 @@ class TriangleBvh {
           if (!slotGroup_.empty() && slotGroup_[si] == slotGroup_[sj]) continue;
           if (!boxesOverlap(primBoxes_[si].lo, primBoxes_[si].hi, primBoxes_[sj].lo, primBoxes_[sj].hi)) continue;
           const uint32_t t = prims_[si], u = prims_[sj];
-          if (t < u) f(t, u); else f(u, t);
+          if (t < u)
+            f(t, u);
+          else
+            f(u, t);
         }
       }
     }
@@ -252,14 +255,15 @@ class TriangleBvh {
     const uint32_t keep = splitA ? b : a, inner = splitA ? a : b;
     const Node& k = nodes_[keep];
     for (uint32_t c : {inner + 1, nodes_[inner].first})
-      if (mixedPair(c, keep) && boxesOverlap(nodes_[c].lo, nodes_[c].hi, k.lo, k.hi)) emit(splitA ? c : keep, splitA ? keep : c);
+      if (mixedPair(c, keep) && boxesOverlap(nodes_[c].lo, nodes_[c].hi, k.lo, k.hi))
+        emit(splitA ? c : keep, splitA ? keep : c);
   }
   void buildNodes(size_t triangleCount);
   const glm::vec3* posF_ = nullptr;
   const glm::dvec3* posD_ = nullptr;
   const uint32_t* idx_ = nullptr;
   std::vector<Node> nodes_;
-  std::vector<PrimBox> primBoxes_;  // per prims_ slot
+  std::vector<PrimBox> primBoxes_;               // per prims_ slot
   std::vector<uint32_t> slotGroup_, nodeGroup_;  // setGroups(): per slot; per node (kMixed: several)
   std::vector<uint32_t> prims_;
 };

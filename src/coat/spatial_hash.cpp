@@ -17,8 +17,10 @@ namespace pteryla::coat::detail {
 void CellGrid::build(const glm::dvec3* pts, size_t n) {
   std::vector<std::pair<uint64_t, uint32_t>> kv(n);
   for (size_t i = 0; i < n; ++i) kv[i] = {key(pts[i]), static_cast<uint32_t>(i)};
-  if (n > 50000) tbb::parallel_sort(kv.begin(), kv.end());
-  else std::sort(kv.begin(), kv.end());
+  if (n > 50000)
+    tbb::parallel_sort(kv.begin(), kv.end());
+  else
+    std::sort(kv.begin(), kv.end());
   order_.resize(n);
   size_t runs = 0;
   for (size_t i = 0; i < n; ++i) {

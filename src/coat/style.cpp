@@ -31,9 +31,9 @@ std::vector<uint32_t> selectFeathers(const CoatFeathers& coat, const StyleSelect
     case StyleKind::Ids:
       for (size_t k = 0; k < s.ids.size(); ++k) {
         if (s.ids[k] >= n)
-          throw Error("feather id " + std::to_string(s.ids[k]) + " out of range (coat has " + std::to_string(n) +
-                          " feathers)",
-                      {}, where.empty() ? "ids[" + std::to_string(k) + "]" : where + ".ids[" + std::to_string(k) + "]");
+          throw Error(
+              "feather id " + std::to_string(s.ids[k]) + " out of range (coat has " + std::to_string(n) + " feathers)",
+              {}, where.empty() ? "ids[" + std::to_string(k) + "]" : where + ".ids[" + std::to_string(k) + "]");
         out.push_back(s.ids[k]);
       }
       std::sort(out.begin(), out.end());
@@ -132,7 +132,8 @@ StyleSelection parseStyleSelection(JsonReader& r) {
     for (size_t k = 0; k < ids.size(); ++k) {
       const double v = jsonNumber(ids[k], r.file(), r.pathOf("ids") + "[" + std::to_string(k) + "]");
       if (v < 0 || v != std::floor(v) || v > 4294967295.0)
-        throw Error("expected a non-negative integer feather index", r.file(), r.pathOf("ids") + "[" + std::to_string(k) + "]");
+        throw Error("expected a non-negative integer feather index", r.file(),
+                    r.pathOf("ids") + "[" + std::to_string(k) + "]");
       s.ids.push_back(static_cast<uint32_t>(v));
     }
   } else if (kind == "sphere") {

@@ -33,7 +33,8 @@ std::string groupList(const SkinMesh& mesh) {
 // Triangles [begin,end) of source polygon p (sourceFace is non-decreasing by construction).
 std::pair<size_t, size_t> trianglesOf(const SkinMesh& mesh, uint32_t p) {
   const auto r = std::equal_range(mesh.sourceFace.begin(), mesh.sourceFace.end(), p);
-  return {static_cast<size_t>(r.first - mesh.sourceFace.begin()), static_cast<size_t>(r.second - mesh.sourceFace.begin())};
+  return {static_cast<size_t>(r.first - mesh.sourceFace.begin()),
+          static_cast<size_t>(r.second - mesh.sourceFace.begin())};
 }
 
 }  // namespace
@@ -52,7 +53,8 @@ Tract tractFromGroups(const SkinMesh& mesh, const std::string& name, const std::
     bool found = false;
     for (size_t i = 0; i < mesh.groupNames.size(); ++i)
       if (mesh.groupMatches(static_cast<int32_t>(i), g)) want[i] = 1, found = true;
-    if (!found) throw Error("unknown face group '" + g + "' (" + groupList(mesh) + ")", mesh.file, "tract '" + name + "'");
+    if (!found)
+      throw Error("unknown face group '" + g + "' (" + groupList(mesh) + ")", mesh.file, "tract '" + name + "'");
   }
   for (uint32_t f = 0; f < mesh.faceGroup.size(); ++f)
     if (mesh.faceGroup[f] >= 0 && want[static_cast<size_t>(mesh.faceGroup[f])]) t.faces.push_back(f);
@@ -64,7 +66,8 @@ Tract tractFromSourceFaces(const SkinMesh& mesh, const std::string& name, const 
   for (int64_t p : sourceFaces) {
     if (p < 0 || static_cast<size_t>(p) >= mesh.sourceFaceCount)
       throw Error("face index " + std::to_string(p) + " is out of range (mesh has " +
-                  std::to_string(mesh.sourceFaceCount) + " faces)", mesh.file, "tract '" + name + "'");
+                      std::to_string(mesh.sourceFaceCount) + " faces)",
+                  mesh.file, "tract '" + name + "'");
     const auto [b, e] = trianglesOf(mesh, static_cast<uint32_t>(p));
     for (size_t k = b; k < e; ++k) t.faces.push_back(static_cast<uint32_t>(k));
   }
@@ -76,7 +79,8 @@ Tract tractFromLabels(const SkinMesh& mesh, const std::string& name, const std::
                       const std::vector<int64_t>& wanted) {
   if (labels.size() != mesh.sourceFaceCount)
     throw Error("label list has " + std::to_string(labels.size()) + " entries but the mesh has " +
-                std::to_string(mesh.sourceFaceCount) + " faces", mesh.file, "tract '" + name + "'");
+                    std::to_string(mesh.sourceFaceCount) + " faces",
+                mesh.file, "tract '" + name + "'");
   Tract t{name, {}};
   for (uint32_t f = 0; f < mesh.faces.size(); ++f) {
     const int64_t l = labels[mesh.sourceFace[f]];
@@ -109,8 +113,8 @@ std::vector<int64_t> readFaceLabels(const std::string& path, size_t expectedCoun
   }
   if (out.size() != expectedCount)
     throw Error("label file has " + std::to_string(out.size()) + " labels but the mesh has " +
-                std::to_string(expectedCount) + " faces (one label per face, in file order)", path,
-                "line " + std::to_string(lineNo));
+                    std::to_string(expectedCount) + " faces (one label per face, in file order)",
+                path, "line " + std::to_string(lineNo));
   return out;
 }
 
@@ -168,7 +172,8 @@ Tract resolveRef(JsonReader& r, const std::string& key, size_t idx, const std::s
   std::string known;
   for (const auto& t : earlier) known += (known.empty() ? "" : ", ") + ("'" + t.name + "'");
   throw Error("'" + ref + "' is neither an earlier tract (" + (known.empty() ? "none defined yet" : known) +
-              ") nor a face group (" + groupList(mesh) + ")", r.file(), r.pathOf(key) + "[" + std::to_string(idx) + "]");
+                  ") nor a face group (" + groupList(mesh) + ")",
+              r.file(), r.pathOf(key) + "[" + std::to_string(idx) + "]");
 }
 
 }  // namespace
@@ -188,7 +193,8 @@ Tract readTract(JsonReader& r, const SkinMesh& mesh, const std::vector<Tract>& e
     const auto names = stringList(r, "groups");
     for (size_t i = 0; i < names.size(); ++i) {
       bool found = false;
-      for (size_t g = 0; g < mesh.groupNames.size() && !found; ++g) found = mesh.groupMatches(static_cast<int32_t>(g), names[i]);
+      for (size_t g = 0; g < mesh.groupNames.size() && !found; ++g)
+        found = mesh.groupMatches(static_cast<int32_t>(g), names[i]);
       if (!found)
         throw Error("unknown face group '" + names[i] + "' (" + groupList(mesh) + ")", r.file(),
                     r.pathOf("groups") + "[" + std::to_string(i) + "]");
@@ -201,13 +207,14 @@ Tract readTract(JsonReader& r, const SkinMesh& mesh, const std::vector<Tract>& e
     for (size_t i = 0; i < faces.size(); ++i)
       if (faces[i] < 0 || static_cast<size_t>(faces[i]) >= mesh.sourceFaceCount)
         throw Error("face index " + std::to_string(faces[i]) + " is out of range (mesh has " +
-                    std::to_string(mesh.sourceFaceCount) + " faces)", r.file(),
-                    r.pathOf("faces") + "[" + std::to_string(i) + "]");
+                        std::to_string(mesh.sourceFaceCount) + " faces)",
+                    r.file(), r.pathOf("faces") + "[" + std::to_string(i) + "]");
     addAll(tractFromSourceFaces(mesh, t.name, faces));
     additive = true;
   }
   const bool hasFile = r.has("labels_file"), hasLabel = r.has("label");
-  if (hasFile != hasLabel) r.fail(hasFile ? "labels_file" : "label", "'labels_file' and 'label' must be given together");
+  if (hasFile != hasLabel)
+    r.fail(hasFile ? "labels_file" : "label", "'labels_file' and 'label' must be given together");
   if (hasFile) {
     const std::string path = resolveRelative(r.file(), r.string("labels_file"));
     std::error_code ec;
@@ -232,13 +239,15 @@ Tract readTract(JsonReader& r, const SkinMesh& mesh, const std::vector<Tract>& e
   if (!additive) t = wholeMeshTract(mesh, t.name);
   if (r.has("intersect")) {
     const auto refs = stringList(r, "intersect");
-    for (size_t i = 0; i < refs.size(); ++i) t = tractIntersection(t, resolveRef(r, "intersect", i, refs[i], mesh, earlier), t.name);
+    for (size_t i = 0; i < refs.size(); ++i)
+      t = tractIntersection(t, resolveRef(r, "intersect", i, refs[i], mesh, earlier), t.name);
   } else {
     r.allow("intersect");
   }
   if (r.has("subtract")) {
     const auto refs = stringList(r, "subtract");
-    for (size_t i = 0; i < refs.size(); ++i) t = tractDifference(t, resolveRef(r, "subtract", i, refs[i], mesh, earlier), t.name);
+    for (size_t i = 0; i < refs.size(); ++i)
+      t = tractDifference(t, resolveRef(r, "subtract", i, refs[i], mesh, earlier), t.name);
   } else {
     r.allow("subtract");
   }

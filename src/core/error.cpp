@@ -19,8 +19,8 @@ Error Error::withFile(const std::string& file) const {
 }
 
 void checkFailed(const char* expr, const char* file, int line, const std::string& msg) {
-  throw InternalError(std::string("internal check failed: ") + expr + " at " + file + ":" +
-                      std::to_string(line) + (msg.empty() ? "" : " (" + msg + ")"));
+  throw InternalError(std::string("internal check failed: ") + expr + " at " + file + ":" + std::to_string(line) +
+                      (msg.empty() ? "" : " (" + msg + ")"));
 }
 
 }  // namespace pteryla

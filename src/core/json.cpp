@@ -21,7 +21,12 @@ Json readJsonFile(const std::string& path) {
     const std::string s = ss.str();
     size_t line = 1, col = 1;
     for (size_t i = 0; i + 1 < e.byte && i < s.size(); ++i) {
-      if (s[i] == '\n') { ++line; col = 1; } else { ++col; }
+      if (s[i] == '\n') {
+        ++line;
+        col = 1;
+      } else {
+        ++col;
+      }
     }
     std::string msg = e.what();
     const auto p = msg.find("parse error");
@@ -38,9 +43,7 @@ Json readJsonFile(const std::string& path) {
   }
 }
 
-void writeJsonFile(const std::string& path, const Json& j) {
-  writeFileAtomic(path, j.dump(2) + "\n");
-}
+void writeJsonFile(const std::string& path, const Json& j) { writeFileAtomic(path, j.dump(2) + "\n"); }
 
 JsonReader::JsonReader(const Json& j, std::string file, std::string path)
     : j_(j), file_(std::move(file)), path_(std::move(path)) {
@@ -88,7 +91,10 @@ double JsonReader::number(const std::string& key, double lo, double hi) {
 }
 
 double JsonReader::number(const std::string& key, double def, double lo, double hi) {
-  if (!j_.contains(key)) { used_.insert(key); return def; }
+  if (!j_.contains(key)) {
+    used_.insert(key);
+    return def;
+  }
   return number(key, lo, hi);
 }
 
@@ -97,17 +103,24 @@ int64_t JsonReader::integer(const std::string& key, int64_t lo, int64_t hi) {
   if (!v.is_number_integer()) fail(key, "expected an integer");
   const int64_t i = v.get<int64_t>();
   if (i < lo || i > hi)
-    fail(key, "value " + std::to_string(i) + " is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    fail(key,
+         "value " + std::to_string(i) + " is out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   return i;
 }
 
 int64_t JsonReader::integer(const std::string& key, int64_t def, int64_t lo, int64_t hi) {
-  if (!j_.contains(key)) { used_.insert(key); return def; }
+  if (!j_.contains(key)) {
+    used_.insert(key);
+    return def;
+  }
   return integer(key, lo, hi);
 }
 
 uint64_t JsonReader::seed(const std::string& key, uint64_t def) {
-  if (!j_.contains(key)) { used_.insert(key); return def; }
+  if (!j_.contains(key)) {
+    used_.insert(key);
+    return def;
+  }
   const Json& v = get(key);
   if (v.is_number_unsigned()) return v.get<uint64_t>();
   if (v.is_number_integer() && v.get<int64_t>() >= 0) return static_cast<uint64_t>(v.get<int64_t>());
@@ -115,7 +128,10 @@ uint64_t JsonReader::seed(const std::string& key, uint64_t def) {
 }
 
 bool JsonReader::boolean(const std::string& key, bool def) {
-  if (!j_.contains(key)) { used_.insert(key); return def; }
+  if (!j_.contains(key)) {
+    used_.insert(key);
+    return def;
+  }
   const Json& v = get(key);
   if (!v.is_boolean()) fail(key, "expected true or false");
   return v.get<bool>();
@@ -128,7 +144,10 @@ std::string JsonReader::string(const std::string& key) {
 }
 
 std::string JsonReader::string(const std::string& key, const std::string& def) {
-  if (!j_.contains(key)) { used_.insert(key); return def; }
+  if (!j_.contains(key)) {
+    used_.insert(key);
+    return def;
+  }
   return string(key);
 }
 
@@ -145,7 +164,8 @@ std::vector<double> JsonReader::numbers(const std::string& key) {
   const Json& v = get(key);
   if (!v.is_array()) fail(key, "expected an array of numbers");
   std::vector<double> out;
-  for (size_t i = 0; i < v.size(); ++i) out.push_back(jsonNumber(v[i], file_, pathOf(key) + "[" + std::to_string(i) + "]"));
+  for (size_t i = 0; i < v.size(); ++i)
+    out.push_back(jsonNumber(v[i], file_, pathOf(key) + "[" + std::to_string(i) + "]"));
   return out;
 }
 
@@ -162,7 +182,10 @@ glm::dvec3 JsonReader::vec3(const std::string& key) {
 }
 
 glm::dvec3 JsonReader::vec3(const std::string& key, const glm::dvec3& def) {
-  if (!j_.contains(key)) { used_.insert(key); return def; }
+  if (!j_.contains(key)) {
+    used_.insert(key);
+    return def;
+  }
   return vec3(key);
 }
 
@@ -174,7 +197,10 @@ JsonReader JsonReader::object(const std::string& key) {
 
 std::vector<JsonReader> JsonReader::objects(const std::string& key) {
   std::vector<JsonReader> out;
-  if (!j_.contains(key)) { used_.insert(key); return out; }
+  if (!j_.contains(key)) {
+    used_.insert(key);
+    return out;
+  }
   const Json& v = get(key);
   if (!v.is_array()) fail(key, "expected an array of objects");
   for (size_t i = 0; i < v.size(); ++i) out.emplace_back(v[i], file_, pathOf(key) + "[" + std::to_string(i) + "]");

@@ -123,9 +123,12 @@ bool materialImage(const pipeline::CoatMaterial& m, std::vector<unsigned char>& 
   }
   if (!file.empty()) {
     const std::string ext = extensionOf(file);
-    if (ext == ".png") mime = "image/png";
-    else if (ext == ".jpg" || ext == ".jpeg") mime = "image/jpeg";
-    else throw Error("glTF carries PNG or JPEG textures only", file);
+    if (ext == ".png")
+      mime = "image/png";
+    else if (ext == ".jpg" || ext == ".jpeg")
+      mime = "image/jpeg";
+    else
+      throw Error("glTF carries PNG or JPEG textures only", file);
     bytes = readBytes(file);
     return true;
   }
@@ -273,7 +276,8 @@ detail::ExportFrame sample(pipeline::Pipeline& p) {
     r.age = float(cf.age[i]);
     r.present = cf.present[i] != 0;
     const coat::FeatherFrame& fr = cf.frames[i];
-    const auto pl = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, i < elev.size() ? elev[i] : 0.0);
+    const auto pl =
+        feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, i < elev.size() ? elev[i] : 0.0);
     r.origin = pl.origin;
     r.x = pl.x;
     r.y = pl.y;
@@ -296,7 +300,8 @@ ExportResult exportCoat(pipeline::Pipeline& p, const std::string& path, const Ex
   if ((fmt == Format::Obj || fmt == Format::Ply) && opt.times.size() > 1)
     throw Error("OBJ and PLY hold one frame: export a range as .glb, .gltf or .usda", path, "--from");
   if (!(opt.fps > 0 && std::isfinite(opt.fps))) throw Error("expected frames per unit of time > 0", "", "--fps");
-  if (!(opt.metersPerUnit > 0 && std::isfinite(opt.metersPerUnit))) throw Error("expected metres per unit > 0", "", "metersPerUnit");
+  if (!(opt.metersPerUnit > 0 && std::isfinite(opt.metersPerUnit)))
+    throw Error("expected metres per unit > 0", "", "metersPerUnit");
   if (opt.instancePrototypes < 1) throw Error("expected at least one prototype per material", "", "instancePrototypes");
   ExportResult res;
   if (fmt == Format::Obj || fmt == Format::Ply) {
@@ -350,7 +355,8 @@ ExportResult exportCoat(pipeline::Pipeline& p, const std::string& path, const Ex
   res.feathers = s.frames.front().ranges.size();
   for (const auto& f : s.frames) {
     res.triangles += f.skin.triangleCount();
-    for (size_t t = 0; t < f.coat.triangleCount(); ++t) res.triangles += detail::collapsed(&f.coat.indices[3 * t]) ? 0 : 1;
+    for (size_t t = 0; t < f.coat.triangleCount(); ++t)
+      res.triangles += detail::collapsed(&f.coat.indices[3 * t]) ? 0 : 1;
   }
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;

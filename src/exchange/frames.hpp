@@ -16,12 +16,12 @@
 namespace pteryla::exchange::detail {
 
 struct FeatherRecord {
-  uint32_t id = 0;              // index into Pipeline::feathers()
+  uint32_t id = 0;  // index into Pipeline::feathers()
   uint32_t tract = 0;
-  uint32_t layer = 0;           // position in the packing order, 0 = bottom
+  uint32_t layer = 0;  // position in the packing order, 0 = bottom
   float age = 1;
   bool present = true;
-  uint32_t material = 0;        // index into ExportFrame::materials (by feather definition name)
+  uint32_t material = 0;  // index into ExportFrame::materials (by feather definition name)
   // Placement of the feather-local frame: x along the shaft, y to the left vane, z dorsal (unit).
   glm::dvec3 origin{0}, x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
 };
@@ -30,8 +30,8 @@ struct ExportFrame {
   double time = 0;
   TriMesh skin;
   TriMesh coat;  // as the pipeline meshed it: drape-trimmed triangles are collapsed (a, a, a), not removed
-  std::vector<pipeline::CoatDrawRange> ranges;   // per present feather, bottom layer first
-  std::vector<FeatherRecord> feathers;           // every feather, present or not, by id
+  std::vector<pipeline::CoatDrawRange> ranges;  // per present feather, bottom layer first
+  std::vector<FeatherRecord> feathers;          // every feather, present or not, by id
 };
 
 struct ExportScene {
@@ -49,7 +49,8 @@ size_t writeGltf(const ExportScene& s, const std::string& path, bool binary);
 struct UsdCounts {
   size_t curves = 0, instances = 0, prototypes = 0;
 };
-size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int prototypesPerMaterial, UsdCounts& counts);
+size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int prototypesPerMaterial,
+                 UsdCounts& counts);
 
 // Shortest decimal text that reads back as exactly `v` ("0", "1.5", "-2.25e-08").
 std::string shortest(float v);

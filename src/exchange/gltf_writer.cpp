@@ -330,8 +330,9 @@ size_t writeGltf(const ExportScene& s, const std::string& path, bool binary) {
   for (const auto& f : s.frames) sceneTimes.push_back(f.time);
   pteryla["times"] = numbers(sceneTimes);
   pteryla["fps"] = tinygltf::Value(s.fps);
-  pteryla["attributes"] = tinygltf::Value(std::string(
-      "_FEATHER_ID feather index, _TRACT index into tracts, _LAYER packing order (0 bottom), _AGE growth age; docs/export.md"));
+  pteryla["attributes"] =
+      tinygltf::Value(std::string("_FEATHER_ID feather index, _TRACT index into tracts, _LAYER packing order (0 "
+                                  "bottom), _AGE growth age; docs/export.md"));
   tinygltf::Value::Object assetExtras;
   assetExtras["pteryla"] = tinygltf::Value(std::move(pteryla));
   model.asset.extras = tinygltf::Value(std::move(assetExtras));

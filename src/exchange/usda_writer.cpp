@@ -79,12 +79,18 @@ struct Out {
 struct Quat {
   float w, x, y, z;
 };
-template <class T> constexpr size_t kMaxChars = 0;
-template <> constexpr size_t kMaxChars<float> = 16;    // shortest round-trip float: "-1.1754944e-38"
-template <> constexpr size_t kMaxChars<int64_t> = 20;  // "-9223372036854775808"
-template <> constexpr size_t kMaxChars<glm::vec2> = 2 + 2 * 16 + 2;
-template <> constexpr size_t kMaxChars<glm::vec3> = 2 + 3 * 16 + 4;
-template <> constexpr size_t kMaxChars<Quat> = 2 + 4 * 16 + 6;
+template <class T>
+constexpr size_t kMaxChars = 0;
+template <>
+constexpr size_t kMaxChars<float> = 16;  // shortest round-trip float: "-1.1754944e-38"
+template <>
+constexpr size_t kMaxChars<int64_t> = 20;  // "-9223372036854775808"
+template <>
+constexpr size_t kMaxChars<glm::vec2> = 2 + 2 * 16 + 2;
+template <>
+constexpr size_t kMaxChars<glm::vec3> = 2 + 3 * 16 + 4;
+template <>
+constexpr size_t kMaxChars<Quat> = 2 + 4 * 16 + 6;
 
 char* fmt(char* p, float v) { return std::to_chars(p, p + kMaxChars<float>, v).ptr; }
 char* fmt(char* p, int64_t v) { return std::to_chars(p, p + kMaxChars<int64_t>, v).ptr; }
@@ -218,7 +224,9 @@ struct Curves {
 
 // st for curves (Yeti, Houdini): s along the rachis (uvGlobal v), t across: 0-0.5 left vane, 0.5-1 right
 // (uvGlobal u runs 0 at the left edge to 1 at the right edge, feather/mesh.hpp).
-glm::vec2 curveSt(const TriMesh& m, uint32_t v) { return m.uvGlobal.empty() ? glm::vec2(0.0f) : glm::vec2(m.uvGlobal[v].y, m.uvGlobal[v].x); }
+glm::vec2 curveSt(const TriMesh& m, uint32_t v) {
+  return m.uvGlobal.empty() ? glm::vec2(0.0f) : glm::vec2(m.uvGlobal[v].y, m.uvGlobal[v].x);
+}
 
 void buildCurves(const ExportScene& s, const ExportFrame& f, Curves& rachis, Curves& barbs) {
   const TriMesh& m = f.coat;
@@ -270,8 +278,9 @@ struct MeshData {
 };
 
 // Triangles of `tris` with compacted vertices; per-face feather values when `feathers`.
-void buildMesh(const TriMesh& m, const std::vector<uint32_t>& tris, const ExportFrame* f, const ExportScene* s, MeshData& d,
-               const glm::dvec3* localOrigin = nullptr, const glm::dvec3* axes = nullptr, double invScale = 1) {
+void buildMesh(const TriMesh& m, const std::vector<uint32_t>& tris, const ExportFrame* f, const ExportScene* s,
+               MeshData& d, const glm::dvec3* localOrigin = nullptr, const glm::dvec3* axes = nullptr,
+               double invScale = 1) {
   // New vertex index per mesh vertex in first-use order. A flat table when the triangles touch much of the
   // mesh (the cards of a full-detail bird: millions of vertices), a map for one prototype feather.
   const bool dense = 3 * tris.size() * 8 >= m.positions.size() || (!f && !localOrigin);
@@ -306,7 +315,8 @@ void buildMesh(const TriMesh& m, const std::vector<uint32_t>& tris, const Export
     glm::vec3 p = m.positions[v], n = m.normals.empty() ? glm::vec3(0, 0, 1) : m.normals[v];
     if (localOrigin) {  // into the feather's local frame, scaled to unit length
       const glm::dvec3 q = glm::dvec3(p) - *localOrigin;
-      p = glm::vec3(float(glm::dot(q, axes[0]) * invScale), float(glm::dot(q, axes[1]) * invScale), float(glm::dot(q, axes[2]) * invScale));
+      p = glm::vec3(float(glm::dot(q, axes[0]) * invScale), float(glm::dot(q, axes[1]) * invScale),
+                    float(glm::dot(q, axes[2]) * invScale));
       const glm::dvec3 nd(n);
       n = glm::vec3(float(glm::dot(nd, axes[0])), float(glm::dot(nd, axes[1])), float(glm::dot(nd, axes[2])));
     }
@@ -378,11 +388,14 @@ void meshAttrs(std::vector<Attr>& attrs, const std::vector<MeshData>& d, bool pe
   add("int[] faceVertexIndices", "", [](const MeshData& m) { return array(m.indices); });
   add("point3f[] points", "", [](const MeshData& m) { return array(m.points); });
   add("normal3f[] normals", "interpolation = \"vertex\"", [](const MeshData& m) { return array(m.normals); });
-  if (!d.front().st.empty()) add("texCoord2f[] primvars:st", "interpolation = \"vertex\"", [](const MeshData& m) { return array(m.st); });
+  if (!d.front().st.empty())
+    add("texCoord2f[] primvars:st", "interpolation = \"vertex\"", [](const MeshData& m) { return array(m.st); });
   if (!d.front().opacity.empty())
-    add("float[] primvars:displayOpacity", "interpolation = \"vertex\"", [](const MeshData& m) { return array(m.opacity); });
+    add("float[] primvars:displayOpacity", "interpolation = \"vertex\"",
+        [](const MeshData& m) { return array(m.opacity); });
   if (perFeather) {
-    add("color3f[] primvars:displayColor", "interpolation = \"uniform\"", [](const MeshData& m) { return array(m.color); });
+    add("color3f[] primvars:displayColor", "interpolation = \"uniform\"",
+        [](const MeshData& m) { return array(m.color); });
     add("int[] primvars:feather_id", "interpolation = \"uniform\"", [](const MeshData& m) { return array(m.fid); });
     add("int[] primvars:tract", "interpolation = \"uniform\"", [](const MeshData& m) { return array(m.tract); });
     add("int[] primvars:layer", "interpolation = \"uniform\"", [](const MeshData& m) { return array(m.layer); });
@@ -424,7 +437,8 @@ std::string quoted(const std::string& s) {
 
 }  // namespace
 
-size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int prototypesPerMaterial, UsdCounts& counts) {
+size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int prototypesPerMaterial,
+                 UsdCounts& counts) {
   const size_t nf = s.frames.size();
   std::vector<double> codes;
   for (const auto& f : s.frames) codes.push_back(f.time * s.fps);
@@ -468,11 +482,12 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
     std::vector<Attr> attrs;
     meshAttrs(attrs, d, false);
     for (const Attr& a : attrs) emit(o, 2, a, codes);
-    o.line(2, "color3f[] primvars:displayColor = [" + [&] {
-      std::string c;
-      put(c, s.skinColor);
-      return c;
-    }() + "] (interpolation = \"constant\")");
+    o.line(
+        2, "color3f[] primvars:displayColor = [" + [&] {
+          std::string c;
+          put(c, s.skinColor);
+          return c;
+        }() + "] (interpolation = \"constant\")");
     o.line(2, "uniform token subdivisionScheme = \"none\"");
     o.line(1, "}");
   }
@@ -530,7 +545,8 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
     std::vector<const pipeline::CoatDrawRange*> rangeOf(nFeathers, nullptr);
     for (const auto& r : f0.ranges) {
       rangeOf[r.feather] = &r;
-      byMaterial[std::min<size_t>(f0.feathers[r.feather].material, byMaterial.size() - 1)].push_back({featherLength(f0, r), r.feather});
+      byMaterial[std::min<size_t>(f0.feathers[r.feather].material, byMaterial.size() - 1)].push_back(
+          {featherLength(f0, r), r.feather});
     }
     std::vector<int64_t> firstProtoOfMaterial(byMaterial.size(), 0);
     std::vector<double> medianLength(byMaterial.size(), 1.0);
@@ -549,7 +565,8 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
       }
     }
     for (size_t i = 0; i < nFeathers; ++i)
-      if (!rangeOf[i]) protoOf[i] = firstProtoOfMaterial[std::min<size_t>(f0.feathers[i].material, byMaterial.size() - 1)];
+      if (!rangeOf[i])
+        protoOf[i] = firstProtoOfMaterial[std::min<size_t>(f0.feathers[i].material, byMaterial.size() - 1)];
     if (protos.empty()) throw Error("nothing to instance: the first frame has no feathers", path, "--as");
     if (size_t(protoOf.size()) && protos.size()) {
       for (auto& p : protoOf) p = std::min<int64_t>(p, int64_t(protos.size() - 1));
@@ -559,20 +576,24 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
     o.line(2, "def PointInstancer \"feathers\"");
     o.line(2, "{");
     std::vector<std::string> targets;
-    for (size_t p = 0; p < protos.size(); ++p) targets.push_back("</pteryla/coat/feathers/Prototypes/p" + std::to_string(p) + ">");
+    for (size_t p = 0; p < protos.size(); ++p)
+      targets.push_back("</pteryla/coat/feathers/Prototypes/p" + std::to_string(p) + ">");
     std::string rel = "rel prototypes = [";
     for (size_t p = 0; p < targets.size(); ++p) rel += (p ? ", " : "") + targets[p];
     o.line(3, rel + "]");
     std::vector<Attr> attrs;
     Attr ids{"int64[] ids", "", {}}, proto{"int[] protoIndices", "", {}}, pos{"point3f[] positions", "", {}},
         ori{"quath[] orientations", "", {}}, scl{"float3[] scales", "", {}}, inv{"int64[] invisibleIds", "", {}};
-    Attr fid{"int[] primvars:feather_id", "interpolation = \"vertex\"", {}}, tract{"int[] primvars:tract", "interpolation = \"vertex\"", {}},
-        layer{"int[] primvars:layer", "interpolation = \"vertex\"", {}}, age{"float[] primvars:age", "interpolation = \"vertex\"", {}};
+    Attr fid{"int[] primvars:feather_id", "interpolation = \"vertex\"", {}},
+        tract{"int[] primvars:tract", "interpolation = \"vertex\"", {}},
+        layer{"int[] primvars:layer", "interpolation = \"vertex\"", {}},
+        age{"float[] primvars:age", "interpolation = \"vertex\"", {}};
     for (size_t k = 0; k < nf; ++k) {
       const ExportFrame& f = s.frames[k];
       PTERYLA_CHECK_EQ(f.feathers.size(), nFeathers, "the feather count changed between frames");
       std::vector<double> length(nFeathers, 0);
-      for (size_t i = 0; i < nFeathers; ++i) length[i] = medianLength[std::min<size_t>(f.feathers[i].material, byMaterial.size() - 1)];
+      for (size_t i = 0; i < nFeathers; ++i)
+        length[i] = medianLength[std::min<size_t>(f.feathers[i].material, byMaterial.size() - 1)];
       for (const auto& r : f.ranges) length[r.feather] = std::max(1e-12, featherLength(f, r));
       std::vector<int64_t> idv, invisible, fv, tv, lv;
       std::vector<glm::vec3> pv, sv;
@@ -610,8 +631,8 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
       const pipeline::CoatDrawRange& range = *rangeOf[protos[p].feather];
       const glm::dvec3 axes[3] = {r.x, r.y, r.z};
       std::vector<MeshData> d(1);
-      buildMesh(f0.coat, liveTriangles(f0.coat, range.firstIndex, range.indexCount), nullptr, nullptr, d[0], &r.origin, axes,
-                1.0 / protos[p].length);
+      buildMesh(f0.coat, liveTriangles(f0.coat, range.firstIndex, range.indexCount), nullptr, nullptr, d[0], &r.origin,
+                axes, 1.0 / protos[p].length);
       o.line(4, "def Mesh \"p" + std::to_string(p) + "\"");
       o.line(4, "{");
       std::vector<Attr> pa;
@@ -621,7 +642,8 @@ size_t writeUsda(const ExportScene& s, const std::string& path, CoatAs as, int p
       put(c, r.material < s.materials.size() ? s.materials[r.material].baseColor : glm::vec3(0.8f));
       o.line(5, "color3f[] primvars:displayColor = [" + c + "] (interpolation = \"constant\")");
       o.line(5, "uniform bool doubleSided = 1");
-      o.line(5, "custom string pteryla:material = " + quoted(r.material < s.materials.size() ? s.materials[r.material].name : ""));
+      o.line(5, "custom string pteryla:material = " +
+                    quoted(r.material < s.materials.size() ? s.materials[r.material].name : ""));
       o.line(5, "uniform token subdivisionScheme = \"none\"");
       o.line(4, "}");
     }

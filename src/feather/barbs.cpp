@@ -22,14 +22,29 @@ namespace {
 inline void fastSinCos(double x, double& s, double& c) {
   double r = x;
   int quadrant = 0;  // 0: |x| <= pi/2, 1: x > pi/2, 2: x < -pi/2
-  if (x > kPi / 2) { r = x - kPi / 2; quadrant = 1; }
-  else if (x < -kPi / 2) { r = x + kPi / 2; quadrant = 2; }
+  if (x > kPi / 2) {
+    r = x - kPi / 2;
+    quadrant = 1;
+  } else if (x < -kPi / 2) {
+    r = x + kPi / 2;
+    quadrant = 2;
+  }
   const double r2 = r * r;
-  const double sr = r * (1 + r2 * (-1.0 / 6 + r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 + r2 * (-1.0 / 39916800))))));
-  const double cr = 1 + r2 * (-0.5 + r2 * (1.0 / 24 + r2 * (-1.0 / 720 + r2 * (1.0 / 40320 + r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600))))));
-  if (quadrant == 0) { s = sr; c = cr; }
-  else if (quadrant == 1) { s = cr; c = -sr; }
-  else { s = -cr; c = sr; }
+  const double sr =
+      r * (1 + r2 * (-1.0 / 6 + r2 * (1.0 / 120 + r2 * (-1.0 / 5040 + r2 * (1.0 / 362880 + r2 * (-1.0 / 39916800))))));
+  const double cr =
+      1 + r2 * (-0.5 + r2 * (1.0 / 24 +
+                             r2 * (-1.0 / 720 + r2 * (1.0 / 40320 + r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600))))));
+  if (quadrant == 0) {
+    s = sr;
+    c = cr;
+  } else if (quadrant == 1) {
+    s = cr;
+    c = -sr;
+  } else {
+    s = -cr;
+    c = sr;
+  }
 }
 
 // The rachis: a circular arc of length L starting at `base` along +x, bending in the plane spanned by
@@ -45,7 +60,10 @@ struct Arc {
     width = p.rachisWidth;
     const double lat = p.rachisLateralCurvature, vd = p.rachisVentralDorsalCurvature;
     theta = std::hypot(lat, vd);
-    if (theta > 0) { ny = lat / theta; nz = -vd / theta; }
+    if (theta > 0) {
+      ny = lat / theta;
+      nz = -vd / theta;
+    }
   }
 
   void frame(double rp, RachisFrame& f, bool fast = false) const {
@@ -210,8 +228,8 @@ void generatePart(const FeatherParams& p, const glm::dvec3& origin, uint8_t part
       const glm::vec3 T(f.tangent), L(f.left), D(f.dorsal);
       const glm::vec3 root = glm::vec3(f.point) + (side * 0.5f * static_cast<float>(f.width)) * L;
       const float lf = static_cast<float>(len);
-      const glm::vec3 ul = lf * (ca * T + (side * sa) * L);   // along the barb
-      const glm::vec3 wl = lf * (sa * T - (side * ca) * L);   // toward the tip
+      const glm::vec3 ul = lf * (ca * T + (side * sa) * L);  // along the barb
+      const glm::vec3 wl = lf * (sa * T - (side * ca) * L);  // toward the tip
       const glm::vec3 dl = lf * D;
 
       BarbCurve& b = barbOut[i];
@@ -242,12 +260,10 @@ bool quickValid(const FeatherParams& p) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   bool good = ok(p.calamusLength, 0, inf) && ok(p.calamusWidthRatio, 0, inf) && ok(p.rachisWidth, 0, inf) &&
               ok(p.barbLength, 0, inf) && ok(p.rachisLength, 1e-300, inf) && ok(p.spacingBase, 1e-300, inf) &&
-              ok(p.spacingTip, 1e-300, inf) &&
-              p.rachisLength / std::min(p.spacingBase, p.spacingTip) <= 1e5 &&
-              std::hypot(p.rachisLateralCurvature, p.rachisVentralDorsalCurvature) <= kPi &&
-              p.splits.count >= 0 && p.splits.count <= 1000 && p.splits.reach >= 0 && p.splits.reach <= 1000 &&
-              ok(p.splits.rpMin, 0, 1) && ok(p.splits.rpMax, p.splits.rpMin, 1) &&
-              ok(p.splits.openingAngle, 0, kPi / 2);
+              ok(p.spacingTip, 1e-300, inf) && p.rachisLength / std::min(p.spacingBase, p.spacingTip) <= 1e5 &&
+              std::hypot(p.rachisLateralCurvature, p.rachisVentralDorsalCurvature) <= kPi && p.splits.count >= 0 &&
+              p.splits.count <= 1000 && p.splits.reach >= 0 && p.splits.reach <= 1000 && ok(p.splits.rpMin, 0, 1) &&
+              ok(p.splits.rpMax, p.splits.rpMin, 1) && ok(p.splits.openingAngle, 0, kPi / 2);
   for (int v = 0; v < 2 && good; ++v) {
     const VaneParams& vp = p.vane(v);
     good = ok(vp.baseAngle, 0, kPi) && ok(vp.tipAngle, 0, kPi);
@@ -308,8 +324,7 @@ void barbPositions(const FeatherParams& p, std::vector<double>& rps) {
   const double kmax = std::log(b / a) / c;
   const size_t count = static_cast<size_t>(std::floor(kmax + 1e-9)) + 1;
   rps.resize(count);
-  for (size_t k = 0; k < count; ++k)
-    rps[k] = std::min(1.0, a * std::expm1(c * static_cast<double>(k)) / c / L);
+  for (size_t k = 0; k < count; ++k) rps[k] = std::min(1.0, a * std::expm1(c * static_cast<double>(k)) / c / L);
 }
 
 size_t barbCount(const FeatherParams& p) {
@@ -356,7 +371,8 @@ FeatherCurves generateBarbs(const FeatherParams& p, const GenerateOptions& opt) 
 
 void generateBarbs(const FeatherParams& p, FeatherCurves& out, const GenerateOptions& opt) {
   out.clear();
-  if (!quickValid(p) || (p.afterfeather && !quickValid(*p.afterfeather))) validateFeather(p, p.sourceFile);  // throws naming the bad parameter
+  if (!quickValid(p) || (p.afterfeather && !quickValid(*p.afterfeather)))
+    validateFeather(p, p.sourceFile);  // throws naming the bad parameter
   if (p.generator != "streit") {
     const FeatherGenerator* g = findFeatherGenerator(p.generator);
     if (!g) throw Error("unknown feather generator '" + p.generator + "'", p.sourceFile, "generator");

@@ -18,17 +18,22 @@ namespace pteryla::feather {
 namespace {
 
 constexpr const char* kParamNames[kGrowthParamCount] = {
-    "shaft_length", "shaft_width", "barb_length", "opening", "barb_angle", "pin_key_barbs",
-    "key_barbs", "rachis_curvature", "sheath", "wear_length", "wear_splits"};
+    "shaft_length", "shaft_width",      "barb_length", "opening",     "barb_angle", "pin_key_barbs",
+    "key_barbs",    "rachis_curvature", "sheath",      "wear_length", "wear_splits"};
 constexpr const char* kEasingNames[] = {"linear", "smooth", "ease_in", "ease_out", "step"};
 
 double ease(Easing e, double t) {
   switch (e) {
-    case Easing::Linear: return t;
-    case Easing::Smooth: return t * t * (3 - 2 * t);
-    case Easing::EaseIn: return t * t;
-    case Easing::EaseOut: return 1 - (1 - t) * (1 - t);
-    case Easing::Step: return t >= 1 ? 1.0 : 0.0;
+    case Easing::Linear:
+      return t;
+    case Easing::Smooth:
+      return t * t * (3 - 2 * t);
+    case Easing::EaseIn:
+      return t * t;
+    case Easing::EaseOut:
+      return 1 - (1 - t) * (1 - t);
+    case Easing::Step:
+      return t >= 1 ? 1.0 : 0.0;
   }
   return t;
 }
@@ -110,10 +115,10 @@ const GrowthSchedule& defaultGrowthSchedule() {
   static const GrowthSchedule s = [] {
     GrowthSchedule g;
     using P = GrowthParam;
-    g.ramps = {{P::ShaftLength, 0.0, 0.3, Easing::Linear}, {P::ShaftWidth, 0.0, 0.3, Easing::Linear},
-               {P::BarbLength, 0.3, 0.5, Easing::Linear},  {P::Opening, 0.5, 0.8, Easing::Linear},
-               {P::BarbAngle, 0.5, 0.8, Easing::Linear},   {P::Sheath, 0.5, 0.8, Easing::Linear},
-               {P::PinKeyBarbs, 0.8, 1.0, Easing::Linear}, {P::KeyBarbs, 0.8, 1.0, Easing::Linear},
+    g.ramps = {{P::ShaftLength, 0.0, 0.3, Easing::Linear},     {P::ShaftWidth, 0.0, 0.3, Easing::Linear},
+               {P::BarbLength, 0.3, 0.5, Easing::Linear},      {P::Opening, 0.5, 0.8, Easing::Linear},
+               {P::BarbAngle, 0.5, 0.8, Easing::Linear},       {P::Sheath, 0.5, 0.8, Easing::Linear},
+               {P::PinKeyBarbs, 0.8, 1.0, Easing::Linear},     {P::KeyBarbs, 0.8, 1.0, Easing::Linear},
                {P::RachisCurvature, 0.8, 1.0, Easing::Linear}, {P::WearLength, 1.0, 2.0, Easing::Linear},
                {P::WearSplits, 1.0, 2.0, Easing::Linear}};
     return g;
@@ -152,7 +157,8 @@ void validateGrowthSchedule(const GrowthSchedule& s, const std::string& file) {
   }
   if (!std::isfinite(s.wearMaxShortening) || s.wearMaxShortening < 0 || s.wearMaxShortening > 1)
     throw Error("expected a fraction in [0, 1]", file, "growth.wear_max_shortening");
-  if (s.wearMaxSplits < 0 || s.wearMaxSplits > 1000) throw Error("expected 0..1000 splits", file, "growth.wear_max_splits");
+  if (s.wearMaxSplits < 0 || s.wearMaxSplits > 1000)
+    throw Error("expected 0..1000 splits", file, "growth.wear_max_splits");
   if (!std::isfinite(s.sheathBand) || s.sheathBand <= 0 || s.sheathBand > 1)
     throw Error("expected a band in (0, 1]", file, "growth.sheath_band");
 }
@@ -205,7 +211,8 @@ FeatherParams featherAtState(const FeatherParams& def, const GrowthState& st, co
   }
   const long extra = std::lround(s.wearMaxSplits * st[GrowthParam::WearSplits]);
   p.splits.count = static_cast<int>(std::min<long>(1000, p.splits.count + extra));
-  if (def.afterfeather) p.afterfeather = std::make_shared<const FeatherParams>(featherAtState(*def.afterfeather, st, s));
+  if (def.afterfeather)
+    p.afterfeather = std::make_shared<const FeatherParams>(featherAtState(*def.afterfeather, st, s));
   return p;
 }
 
@@ -240,12 +247,17 @@ GrowthSchedule readGrowthSchedule(JsonReader& r) {
     const std::string ez = e.oneOf("easing", "linear", easings);
     ramp.easing = static_cast<Easing>(std::find(easings.begin(), easings.end(), ez) - easings.begin());
     if (ramp.end < ramp.start) e.fail("end", "end age must be >= start age");
-    if (!isWearParam(ramp.parameter) && ramp.end > 1) e.fail("end", "growth ramps must end by age 1 (the mature feather)");
+    if (!isWearParam(ramp.parameter) && ramp.end > 1)
+      e.fail("end", "growth ramps must end by age 1 (the mature feather)");
     if (isWearParam(ramp.parameter) && (ramp.start < 1 || ramp.end <= 1))
       e.fail("start", "wear ramps must start at age >= 1 and end after age 1");
     e.finish();
-    auto it = std::find_if(s.ramps.begin(), s.ramps.end(), [&](const GrowthRamp& x) { return x.parameter == ramp.parameter; });
-    if (it != s.ramps.end()) *it = ramp; else s.ramps.push_back(ramp);
+    auto it = std::find_if(s.ramps.begin(), s.ramps.end(),
+                           [&](const GrowthRamp& x) { return x.parameter == ramp.parameter; });
+    if (it != s.ramps.end())
+      *it = ramp;
+    else
+      s.ramps.push_back(ramp);
   }
   s.wearMaxShortening = r.number("wear_max_shortening", s.wearMaxShortening, 0.0, 1.0);
   s.wearMaxSplits = static_cast<int>(r.integer("wear_max_splits", s.wearMaxSplits, 0, 1000));
@@ -267,9 +279,13 @@ GrowthSchedule loadGrowthSchedule(const std::string& path) {
 Json growthScheduleToJson(const GrowthSchedule& s) {
   Json ramps = Json::array();
   for (const GrowthRamp& r : s.ramps)
-    ramps.push_back({{"parameter", growthParamName(r.parameter)}, {"start", r.start}, {"end", r.end},
+    ramps.push_back({{"parameter", growthParamName(r.parameter)},
+                     {"start", r.start},
+                     {"end", r.end},
                      {"easing", easingName(r.easing)}});
-  return {{"ramps", ramps}, {"wear_max_shortening", s.wearMaxShortening}, {"wear_max_splits", s.wearMaxSplits},
+  return {{"ramps", ramps},
+          {"wear_max_shortening", s.wearMaxShortening},
+          {"wear_max_splits", s.wearMaxSplits},
           {"sheath_band", s.sheathBand}};
 }
 

@@ -99,8 +99,8 @@ double Curve1D::operator()(double x) const {
   if (n == 0) return 0.0;
   if (n == 1 || x <= keys_.front().x) return keys_.front().y;
   if (x >= keys_.back().x) return keys_.back().y;
-  const auto it = std::upper_bound(keys_.begin(), keys_.end(), x,
-                                   [](double v, const glm::dvec2& k) { return v < k.x; });
+  const auto it =
+      std::upper_bound(keys_.begin(), keys_.end(), x, [](double v, const glm::dvec2& k) { return v < k.x; });
   const size_t i = static_cast<size_t>(it - keys_.begin()) - 1;
   const double h = keys_[i + 1].x - keys_[i].x;
   const double t = (x - keys_[i].x) / h;
@@ -249,9 +249,8 @@ bool HelicalParams::operator==(const HelicalParams& o) const {
          posteriorLeft == o.posteriorLeft && posteriorRight == o.posteriorRight && frequency == o.frequency &&
          growthSpeed == o.growthSpeed && emitterSpeed == o.emitterSpeed && barbSpeed == o.barbSpeed &&
          syncSpeedToPolar == o.syncSpeedToPolar && barbCount == o.barbCount && spawnMode == o.spawnMode &&
-         sampleDt == o.sampleDt && unfurlLeft == o.unfurlLeft && unfurlRight == o.unfurlRight &&
-         length == o.length && fitCvs == o.fitCvs && keyBarbTolerance == o.keyBarbTolerance &&
-         maxKeyBarbs == o.maxKeyBarbs;
+         sampleDt == o.sampleDt && unfurlLeft == o.unfurlLeft && unfurlRight == o.unfurlRight && length == o.length &&
+         fitCvs == o.fitCvs && keyBarbTolerance == o.keyBarbTolerance && maxKeyBarbs == o.maxKeyBarbs;
 }
 
 void validateHelical(const HelicalParams& p, const std::string& file) {
@@ -265,9 +264,10 @@ void validateHelical(const HelicalParams& p, const std::string& file) {
   finite(p.posteriorRight, "posterior.right");
   if (!(0 < p.anteriorRight && p.anteriorRight < p.posteriorRight && p.posteriorRight < p.posteriorLeft &&
         p.posteriorLeft < p.anteriorLeft && p.anteriorLeft < 1))
-    bad("posterior", "loci must satisfy 0 < anterior.right < posterior.right < posterior.left < anterior.left < 1 (got " +
-                         num(p.anteriorRight) + ", " + num(p.posteriorRight) + ", " + num(p.posteriorLeft) + ", " +
-                         num(p.anteriorLeft) + ")");
+    bad("posterior",
+        "loci must satisfy 0 < anterior.right < posterior.right < posterior.left < anterior.left < 1 (got " +
+            num(p.anteriorRight) + ", " + num(p.posteriorRight) + ", " + num(p.posteriorLeft) + ", " +
+            num(p.anteriorLeft) + ")");
   if (!std::isfinite(p.frequency) || p.frequency <= 0) bad("frequency", "must be > 0");
   if (!std::isfinite(p.growthSpeed) || p.growthSpeed <= 0) bad("growthSpeed", "must be > 0");
   if (p.emitterSpeed.empty() || !(p.emitterSpeed.minValue() > 0))
@@ -275,7 +275,8 @@ void validateHelical(const HelicalParams& p, const std::string& file) {
   if (p.barbSpeed.empty() || !(p.barbSpeed.minValue() > 0)) bad("barbSpeed", "speed curve needs keys with values > 0");
   if (!std::isfinite(p.emitterSpeed.maxValue()) || !std::isfinite(p.barbSpeed.maxValue()))
     bad("barbSpeed", "speed curve is not finite");
-  if (p.barbCount < 1 || p.barbCount > kMaxBarbCount) bad("barbCount", "must be in [1, " + std::to_string(kMaxBarbCount) + "]");
+  if (p.barbCount < 1 || p.barbCount > kMaxBarbCount)
+    bad("barbCount", "must be in [1, " + std::to_string(kMaxBarbCount) + "]");
   if (!std::isfinite(p.sampleDt) || p.sampleDt <= 0) bad("sampleDt", "must be > 0");
   if (!(p.unfurlLeft >= 0 && p.unfurlLeft <= 1)) bad("unfurl.left", "must be in [0, 1]");
   if (!(p.unfurlRight >= 0 && p.unfurlRight <= 1)) bad("unfurl.right", "must be in [0, 1]");
@@ -301,7 +302,8 @@ CollarShape readCollar(JsonReader r) {
     for (size_t i = 0; i < pts.size(); ++i) {
       const std::string path = r.pathOf("points") + "[" + std::to_string(i) + "]";
       if (!pts[i].is_array() || pts[i].size() != 2) throw Error("expected a point [x, y]", r.file(), path);
-      c.points.emplace_back(jsonNumber(pts[i][0], r.file(), path + "[0]"), jsonNumber(pts[i][1], r.file(), path + "[1]"));
+      c.points.emplace_back(jsonNumber(pts[i][0], r.file(), path + "[0]"),
+                            jsonNumber(pts[i][1], r.file(), path + "[1]"));
     }
   }
   r.finish();

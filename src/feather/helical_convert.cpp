@@ -324,8 +324,7 @@ void applyHelical(FeatherParams& p, const HelicalParams& hp) {
 }
 
 void applyHelical(FeatherParams& p) {
-  if (!p.generatorParams.is_object())
-    throw Error("helical feather has no helical parameters", p.sourceFile, "helical");
+  if (!p.generatorParams.is_object()) throw Error("helical feather has no helical parameters", p.sourceFile, "helical");
   JsonReader r(p.generatorParams, p.sourceFile, "helical");
   applyHelical(p, readHelical(r));
 }

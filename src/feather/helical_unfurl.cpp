@@ -198,7 +198,8 @@ HelicalSpacingStats helicalSpacingStats(const HelicalGrowth& g) {
       st.tipSpacing = sum / static_cast<double>(tip.size());
     }
     st.tipRatio = st.medianSpacing > 0 ? st.tipSpacing / st.medianSpacing : 0.0;
-    st.tipMaxRatio = st.medianSpacing > 0 && !tip.empty() ? *std::max_element(tip.begin(), tip.end()) / st.medianSpacing : 0.0;
+    st.tipMaxRatio =
+        st.medianSpacing > 0 && !tip.empty() ? *std::max_element(tip.begin(), tip.end()) / st.medianSpacing : 0.0;
     st.nearEdge = median(edge);
     st.nearRachis = median(rachis);
   }

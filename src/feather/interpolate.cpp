@@ -40,8 +40,8 @@ LengthProfile blendProfiles(const std::vector<LengthProfile>& profs, const std::
   xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
   auto leftLimit = [](const LengthProfile& p, double x) {
     // Value approaching x from below (lower value of a jump at x).
-    const auto it = std::lower_bound(p.points.begin(), p.points.end(), x,
-                                     [](const glm::dvec2& q, double r) { return q.x < r; });
+    const auto it =
+        std::lower_bound(p.points.begin(), p.points.end(), x, [](const glm::dvec2& q, double r) { return q.x < r; });
     if (it != p.points.end() && it->x == x) return it->y;
     return p.at(x);
   };
@@ -78,7 +78,8 @@ FeatherParams blendFeathers(const std::vector<const FeatherParams*>& feathersIn,
   double sum = 0;
   for (size_t i = 0; i < feathersIn.size(); ++i) {
     const double wi = weightsIn[i];
-    if (!std::isfinite(wi) || wi < 0) throw Error("blendFeathers: weights must be finite and >= 0", {}, "weights[" + std::to_string(i) + "]");
+    if (!std::isfinite(wi) || wi < 0)
+      throw Error("blendFeathers: weights must be finite and >= 0", {}, "weights[" + std::to_string(i) + "]");
     PTERYLA_CHECK_NE(feathersIn[i], nullptr, "null feather in blend");
     if (wi > 0) {
       fs.push_back(feathersIn[i]);
@@ -94,8 +95,9 @@ FeatherParams blendFeathers(const std::vector<const FeatherParams*>& feathersIn,
 
   for (const auto* f : fs)
     if (f->generator != fs.front()->generator)
-      throw Error("cannot blend feathers of different generators ('" + fs.front()->generator + "' and '" +
-                  f->generator + "')", {}, "generator");
+      throw Error(
+          "cannot blend feathers of different generators ('" + fs.front()->generator + "' and '" + f->generator + "')",
+          {}, "generator");
 
   FeatherParams r;
   r.name = top.name;
@@ -182,7 +184,8 @@ FeatherParams blendFeathers(const std::vector<const FeatherParams*>& feathersIn,
       }
     }
     // Rounding can reorder equal positions by an ulp; keep the list sorted.
-    std::stable_sort(rv.keyBarbs.begin(), rv.keyBarbs.end(), [](const KeyBarb& a, const KeyBarb& b) { return a.rp < b.rp; });
+    std::stable_sort(rv.keyBarbs.begin(), rv.keyBarbs.end(),
+                     [](const KeyBarb& a, const KeyBarb& b) { return a.rp < b.rp; });
   }
 
   // Afterfeather: blend those present, then shrink by the weight of feathers that have one.

@@ -74,7 +74,8 @@ VaneParams readVane(JsonReader r) {
     k.finish();
     v.keyBarbs.push_back(std::move(b));
   }
-  std::stable_sort(v.keyBarbs.begin(), v.keyBarbs.end(), [](const KeyBarb& a, const KeyBarb& b) { return a.rp < b.rp; });
+  std::stable_sort(v.keyBarbs.begin(), v.keyBarbs.end(),
+                   [](const KeyBarb& a, const KeyBarb& b) { return a.rp < b.rp; });
   r.finish();
   return v;
 }
@@ -120,8 +121,8 @@ FeatherParams readImpl(JsonReader& r) {
   if (r.json().contains("pteryla_feather")) {
     const int64_t version = r.integer("pteryla_feather", 0, 1000000);
     if (version != kFeatherFormatVersion)
-      r.fail("pteryla_feather", "unsupported feather format version " + std::to_string(version) + " (this build reads " +
-                                    std::to_string(kFeatherFormatVersion) + ")");
+      r.fail("pteryla_feather", "unsupported feather format version " + std::to_string(version) +
+                                    " (this build reads " + std::to_string(kFeatherFormatVersion) + ")");
   } else {
     r.integer("pteryla_feather", 1, 0, 1000000);
   }
@@ -193,16 +194,22 @@ FeatherParams readImpl(JsonReader& r) {
       markKnown(s, "outline");
       if (!s.json().contains("left") && !s.json().contains("right"))
         s.fail("", "expected 'left' and/or 'right' barb length profiles, or an 'outline'");
-      if (s.json().contains("left")) p.silhouette.left = readProfile(s, "left");
-      else markKnown(s, "left");
-      if (s.json().contains("right")) p.silhouette.right = readProfile(s, "right");
-      else markKnown(s, "right");
+      if (s.json().contains("left"))
+        p.silhouette.left = readProfile(s, "left");
+      else
+        markKnown(s, "left");
+      if (s.json().contains("right"))
+        p.silhouette.right = readProfile(s, "right");
+      else
+        markKnown(s, "right");
     }
     s.finish();
   }
 
-  if (r.json().contains("material")) p.material = readMaterial(r.object("material"));
-  else markKnown(r, "material");
+  if (r.json().contains("material"))
+    p.material = readMaterial(r.object("material"));
+  else
+    markKnown(r, "material");
 
   if (r.json().contains("growth")) {
     JsonReader g = r.object("growth");
@@ -290,7 +297,8 @@ Json featherToJson(const FeatherParams& p, bool withVersion) {
     if (!p.material.texture.empty()) m["texture"] = p.material.texture;
     if (!p.material.alphaTexture.empty()) m["alpha_texture"] = p.material.alphaTexture;
     if (!p.material.pattern.empty()) m["pattern"] = p.material.pattern;
-    if (p.material.baseColor) m["base_color"] = {p.material.baseColor->x, p.material.baseColor->y, p.material.baseColor->z};
+    if (p.material.baseColor)
+      m["base_color"] = {p.material.baseColor->x, p.material.baseColor->y, p.material.baseColor->z};
     if (p.material.uv != "global") m["uv"] = p.material.uv;
     j["material"] = m;
   }

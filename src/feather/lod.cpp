@@ -99,8 +99,10 @@ void computeLodOrder(const FeatherCurves& c, LodOrder& out) {
     for (size_t i = begin; i < end; ++i) {
       const BarbCurve& b = c.barbs[i];
       const bool before = i > begin && c.barbs[i - 1].splitAfter;
-      if (i == begin || i + 1 == end || b.isSplitEdge || b.splitAfter || before) s.pinned[i] = 1;
-      else if (b.isKey) s.pinned[i] = 2;
+      if (i == begin || i + 1 == end || b.isSplitEdge || b.splitAfter || before)
+        s.pinned[i] = 1;
+      else if (b.isKey)
+        s.pinned[i] = 2;
     }
     // The widest barb between consecutive anchors is pinned too when it is longer than both: with the
     // vane ends alone, the lowest levels of a feather whose end barbs are short (any contour feather)
@@ -129,12 +131,14 @@ void computeLodOrder(const FeatherCurves& c, LodOrder& out) {
   size_t prev = 0;
   for (size_t j = 1; j < s.seq.size(); ++j) {
     if (s.pinned[s.seq[j]] != 1) continue;
-    if (j - prev >= 2) s.heap.push_back(Interval{static_cast<uint32_t>(j - prev), 0, static_cast<uint32_t>(prev),
-                                                 static_cast<uint32_t>(j)});
+    if (j - prev >= 2)
+      s.heap.push_back(
+          Interval{static_cast<uint32_t>(j - prev), 0, static_cast<uint32_t>(prev), static_cast<uint32_t>(j)});
     prev = j;
   }
   static const std::vector<uint32_t> kNoKeyDist;
-  divideAndConquer(s.heap, out.rank, next, [&](uint32_t j) { return s.seq[j]; }, kNoKeyDist);
+  divideAndConquer(
+      s.heap, out.rank, next, [&](uint32_t j) { return s.seq[j]; }, kNoKeyDist);
 
   // The other barbs: intervals (in barbs) between consecutive anchors or key barbs of the same vane.
   for (size_t j = 1; j < s.seq.size(); ++j) {
@@ -144,7 +148,8 @@ void computeLodOrder(const FeatherCurves& c, LodOrder& out) {
     iv.keyDist = s.keyDist[iv.mid()];
     s.heap.push_back(iv);
   }
-  divideAndConquer(s.heap, out.rank, next, [](uint32_t i) { return i; }, s.keyDist);
+  divideAndConquer(
+      s.heap, out.rank, next, [](uint32_t i) { return i; }, s.keyDist);
   PTERYLA_CHECK_EQ(next, n, "every barb gets a collapse rank");
 }
 

@@ -98,8 +98,10 @@ void writeVane(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& i
 
   s.rows.clear();
   for (size_t q = 0; q < K; ++q) {
-    if (q == 0) s.rows.push_back(boundaryRow(q, -1));
-    else if (splitBetween(q - 1)) s.rows.push_back(boundaryRow(q, -1));
+    if (q == 0)
+      s.rows.push_back(boundaryRow(q, -1));
+    else if (splitBetween(q - 1))
+      s.rows.push_back(boundaryRow(q, -1));
     Row cr;
     cr.a = cr.b = s.keptSlot[q];
     cr.wa = 1;
@@ -155,7 +157,9 @@ void writeVane(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& i
     const size_t sa = static_cast<size_t>(row.a) * n;
     const size_t sb = row.b >= 0 ? static_cast<size_t>(row.b) * n : sa;
     const float wb = row.b >= 0 ? row.wb : 0.0f, wa = row.b >= 0 ? row.wa : 1.0f;
-    const float rp = std::clamp(wa * s.srcRp[static_cast<size_t>(row.a)] + wb * s.srcRp[static_cast<size_t>(row.b >= 0 ? row.b : row.a)], 0.0f, 1.0f);
+    const float rp = std::clamp(
+        wa * s.srcRp[static_cast<size_t>(row.a)] + wb * s.srcRp[static_cast<size_t>(row.b >= 0 ? row.b : row.a)], 0.0f,
+        1.0f);
     const glm::vec3* P = s.rowPos.data() + r * n;
     const glm::vec3* Pp = s.rowPos.data() + (r > 0 ? r - 1 : r) * n;
     const glm::vec3* Pn = s.rowPos.data() + (r + 1 < R ? r + 1 : r) * n;
@@ -204,11 +208,19 @@ void writeVane(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& i
       for (uint32_t k = 0; k + 1 < n; ++k) {
         const uint32_t a = lo + k, b = lo + k + 1, e = hi + k, f = hi + k + 1;
         if (vane == 0) {  // (a, e, b), (b, e, f): faces point dorsal
-          *idx++ = a; *idx++ = e; *idx++ = b;
-          *idx++ = b; *idx++ = e; *idx++ = f;
+          *idx++ = a;
+          *idx++ = e;
+          *idx++ = b;
+          *idx++ = b;
+          *idx++ = e;
+          *idx++ = f;
         } else {
-          *idx++ = a; *idx++ = b; *idx++ = e;
-          *idx++ = b; *idx++ = f; *idx++ = e;
+          *idx++ = a;
+          *idx++ = b;
+          *idx++ = e;
+          *idx++ = b;
+          *idx++ = f;
+          *idx++ = e;
         }
       }
     }
@@ -301,14 +313,20 @@ void writeShaft(const Plan& pl, const MeshOptions& opt, const FeatherMeshInput& 
   for (size_t ri = 0; ri + 1 < rings; ++ri) {
     const uint32_t a0 = base + static_cast<uint32_t>(ri) * ringN, b0 = a0 + ringN;
     for (uint32_t j = 0; j < static_cast<uint32_t>(sides); ++j) {
-      *idx++ = a0 + j; *idx++ = b0 + j; *idx++ = a0 + j + 1;
-      *idx++ = a0 + j + 1; *idx++ = b0 + j; *idx++ = b0 + j + 1;
+      *idx++ = a0 + j;
+      *idx++ = b0 + j;
+      *idx++ = a0 + j + 1;
+      *idx++ = a0 + j + 1;
+      *idx++ = b0 + j;
+      *idx++ = b0 + j + 1;
     }
   }
   const uint32_t last = base + static_cast<uint32_t>(rings - 1) * ringN;
   const uint32_t apex = base + static_cast<uint32_t>(rings) * ringN;
   for (uint32_t j = 0; j < static_cast<uint32_t>(sides); ++j) {
-    *idx++ = last + j; *idx++ = apex + j; *idx++ = last + j + 1;
+    *idx++ = last + j;
+    *idx++ = apex + j;
+    *idx++ = last + j + 1;
   }
   cur.v = o;
   cur.i = static_cast<uint32_t>(idx - d.idx);
@@ -336,10 +354,16 @@ void writeFeather(const FeatherMeshInput& in, const MeshOptions& opt, Dst& d, Fe
     if (part == 1) mark(rg.afterFirst);
     if (part == 0) mark(rg.shaftFirst);
     if (opt.shaft) writeShaft(pl, opt, in, xf, s, part, d, cur);
-    if (part == 0) { rg.shaftCount = cur.i - partStart; mark(rg.leftFirst); }
+    if (part == 0) {
+      rg.shaftCount = cur.i - partStart;
+      mark(rg.leftFirst);
+    }
     const uint32_t leftStart = cur.i;
     writeVane(pl, opt, in, xf, s, part, 0, runs, refRuns, d, cur);
-    if (part == 0) { rg.leftCount = cur.i - leftStart; mark(rg.rightFirst); }
+    if (part == 0) {
+      rg.leftCount = cur.i - leftStart;
+      mark(rg.rightFirst);
+    }
     const uint32_t rightStart = cur.i;
     writeVane(pl, opt, in, xf, s, part, 1, runs, refRuns, d, cur);
     if (part == 0) rg.rightCount = cur.i - rightStart;
@@ -410,14 +434,17 @@ using namespace meshing;
 // ---------------------------------------------------------------- public API
 
 void validateMeshOptions(const MeshOptions& o) {
-  if (o.barbSegments < 1 || o.barbSegments > 64) throw Error("expected 1..64 segments per barb", "", "mesh.barb_segments");
+  if (o.barbSegments < 1 || o.barbSegments > 64)
+    throw Error("expected 1..64 segments per barb", "", "mesh.barb_segments");
   if (o.minBarbSegments < 1 || o.minBarbSegments > o.barbSegments)
     throw Error("expected 1 <= min_barb_segments <= barb_segments", "", "mesh.min_barb_segments");
   if (!std::isfinite(o.segmentLodStart) || o.segmentLodStart < 0 || o.segmentLodStart > 1)
     throw Error("expected a level in [0, 1]", "", "mesh.segment_lod_start");
   if (o.shaftSides < 3 || o.shaftSides > 64) throw Error("expected 3..64 shaft sides", "", "mesh.shaft_sides");
-  if (o.minShaftSegments < 1 || o.minShaftSegments > 1024) throw Error("expected 1..1024 shaft segments", "", "mesh.min_shaft_segments");
-  if (!std::isfinite(o.alphaTip) || o.alphaTip < 0 || o.alphaTip > 1) throw Error("expected alpha in [0, 1]", "", "mesh.alpha_tip");
+  if (o.minShaftSegments < 1 || o.minShaftSegments > 1024)
+    throw Error("expected 1..1024 shaft segments", "", "mesh.min_shaft_segments");
+  if (!std::isfinite(o.alphaTip) || o.alphaTip < 0 || o.alphaTip > 1)
+    throw Error("expected alpha in [0, 1]", "", "mesh.alpha_tip");
 }
 
 FeatherPlacement FeatherPlacement::fromFollicle(const glm::dvec3& origin, const glm::dvec3& T, const glm::dvec3& N,

@@ -112,10 +112,10 @@ struct ShaftFrames {
 // ---------------------------------------------------------------- texture space of the reference
 
 struct RefBarb {
-  Frame fr;          // rachis frame at the barb's rp
-  float len = 0;     // chord from root to tip
-  float u0 = 0;      // global |u - 0.5| of the root (rachis half width)
-  float uTip = 0;    // global |u - 0.5| of the tip
+  Frame fr;        // rachis frame at the barb's rp
+  float len = 0;   // chord from root to tip
+  float u0 = 0;    // global |u - 0.5| of the root (rachis half width)
+  float uTip = 0;  // global |u - 0.5| of the tip
 };
 
 struct UvSpace {
@@ -143,21 +143,21 @@ inline VaneRuns vaneRuns(const FeatherCurves& c, size_t part) {
 constexpr int kBelow = -2, kAbove = -3;  // Row::b markers for a vane of a single barb
 
 struct Row {
-  int a = 0, b = 0;         // sources (b < 0: kBelow / kAbove)
-  float wa = 1, wb = 0;     // weights
-  float count = 1;          // barbCount
+  int a = 0, b = 0;      // sources (b < 0: kBelow / kAbove)
+  float wa = 1, wb = 0;  // weights
+  float count = 1;       // barbCount
   bool centre = false;
 };
 
 struct Scratch {
   LodOrder order;
   std::vector<ShaftFrames> frames, refFrames;
-  std::vector<RefBarb> ref;            // per barb of the reference (valid where refDone)
+  std::vector<RefBarb> ref;  // per barb of the reference (valid where refDone)
   std::vector<uint8_t> refDone;
   std::vector<ShaftFrames>* geo = nullptr;  // frames of the curves being meshed (refFrames when same)
-  std::vector<UvSpace> space;          // per part of the reference
-  std::vector<uint32_t> kept;          // kept barbs of the current vane
-  std::vector<int> keptSlot;           // source slot of each kept barb
+  std::vector<UvSpace> space;               // per part of the reference
+  std::vector<uint32_t> kept;               // kept barbs of the current vane
+  std::vector<int> keptSlot;                // source slot of each kept barb
   std::vector<float> keptCount;
   // Sources: evaluated barbs, (segments + 1) samples each.
   std::vector<glm::vec3> srcPos;
@@ -166,8 +166,8 @@ struct Scratch {
   std::vector<Row> rows;
   std::vector<glm::vec3> rowPos;
   std::vector<int> shaftSel;
-  std::vector<float> alphaC, alphaE;   // alpha per sample of centre / side rows
-  std::vector<glm::vec2> ring;         // (cos, sin) per shaft side
+  std::vector<float> alphaC, alphaE;  // alpha per sample of centre / side rows
+  std::vector<glm::vec2> ring;        // (cos, sin) per shaft side
 };
 inline Scratch& scratch() {
   static thread_local Scratch s;
@@ -181,14 +181,13 @@ struct Plan {
   const FeatherCurves* ref = nullptr;
   const LodOrder* order = nullptr;
   uint32_t keep = 0;
-  int segs = 1;        // barb segments at this level
+  int segs = 1;  // barb segments at this level
   int fullSegs = 1;
-  double lod = 1;      // clamped level
+  double lod = 1;  // clamped level
   size_t parts = 0;
 };
 
 inline bool keptBarb(const Plan& pl, uint32_t i) { return pl.order->rank[i] < pl.keep; }
-
 
 // Reference barbs standing for barb i of the curves: same index when the vane layouts match, else the
 // two reference barbs bracketing its rp.

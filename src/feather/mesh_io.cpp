@@ -57,9 +57,12 @@ void checkMesh(const TriMesh& m, const std::string& path) {
 
 const std::vector<glm::vec2>& uvSet(const TriMesh& m, UvSet s) {
   switch (s) {
-    case UvSet::Barb: return m.uvBarb;
-    case UvSet::Growth: return m.uvGrowth;
-    case UvSet::Global: break;
+    case UvSet::Barb:
+      return m.uvBarb;
+    case UvSet::Growth:
+      return m.uvGrowth;
+    case UvSet::Global:
+      break;
   }
   return m.uvGlobal;
 }
@@ -87,10 +90,14 @@ void writeObj(const std::string& path, const TriMesh& m, UvSet uv) {
     for (const auto& q : m.normals) out.printf("vn %.6g %.6g %.6g\n", q.x, q.y, q.z);
   for (size_t i = 0; i < m.indices.size(); i += 3) {
     const uint32_t a = m.indices[i] + 1, b = m.indices[i + 1] + 1, c = m.indices[i + 2] + 1;
-    if (hasT && hasN) out.printf("f %u/%u/%u %u/%u/%u %u/%u/%u\n", a, a, a, b, b, b, c, c, c);
-    else if (hasT) out.printf("f %u/%u %u/%u %u/%u\n", a, a, b, b, c, c);
-    else if (hasN) out.printf("f %u//%u %u//%u %u//%u\n", a, a, b, b, c, c);
-    else out.printf("f %u %u %u\n", a, b, c);
+    if (hasT && hasN)
+      out.printf("f %u/%u/%u %u/%u/%u %u/%u/%u\n", a, a, a, b, b, b, c, c, c);
+    else if (hasT)
+      out.printf("f %u/%u %u/%u %u/%u\n", a, a, b, b, c, c);
+    else if (hasN)
+      out.printf("f %u//%u %u//%u %u//%u\n", a, a, b, b, c, c);
+    else
+      out.printf("f %u %u %u\n", a, b, c);
   }
   out.flush();
   file.close();
@@ -102,8 +109,8 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
   const std::vector<glm::vec2>& t = uvSet(m, opt.uv);
   struct Prop {
     const char* name;
-    const float* f;      // float source with stride
-    const uint32_t* u;   // or uint source
+    const float* f;     // float source with stride
+    const uint32_t* u;  // or uint source
     size_t stride;
   };
   std::vector<Prop> props;
@@ -126,7 +133,8 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
   header += opt.binary ? (littleEndian() ? "binary_little_endian" : "binary_big_endian") : "ascii";
   header += " 1.0\ncomment pteryla feather mesh\nelement vertex " + std::to_string(n) + "\n";
   for (const Prop& p : props) header += std::string("property ") + (p.u ? "uint " : "float ") + p.name + "\n";
-  header += "element face " + std::to_string(m.triangleCount()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
+  header +=
+      "element face " + std::to_string(m.triangleCount()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
   file.write(header.data(), header.size());
 
   if (opt.binary) {
@@ -143,8 +151,10 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
       flushIf(vbytes);
       for (const Prop& p : props) {
         char b[4];
-        if (p.u) std::memcpy(b, p.u + i * p.stride, 4);
-        else std::memcpy(b, p.f + i * p.stride, 4);
+        if (p.u)
+          std::memcpy(b, p.u + i * p.stride, 4);
+        else
+          std::memcpy(b, p.f + i * p.stride, 4);
         buf.insert(buf.end(), b, b + 4);
       }
     }
@@ -161,8 +171,10 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
       for (size_t k = 0; k < props.size(); ++k) {
         const Prop& p = props[k];
         const char* sep = k + 1 < props.size() ? " " : "\n";
-        if (p.u) out.printf("%u%s", p.u[i * p.stride], sep);
-        else out.printf("%.7g%s", static_cast<double>(p.f[i * p.stride]), sep);
+        if (p.u)
+          out.printf("%u%s", p.u[i * p.stride], sep);
+        else
+          out.printf("%.7g%s", static_cast<double>(p.f[i * p.stride]), sep);
       }
     }
     for (size_t i = 0; i < m.indices.size(); i += 3)
@@ -174,7 +186,8 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
 
 void writeMesh(const std::string& path, const TriMesh& mesh) {
   std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
   if (ext == ".obj") return writeObj(path, mesh);
   if (ext == ".ply") return writePly(path, mesh);
   throw Error("unknown mesh format (expected a .obj or .ply file name)", path);

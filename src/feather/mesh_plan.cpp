@@ -67,7 +67,8 @@ void shaftSelection(const ShaftCurve& sh, const Plan& pl, const MeshOptions& opt
   }
   const int lo = std::min(std::max(1, opt.minShaftSegments), segs);
   const int target = std::clamp(static_cast<int>(std::ceil(segs * pl.lod - 1e-9)), lo, segs);
-  for (int k = 0; k <= target; ++k) sel.push_back(rb + static_cast<int>(std::lround(static_cast<double>(k) * segs / target)));
+  for (int k = 0; k <= target; ++k)
+    sel.push_back(rb + static_cast<int>(std::lround(static_cast<double>(k) * segs / target)));
 }
 
 struct PartSize {
@@ -182,7 +183,8 @@ const RefBarb& refBarb(const Plan& pl, Scratch& s, uint32_t i) {
   const glm::vec3* cv = r.cvs.data() + b.cvOffset;
   rb.len = b.cvCount ? glm::length(cv[b.cvCount - 1] - cv[0]) : 0.0f;
   rb.u0 = b.cvCount ? std::min(0.5f, std::abs(glm::dot(cv[0] - rb.fr.p, rb.fr.l)) * sp.acrossInv) : 0.0f;
-  rb.uTip = b.cvCount ? std::clamp(std::abs(glm::dot(cv[b.cvCount - 1] - rb.fr.p, rb.fr.l)) * sp.acrossInv, rb.u0, 0.5f) : rb.u0;
+  rb.uTip = b.cvCount ? std::clamp(std::abs(glm::dot(cv[b.cvCount - 1] - rb.fr.p, rb.fr.l)) * sp.acrossInv, rb.u0, 0.5f)
+                      : rb.u0;
   return rb;
 }
 
@@ -201,17 +203,25 @@ RefLink refLink(const Plan& pl, size_t part, int vane, const VaneRuns& runs, con
   uint32_t lo = rb, hi = re;  // first reference barb with rp > rp
   while (lo < hi) {
     const uint32_t mid = (lo + hi) / 2;
-    if (pl.ref->barbs[mid].rp <= rp) lo = mid + 1; else hi = mid;
+    if (pl.ref->barbs[mid].rp <= rp)
+      lo = mid + 1;
+    else
+      hi = mid;
   }
-  if (lo == rb) { L.a = L.b = rb; return L; }
-  if (lo == re) { L.a = L.b = re - 1; return L; }
+  if (lo == rb) {
+    L.a = L.b = rb;
+    return L;
+  }
+  if (lo == re) {
+    L.a = L.b = re - 1;
+    return L;
+  }
   L.a = lo - 1;
   L.b = lo;
   const float ra = pl.ref->barbs[L.a].rp, rbp = pl.ref->barbs[L.b].rp;
   L.w = rbp > ra ? (rp - ra) / (rbp - ra) : 0.0f;
   return L;
 }
-
 
 // ---------------------------------------------------------------- sources (evaluated barbs)
 

@@ -22,8 +22,8 @@ double LengthProfile::at(double rp) const {
   if (rp < points.front().x) return points.front().y;
   if (rp >= points.back().x) return points.back().y;
   // Last point at or below rp (at an equal-rp jump this is the upper value) and the next one.
-  const auto it = std::upper_bound(points.begin(), points.end(), rp,
-                                   [](double r, const glm::dvec2& p) { return r < p.x; });
+  const auto it =
+      std::upper_bound(points.begin(), points.end(), rp, [](double r, const glm::dvec2& p) { return r < p.x; });
   const glm::dvec2& hi = *it;
   const glm::dvec2& lo = *(it - 1);
   if (rp == lo.x) return lo.y;
@@ -37,8 +37,8 @@ double FeatherParams::barbLengthAt(int v, double rp) const {
 }
 
 bool FeatherParams::equalExceptKeyBarbs(const FeatherParams& o) const {
-  const bool afterEq = (!afterfeather && !o.afterfeather) ||
-                       (afterfeather && o.afterfeather && *afterfeather == *o.afterfeather);
+  const bool afterEq =
+      (!afterfeather && !o.afterfeather) || (afterfeather && o.afterfeather && *afterfeather == *o.afterfeather);
   const bool growthEq = growth == o.growth || (growth && o.growth && *growth == *o.growth);
   return afterEq && growthEq && name == o.name && generator == o.generator && generatorParams == o.generatorParams &&
          calamusLength == o.calamusLength && calamusWidthRatio == o.calamusWidthRatio &&
@@ -74,7 +74,8 @@ void fillPlumulaceousBarb(uint64_t seed, glm::dvec3* cvs) {
 std::array<glm::dvec3, 4> defaultPennaceousBarbArray() {
   // Straight barb with a slight front-to-back curvature: bulges dorsally, tip curls ventrally; chord 1.
   const double a = 0.06;  // tip droop, radians
-  return {glm::dvec3(0, 0, 0), glm::dvec3(0.34, 0, 0.035), glm::dvec3(0.68, 0, 0.03), glm::dvec3(std::cos(a), 0, -std::sin(a))};
+  return {glm::dvec3(0, 0, 0), glm::dvec3(0.34, 0, 0.035), glm::dvec3(0.68, 0, 0.03),
+          glm::dvec3(std::cos(a), 0, -std::sin(a))};
 }
 
 std::vector<glm::dvec3> defaultPlumulaceousBarb(uint64_t seed) {
@@ -93,7 +94,8 @@ void normalizeCvs(std::vector<glm::dvec3>& cvs) {
   const glm::dvec3 o = cvs.front();
   for (auto& c : cvs) c -= o;
   const double chord = glm::length(cvs.back());
-  if (chord > 1) for (auto& c : cvs) c /= chord;
+  if (chord > 1)
+    for (auto& c : cvs) c /= chord;
 }
 }  // namespace
 
@@ -117,9 +119,11 @@ void effectiveKeyBarbsInto(const FeatherParams& p, int vane, std::vector<KeyBarb
   } else {
     bool sorted = true;
     for (size_t i = 1; i < vp.keyBarbs.size(); ++i) sorted = sorted && vp.keyBarbs[i - 1].rp <= vp.keyBarbs[i].rp;
-    const double first = sorted ? vp.keyBarbs.front().rp
-                                : std::min_element(vp.keyBarbs.begin(), vp.keyBarbs.end(),
-                                                   [](const KeyBarb& a, const KeyBarb& b) { return a.rp < b.rp; })->rp;
+    const double first =
+        sorted ? vp.keyBarbs.front().rp
+               : std::min_element(vp.keyBarbs.begin(), vp.keyBarbs.end(), [](const KeyBarb& a, const KeyBarb& b) {
+                   return a.rp < b.rp;
+                 })->rp;
     if (first > 0) setDf1(next(), 0.0);
     const size_t begin = m;
     for (const KeyBarb& k : vp.keyBarbs) {
@@ -159,8 +163,14 @@ void barbShapeAt(const std::vector<KeyBarb>& keys, double rp, std::vector<glm::d
     return;
   }
   const auto it = std::upper_bound(keys.begin(), keys.end(), rp, [](double r, const KeyBarb& k) { return r < k.rp; });
-  if (it == keys.begin()) { out = keys.front().cvs; return; }
-  if (it == keys.end()) { out = keys.back().cvs; return; }
+  if (it == keys.begin()) {
+    out = keys.front().cvs;
+    return;
+  }
+  if (it == keys.end()) {
+    out = keys.back().cvs;
+    return;
+  }
   const KeyBarb& above = *it;
   const KeyBarb& below = *(it - 1);
   const double t = (rp - below.rp) / (above.rp - below.rp);
@@ -201,8 +211,10 @@ void validateImpl(const FeatherParams& p, const std::string& file, const std::st
   for (int v = 0; v < 2; ++v) {
     const std::string vn = v == 0 ? "left_vane" : "right_vane";
     const VaneParams& vp = p.vane(v);
-    if (!finite(vp.baseAngle) || vp.baseAngle < 0 || vp.baseAngle > kPi) fail(vn + ".base_angle", "expected an angle in [0, pi] radians");
-    if (!finite(vp.tipAngle) || vp.tipAngle < 0 || vp.tipAngle > kPi) fail(vn + ".tip_angle", "expected an angle in [0, pi] radians");
+    if (!finite(vp.baseAngle) || vp.baseAngle < 0 || vp.baseAngle > kPi)
+      fail(vn + ".base_angle", "expected an angle in [0, pi] radians");
+    if (!finite(vp.tipAngle) || vp.tipAngle < 0 || vp.tipAngle > kPi)
+      fail(vn + ".tip_angle", "expected an angle in [0, pi] radians");
     for (size_t k = 0; k < vp.keyBarbs.size(); ++k) {
       const std::string kn = vn + ".key_barbs[" + std::to_string(k) + "]";
       const KeyBarb& kb = vp.keyBarbs[k];

@@ -232,7 +232,10 @@ bool fitVane(const std::vector<OrientationWindow>& windows, const PixelArc& arc,
           if (residual[i] > limit) keep[i] = 0;
       }
     }
-    if (it >= 2 && std::abs(m.a0 - prev.a0) + std::abs(m.a1 - prev.a1) + std::abs(m.k0 - prev.k0) + std::abs(m.k1 - prev.k1) < 1e-5) break;
+    if (it >= 2 &&
+        std::abs(m.a0 - prev.a0) + std::abs(m.a1 - prev.a1) + std::abs(m.k0 - prev.k0) + std::abs(m.k1 - prev.k1) <
+            1e-5)
+      break;
   }
   double sum = 0;
   used = 0;
@@ -255,7 +258,8 @@ bool fitVane(const std::vector<OrientationWindow>& windows, const PixelArc& arc,
 double projectionSharpness(const std::vector<glm::dvec3>& pts, double angle) {
   const glm::dvec2 n(-std::sin(angle), std::cos(angle));
   double lo = 1e300, hi = -1e300;
-  for (const auto& q : pts) lo = std::min(lo, glm::dot(glm::dvec2(q), n)), hi = std::max(hi, glm::dot(glm::dvec2(q), n));
+  for (const auto& q : pts)
+    lo = std::min(lo, glm::dot(glm::dvec2(q), n)), hi = std::max(hi, glm::dot(glm::dvec2(q), n));
   const size_t bins = static_cast<size_t>((hi - lo) / 0.5) + 1;
   std::vector<double> sum(bins, 0.0), count(bins, 0.0);
   for (const auto& q : pts) {
@@ -273,9 +277,10 @@ double projectionSharpness(const std::vector<glm::dvec3>& pts, double angle) {
 // window is in the mask). The structure tensor's
 // orientation is biased toward the pixel diagonals for fine line patterns (the central difference's
 // response falls off at high frequency), so it only seeds a search for the sharpest projection.
-glm::dvec2 windowOrientation(const std::vector<float>& pixels, const std::vector<uint8_t>& mask, const std::vector<float>& gx,
-                             const std::vector<float>& gy, int w, int h, const PixelArc& arc, int v, double s0, double s1,
-                             double d0, double d1, double& coherence) {
+glm::dvec2 windowOrientation(const std::vector<float>& pixels, const std::vector<uint8_t>& mask,
+                             const std::vector<float>& gx, const std::vector<float>& gy, int w, int h,
+                             const PixelArc& arc, int v, double s0, double s1, double d0, double d1,
+                             double& coherence) {
   size_t inside = 0;
   double jxx = 0, jxy = 0, jyy = 0;
   std::vector<glm::dvec3> pts;  // x, y relative to the window centre; z intensity
@@ -355,7 +360,6 @@ double period(const std::vector<std::vector<double>>& signals, double step, doub
   return (best + off) * step;
 }
 
-
 // Cubic Bezier of a circular arc of unit chord turning by `bend` (barb-local: x along, y toward the tip).
 std::vector<glm::dvec3> bentBarb(double bend) {
   if (std::abs(bend) < 1e-6) return {{0, 0, 0}, {1.0 / 3, 0, 0}, {2.0 / 3, 0, 0}, {1, 0, 0}};
@@ -416,11 +420,15 @@ std::vector<glm::dvec2> detectRachis(const GrayImage& img) {
   while (runHi < bins && isThin(bins - 1 - runHi)) ++runHi;
   const double minRun = std::max(3.0, 0.03 * bins);
   int base;  // +1: the base is at smin
-  if (runLo >= minRun && runLo >= 1.5 * runHi) base = 1;
-  else if (runHi >= minRun && runHi >= 1.5 * runLo) base = -1;
+  if (runLo >= minRun && runLo >= 1.5 * runHi)
+    base = 1;
+  else if (runHi >= minRun && runHi >= 1.5 * runLo)
+    base = -1;
   else
-    throw Error("cannot tell the base from the tip: neither end of the feather has a bare calamus clearly longer than the "
-                "other's; mark the rachis (base, tip)", {}, "rachis");
+    throw Error(
+        "cannot tell the base from the tip: neither end of the feather has a bare calamus clearly longer than the "
+        "other's; mark the rachis (base, tip)",
+        {}, "rachis");
   // Base: the calamus centre line where the vanes begin.
   auto centre = [&](int from, int to) {
     double q = 0, m = 0;
@@ -468,8 +476,10 @@ std::vector<glm::dvec2> detectRachis(const GrayImage& img) {
     const glm::dvec2 q = ridge ? ahead + std::clamp(bestO, -0.5, 0.5) * across : ahead;
     if (q.x < 0 || q.y < 0 || q.x > w - 1 || q.y > h - 1) break;
     track.push_back(q);
-    if (ridge && inFeather(q)) misses = 0, lastInside = track.size() - 1;
-    else ++misses;
+    if (ridge && inFeather(q))
+      misses = 0, lastInside = track.size() - 1;
+    else
+      ++misses;
     const glm::dvec2 back = track[track.size() > 12 ? track.size() - 12 : 0];
     if (glm::length(q - back) < 1e-9) continue;
     const glm::dvec2 want = glm::normalize(q - back);
@@ -544,8 +554,10 @@ ScanResult acquireScan(const GrayImage& img, const ScanOptions& opt) {
   for (double s = 0; s > -len; s -= 0.5) {
     bool hit = false;
     for (double d = -2; d <= 2 && !hit; d += 1) hit = inMask(arc.point(s) + d * arc.side(0, s));
-    if (hit) lastIn = s;
-    else if (lastIn - s > opt.gapTolerance) break;
+    if (hit)
+      lastIn = s;
+    else if (lastIn - s > opt.gapTolerance)
+      break;
   }
   res.calamusLengthPixels = -lastIn;
   if (res.calamusLengthPixels >= 4) {
@@ -585,7 +597,8 @@ ScanResult acquireScan(const GrayImage& img, const ScanOptions& opt) {
         const double d0 = std::max(clear, band[0] * width), d1 = band[1] * width;
         if (d1 - d0 < 3) continue;
         double coherence = 0;
-        const glm::dvec2 dir = windowOrientation(img.pixels, perp.mask, gx, gy, w, h, arc, v, sc - halfWindow, sc + halfWindow, d0, d1, coherence);
+        const glm::dvec2 dir = windowOrientation(img.pixels, perp.mask, gx, gy, w, h, arc, v, sc - halfWindow,
+                                                 sc + halfWindow, d0, d1, coherence);
         if (coherence >= 0.3) windows[v].push_back({sc, 0.5 * (d0 + d1), coherence, dir});
       }
     }
@@ -608,8 +621,8 @@ ScanResult acquireScan(const GrayImage& img, const ScanOptions& opt) {
     if (fit.measured && !consistent) {
       fit.measured = false;
       char why[160];
-      std::snprintf(why, sizeof why, " vane: barb orientation inconsistent (%d of %zu windows agree, rms %.1f deg%s)", fit.windows,
-                    windows[v].size(), rms * 180 / kPi, atLimit ? ", fit at its limits" : "");
+      std::snprintf(why, sizeof why, " vane: barb orientation inconsistent (%d of %zu windows agree, rms %.1f deg%s)",
+                    fit.windows, windows[v].size(), rms * 180 / kPi, atLimit ? ", fit at its limits" : "");
       note = vaneName + why + ": default angles and straight key barbs";
     } else if (!fit.measured) {
       note = vaneName + " vane: barb orientation not measurable (" + std::to_string(windows[v].size()) +
@@ -631,7 +644,8 @@ ScanResult acquireScan(const GrayImage& img, const ScanOptions& opt) {
     vp.baseAngle = fit.baseAngle;
     vp.tipAngle = fit.tipAngle;
     vp.keyBarbs = {{0.0, bentBarb(fit.bendBase)}, {1.0, bentBarb(fit.bendTip)}};
-    return model.bent ? std::string() : vaneName + " vane: too few windows across the vane for barb curvature: straight key barbs";
+    return model.bent ? std::string()
+                      : vaneName + " vane: too few windows across the vane for barb curvature: straight key barbs";
   };
 
   // Barb spacing: periodicity along lines parallel to the rachis at 30%, 50%, 70% of each vane's width.
@@ -705,7 +719,8 @@ ScanResult acquireScan(const GrayImage& img, const ScanOptions& opt) {
     if (res.spacingBasePixels > 0) return std::string();
     p.spacingBase = p.spacingTip = 0.01 * p.rachisLength;
     res.spacingWindows = 0;
-    return "no consistent barb periodicity (" + std::to_string(spacing.size()) + " windows): barb spacing 1% of the rachis length";
+    return "no consistent barb periodicity (" + std::to_string(spacing.size()) +
+           " windows): barb spacing 1% of the rachis length";
   };
 
   std::string notes[3] = {fitOrientation(0), fitOrientation(1), measureSpacing()};

@@ -16,7 +16,8 @@ inline glm::dvec2 imageLeft(glm::dvec2 t) { return {t.y, -t.x}; }
 inline double sample(const std::vector<float>& img, int w, int h, double x, double y) {
   x = std::clamp(x, 0.0, w - 1.0);
   y = std::clamp(y, 0.0, h - 1.0);
-  const int x0 = std::min(static_cast<int>(x), std::max(0, w - 2)), y0 = std::min(static_cast<int>(y), std::max(0, h - 2));
+  const int x0 = std::min(static_cast<int>(x), std::max(0, w - 2)),
+            y0 = std::min(static_cast<int>(y), std::max(0, h - 2));
   const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
   const double fx = x - x0, fy = y - y0;
   const auto at = [&](int xx, int yy) { return static_cast<double>(img[static_cast<size_t>(yy) * w + xx]); };

@@ -67,7 +67,8 @@ ScanTexture scanTexture(const std::string& scanPath, const ScanResult& r, int ma
   if (w <= 0 || h <= 0 || nc <= 0) throw Error("empty image", scanPath);
   requireMemory(double(w) * h * (nc + 3) * 4.0 + double(tex.width) * tex.height * 4.0, "scan texture", scanPath, "");
   std::vector<float> raw(static_cast<size_t>(w) * h * nc);
-  if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, raw.data())) throw Error("cannot read image: " + in->geterror(), scanPath);
+  if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, raw.data()))
+    throw Error("cannot read image: " + in->geterror(), scanPath);
   in->close();
   std::array<std::vector<float>, 3> rgb;
   for (int c = 0; c < 3; ++c) {
@@ -85,8 +86,11 @@ ScanTexture scanTexture(const std::string& scanPath, const ScanResult& r, int ma
   std::array<float, 3> background{};
   for (int c = 0; c < 3; ++c) {
     std::vector<float> border;
-    for (int x = 0; x < w; ++x) border.push_back(rgb[c][x]), border.push_back(rgb[c][static_cast<size_t>(h - 1) * w + x]);
-    for (int y = 0; y < h; ++y) border.push_back(rgb[c][static_cast<size_t>(y) * w]), border.push_back(rgb[c][static_cast<size_t>(y) * w + w - 1]);
+    for (int x = 0; x < w; ++x)
+      border.push_back(rgb[c][x]), border.push_back(rgb[c][static_cast<size_t>(h - 1) * w + x]);
+    for (int y = 0; y < h; ++y)
+      border.push_back(rgb[c][static_cast<size_t>(y) * w]),
+          border.push_back(rgb[c][static_cast<size_t>(y) * w + w - 1]);
     std::nth_element(border.begin(), border.begin() + border.size() / 2, border.end());
     background[c] = border[border.size() / 2];
   }
@@ -97,7 +101,7 @@ ScanTexture scanTexture(const std::string& scanPath, const ScanResult& r, int ma
     for (int i = 0; i < tex.width; ++i) {
       const double u = (i + 0.5) / tex.width, v = 1 - (j + 0.5) / tex.height;
       const double along = (alongMin + v * (alongMax - alongMin)) * ppu - calamusPx;  // pixels from the rachis base
-      const double across = (0.5 - u) * 2 * acrossMax * ppu;                            // pixels toward the left vane
+      const double across = (0.5 - u) * 2 * acrossMax * ppu;                          // pixels toward the left vane
       const glm::dvec2 q = arc.point(along) + across * arc.side(0, along);
       uint8_t* o = &tex.rgba[(static_cast<size_t>(j) * tex.width + i) * 4];
       const bool outside = q.x < 0 || q.y < 0 || q.x > w - 1 || q.y > h - 1;

@@ -52,7 +52,8 @@ glm::dvec2 imageLeft(glm::dvec2 t) { return {t.y, -t.x}; }
 double bilinear(const std::vector<float>& img, int w, int h, double x, double y) {
   x = std::clamp(x, 0.0, w - 1.0);
   y = std::clamp(y, 0.0, h - 1.0);
-  const int x0 = std::min(static_cast<int>(x), w - 2 < 0 ? 0 : w - 2), y0 = std::min(static_cast<int>(y), h - 2 < 0 ? 0 : h - 2);
+  const int x0 = std::min(static_cast<int>(x), w - 2 < 0 ? 0 : w - 2),
+            y0 = std::min(static_cast<int>(y), h - 2 < 0 ? 0 : h - 2);
   const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
   const double fx = x - x0, fy = y - y0;
   const auto at = [&](int xx, int yy) { return static_cast<double>(img[static_cast<size_t>(yy) * w + xx]); };
@@ -82,7 +83,8 @@ Silhouette silhouetteFromOutline(const std::vector<glm::dvec2>& outline, const F
   if (outline.size() < 3) throw Error("an outline needs at least 3 points", p.sourceFile, "silhouette.outline");
   if (samples < 2) throw Error("need at least 2 samples", p.sourceFile, "silhouette.samples");
   for (const auto& q : outline)
-    if (!std::isfinite(q.x) || !std::isfinite(q.y)) throw Error("outline points must be finite", p.sourceFile, "silhouette.outline");
+    if (!std::isfinite(q.x) || !std::isfinite(q.y))
+      throw Error("outline points must be finite", p.sourceFile, "silhouette.outline");
   FeatherParams flat;
   flat.calamusLength = p.calamusLength;
   flat.rachisLength = p.rachisLength;
@@ -120,7 +122,8 @@ GrayImage loadGrayImage(const std::string& path) {
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) throw Error("empty image", path);
   if (static_cast<int64_t>(spec.width) * spec.height > (int64_t(1) << 28)) throw Error("image too large", path);
   std::vector<float> data(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::FLOAT, data.data())) throw Error("cannot read image: " + in->geterror(), path);
+  if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::FLOAT, data.data()))
+    throw Error("cannot read image: " + in->geterror(), path);
   GrayImage img;
   img.width = spec.width;
   img.height = spec.height;
@@ -145,18 +148,26 @@ void saveGrayImage(const std::string& path, const GrayImage& img) {
   if (!out) throw Error("cannot write image: " + OIIO::geterror(), path);
   ImageSpec spec(img.width, img.height, 1, TypeDesc::UINT8);
   if (!out->open(path, spec)) throw Error("cannot write image: " + out->geterror(), path);
-  if (!out->write_image(TypeDesc::FLOAT, img.pixels.data())) throw Error("cannot write image: " + out->geterror(), path);
+  if (!out->write_image(TypeDesc::FLOAT, img.pixels.data()))
+    throw Error("cannot write image: " + out->geterror(), path);
   out->close();
 }
 
 Segmentation segmentFeather(const GrayImage& img) {
   const int w = img.width, h = img.height;
-  if (w < 4 || h < 4 || img.pixels.size() != static_cast<size_t>(w) * h) throw Error("image must be at least 4x4 pixels", {}, "image");
+  if (w < 4 || h < 4 || img.pixels.size() != static_cast<size_t>(w) * h)
+    throw Error("image must be at least 4x4 pixels", {}, "image");
   Segmentation seg;
   // 1. Background level: median of the border pixels.
   std::vector<float> border;
-  for (int x = 0; x < w; ++x) { border.push_back(img.at(x, 0)); border.push_back(img.at(x, h - 1)); }
-  for (int y = 1; y + 1 < h; ++y) { border.push_back(img.at(0, y)); border.push_back(img.at(w - 1, y)); }
+  for (int x = 0; x < w; ++x) {
+    border.push_back(img.at(x, 0));
+    border.push_back(img.at(x, h - 1));
+  }
+  for (int y = 1; y + 1 < h; ++y) {
+    border.push_back(img.at(0, y));
+    border.push_back(img.at(w - 1, y));
+  }
   std::nth_element(border.begin(), border.begin() + border.size() / 2, border.end());
   seg.background = border[border.size() / 2];
 
@@ -184,7 +195,10 @@ Segmentation segmentFeather(const GrayImage& img) {
     sumB += i * hist[i];
     const double mB = sumB / wB, mF = (sumAll - sumB) / wF;
     const double var = wB * wF * (mB - mF) * (mB - mF);
-    if (var > bestVar) { bestVar = var; bestBin = i; }
+    if (var > bestVar) {
+      bestVar = var;
+      bestBin = i;
+    }
   }
   seg.threshold = (bestBin + 1.0) / kBins * dmax;
   seg.mask.resize(dist.size());
@@ -194,7 +208,8 @@ Segmentation segmentFeather(const GrayImage& img) {
 
 SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteImageOptions& opt) {
   const int w = img.width, h = img.height;
-  if (w < 4 || h < 4 || img.pixels.size() != static_cast<size_t>(w) * h) throw Error("image must be at least 4x4 pixels", {}, "image");
+  if (w < 4 || h < 4 || img.pixels.size() != static_cast<size_t>(w) * h)
+    throw Error("image must be at least 4x4 pixels", {}, "image");
   if (opt.rachis.size() < 2) throw Error("mark the rachis with at least 2 points (base, tip)", {}, "rachis");
   for (const auto& q : opt.rachis)
     if (!std::isfinite(q.x) || !std::isfinite(q.y) || q.x < 0 || q.y < 0 || q.x > w - 1 || q.y > h - 1)
@@ -211,7 +226,8 @@ SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteIm
 
   // 3. Rachis: resample the marked polyline, optionally move samples onto the rachis ridge, fit an arc.
   std::vector<double> cum{0.0};
-  for (size_t i = 1; i < opt.rachis.size(); ++i) cum.push_back(cum.back() + glm::length(opt.rachis[i] - opt.rachis[i - 1]));
+  for (size_t i = 1; i < opt.rachis.size(); ++i)
+    cum.push_back(cum.back() + glm::length(opt.rachis[i] - opt.rachis[i - 1]));
   const double marked = cum.back();
   if (marked < 2) throw Error("the marked rachis is shorter than 2 pixels", {}, "rachis");
   const int nr = std::max(8, static_cast<int>(marked / 3));
@@ -277,7 +293,10 @@ SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteIm
         for (double o = -opt.searchRadius; o <= opt.searchRadius; o += 0.25) {
           const glm::dvec2 q = guess[i] + o * n;
           const double c = std::abs(bilinear(img.pixels, w, h, q.x, q.y) - vane);
-          if (c > best + 1e-9) { best = c; bestO = o; }
+          if (c > best + 1e-9) {
+            best = c;
+            bestO = o;
+          }
         }
         // Only trust a ridge that stands out from the vane.
         if (best > 0.25 * res.threshold) refined[i] = guess[i] + bestO * n;

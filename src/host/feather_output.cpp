@@ -35,7 +35,8 @@ size_t writeFeather(const std::string& featherFile, const std::string& out, cons
   const bool image = ext == ".png";
   if (image)
     for (const auto& [v, name] : {std::pair{output.width, "width"}, {output.height, "height"}})
-      if (v < 1 || v > 16384) throw Error(std::string(name) + " must be in [1, 16384], got " + std::to_string(v), out, name);
+      if (v < 1 || v > 16384)
+        throw Error(std::string(name) + " must be in [1, 16384], got " + std::to_string(v), out, name);
   const feather::FeatherParams p = feather::loadFeather(featherFile);
   const TriMesh mesh = feather::buildFeatherMesh(p, output.age, output.lod, {}, feather::growthScheduleOf(p));
   if (!image) {
@@ -65,7 +66,8 @@ std::string pathRelativeTo(const std::string& target, const std::string& from) {
 }  // namespace
 
 ScanSummary writeFeatherFromScan(const std::string& scanImage, const std::string& out, const ScanSettings& settings) {
-  if (extensionOf(out) != ".json") throw Error("a scan is written as a feather file: expected a .json output", out, "out");
+  if (extensionOf(out) != ".json")
+    throw Error("a scan is written as a feather file: expected a .json output", out, "out");
   if (!fileExists(scanImage)) throw Error("scan image not found", scanImage, "scan");
   feather::GrayImage img;
   try {
@@ -82,8 +84,9 @@ ScanSummary writeFeatherFromScan(const std::string& scanImage, const std::string
     if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || q[0] < 0 || q[1] < 0 || q[0] > img.width - 1 ||
         q[1] > img.height - 1) {
       char msg[160];
-      std::snprintf(msg, sizeof msg, "point (%g, %g) lies outside the %dx%d image (expected x in [0, %d], y in [0, %d])",
-                    q[0], q[1], img.width, img.height, img.width - 1, img.height - 1);
+      std::snprintf(msg, sizeof msg,
+                    "point (%g, %g) lies outside the %dx%d image (expected x in [0, %d], y in [0, %d])", q[0], q[1],
+                    img.width, img.height, img.width - 1, img.height - 1);
       throw Error(msg, scanImage, "rachis");
     }
     opt.rachis.emplace_back(q[0], q[1]);

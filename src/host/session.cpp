@@ -104,9 +104,7 @@ struct Session::Impl {
     frameValid = false;
   }
 
-  uint64_t meshEvaluations() {
-    return pipeline->evaluations(pipeline::Stage::Mesh);
-  }
+  uint64_t meshEvaluations() { return pipeline->evaluations(pipeline::Stage::Mesh); }
 
   // Follow mode: carries the base coat (the pipeline's frame, already in the views' arrays) onto the host's
   // pose. Binds again only when the mesh stage produced a new coat.
@@ -197,7 +195,8 @@ struct Session::Impl {
     return *view;
   }
   render::Image draw(const std::array<int, 2>& size, const std::string& style) {
-    return reporting("the render", [&] { return renderer(size[0], size[1]).render(*pipeline, size[0], size[1], style); });
+    return reporting("the render",
+                     [&] { return renderer(size[0], size[1]).render(*pipeline, size[0], size[1], style); });
   }
 
   // The frame's coat mesh as a TriMesh (exportMesh): the pipeline's, or carried onto a Follow pose.
@@ -240,14 +239,15 @@ struct Session::Impl {
     materials.resize(mesh.materials.size());
     for (size_t k = 0; k < materials.size(); ++k) {
       const pipeline::CoatMaterial& c = mesh.materials[k];
-      materials[k] = {c.name, c.texture, c.alphaTexture, c.pattern, {{c.baseColor.x, c.baseColor.y, c.baseColor.z}}, c.uv};
+      materials[k] = {c.name, c.texture, c.alphaTexture, c.pattern, {{c.baseColor.x, c.baseColor.y, c.baseColor.z}},
+                      c.uv};
     }
     PTERYLA_CHECK(coat.tract.size() == n && coat.present.size() == n && elevation.size() == n,
                   "per-feather results of different lengths");
     const TriMesh& m = mesh.mesh;
     const size_t nv = m.positions.size();
-    PTERYLA_CHECK(m.normals.size() == nv && m.featherId.size() == nv && (m.uvGlobal.empty() || m.uvGlobal.size() == nv) &&
-                      (m.alpha.empty() || m.alpha.size() == nv),
+    PTERYLA_CHECK(m.normals.size() == nv && m.featherId.size() == nv &&
+                      (m.uvGlobal.empty() || m.uvGlobal.size() == nv) && (m.alpha.empty() || m.alpha.size() == nv),
                   "coat mesh attributes of different lengths");
     Frame& fr = frame;
     fr.featherCount = n;
@@ -435,8 +435,9 @@ void Session::releaseRenderer() { impl_->releaseRenderer(); }
 
 const Frame& Session::frame() const {
   if (!impl_->frameValid)
-    throw Error("no evaluated frame: the inputs changed, or the last evaluate() was cancelled or failed; call evaluate()",
-                "", "frame");
+    throw Error(
+        "no evaluated frame: the inputs changed, or the last evaluate() was cancelled or failed; call evaluate()", "",
+        "frame");
   return impl_->frame;
 }
 
@@ -473,7 +474,8 @@ std::array<int, 2> renderSize(const pipeline::Pipeline& p, const RenderSettings&
   const int width = sceneSize ? p.scene().render.width : settings.width;
   const int height = sceneSize ? p.scene().render.height : settings.height;
   for (const auto& [v, name] : {std::pair{width, "width"}, {height, "height"}})
-    if (v < 1 || v > 16384) throw Error(std::string(name) + " must be in [1, 16384], got " + std::to_string(v), path, name);
+    if (v < 1 || v > 16384)
+      throw Error(std::string(name) + " must be in [1, 16384], got " + std::to_string(v), path, name);
   if (!settings.style.empty() && settings.style != "shaded" && settings.style != "scratchboard")
     throw Error("style must be \"\", \"shaded\" or \"scratchboard\", got \"" + settings.style + "\"", path, "style");
   return {{width, height}};
@@ -486,12 +488,15 @@ void checkExportSettings(const std::string& path, const ExportSettings& settings
 ExportSummary Session::exportTo(const std::string& path, const ExportSettings& settings) {
   Impl& m = *impl_;
   if (m.following())
-    throw Error("exporting a coat carried onto a Follow pose is not supported yet: exportMesh() writes this frame, "
-                "or use PoseMode::Repack", path, "poseMode");
+    throw Error(
+        "exporting a coat carried onto a Follow pose is not supported yet: exportMesh() writes this frame, "
+        "or use PoseMode::Repack",
+        path, "poseMode");
   const exchange::ExportOptions opt = exportOptions(path, settings);
   const bool hadFrame = m.frameValid;
   m.frameValid = false;
-  const exchange::ExportResult r = m.reporting("the export", [&] { return exchange::exportCoat(*m.pipeline, path, opt); });
+  const exchange::ExportResult r =
+      m.reporting("the export", [&] { return exchange::exportCoat(*m.pipeline, path, opt); });
   if (hadFrame) m.fillFrame();  // the export evaluated other times: point the views at this one again
   ExportSummary out;
   out.bytes = r.bytes;
@@ -555,8 +560,10 @@ RenderSummary Session::render(const std::string& path, const RenderSettings& set
 Metrics Session::metrics() {
   Impl& m = *impl_;
   if (m.following())
-    throw Error("the checker measures the coat the pipeline laid, not one carried onto a Follow pose: clear the "
-                "pose or use PoseMode::Repack to check a pose", "", "poseMode");
+    throw Error(
+        "the checker measures the coat the pipeline laid, not one carried onto a Follow pose: clear the "
+        "pose or use PoseMode::Repack to check a pose",
+        "", "poseMode");
   pipeline::QualityMetrics q;
   const double lod = m.pipeline->lod();
   const bool hadFrame = m.frameValid;

@@ -51,7 +51,8 @@ coat::SkinMesh skinFromArrays(const SkinArrays& in) {
                       std::to_string(in.groupNames.size()) + " names)",
                   "", at("faceGroups", f));
   std::vector<glm::dvec3> positions(nv);
-  for (size_t v = 0; v < nv; ++v) positions[v] = {in.positions[3 * v], in.positions[3 * v + 1], in.positions[3 * v + 2]};
+  for (size_t v = 0; v < nv; ++v)
+    positions[v] = {in.positions[3 * v], in.positions[3 * v + 1], in.positions[3 * v + 2]};
   std::vector<std::array<uint32_t, 3>> faces(nf);
   for (size_t f = 0; f < nf; ++f) faces[f] = {in.triangles[3 * f], in.triangles[3 * f + 1], in.triangles[3 * f + 2]};
   coat::MeshLoadOptions o;
@@ -74,9 +75,9 @@ pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
   std::set<std::string> names;
   Json feathers = Json::object();
   auto featherName = [&](const std::string& file, const std::string& element) {
-    const std::string path =
-        file.empty() ? (std::filesystem::path(dataDirectory()) / "feathers" / "contour.json").string()
-                     : std::filesystem::absolute(file).lexically_normal().string();
+    const std::string path = file.empty()
+                                 ? (std::filesystem::path(dataDirectory()) / "feathers" / "contour.json").string()
+                                 : std::filesystem::absolute(file).lexically_normal().string();
     if (!fileExists(path)) throw Error("feather file not found: " + path, "", element);
     if (auto it = nameOfFile.find(path); it != nameOfFile.end()) return it->second;
     const std::string stem = std::filesystem::path(path).stem().string();
@@ -105,13 +106,18 @@ pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
     if (t.density < 0) throw Error("density must not be negative", "", where + ".density");
     if (t.count > uint64_t(std::numeric_limits<int64_t>::max()))
       throw Error("count is out of range", "", where + ".count");
-    if (t.count > 0) o["count"] = uint64_t(t.count);
-    else if (t.density > 0) o["density"] = t.density;
+    if (t.count > 0)
+      o["count"] = uint64_t(t.count);
+    else if (t.density > 0)
+      o["density"] = t.density;
     o["feather"] = featherName(t.featherFile, where + ".featherFile");
     requireFinite(t.featherScale, where + ".feather_scale", "feather_scale");
-    if (t.featherScale < 0) throw Error("feather_scale must be positive, or 0 for automatic", "", where + ".feather_scale");
-    if (t.featherScale > 0) o["feather_scale"] = t.featherScale;
-    else o["feather_scale"] = "auto";
+    if (t.featherScale < 0)
+      throw Error("feather_scale must be positive, or 0 for automatic", "", where + ".feather_scale");
+    if (t.featherScale > 0)
+      o["feather_scale"] = t.featherScale;
+    else
+      o["feather_scale"] = "auto";
     requireFinite(t.featherSpacings, where + ".feather_spacings", "feather_spacings");
     o["feather_spacings"] = t.featherSpacings;
     o["relax"] = {{"iterations", t.relaxIterations}};
@@ -148,16 +154,21 @@ pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
       j["ordering"] = {{"method", "tracts"}};
       if (!setup.tractOrder.empty()) j["ordering"]["tracts"] = setup.tractOrder;
       break;
-    case CoatSetup::Ordering::Flow: j["ordering"] = {{"method", "flow"}}; break;
+    case CoatSetup::Ordering::Flow:
+      j["ordering"] = {{"method", "flow"}};
+      break;
   }
   j["packing"] = {{"method", setup.packing == CoatSetup::Packing::Drape ? "drape" : "height_field"}};
   if (setup.moult.enabled) {
     const MoultSetup& m = setup.moult;
-    for (const auto& [v, key] : {std::pair{m.start, "start"}, {m.duration, "duration"}, {m.window, "window"},
-                                 {m.gap, "gap"}, {m.random, "random"}})
+    for (const auto& [v, key] : {std::pair{m.start, "start"},
+                                 {m.duration, "duration"},
+                                 {m.window, "window"},
+                                 {m.gap, "gap"},
+                                 {m.random, "random"}})
       requireFinite(v, std::string("moult.") + key, key);
     Json mj = {{"start", m.start}, {"duration", m.duration}, {"window", m.window}, {"sequence", m.sequence},
-               {"gap", m.gap}, {"random", m.random}, {"seed", m.seed}};
+               {"gap", m.gap},     {"random", m.random},     {"seed", m.seed}};
     // Checked now, with the scene format's ranges and names (the time stages read it at evaluate()).
     JsonReader r(mj, "", "moult");
     moult::readMoultOptions(r);
@@ -169,11 +180,18 @@ pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
       const ControlSetup& in = setup.controls[c];
       const std::string where = at("controls", c);
       for (int k = 0; k < 3; ++k) requireFinite(in.at[k], where + ".at", "at");
-      for (const auto& [v, key] : {std::pair{in.radius, "radius"}, {in.falloff, "falloff"},
-                                   {in.twistAngleDeg, "twist_angle"}, {in.maxLiftDeg, "max_lift"}})
+      for (const auto& [v, key] : {std::pair{in.radius, "radius"},
+                                   {in.falloff, "falloff"},
+                                   {in.twistAngleDeg, "twist_angle"},
+                                   {in.maxLiftDeg, "max_lift"}})
         requireFinite(v, where + "." + key, key);
-      Json o = {{"name", in.name}, {"at", point(in.at)}, {"radius", in.radius}, {"falloff", in.falloff},
-                {"interpolation", in.interpolation}, {"seed", in.seed}, {"twist_angle", in.twistAngleDeg},
+      Json o = {{"name", in.name},
+                {"at", point(in.at)},
+                {"radius", in.radius},
+                {"falloff", in.falloff},
+                {"interpolation", in.interpolation},
+                {"seed", in.seed},
+                {"twist_angle", in.twistAngleDeg},
                 {"max_lift", in.maxLiftDeg}};
       if (!in.tracts.empty()) o["tracts"] = in.tracts;
       if (in.keys.empty()) throw Error("a control needs at least one key", "", where + ".keys");
@@ -183,8 +201,11 @@ pipeline::Scene sceneFromSetup(const CoatSetup& setup) {
         const std::string kw = where + ".keys[" + std::to_string(k) + "]";
         requireFinite(key.t, kw + ".t", "t");
         Json kj = {{"t", key.t}};
-        for (const auto& [v, name] : {std::pair{key.lift, "lift"}, {key.aim, "aim"}, {key.direction, "direction"},
-                                      {key.random, "random"}, {key.dynamic, "dynamic"}})
+        for (const auto& [v, name] : {std::pair{key.lift, "lift"},
+                                      {key.aim, "aim"},
+                                      {key.direction, "direction"},
+                                      {key.random, "random"},
+                                      {key.dynamic, "dynamic"}})
           if (v) {
             requireFinite(*v, kw + "." + name, name);
             kj[name] = *v;

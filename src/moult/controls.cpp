@@ -242,8 +242,7 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
       if (std::isnan(fixedElevation[i])) needNatural = true;
     }
   }
-  if (!needNatural && std::none_of(wantsRaise.begin(), wantsRaise.end(), [](uint8_t x) { return x != 0; }))
-    return res;
+  if (!needNatural && std::none_of(wantsRaise.begin(), wantsRaise.end(), [](uint8_t x) { return x != 0; })) return res;
 
   const std::vector<double>* natural = nullptr;
   if (needNatural) {
@@ -324,12 +323,14 @@ ControlSpec readControl(JsonReader& r) {
     const char* key;
     Track* track;
   };
-  const Attr scalars[] = {{"lift", &c.lift}, {"aim", &c.aim}, {"direction", &c.direction}, {"random", &c.random},
-                          {"dynamic", &c.dynamic}};
+  const Attr scalars[] = {
+      {"lift", &c.lift}, {"aim", &c.aim}, {"direction", &c.direction}, {"random", &c.random}, {"dynamic", &c.dynamic}};
   // Constant values at the control level (a single key).
   for (const Attr& a : scalars) readAttribute(r, a.key, 0.0, 1.0, *a.track);
-  if (r.has("offset")) c.offset.addKey(0.0, r.vec3("offset"));
-  else r.allow("offset");
+  if (r.has("offset"))
+    c.offset.addKey(0.0, r.vec3("offset"));
+  else
+    r.allow("offset");
   std::vector<JsonReader> keys = r.objects("keys");
   for (auto& k : keys) {
     const double t = k.number("t", -1e12, 1e12);

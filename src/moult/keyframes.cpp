@@ -9,18 +9,25 @@ namespace pteryla::moult {
 
 const char* interpolationName(Interpolation i) {
   switch (i) {
-    case Interpolation::Linear: return "linear";
-    case Interpolation::Smooth: return "smooth";
-    case Interpolation::Step: return "step";
+    case Interpolation::Linear:
+      return "linear";
+    case Interpolation::Smooth:
+      return "smooth";
+    case Interpolation::Step:
+      return "step";
   }
   return "?";
 }
 
 bool parseInterpolation(const std::string& name, Interpolation& out) {
-  if (name == "linear") out = Interpolation::Linear;
-  else if (name == "smooth") out = Interpolation::Smooth;
-  else if (name == "step") out = Interpolation::Step;
-  else return false;
+  if (name == "linear")
+    out = Interpolation::Linear;
+  else if (name == "smooth")
+    out = Interpolation::Smooth;
+  else if (name == "step")
+    out = Interpolation::Step;
+  else
+    return false;
   return true;
 }
 
@@ -40,9 +47,12 @@ glm::dvec3 Track::at(double time) const {
   const size_t k = static_cast<size_t>(std::upper_bound(t.begin(), t.end(), time) - t.begin()) - 1;
   const double x = (time - t[k]) / (t[k + 1] - t[k]);
   switch (interpolation) {
-    case Interpolation::Linear: return v[k] + (v[k + 1] - v[k]) * x;
-    case Interpolation::Smooth: return v[k] + (v[k + 1] - v[k]) * (x * x * (3.0 - 2.0 * x));
-    case Interpolation::Step: return v[k];
+    case Interpolation::Linear:
+      return v[k] + (v[k + 1] - v[k]) * x;
+    case Interpolation::Smooth:
+      return v[k] + (v[k + 1] - v[k]) * (x * x * (3.0 - 2.0 * x));
+    case Interpolation::Step:
+      return v[k];
   }
   return v[k];
 }
@@ -63,12 +73,15 @@ std::vector<TrackSegment> Track::segments() const {
     const glm::dvec3 dv = v[k + 1] - v[k];
     s.c[0] = v[k];
     switch (interpolation) {
-      case Interpolation::Linear: s.c[1] = dv / d; break;
+      case Interpolation::Linear:
+        s.c[1] = dv / d;
+        break;
       case Interpolation::Smooth:
         s.c[2] = 3.0 * dv / (d * d);
         s.c[3] = -2.0 * dv / (d * d * d);
         break;
-      case Interpolation::Step: break;
+      case Interpolation::Step:
+        break;
     }
     out.push_back(s);
   }

@@ -22,12 +22,18 @@ struct SequenceName {
   const char* name;
 };
 constexpr SequenceName kSequences[] = {
-    {MoultSequence::CentreOut, "centre_out"},     {MoultSequence::BoundaryIn, "boundary_in"},
-    {MoultSequence::CentreOutU, "centre_out_u"},  {MoultSequence::BoundaryInU, "boundary_in_u"},
-    {MoultSequence::CentreOutV, "centre_out_v"},  {MoultSequence::BoundaryInV, "boundary_in_v"},
-    {MoultSequence::IncreasingU, "increasing_u"}, {MoultSequence::DecreasingU, "decreasing_u"},
-    {MoultSequence::IncreasingV, "increasing_v"}, {MoultSequence::DecreasingV, "decreasing_v"},
-    {MoultSequence::Radial, "radial"},            {MoultSequence::Random, "random"},
+    {MoultSequence::CentreOut, "centre_out"},
+    {MoultSequence::BoundaryIn, "boundary_in"},
+    {MoultSequence::CentreOutU, "centre_out_u"},
+    {MoultSequence::BoundaryInU, "boundary_in_u"},
+    {MoultSequence::CentreOutV, "centre_out_v"},
+    {MoultSequence::BoundaryInV, "boundary_in_v"},
+    {MoultSequence::IncreasingU, "increasing_u"},
+    {MoultSequence::DecreasingU, "decreasing_u"},
+    {MoultSequence::IncreasingV, "increasing_v"},
+    {MoultSequence::DecreasingV, "decreasing_v"},
+    {MoultSequence::Radial, "radial"},
+    {MoultSequence::Random, "random"},
 };
 
 // Salts so the random order and the jitter are independent streams of one seed.
@@ -75,8 +81,8 @@ bool parseMoultSequence(const std::string& name, MoultSequence& out) {
   return false;
 }
 
-MoultPlan planMoult(const std::vector<glm::dvec2>& uv, const std::vector<double>& size,
-                    const std::vector<uint64_t>& id, const MoultOptions& options) {
+MoultPlan planMoult(const std::vector<glm::dvec2>& uv, const std::vector<double>& size, const std::vector<uint64_t>& id,
+                    const MoultOptions& options) {
   validate(options, {}, {});
   PTERYLA_CHECK(uv.size() == size.size() && uv.size() == id.size(), "planMoult: uv, size and id differ in length");
   const size_t n = uv.size();
@@ -113,18 +119,45 @@ MoultPlan planMoult(const std::vector<glm::dvec2>& uv, const std::vector<double>
   for (size_t i = 0; i < n; ++i) {
     const glm::dvec2& p = uv[i];
     switch (options.sequence) {
-      case MoultSequence::CentreOut: d[i] = elliptic[i]; break;
-      case MoultSequence::BoundaryIn: d[i] = elliptic[i]; reverse = true; break;
-      case MoultSequence::CentreOutU: d[i] = std::abs(p.x - c.x); break;
-      case MoultSequence::BoundaryInU: d[i] = std::abs(p.x - c.x); reverse = true; break;
-      case MoultSequence::CentreOutV: d[i] = std::abs(p.y - c.y); break;
-      case MoultSequence::BoundaryInV: d[i] = std::abs(p.y - c.y); reverse = true; break;
-      case MoultSequence::IncreasingU: d[i] = p.x - lo.x; break;
-      case MoultSequence::DecreasingU: d[i] = hi.x - p.x; break;
-      case MoultSequence::IncreasingV: d[i] = p.y - lo.y; break;
-      case MoultSequence::DecreasingV: d[i] = hi.y - p.y; break;
-      case MoultSequence::Radial: d[i] = glm::length(p - c); break;
-      case MoultSequence::Random: d[i] = hashUniform(options.seed ^ kRandomOrderSalt, id[i]); break;
+      case MoultSequence::CentreOut:
+        d[i] = elliptic[i];
+        break;
+      case MoultSequence::BoundaryIn:
+        d[i] = elliptic[i];
+        reverse = true;
+        break;
+      case MoultSequence::CentreOutU:
+        d[i] = std::abs(p.x - c.x);
+        break;
+      case MoultSequence::BoundaryInU:
+        d[i] = std::abs(p.x - c.x);
+        reverse = true;
+        break;
+      case MoultSequence::CentreOutV:
+        d[i] = std::abs(p.y - c.y);
+        break;
+      case MoultSequence::BoundaryInV:
+        d[i] = std::abs(p.y - c.y);
+        reverse = true;
+        break;
+      case MoultSequence::IncreasingU:
+        d[i] = p.x - lo.x;
+        break;
+      case MoultSequence::DecreasingU:
+        d[i] = hi.x - p.x;
+        break;
+      case MoultSequence::IncreasingV:
+        d[i] = p.y - lo.y;
+        break;
+      case MoultSequence::DecreasingV:
+        d[i] = hi.y - p.y;
+        break;
+      case MoultSequence::Radial:
+        d[i] = glm::length(p - c);
+        break;
+      case MoultSequence::Random:
+        d[i] = hashUniform(options.seed ^ kRandomOrderSalt, id[i]);
+        break;
     }
   }
   normaliseMax(d);
@@ -259,10 +292,18 @@ MoultStats applyMoult(const CoatMoultPlan& plan, double t, coat::CoatFeathers& c
       coat.age[fs[k]] = s.age;
       coat.present[fs[k]] = s.present ? 1 : 0;
       switch (s.phase) {
-        case MoultPhase::Old: ++st.old; break;
-        case MoultPhase::Lost: ++st.lost; break;
-        case MoultPhase::Growing: ++st.growing; break;
-        case MoultPhase::Renewed: ++st.renewed; break;
+        case MoultPhase::Old:
+          ++st.old;
+          break;
+        case MoultPhase::Lost:
+          ++st.lost;
+          break;
+        case MoultPhase::Growing:
+          ++st.growing;
+          break;
+        case MoultPhase::Renewed:
+          ++st.renewed;
+          break;
       }
     }
   }
@@ -291,8 +332,10 @@ MoultOptions readMoultOptions(JsonReader& r, const MoultOptions& defaults) {
   o.gap = r.number("gap", o.gap, 0.0, 0.999);
   o.random = r.number("random", o.random, 0.0, 1.0);
   o.seed = r.seed("seed", o.seed);
-  if (r.has("center")) o.center = r.vec2("center");
-  else r.allow("center");
+  if (r.has("center"))
+    o.center = r.vec2("center");
+  else
+    r.allow("center");
   o.sizeExponent = r.number("size_exponent", o.sizeExponent, 0.0, 8.0);
   o.boundarySlowdown = r.number("boundary_slowdown", o.boundarySlowdown, 0.0, 100.0);
   o.oldAge = r.number("old_age", o.oldAge, 1.0, 2.0);

@@ -73,8 +73,10 @@ Skeleton readSkeleton(JsonReader& r, size_t vertexCount) {
     double sum = 0;
     size_t m = 0;
     for (size_t k = 0; k < list.size(); ++k) {
-      if (m > 0 && list[m - 1].first == list[k].first) list[m - 1].second += list[k].second;
-      else list[m++] = list[k];
+      if (m > 0 && list[m - 1].first == list[k].first)
+        list[m - 1].second += list[k].second;
+      else
+        list[m++] = list[k];
     }
     list.resize(m);
     for (const auto& e : list) sum += e.second;
@@ -154,14 +156,25 @@ SkeletonPose poseAt(const SkeletonAnimation& a, double t) {
     const auto& ts = a.times[j];
     const auto& qs = a.rotations[j];
     if (ts.empty()) continue;
-    if (t <= ts.front()) { p.rotation[j] = qs.front(); continue; }
-    if (t >= ts.back()) { p.rotation[j] = qs.back(); continue; }
+    if (t <= ts.front()) {
+      p.rotation[j] = qs.front();
+      continue;
+    }
+    if (t >= ts.back()) {
+      p.rotation[j] = qs.back();
+      continue;
+    }
     const size_t k = static_cast<size_t>(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin()) - 1;
     double x = (t - ts[k]) / (ts[k + 1] - ts[k]);
     switch (a.interpolation) {
-      case Interpolation::Linear: break;
-      case Interpolation::Smooth: x = x * x * (3.0 - 2.0 * x); break;
-      case Interpolation::Step: x = 0; break;
+      case Interpolation::Linear:
+        break;
+      case Interpolation::Smooth:
+        x = x * x * (3.0 - 2.0 * x);
+        break;
+      case Interpolation::Step:
+        x = 0;
+        break;
     }
     p.rotation[j] = x == 0 ? qs[k] : glm::normalize(glm::slerp(qs[k], qs[k + 1], x));
   }
@@ -178,7 +191,8 @@ glm::dquat rotationFromAxisAngle(const glm::dvec3& axis, double degrees) {
 SkinRig readSkinRig(JsonReader& r, size_t vertexCount) {
   SkinRig rig;
   if (r.has("file")) {
-    if (r.has("joints") || r.has("weights")) r.fail("file", "give either \"file\" or inline \"joints\"/\"weights\", not both");
+    if (r.has("joints") || r.has("weights"))
+      r.fail("file", "give either \"file\" or inline \"joints\"/\"weights\", not both");
     rig.file = resolveRelative(r.file(), r.string("file"));
     if (!fileExists(rig.file)) r.fail("file", "skeleton file not found: " + rig.file);
     rig.skeleton = loadSkeleton(rig.file, vertexCount);
@@ -207,7 +221,8 @@ SkinRig readSkinRig(JsonReader& r, size_t vertexCount) {
     } else if (jv.is_number_integer()) {
       const int64_t j = jv.get<int64_t>();
       if (j < 0 || static_cast<uint64_t>(j) >= s.jointCount())
-        k.fail("joint", "joint index " + std::to_string(j) + " out of range [0, " + std::to_string(s.jointCount()) + ")");
+        k.fail("joint",
+               "joint index " + std::to_string(j) + " out of range [0, " + std::to_string(s.jointCount()) + ")");
       joint = static_cast<int32_t>(j);
     } else {
       k.fail("joint", "expected a joint name or index");

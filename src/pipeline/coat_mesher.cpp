@@ -135,11 +135,14 @@ void CoatMesher::updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& gro
       const bool havePacked = !packed.packedKeys.keyOffset.empty();
       const bool asGrown = growing && havePacked && packedAsGrown(age, schedule);
       const bool meshUnpacked = asGrown || !havePacked;  // mesh params = coat.params[i], else the packed ones
-      const bool same = matureValid_[i] && (meshUnpacked ? meshParams_[i] == coat.params[i]
-                                                         : coat::packedParamsEqual(meshParams_[i], packedCoat, packed, i));
+      const bool same =
+          matureValid_[i] && (meshUnpacked ? meshParams_[i] == coat.params[i]
+                                           : coat::packedParamsEqual(meshParams_[i], packedCoat, packed, i));
       if (!same) {
-        if (meshUnpacked) meshParams_[i] = coat.params[i];
-        else coat::packedParamsInto(packedCoat, packed, i, meshParams_[i]);
+        if (meshUnpacked)
+          meshParams_[i] = coat.params[i];
+        else
+          coat::packedParamsInto(packedCoat, packed, i, meshParams_[i]);
         const feather::FeatherParams& p = meshParams_[i];
         feather::generateBarbs(p, matureCurves_[i]);
         feather::computeLodOrder(matureCurves_[i], lodOrders_[i]);
@@ -189,7 +192,8 @@ void CoatMesher::update(const CoatMeshInput& in, TriMesh& out) {
     feather::FeatherMeshInput fi;
     fi.curves = grown[i] ? &matureCurves_[i] : &grownCurves_[i];
     fi.reference = grown[i] ? nullptr : &matureCurves_[i];
-    fi.order = !grown[i] && grownCurves_[i].barbs.size() != matureCurves_[i].barbs.size() ? &grownOrders_[i] : &lodOrders_[i];
+    fi.order =
+        !grown[i] && grownCurves_[i].barbs.size() != matureCurves_[i].barbs.size() ? &grownOrders_[i] : &lodOrders_[i];
     const coat::FeatherFrame& fr = coat.frames[i];
     fi.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, in.packed->elevation[i]);
     fi.featherId = i;

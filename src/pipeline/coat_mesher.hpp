@@ -60,8 +60,8 @@ class CoatMesher {
   // Where a feather sits in the mesh and what it was meshed from.
   struct Slice {
     bool valid = false;
-    uint64_t version = 0;             // curvesVersion_ of the curves it was meshed from
-    bool growing = false;             // meshed from the grown curves (else the mature ones)
+    uint64_t version = 0;  // curvesVersion_ of the curves it was meshed from
+    bool growing = false;  // meshed from the grown curves (else the mature ones)
     double lod = 0, shed = 0;
     uint32_t v0 = 0, vn = 0, i0 = 0, in = 0;
     feather::FeatherMeshRanges ranges;  // absolute, in the mesh

@@ -25,16 +25,26 @@ namespace pteryla::pipeline {
 
 const char* stageName(Stage s) {
   switch (s) {
-    case Stage::Skin: return "skin";
-    case Stage::Tracts: return "tracts";
-    case Stage::Distribute: return "distribute";
-    case Stage::Interpolate: return "interpolate";
-    case Stage::Directions: return "directions";
-    case Stage::Pose: return "pose";
-    case Stage::Ages: return "ages";
-    case Stage::Controls: return "controls";
-    case Stage::Pack: return "pack";
-    case Stage::Mesh: return "mesh";
+    case Stage::Skin:
+      return "skin";
+    case Stage::Tracts:
+      return "tracts";
+    case Stage::Distribute:
+      return "distribute";
+    case Stage::Interpolate:
+      return "interpolate";
+    case Stage::Directions:
+      return "directions";
+    case Stage::Pose:
+      return "pose";
+    case Stage::Ages:
+      return "ages";
+    case Stage::Controls:
+      return "controls";
+    case Stage::Pack:
+      return "pack";
+    case Stage::Mesh:
+      return "mesh";
   }
   return "?";
 }
@@ -57,7 +67,6 @@ void Pipeline::Impl::build() {
   add(Stage::Pack, {Stage::Controls}, &Impl::computePack);
   add(Stage::Mesh, {Stage::Pack}, &Impl::computeMesh);
 }
-
 
 void Pipeline::Impl::computePose() {
   timeState.generation = restGeneration();
@@ -259,7 +268,8 @@ Pipeline::Pipeline(Scene scene, ProgressFn progress) : impl_(std::make_unique<Im
   impl_->build();
 }
 
-Pipeline::Pipeline(Scene scene, coat::SkinMesh skin, ProgressFn progress) : Pipeline(std::move(scene), std::move(progress)) {
+Pipeline::Pipeline(Scene scene, coat::SkinMesh skin, ProgressFn progress)
+    : Pipeline(std::move(scene), std::move(progress)) {
   impl_->memorySkin = std::move(skin);
 }
 
@@ -278,7 +288,9 @@ void Pipeline::setProgress(ProgressFn progress) { impl_->progress = std::move(pr
 // controls). Conservative: any such section counts, even one that turns out to be disabled.
 namespace {
 bool timeMatters(const Scene& scene) {
-  auto nonEmpty = [](const Json& j) { return !j.is_null() && !(j.is_object() && j.empty()) && !(j.is_array() && j.empty()); };
+  auto nonEmpty = [](const Json& j) {
+    return !j.is_null() && !(j.is_object() && j.empty()) && !(j.is_array() && j.empty());
+  };
   if (nonEmpty(scene.skeleton) || nonEmpty(scene.controls) || nonEmpty(scene.moult)) return true;
   for (const Json& t : scene.tracts)
     if (t.is_object() && t.contains("moult") && t.at("moult") != Json(false)) return true;
@@ -488,7 +500,8 @@ double Pipeline::timeFullPack(int repeats) {
   elevations();  // the pack stage has run: its inputs are this frame's
   Impl& m = *impl_;
   const coat::PackOptions& o = m.packOptions;
-  const coat::CoatFeathers& c = m.timeState.packReport.moult ? m.timeState.mature : (m.packGrownAge.empty() ? m.coatNow : m.packCoat);
+  const coat::CoatFeathers& c =
+      m.timeState.packReport.moult ? m.timeState.mature : (m.packGrownAge.empty() ? m.coatNow : m.packCoat);
   double best = std::numeric_limits<double>::infinity();
   for (int r = 0; r < std::max(1, repeats); ++r) {
     const auto t0 = std::chrono::steady_clock::now();

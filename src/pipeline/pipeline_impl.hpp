@@ -30,7 +30,7 @@ namespace pteryla::pipeline {
 // Per-tract settings the pipeline reads itself (the rest of a tract object belongs to coat parsers).
 struct TractSettings {
   coat::Tract tract;
-  double density = 0;       // follicles per unit area (0: use count)
+  double density = 0;  // follicles per unit area (0: use count)
   size_t count = 0;
   bool autoScale = false;   // scale feathers so their length is ~featherSpacings x follicle spacing
   double featherScale = 1;  // explicit scale factor
@@ -39,7 +39,7 @@ struct TractSettings {
   std::vector<glm::dvec3> pinned;
   coat::TractFeatherOptions feathers;
   std::shared_ptr<const feather::GrowthSchedule> growth;  // the tract's "growth" (null: none)
-  std::string overlapGroup;  // "overlap_group": tracts of one group share one distribution where they overlap
+  std::string overlapGroup;      // "overlap_group": tracts of one group share one distribution where they overlap
   std::optional<uint64_t> seed;  // "seed": this tract's own follicle seed (else derived from the scene's)
   double area = 0;
   std::string element;
@@ -50,10 +50,10 @@ struct Pipeline::Impl {
   ProgressFn progress;
   double time = 0, lod = 1;
   std::vector<double> featherLods;  // per feather, multiplies lod (empty: 1 for all)
-  StageGraph graph;  // node int(s) is stage s
+  StageGraph graph;                 // node int(s) is stage s
 
-  std::optional<coat::SkinMesh> memorySkin;  // the rest skin when given in memory (else scene.meshPath)
-  std::vector<glm::dvec3> skinPose;          // the caller's posed positions (empty: skeleton / rest)
+  std::optional<coat::SkinMesh> memorySkin;   // the rest skin when given in memory (else scene.meshPath)
+  std::vector<glm::dvec3> skinPose;           // the caller's posed positions (empty: skeleton / rest)
   std::map<uint64_t, double> hostElevations;  // setFixedElevations: follicle id -> radians
 
   // Cached stage results.
@@ -66,31 +66,31 @@ struct Pipeline::Impl {
   coat::Follicles follicles, posedFollicles;
   std::vector<coat::RelaxResult> relaxResults;
   std::vector<coat::TractParameterization> params;
-  coat::CoatFeathers coatRest;    // interpolated + rest frames + order
+  coat::CoatFeathers coatRest;  // interpolated + rest frames + order
   coat::SurfaceDirections directions;
   coat::DirectionOptions directionOptions;
   coat::OrderOptions orderOptions;
-  coat::PackOptions packOptions;        // the scene's "packing" knobs (PackingSettings::options)
-  coat::PackConstraints constraints;    // the frame's per-feather constraints: fixedElevation below, and
-                                        // the styling's minimum elevations and shaft bands
-  bool moultOver = true;                // PackingSettings::moultOver
-  coat::CoatFeathers coatNow;     // at the current time: posed frames, ages, presence
-  coat::CoatFeathers packCoat;    // coatNow with growing feathers as grown (the pack input when any grows)
-  std::vector<double> packGrownAge;  // per feather, the age packCoat's parameters are grown to (empty = none)
+  coat::PackOptions packOptions;      // the scene's "packing" knobs (PackingSettings::options)
+  coat::PackConstraints constraints;  // the frame's per-feather constraints: fixedElevation below, and
+                                      // the styling's minimum elevations and shaft bands
+  bool moultOver = true;              // PackingSettings::moultOver
+  coat::CoatFeathers coatNow;         // at the current time: posed frames, ages, presence
+  coat::CoatFeathers packCoat;        // coatNow with growing feathers as grown (the pack input when any grows)
+  std::vector<double> packGrownAge;   // per feather, the age packCoat's parameters are grown to (empty = none)
   TimeState timeState;
   std::vector<double> fixedElevation;
-  const coat::PackResult* packed = nullptr;  // timeState.frame.result once packed
+  const coat::PackResult* packed = nullptr;        // timeState.frame.result once packed
   const coat::CoatFeathers* packedCoat = nullptr;  // the coat `packed` was packed from (coatNow or packCoat)
   // Draped packing (packing.method "drape"): the pack stage lays nothing (every elevation 0, `flatPack`)
   // and the mesh stage drapes the assembled mesh; `drape` is its last result.
   coat::PackResult flatPack;
   coat::DrapeResult drape;
   CoatMesh mesh;
-  CoatMesher mesher;                // mesh.mesh is its last result
+  CoatMesher mesher;  // mesh.mesh is its last result
   // Caches of time-stage results are stamped with the rest state they were made from: the number of
   // evaluations of the directions stage, downstream of every rest stage (restGeneration()).
-  uint64_t coatNowGeneration = 0;   // generation coatNow was copied from coatRest at
-  uint64_t posedGeneration = 0;     // generation `posed` is an untouched copy of `rest` at (0 = not)
+  uint64_t coatNowGeneration = 0;  // generation coatNow was copied from coatRest at
+  uint64_t posedGeneration = 0;    // generation `posed` is an untouched copy of `rest` at (0 = not)
   // check(): the last unpacked proxy coat and its intersecting pair count. The unpacked coat comes from
   // the input alone, so checks after edits that leave it as it was (packing, pose-free edits, LOD)
   // reuse the count instead of searching the same mesh again.

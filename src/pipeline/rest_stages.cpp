@@ -31,9 +31,14 @@ constexpr double kBytesPerTriangle = 200;
 // Axes of the rest skin's bounding box, longest first.
 void boxAxes(const coat::SkinMesh& m, glm::dvec3& lo, glm::dvec3& hi, int axes[3]) {
   lo = hi = m.positions.empty() ? glm::dvec3(0) : m.positions[0];
-  for (const auto& p : m.positions) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
+  for (const auto& p : m.positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
   const glm::dvec3 ext = hi - lo;
-  axes[0] = 0; axes[1] = 1; axes[2] = 2;
+  axes[0] = 0;
+  axes[1] = 1;
+  axes[2] = 2;
   std::sort(axes, axes + 3, [&](int a, int b) { return ext[a] > ext[b]; });
 }
 
@@ -56,9 +61,10 @@ void Pipeline::Impl::computeSkin() {
   library.clear();
   materialNames.clear();
   // A scene without feathers gets the bundled contour feather, as a bare mesh does.
-  const Json feathers = scene.feathers.empty()
-                            ? Json{{"contour", (std::filesystem::path(dataDir()) / "feathers" / "contour.json").string()}}
-                            : scene.feathers;
+  const Json feathers =
+      scene.feathers.empty()
+          ? Json{{"contour", (std::filesystem::path(dataDir()) / "feathers" / "contour.json").string()}}
+          : scene.feathers;
   for (auto it = feathers.begin(); it != feathers.end(); ++it) {
     feather::FeatherParams p;
     if (it->is_string()) {
@@ -118,10 +124,13 @@ void Pipeline::Impl::computeTracts() {
     // Memory before distributing: every follicle becomes a feather (frames, pack data, mesh).
     const double follicles = t.count ? double(t.count) : t.density * area;
     plannedFollicles += follicles;
-    requireMemory(plannedFollicles * kBytesPerFollicle,
-                  "the coat of about " + std::to_string(static_cast<uint64_t>(std::min(plannedFollicles, 1e18))) +
-                      " follicles",
-                  scene.file, where + (t.count ? ".count" : r.has("density") ? ".density" : ""));
+    requireMemory(
+        plannedFollicles * kBytesPerFollicle,
+        "the coat of about " + std::to_string(static_cast<uint64_t>(std::min(plannedFollicles, 1e18))) + " follicles",
+        scene.file,
+        where + (t.count            ? ".count"
+                 : r.has("density") ? ".density"
+                                    : ""));
     if (r.has("feather_scale") && r.json().at("feather_scale").is_string()) {
       if (r.string("feather_scale") != "auto") r.fail("feather_scale", "expected a positive number or \"auto\"");
       t.autoScale = true;
@@ -190,7 +199,8 @@ void Pipeline::Impl::computeDistribute() {
     so.tractIndex = static_cast<uint32_t>(i);
     so.firstId = nextId;
     // count 0 with no density: a tract of hand-placed (pinned) follicles only, e.g. flight feathers.
-    coat::Follicles f = (so.count == 0 && t.density <= 0) ? coat::Follicles{} : coat::scatterFollicles(rest, t.tract, so);
+    coat::Follicles f =
+        (so.count == 0 && t.density <= 0) ? coat::Follicles{} : coat::scatterFollicles(rest, t.tract, so);
     nextId += f.size() + t.pinned.size() + 1;
     for (size_t k = 0; k < t.pinned.size(); ++k)
       coat::addPinnedFollicleNear(f, rest, t.tract, t.pinned[k], static_cast<uint32_t>(i), nextId - 1 - k);
@@ -198,7 +208,8 @@ void Pipeline::Impl::computeDistribute() {
     ro.progress = [&, i](const std::string&, double fr) {
       return report(progress, "distribute", (double(i) + fr) / double(tractSettings.size()));
     };
-    relaxResults.push_back(f.size() > t.pinned.size() ? coat::relaxFollicles(rest, t.tract, f, ro) : coat::RelaxResult{});
+    relaxResults.push_back(f.size() > t.pinned.size() ? coat::relaxFollicles(rest, t.tract, f, ro)
+                                                      : coat::RelaxResult{});
     follicles.append(f);
   }
   redistributeOverlaps(nextId);
@@ -300,8 +311,8 @@ void Pipeline::Impl::computeInterpolate() {
   for (size_t i = 0; i < tractSettings.size(); ++i) {
     TractSettings& t = tractSettings[i];
     try {
-      params.push_back(coat::parameterizeTract(rest, t.tract, static_cast<uint32_t>(i), follicles,
-                                               t.feathers.parameterization));
+      params.push_back(
+          coat::parameterizeTract(rest, t.tract, static_cast<uint32_t>(i), follicles, t.feathers.parameterization));
     } catch (const Error&) {
       // With at most one key feather nothing is interpolated, so a closed or folded tract needs no
       // real parameterization: (u,v) from the two longest axes of the mesh's bounding box.
@@ -330,7 +341,10 @@ void Pipeline::Impl::computeInterpolate() {
       double len = 0;
       size_t n = 0;
       for (size_t f = 0; f < coatRest.size(); ++f)
-        if (coatRest.tract[f] == i) { len += coatRest.params[f].totalLength(); ++n; }
+        if (coatRest.tract[f] == i) {
+          len += coatRest.params[f].totalLength();
+          ++n;
+        }
       if (n && len > 0) s = t.featherSpacings * relaxResults[i].spacing / (len / double(n));
     }
     if (s != 1.0)
@@ -340,8 +354,10 @@ void Pipeline::Impl::computeInterpolate() {
   // Growth schedules: the tract's, else the feather file's, else the scene's (else the default).
   for (size_t f = 0; f < coatRest.size(); ++f) {
     const uint32_t t = coatRest.tract[f];
-    if (t < tractSettings.size() && tractSettings[t].growth) coatRest.params[f].growth = tractSettings[t].growth;
-    else if (!coatRest.params[f].growth) coatRest.params[f].growth = sceneGrowth;
+    if (t < tractSettings.size() && tractSettings[t].growth)
+      coatRest.params[f].growth = tractSettings[t].growth;
+    else if (!coatRest.params[f].growth)
+      coatRest.params[f].growth = sceneGrowth;
   }
   // Memory of the coat's geometry before packing and meshing it: barbs on both vanes (and afterfeathers)
   // at the current level of detail, about kTrianglesPerBarb triangles each.
@@ -352,7 +368,10 @@ void Pipeline::Impl::computeInterpolate() {
     double barbs = 0;
     for (const feather::FeatherParams* p = &coatRest.params[f]; p; p = p->afterfeather.get())
       barbs += 2.0 * p->rachisLength / std::max(std::min(p->spacingBase, p->spacingTip), 1e-300);
-    if (barbs > largestBarbs) { largestBarbs = barbs; largest = f; }
+    if (barbs > largestBarbs) {
+      largestBarbs = barbs;
+      largest = f;
+    }
     triangles += barbs * kTrianglesPerBarb * lod;
   }
   if (!coatRest.params.empty()) {

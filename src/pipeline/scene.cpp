@@ -35,7 +35,8 @@ CameraSpec readCamera(JsonReader r) {
     c.eye = r.vec3("eye");
     c.target = r.vec3("target");
     c.autoFrame = false;
-    if (glm::dvec3 d = c.target - c.eye; d.x * d.x + d.y * d.y + d.z * d.z < 1e-18) r.fail("target", "must differ from eye");
+    if (glm::dvec3 d = c.target - c.eye; d.x * d.x + d.y * d.y + d.z * d.z < 1e-18)
+      r.fail("target", "must differ from eye");
   }
   c.autoFrame = r.boolean("auto_frame", c.autoFrame);
   r.finish();
@@ -56,7 +57,8 @@ RenderSpec readRender(JsonReader r) {
   RenderSpec s;
   if (r.has("size")) {
     const auto n = r.numbers("size");
-    if (n.size() != 2 || n[0] < 16 || n[1] < 16 || n[0] > 16384 || n[1] > 16384 || n[0] != int(n[0]) || n[1] != int(n[1]))
+    if (n.size() != 2 || n[0] < 16 || n[1] < 16 || n[0] > 16384 || n[1] > 16384 || n[0] != int(n[0]) ||
+        n[1] != int(n[1]))
       r.fail("size", "expected [width, height] integers in [16, 16384]");
     s.width = int(n[0]);
     s.height = int(n[1]);
@@ -121,9 +123,15 @@ Scene sceneFromJson(const Json& j, const std::string& file) {
   s.controls = takeSection(r, "controls", Json::array());
   s.packing = takeSection(r, "packing", Json::object());
   s.ordering = takeSection(r, "ordering", Json::object());
-  if (r.has("camera")) s.camera = readCamera(r.object("camera")); else r.allow("camera");
+  if (r.has("camera"))
+    s.camera = readCamera(r.object("camera"));
+  else
+    r.allow("camera");
   for (auto& l : r.objects("lights")) s.lights.push_back(readLight(l));
-  if (r.has("render")) s.render = readRender(r.object("render")); else r.allow("render");
+  if (r.has("render"))
+    s.render = readRender(r.object("render"));
+  else
+    r.allow("render");
   r.finish();
   if (s.lights.empty()) {
     s.lights.push_back(LightSpec{});
@@ -176,13 +184,24 @@ Json sceneToJson(const Scene& s, const std::string& relativeTo) {
   }
   j["camera"] = cam;
   j["lights"] = Json::array();
-  for (const auto& l : s.lights) j["lights"].push_back({{"direction", vec(l.direction)}, {"color", vec(l.color)}, {"intensity", l.intensity}});
+  for (const auto& l : s.lights)
+    j["lights"].push_back({{"direction", vec(l.direction)}, {"color", vec(l.color)}, {"intensity", l.intensity}});
   const RenderSpec& rs = s.render;
-  j["render"] = {{"size", {rs.width, rs.height}}, {"lod", rs.lod}, {"lod_by_screen_size", rs.lodByScreenSize},
-                 {"style", rs.style}, {"background", vec(rs.background)}, {"skin_color", vec(rs.skinColor)},
-                 {"ambient", rs.ambient}, {"shadows", rs.shadows}, {"shadow_strength", rs.shadowStrength},
-                 {"msaa", rs.msaa}, {"exposure", rs.exposure}, {"tone", rs.tone}, {"light_rig", rs.lightRig},
-                 {"ground", rs.ground}, {"ground_color", vec(rs.groundColor)},
+  j["render"] = {{"size", {rs.width, rs.height}},
+                 {"lod", rs.lod},
+                 {"lod_by_screen_size", rs.lodByScreenSize},
+                 {"style", rs.style},
+                 {"background", vec(rs.background)},
+                 {"skin_color", vec(rs.skinColor)},
+                 {"ambient", rs.ambient},
+                 {"shadows", rs.shadows},
+                 {"shadow_strength", rs.shadowStrength},
+                 {"msaa", rs.msaa},
+                 {"exposure", rs.exposure},
+                 {"tone", rs.tone},
+                 {"light_rig", rs.lightRig},
+                 {"ground", rs.ground},
+                 {"ground_color", vec(rs.groundColor)},
                  {"brdf", {{"d", rs.brdfD}, {"h", rs.brdfH}}}};
   return j;
 }

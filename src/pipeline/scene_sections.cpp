@@ -15,7 +15,8 @@ std::string relPath(const std::string& p, const std::string& relativeTo) {
 }
 
 void validateFeathers(Scene& s) {
-  if (!s.feathers.is_object()) throw Error("expected an object mapping feather names to files or definitions", s.file, "feathers");
+  if (!s.feathers.is_object())
+    throw Error("expected an object mapping feather names to files or definitions", s.file, "feathers");
   for (auto it = s.feathers.begin(); it != s.feathers.end(); ++it) {
     const std::string where = "feathers." + it.key();
     if (it->is_string()) {

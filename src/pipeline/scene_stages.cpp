@@ -8,23 +8,23 @@ const std::vector<SectionStage>& sectionStages() {
   static const std::vector<SectionStage> table = {
       {"pteryla", "", std::nullopt},
       {"name", "", std::nullopt},
-      {"time", "", std::nullopt},                  // the starting time: Pipeline::setTime
+      {"time", "", std::nullopt},  // the starting time: Pipeline::setTime
       {"mesh", "", Stage::Skin},
       {"mesh_repair", "", Stage::Skin},
-      {"feathers", "", Stage::Skin},               // the feather library is loaded with the skin
+      {"feathers", "", Stage::Skin},  // the feather library is loaded with the skin
       {"tracts", "", Stage::Tracts},
-      {"tracts", "moult", Stage::Ages},            // per-tract moult overrides: read by the ages stage
-      {"growth", "", Stage::Tracts},               // the scene's growth schedule, read with the tracts
-      {"seed", "", Stage::Distribute},             // scatter seeds (and the interpolation's jitter)
+      {"tracts", "moult", Stage::Ages},  // per-tract moult overrides: read by the ages stage
+      {"growth", "", Stage::Tracts},     // the scene's growth schedule, read with the tracts
+      {"seed", "", Stage::Distribute},   // scatter seeds (and the interpolation's jitter)
       {"directions", "", Stage::Directions},
-      {"ordering", "", Stage::Directions},         // layer order is computed with the directions
+      {"ordering", "", Stage::Directions},  // layer order is computed with the directions
       {"skeleton", "", Stage::Pose},
       {"moult", "", Stage::Ages},
       {"controls", "", Stage::Controls},
-      {"packing", "", Stage::Controls},            // styling and the controls' natural pack read it
+      {"packing", "", Stage::Controls},  // styling and the controls' natural pack read it
       {"camera", "", std::nullopt},
       {"lights", "", std::nullopt},
-      {"render", "", std::nullopt},                // render.lod: the starting level of detail, Pipeline::setLod
+      {"render", "", std::nullopt},  // render.lod: the starting level of detail, Pipeline::setLod
   };
   return table;
 }

@@ -41,7 +41,10 @@ void StageGraph::pull(Id s) {
 }
 
 void StageGraph::resetTimings() {
-  for (auto& n : nodes_) { n.totalSeconds = 0; n.lastSeconds = 0; }
+  for (auto& n : nodes_) {
+    n.totalSeconds = 0;
+    n.lastSeconds = 0;
+  }
 }
 
 }  // namespace pteryla::pipeline

@@ -167,8 +167,8 @@ std::optional<std::vector<uint32_t>> PackMemo::changes(const coat::SkinMesh& ski
     const bool same = sameBits(&coat.frames[i], &frames[i], sizeof(coat::FeatherFrame)) &&
                       presentAt(coat, i) == present[i] && unopenedAt(coat, i, options) == unopened[i] &&
                       sameFixed(fixedAt(constraints, i), fixed[i]) &&
-                      sameBits(&(grownAgeNow.empty() ? kMature : grownAgeNow[i]), &(grownAge.empty() ? kMature : grownAge[i]),
-                               sizeof(double));
+                      sameBits(&(grownAgeNow.empty() ? kMature : grownAgeNow[i]),
+                               &(grownAge.empty() ? kMature : grownAge[i]), sizeof(double));
     if (!same) out.push_back(static_cast<uint32_t>(i));
   }
   return out;
@@ -281,16 +281,16 @@ const coat::CoatFeathers& matureCoat(const coat::CoatFeathers& coat, TimeState& 
   return state.mature;
 }
 
-const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& mature,
-                                       const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                                       const coat::PackConstraints& constraints, TimeState& state,
-                                       const std::vector<double>& grownAge) {
+const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed,
+                                       const coat::CoatFeathers& mature, const coat::CoatFeathers& coat,
+                                       const coat::PackOptions& options, const coat::PackConstraints& constraints,
+                                       TimeState& state, const std::vector<double>& grownAge) {
   PackReport& r = state.packReport;
   r.moult = true;
   const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
-  const coat::PackResult& base = packWithMemo(state.frame, alternative, posed, mature, options, constraints,
-                                              state.generation, scene.packing, r.finalIncremental, r.finalChanged,
-                                              r.finalRecomputed);
+  const coat::PackResult& base =
+      packWithMemo(state.frame, alternative, posed, mature, options, constraints, state.generation, scene.packing,
+                   r.finalIncremental, r.finalChanged, r.finalRecomputed);
   // What differs from the mature coat: lost feathers, and growing ones (grown packing parameters, or the
   // packer's unopened class).
   std::vector<uint32_t> changed;

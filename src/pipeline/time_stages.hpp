@@ -26,17 +26,17 @@ namespace pteryla::pipeline {
 // are compared per feather.
 struct PackMemo {
   bool valid = false;
-  uint64_t generation = 0;               // Pipeline rest-state generation the inputs belong to
-  Json packing;                          // the scene's "packing" section the options were parsed from
-  std::vector<glm::dvec3> skin;          // posed skin positions
+  uint64_t generation = 0;       // Pipeline rest-state generation the inputs belong to
+  Json packing;                  // the scene's "packing" section the options were parsed from
+  std::vector<glm::dvec3> skin;  // posed skin positions
   std::vector<coat::FeatherFrame> frames;
   std::vector<uint8_t> present, unopened;
-  std::vector<double> fixed;             // per feather, NaN = free
+  std::vector<double> fixed;  // per feather, NaN = free
   // Per feather, the age its packing parameters were grown to (1 = the rest parameters); empty = all 1.
   // Within a rest state a feather's packing parameters are a function of this age.
   std::vector<double> grownAge;
   coat::PackResult result;
-  uint64_t version = 0;                  // changes whenever `result` is replaced (remember)
+  uint64_t version = 0;  // changes whenever `result` is replaced (remember)
 
   void clear() { *this = PackMemo{}; }
   // Feathers whose packing input differs from the memo's, or nullopt when the memo cannot seed a repack
@@ -71,15 +71,15 @@ struct TimeState {
   const coat::SkinMesh* rest = nullptr;
 
   // Skeleton ("skeleton" section).
-  Json rigKey;                            // {file, section, vertex count} the rig was read for
-  std::optional<moult::SkinRig> rig;      // empty: no skeleton
-  bool posedMoved = false;                // the last pose moved the skin
+  Json rigKey;                        // {file, section, vertex count} the rig was read for
+  std::optional<moult::SkinRig> rig;  // empty: no skeleton
+  bool posedMoved = false;            // the last pose moved the skin
 
   // Moult ("moult" section and per-tract "moult" overrides).
   Json moultKey;
   bool moultParsed = false;
   std::vector<std::optional<moult::MoultOptions>> moultOptions;  // per tract
-  moult::MoultStats moultStats;           // of the last evaluation
+  moult::MoultStats moultStats;                                  // of the last evaluation
   // The plan depends only on rest data and the moult sections: kept while both are unchanged.
   std::optional<moult::CoatMoultPlan> moultPlan;
   uint64_t moultPlanGeneration = 0;
@@ -90,10 +90,10 @@ struct TimeState {
   std::vector<moult::ControlSpec> controls;
   std::vector<std::vector<uint32_t>> controlTracts;  // per control: tract indices (empty = any)
   coat::PackingSettings packing;
-  moult::ControlResult controlResult;     // of the last evaluation (its natural pack lives in `natural`)
+  moult::ControlResult controlResult;  // of the last evaluation (its natural pack lives in `natural`)
 
   // Packs remembered across frames (see PackMemo): the controls' natural pack and the frame's pack.
-  uint64_t generation = 0;                // set by the pipeline: changes whenever the rest state changes
+  uint64_t generation = 0;  // set by the pipeline: changes whenever the rest state changes
   PackMemo natural, frame;
   // Moult frames: the lost and growing feathers packed over `frame` (which then holds the mature coat's
   // pack) and the version of `frame` it was packed over.
@@ -103,7 +103,7 @@ struct TimeState {
   // natural pack in a moult frame pack. Its rest parameters are copied once per rest state.
   coat::CoatFeathers mature;
   uint64_t matureGeneration = 0;
-  bool naturalThisFrame = false;          // `natural` holds the pack of the current frame without raises
+  bool naturalThisFrame = false;  // `natural` holds the pack of the current frame without raises
   PackReport packReport;
 };
 
@@ -138,9 +138,9 @@ const coat::CoatFeathers& matureCoat(const coat::CoatFeathers& coat, TimeState& 
 // (into state.frame), then the lost and growing feathers of `coat` are packed over it (coat::packOver):
 // mature feathers keep their pose, so a lost feather leaves a gap and a growing one fills in under the
 // feathers over it. Reused when neither the mature pack nor this frame's lost/growing feathers changed.
-const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& mature,
-                                       const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                                       const coat::PackConstraints& constraints, TimeState& state,
-                                       const std::vector<double>& grownAge);
+const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed,
+                                       const coat::CoatFeathers& mature, const coat::CoatFeathers& coat,
+                                       const coat::PackOptions& options, const coat::PackConstraints& constraints,
+                                       TimeState& state, const std::vector<double>& grownAge);
 
 }  // namespace pteryla::pipeline

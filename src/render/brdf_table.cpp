@@ -125,7 +125,10 @@ double barbuleSpecular(double pL, double pV, double d, double h, double sigma) {
   if (b > a) {
     double pts[3] = {a, pH, b};
     int n = 3;
-    if (!(a < pH && pH < b)) { pts[1] = b; n = 2; }
+    if (!(a < pH && pH < b)) {
+      pts[1] = b;
+      n = 2;
+    }
     for (int s = 0; s + 1 < n; ++s) {
       const double u = pts[s], w = pts[s + 1];
       const double mid = 0.5 * (u + w), half = 0.5 * (w - u);

@@ -17,7 +17,8 @@ glm::vec3 Camera::forward() const {
 
 glm::mat4 Camera::view() const {
   glm::vec3 u = up;
-  if (glm::length(glm::cross(forward(), u)) < 1e-6f) u = std::abs(forward().y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+  if (glm::length(glm::cross(forward(), u)) < 1e-6f)
+    u = std::abs(forward().y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
   return glm::lookAt(eye, eye + forward(), u);
 }
 

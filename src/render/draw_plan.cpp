@@ -109,9 +109,9 @@ void DrawPlan::validateRanges(const std::vector<FeatherDrawRange>& ranges, size_
       sum += c;
     }
     if (sum != 0 && sum != f.indexCount)
-      throw Error("feather part counts sum to " + std::to_string(sum) + ", expected indexCount " +
-                      std::to_string(f.indexCount),
-                  {}, el + ".partCount");
+      throw Error(
+          "feather part counts sum to " + std::to_string(sum) + ", expected indexCount " + std::to_string(f.indexCount),
+          {}, el + ".partCount");
   }
   // Ranges may come in any order but must not share indices: each frame's surviving triangles are
   // written into a buffer the size of the coat's index list.
@@ -122,9 +122,11 @@ void DrawPlan::validateRanges(const std::vector<FeatherDrawRange>& ranges, size_
   for (size_t k = 1; k < byFirst.size(); ++k) {
     const FeatherDrawRange& prev = ranges[byFirst[k - 1].second];
     if (size_t(prev.firstIndex) + prev.indexCount > byFirst[k].first) {
-      const size_t a = std::min(byFirst[k - 1].second, byFirst[k].second), b = std::max(byFirst[k - 1].second, byFirst[k].second);
-      throw Error("feather draw range overlaps ranges[" + std::to_string(a) + "] (each triangle belongs to one feather)",
-                  {}, "ranges[" + std::to_string(b) + "]");
+      const size_t a = std::min(byFirst[k - 1].second, byFirst[k].second),
+                   b = std::max(byFirst[k - 1].second, byFirst[k].second);
+      throw Error(
+          "feather draw range overlaps ranges[" + std::to_string(a) + "] (each triangle belongs to one feather)", {},
+          "ranges[" + std::to_string(b) + "]");
     }
   }
 }
@@ -156,8 +158,12 @@ void DrawPlan::setCoat(const std::vector<glm::vec3>& positions, const std::vecto
       partChunks_[5 * i + k] = static_cast<uint32_t>(chunks_.size());
       const uint32_t count = hasParts ? f.partCount[k] : (k == 0 ? f.indexCount : 0);
       for (uint32_t c = 0; c < count; c += 3 * kChunkTriangles) {
-        Chunk ch{glm::vec3(std::numeric_limits<float>::max()), glm::vec3(-std::numeric_limits<float>::max()),
-                 partFirst + c, std::min(3 * kChunkTriangles, count - c), UINT32_MAX, 0};
+        Chunk ch{glm::vec3(std::numeric_limits<float>::max()),
+                 glm::vec3(-std::numeric_limits<float>::max()),
+                 partFirst + c,
+                 std::min(3 * kChunkTriangles, count - c),
+                 UINT32_MAX,
+                 0};
         for (uint32_t j = ch.first; j < ch.first + ch.count; ++j) {
           const glm::vec3& q = positions[indices[j]];
           ch.lo = glm::min(ch.lo, q);
@@ -253,8 +259,8 @@ uint32_t DrawPlan::emitChunk(const Chunk& ch, bool backward, const DepthTiles* t
       continue;
     }
     const float inv = 1.0f / q.w;
-    projected[v] = glm::vec3((q.x * inv * 0.5f + 0.5f) * float(w), (q.y * inv * 0.5f + 0.5f) * float(h),
-                             q.z * inv * 0.5f + 0.5f);
+    projected[v] =
+        glm::vec3((q.x * inv * 0.5f + 0.5f) * float(w), (q.y * inv * 0.5f + 0.5f) * float(h), q.z * inv * 0.5f + 0.5f);
   }
   uint32_t written = 0;
   for (uint32_t n = 0; n < tris; ++n) {
@@ -351,11 +357,12 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
         const Chunk& ch = chunks_[c];
         uint32_t tiny = 0;
         Depth d = depth;
-        if (d == Depth::Mixed && c1 - c0 > 1) d = classify(ch.lo, ch.hi, viewProj, view, proj, width, height, *occluders);
-        const uint32_t n = d == Depth::Hidden ? 0
-                                              : emitChunk(ch, pl.backward, d == Depth::Mixed ? occluders : nullptr,
-                                                          subpixel, viewProj, width, height, scratch_.data() + ch.first,
-                                                          projected, tiny);
+        if (d == Depth::Mixed && c1 - c0 > 1)
+          d = classify(ch.lo, ch.hi, viewProj, view, proj, width, height, *occluders);
+        const uint32_t n = d == Depth::Hidden
+                               ? 0
+                               : emitChunk(ch, pl.backward, d == Depth::Mixed ? occluders : nullptr, subpixel, viewProj,
+                                           width, height, scratch_.data() + ch.first, projected, tiny);
         kept_[c] = n;
         pl.triangles += n / 3;
         pl.occludedTriangles += (ch.count - n) / 3 - tiny;
@@ -378,8 +385,7 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
     counts_.occludedTriangles += pl.occludedTriangles;
     counts_.subpixelTriangles += pl.subpixelTriangles;
     const uint32_t material = ranges_[i].material;
-    if (pl.triangles > 0 && (runs_.empty() || runs_.back().material != material))
-      runs_.push_back({material, used, 0});
+    if (pl.triangles > 0 && (runs_.empty() || runs_.back().material != material)) runs_.push_back({material, used, 0});
     for (int8_t k : pl.order) {
       const uint32_t c0 = partChunks_[5 * i + k], c1 = partChunks_[5 * i + k + 1];
       if (c0 == c1) continue;

@@ -141,15 +141,16 @@ void Renderer::Impl::releaseTarget() {
 }
 
 template <class T>
-void Renderer::Impl::syncAttr(GpuMesh& m, Attr a, const std::vector<T>& data, size_t vertexCount, int comps, const char* name) {
+void Renderer::Impl::syncAttr(GpuMesh& m, Attr a, const std::vector<T>& data, size_t vertexCount, int comps,
+                              const char* name) {
   if (data.empty()) {
     m.present[a] = false;
     gl.DisableVertexAttribArray(a);
     return;
   }
   if (data.size() != vertexCount)
-    throw Error(std::string("mesh attribute '") + name + "' has " + std::to_string(data.size()) +
-                    " entries for " + std::to_string(vertexCount) + " vertices",
+    throw Error(std::string("mesh attribute '") + name + "' has " + std::to_string(data.size()) + " entries for " +
+                    std::to_string(vertexCount) + " vertices",
                 {}, name);
   const size_t bytes = data.size() * sizeof(T);
   if (!m.vbo[a]) gl.GenBuffers(1, &m.vbo[a]);
@@ -176,14 +177,15 @@ void Renderer::Impl::applyDefaults(const GpuMesh& m) {
   if (!m.present[kBarbCount]) gl.VertexAttrib1f(kBarbCount, 1.0f);
 }
 
-void Renderer::Impl::upload(GpuMesh& m, const TriMesh& mesh, const std::vector<glm::vec3>* normalsOverride, bool staticIndices) {
+void Renderer::Impl::upload(GpuMesh& m, const TriMesh& mesh, const std::vector<glm::vec3>* normalsOverride,
+                            bool staticIndices) {
   if (mesh.indices.size() % 3 != 0) throw Error("mesh index count is not a multiple of 3", {}, "indices");
   const size_t nv = mesh.vertexCount();
   for (size_t i = 0; i < mesh.indices.size(); ++i)
     if (mesh.indices[i] >= nv)
-      throw Error("mesh index " + std::to_string(mesh.indices[i]) + " out of range (" + std::to_string(nv) +
-                      " vertices)",
-                  {}, "face " + std::to_string(i / 3));
+      throw Error(
+          "mesh index " + std::to_string(mesh.indices[i]) + " out of range (" + std::to_string(nv) + " vertices)", {},
+          "face " + std::to_string(i / 3));
   if (!m.vao) gl.GenVertexArrays(1, &m.vao);
   gl.BindVertexArray(m.vao);
   syncAttr(m, kPos, mesh.positions, nv, 3, "positions");
@@ -233,13 +235,17 @@ void Renderer::Impl::ensureTarget(int w, int h, int samples) {
     gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
     gl.GenRenderbuffers(1, &color);
     gl.BindRenderbuffer(GL_RENDERBUFFER, color);
-    if (s > 0) gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_RGBA8, w, h);
-    else gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+    if (s > 0)
+      gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_RGBA8, w, h);
+    else
+      gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
     gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
     gl.GenRenderbuffers(1, &depth);
     gl.BindRenderbuffer(GL_RENDERBUFFER, depth);
-    if (s > 0) gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_DEPTH24_STENCIL8, w, h);
-    else gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, w, h);
+    if (s > 0)
+      gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_DEPTH24_STENCIL8, w, h);
+    else
+      gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, w, h);
     gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
     if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw Error("cannot create an off-screen framebuffer of " + std::to_string(w) + "x" + std::to_string(h) +

@@ -12,9 +12,9 @@ namespace {
 
 void checkTolerance(double v, const char* element) {
   if (!(v >= 0.0 && v <= 1.0))
-    throw Error("expected a tolerance in [0, 1] (a fraction of the 0..255 range or of the pixels), got " +
-                    std::to_string(v),
-                {}, element);
+    throw Error(
+        "expected a tolerance in [0, 1] (a fraction of the 0..255 range or of the pixels), got " + std::to_string(v),
+        {}, element);
 }
 
 }  // namespace
@@ -26,8 +26,8 @@ ImageDiff diffImages(const Image& actual, const Image& expected, const DiffToler
   ImageDiff d;
   d.width = actual.width;
   d.height = actual.height;
-  d.sameSize = actual.width == expected.width && actual.height == expected.height &&
-               actual.rgba.size() == expected.rgba.size();
+  d.sameSize =
+      actual.width == expected.width && actual.height == expected.height && actual.rgba.size() == expected.rgba.size();
   if (!d.sameSize) return d;
   const size_t pixels = static_cast<size_t>(actual.width) * static_cast<size_t>(actual.height);
   // Integer thresholds: a channel changed when its difference exceeds tol.pixel * 255.
@@ -75,8 +75,7 @@ Image differenceImage(const Image& actual, const Image& expected, const DiffTole
     uint8_t* o = out.rgba.data() + 4 * p;
     int pixelMax = 0;
     for (int c = 0; c < 4; ++c) pixelMax = std::max(pixelMax, std::abs(int(a[c]) - int(b[c])));
-    for (int c = 0; c < 3; ++c)
-      o[c] = static_cast<uint8_t>(std::min(255.0, gain * std::abs(int(a[c]) - int(b[c]))));
+    for (int c = 0; c < 3; ++c) o[c] = static_cast<uint8_t>(std::min(255.0, gain * std::abs(int(a[c]) - int(b[c]))));
     if (pixelMax > threshold) o[0] = std::max<uint8_t>(o[0], 160);  // changed: at least a visible red
     o[3] = 255;
   }

@@ -53,8 +53,10 @@ const OsMesaApi& osMesa() {
       if ((lib = dlopen(name, RTLD_NOW | RTLD_LOCAL))) break;
     if (!lib) {
       const char* why = dlerror();
-      failure = std::string("cannot load Mesa's off-screen GL library libOSMesa.so.8 (install libosmesa6: "
-                            "tools/bootstrap.sh): ") + (why ? why : "not found");
+      failure = std::string(
+                    "cannot load Mesa's off-screen GL library libOSMesa.so.8 (install libosmesa6: "
+                    "tools/bootstrap.sh): ") +
+                (why ? why : "not found");
       return;
     }
     auto sym = [&](auto& fn, const char* name) {
@@ -91,15 +93,35 @@ void checkSize(int w, int h) {
 OsMesaContext::OsMesaContext(int width, int height) : impl_(std::make_unique<Impl>()) {
   checkSize(width, height);
   const OsMesaApi& gl = osMesa();
-  const int core[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_STENCIL_BITS, 8,
-                      OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
-                      OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+  const int core[] = {OSMESA_FORMAT,
+                      OSMESA_RGBA,
+                      OSMESA_DEPTH_BITS,
+                      24,
+                      OSMESA_STENCIL_BITS,
+                      8,
+                      OSMESA_PROFILE,
+                      OSMESA_CORE_PROFILE,
+                      OSMESA_CONTEXT_MAJOR_VERSION,
+                      3,
+                      OSMESA_CONTEXT_MINOR_VERSION,
+                      3,
+                      0};
   impl_->ctx = gl.createContextAttribs(core, nullptr);
   impl_->core = impl_->ctx != nullptr;
   if (!impl_->ctx) {
-    const int compat[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_STENCIL_BITS, 8,
-                          OSMESA_PROFILE, OSMESA_COMPAT_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
-                          OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+    const int compat[] = {OSMESA_FORMAT,
+                          OSMESA_RGBA,
+                          OSMESA_DEPTH_BITS,
+                          24,
+                          OSMESA_STENCIL_BITS,
+                          8,
+                          OSMESA_PROFILE,
+                          OSMESA_COMPAT_PROFILE,
+                          OSMESA_CONTEXT_MAJOR_VERSION,
+                          3,
+                          OSMESA_CONTEXT_MINOR_VERSION,
+                          3,
+                          0};
     impl_->ctx = gl.createContextAttribs(compat, nullptr);
   }
   if (!impl_->ctx) throw Error("OSMesa could not create an OpenGL 3.3 context (is libosmesa6 installed?)");

@@ -68,8 +68,8 @@ Image generatePattern(const PatternParams& p) {
     for (int x = 0; x < p.width; ++x) {
       const float u = (float(x) + 0.5f) / float(p.width);
       const float r = std::abs(u - 0.5f) * 2.0f;  // 0 at the rachis, 1 at the texture edge
-      float mark = 0.0f;    // amount of markColor
-      float accent = 0.0f;  // amount of accentColor
+      float mark = 0.0f;                          // amount of markColor
+      float accent = 0.0f;                        // amount of accentColor
       switch (p.kind) {
         case PatternKind::Plain:
           break;
@@ -96,7 +96,8 @@ Image generatePattern(const PatternParams& p) {
           const float gx = u * p.frequency * aspect * 2.0f, gy = v * p.frequency;
           for (int oy = -1; oy <= 1; ++oy) {
             for (int ox = -1; ox <= 1; ++ox) {
-              const int64_t cx = static_cast<int64_t>(std::floor(gx)) + ox, cy = static_cast<int64_t>(std::floor(gy)) + oy;
+              const int64_t cx = static_cast<int64_t>(std::floor(gx)) + ox,
+                            cy = static_cast<int64_t>(std::floor(gy)) + oy;
               const auto kx = static_cast<uint64_t>(cx), ky = static_cast<uint64_t>(cy);
               const float px = float(cx) + 0.2f + 0.6f * float(hashUniform(p.seed, kx * 7919u + 1u, ky));
               const float py = float(cy) + 0.2f + 0.6f * float(hashUniform(p.seed, kx * 7919u + 2u, ky));

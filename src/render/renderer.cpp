@@ -131,8 +131,8 @@ void Renderer::setMaterials(const std::vector<FeatherMaterial>& materials) {
       try {
         files[path] = loadImage(path);
       } catch (const Error& e) {
-        throw Error("cannot load texture" + (m.name.empty() ? std::string() : " of material '" + m.name + "'") +
-                        ": " + e.detail(),
+        throw Error("cannot load texture" + (m.name.empty() ? std::string() : " of material '" + m.name + "'") + ": " +
+                        e.detail(),
                     path, el + field);
       }
     }
@@ -153,12 +153,18 @@ void Renderer::setMaterials(const std::vector<FeatherMaterial>& materials) {
     g.desc = m;
     g.desc.colorImage = Image();
     g.desc.alphaImage = Image();
-    if (!m.colorTexture.empty()) g.colorTex = r.fileTextures.at(m.colorTexture);
-    else if (!m.colorImage.empty()) g.colorTex = r.makeTexture(m.colorImage, true, GL_CLAMP_TO_EDGE, GL_CLAMP_TO_EDGE);
-    else g.colorTex = r.white;
-    if (!m.alphaTexture.empty()) g.alphaTex = r.fileTextures.at(m.alphaTexture);
-    else if (!m.alphaImage.empty()) g.alphaTex = r.makeTexture(m.alphaImage, true, GL_REPEAT, GL_CLAMP_TO_EDGE);
-    else g.alphaTex = r.white;
+    if (!m.colorTexture.empty())
+      g.colorTex = r.fileTextures.at(m.colorTexture);
+    else if (!m.colorImage.empty())
+      g.colorTex = r.makeTexture(m.colorImage, true, GL_CLAMP_TO_EDGE, GL_CLAMP_TO_EDGE);
+    else
+      g.colorTex = r.white;
+    if (!m.alphaTexture.empty())
+      g.alphaTex = r.fileTextures.at(m.alphaTexture);
+    else if (!m.alphaImage.empty())
+      g.alphaTex = r.makeTexture(m.alphaImage, true, GL_REPEAT, GL_CLAMP_TO_EDGE);
+    else
+      g.alphaTex = r.white;
     g.brdfTex = r.brdfTexture(m.barbules);
     r.materials.push_back(std::move(g));
   }
@@ -264,11 +270,13 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     float lowest = std::numeric_limits<float>::max();
     for (int k = 0; k < 8; ++k)
       lowest = std::min(lowest, glm::dot(glm::vec3(k & 1 ? modelHi.x : modelLo.x, k & 2 ? modelHi.y : modelLo.y,
-                                                   k & 4 ? modelHi.z : modelLo.z), n));
+                                                   k & 4 ? modelHi.z : modelLo.z),
+                                         n));
     const glm::vec3 centre = c - (glm::dot(c, n) - lowest) * n;
     const std::vector<float> key = {centre.x, centre.y, centre.z, n.x, n.y, n.z, radius};
     if (key != r.groundKey) {
-      const glm::vec3 a = glm::normalize(std::abs(n.x) < 0.9f ? glm::cross(n, glm::vec3(1, 0, 0)) : glm::cross(n, glm::vec3(0, 1, 0)));
+      const glm::vec3 a =
+          glm::normalize(std::abs(n.x) < 0.9f ? glm::cross(n, glm::vec3(1, 0, 0)) : glm::cross(n, glm::vec3(0, 1, 0)));
       const glm::vec3 b = glm::cross(n, a);
       TriMesh g;
       const float h = 4.0f * radius;
@@ -405,8 +413,7 @@ Image Renderer::readPixels(int width, int height) {
   r.gl.Finish();
   r.gl.ReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, raw.data());
   const size_t row = static_cast<size_t>(width) * 4;
-  for (int y = 0; y < height; ++y)
-    std::memcpy(img.rgba.data() + row * y, raw.data() + row * (height - 1 - y), row);
+  for (int y = 0; y < height; ++y) std::memcpy(img.rgba.data() + row * y, raw.data() + row * (height - 1 - y), row);
   const GLenum err = r.gl.GetError();
   PTERYLA_CHECK(err == GL_NO_ERROR, "OpenGL error " + std::to_string(err) + " while reading pixels");
   return img;

@@ -24,36 +24,36 @@ enum Attr : GLuint { kPos, kNormal, kTangent, kUvGlobal, kUvBarb, kUvGrowth, kAl
 
 // Every uniform of the four programs (shaders.hpp). Each program resolves all of them once, when it is
 // linked; one it lacks stays -1, which glUniform* ignores.
-#define PTERYLA_UNIFORMS(X)                     \
-  X(viewProj, "uViewProj")                      \
-  X(colorUv, "uColorUv")                        \
-  X(isCoat, "uIsCoat")                          \
-  X(eye, "uEye")                                \
-  X(ambient, "uAmbient")                        \
-  X(lightCount, "uLightCount")                  \
-  X(lightDir, "uLightDir")                      \
-  X(lightColor, "uLightColor")                  \
-  X(lightViewProj, "uLightViewProj")            \
-  X(shadowLightDir, "uShadowLightDir")          \
-  X(shadowNormalOffset, "uShadowNormalOffset")  \
-  X(shadowMap, "uShadowMap")                    \
-  X(shadows, "uShadows")                        \
-  X(shadowStrength, "uShadowStrength")          \
-  X(shadowTexel, "uShadowTexel")                \
-  X(exposureScale, "uExposureScale")            \
-  X(filmic, "uFilmic")                          \
-  X(skinColor, "uSkinColor")                    \
-  X(colorTex, "uColorTex")                      \
-  X(alphaTex, "uAlphaTex")                      \
-  X(brdfTex, "uBrdfTex")                        \
-  X(useAlphaTex, "uUseAlphaTex")                \
-  X(useBrdf, "uUseBrdf")                        \
-  X(baseColor, "uBaseColor")                    \
-  X(sheathColor, "uSheathColor")                \
-  X(barbuleCosSin, "uBarbuleCosSin")            \
-  X(specular, "uSpecular")                      \
-  X(coneInv2s2, "uConeInv2s2")                  \
-  X(translucency, "uTranslucency")              \
+#define PTERYLA_UNIFORMS(X)                    \
+  X(viewProj, "uViewProj")                     \
+  X(colorUv, "uColorUv")                       \
+  X(isCoat, "uIsCoat")                         \
+  X(eye, "uEye")                               \
+  X(ambient, "uAmbient")                       \
+  X(lightCount, "uLightCount")                 \
+  X(lightDir, "uLightDir")                     \
+  X(lightColor, "uLightColor")                 \
+  X(lightViewProj, "uLightViewProj")           \
+  X(shadowLightDir, "uShadowLightDir")         \
+  X(shadowNormalOffset, "uShadowNormalOffset") \
+  X(shadowMap, "uShadowMap")                   \
+  X(shadows, "uShadows")                       \
+  X(shadowStrength, "uShadowStrength")         \
+  X(shadowTexel, "uShadowTexel")               \
+  X(exposureScale, "uExposureScale")           \
+  X(filmic, "uFilmic")                         \
+  X(skinColor, "uSkinColor")                   \
+  X(colorTex, "uColorTex")                     \
+  X(alphaTex, "uAlphaTex")                     \
+  X(brdfTex, "uBrdfTex")                       \
+  X(useAlphaTex, "uUseAlphaTex")               \
+  X(useBrdf, "uUseBrdf")                       \
+  X(baseColor, "uBaseColor")                   \
+  X(sheathColor, "uSheathColor")               \
+  X(barbuleCosSin, "uBarbuleCosSin")           \
+  X(specular, "uSpecular")                     \
+  X(coneInv2s2, "uConeInv2s2")                 \
+  X(translucency, "uTranslucency")             \
   X(alphaCut, "uAlphaCut")
 struct Uniforms {
 #define PTERYLA_UNIFORM_MEMBER(member, name) GLint member = -1;
@@ -107,7 +107,7 @@ struct Renderer::Impl {
   struct Shadow {
     GLuint fbo = 0, depthTex = 0, ebo = 0;
     int size = 0;
-    bool valid = false;       // the map matches skin, coat and materials (cleared when they change)
+    bool valid = false;  // the map matches skin, coat and materials (cleared when they change)
     glm::vec3 lightDir{0.0f};
     bool alphaTexture = true;
     glm::mat4 viewProj{1.0f};
@@ -121,7 +121,7 @@ struct Renderer::Impl {
   std::vector<float> depth;  // skin depth read back for occlusion culling
   DepthTiles occluders;      // the same, reduced to tiles
   std::vector<GpuMaterial> materials;
-  std::map<std::string, GLuint> fileTextures;            // path -> texture, per setMaterials
+  std::map<std::string, GLuint> fileTextures;  // path -> texture, per setMaterials
   std::map<std::tuple<double, double, double>, GLuint> brdfCache;
   GLuint white = 0;
   bool fastFilter = true;  // minification filter of colour / alpha textures (RenderSettings)

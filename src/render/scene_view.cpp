@@ -38,9 +38,19 @@ Camera sceneCamera(const pipeline::Scene& scene, const TriMesh& skin, const TriM
   glm::vec3 lo, hi, lo2, hi2;
   bool any = skin.bounds(lo, hi);
   if (coat.bounds(lo2, hi2)) {
-    if (any) { lo = glm::min(lo, lo2); hi = glm::max(hi, hi2); } else { lo = lo2; hi = hi2; any = true; }
+    if (any) {
+      lo = glm::min(lo, lo2);
+      hi = glm::max(hi, hi2);
+    } else {
+      lo = lo2;
+      hi = hi2;
+      any = true;
+    }
   }
-  if (!any) { lo = glm::vec3(-1); hi = glm::vec3(1); }
+  if (!any) {
+    lo = glm::vec3(-1);
+    hi = glm::vec3(1);
+  }
   glm::vec3 dir = glm::normalize(v3(scene.camera.viewDir));
   const glm::vec3 centre = 0.5f * (lo + hi);
   c.target = centre;
@@ -61,7 +71,8 @@ std::vector<Light> sceneLights(const pipeline::Scene& scene) {
     view = glm::normalize(view);
     glm::vec3 up = v3(c.up);
     glm::vec3 right = glm::cross(view, up);
-    if (!(glm::length(right) > 1e-6f)) right = glm::cross(view, std::abs(view.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
+    if (!(glm::length(right) > 1e-6f))
+      right = glm::cross(view, std::abs(view.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
     right = glm::normalize(right);
     up = glm::cross(right, view);
     out.push_back({glm::normalize(-0.6f * view + 0.8f * up - 0.5f * right), glm::vec3(1.0f, 0.96f, 0.90f)});

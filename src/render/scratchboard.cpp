@@ -169,8 +169,8 @@ Image scratchboardTone(const TriMesh& coat, const TriMesh& skin, const Camera& c
   return img;
 }
 
-Image renderScratchboard(const TriMesh& coat, const TriMesh& skin, const Camera& camera, const std::vector<Light>& lights,
-                         const ScratchboardSettings& s) {
+Image renderScratchboard(const TriMesh& coat, const TriMesh& skin, const Camera& camera,
+                         const std::vector<Light>& lights, const ScratchboardSettings& s) {
   const GBuffer g = buildGBuffer(coat, skin, camera, lights, s);
   std::vector<float> canvas(static_cast<size_t>(g.w) * g.h, 0.0f);
   const float sp = s.strokeSpacing, len = s.strokeLength;
@@ -198,7 +198,7 @@ Image renderScratchboard(const TriMesh& coat, const TriMesh& skin, const Camera&
         if (hashUniform(s.seed, key, 3) >= width / s.minWidth) continue;  // thinner: fewer strokes
         width = s.minWidth;
       } else if (width > s.maxWidth) {
-        count = static_cast<int>(std::ceil(width / s.maxWidth));       // wider: more strokes
+        count = static_cast<int>(std::ceil(width / s.maxWidth));  // wider: more strokes
         width /= static_cast<float>(count);
       }
       const glm::vec2 d0 = g.dir[k0];
@@ -222,8 +222,10 @@ Image renderScratchboard(const TriMesh& coat, const TriMesh& skin, const Camera&
             p += d;
             prev = d;
           }
-          if (dirSign < 0) pts.assign(half.rbegin(), half.rend());
-          else if (!half.empty()) pts.insert(pts.end(), half.begin() + (pts.empty() ? 0 : 1), half.end());
+          if (dirSign < 0)
+            pts.assign(half.rbegin(), half.rend());
+          else if (!half.empty())
+            pts.insert(pts.end(), half.begin() + (pts.empty() ? 0 : 1), half.end());
         }
         if (pts.size() < 2) {
           drawSegment(canvas, g.w, g.h, start, start, width);

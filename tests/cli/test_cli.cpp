@@ -30,7 +30,8 @@ TEST(Cli, EverySubcommandHasHelp) {
   }
   auto top = runPteryla("--help");
   EXPECT_EQ(top.code, 0);
-  for (const char* sub : {"render", "check", "bench", "export", "feather", "frames", "farm", "diff"}) EXPECT_TRUE(contains(top.out, sub));
+  for (const char* sub : {"render", "check", "bench", "export", "feather", "frames", "farm", "diff"})
+    EXPECT_TRUE(contains(top.out, sub));
 }
 
 TEST(Cli, UnknownOptionExits2) {
@@ -63,7 +64,8 @@ TEST(Cli, MissingVersionAndOutOfRangeValues) {
   auto r = runPteryla("check " + writeTemp("noversion.json", "{\"mesh\": \"tri.obj\"}"));
   EXPECT_EQ(r.code, 2);
   EXPECT_TRUE(contains(r.err, "pteryla")) << r.err;
-  r = runPteryla("check " + writeTemp("badlod.json", "{\"pteryla\": 1, \"mesh\": \"tri.obj\", \"render\": {\"lod\": 7}}"));
+  r = runPteryla("check " +
+                 writeTemp("badlod.json", "{\"pteryla\": 1, \"mesh\": \"tri.obj\", \"render\": {\"lod\": 7}}"));
   EXPECT_EQ(r.code, 2);
   EXPECT_TRUE(contains(r.err, "render.lod")) << r.err;
 }
@@ -98,7 +100,8 @@ TEST(Cli, MissingFeatherFileInSceneNamesTheKey) {
 
 TEST(Cli, FeatherCommandWritesMeshAndRejectsBadFiles) {
   const std::string out = std::string(PTERYLA_BUILD_DIR) + "/cli_contour.obj";
-  auto r = runPteryla("feather " + std::string(PTERYLA_DATA_DIR) + "/feathers/contour.json --out " + out + " --lod 0.5 -q");
+  auto r =
+      runPteryla("feather " + std::string(PTERYLA_DATA_DIR) + "/feathers/contour.json --out " + out + " --lod 0.5 -q");
   EXPECT_EQ(r.code, 0) << r.err;
   FILE* f = fopen(out.c_str(), "r");
   ASSERT_NE(f, nullptr);

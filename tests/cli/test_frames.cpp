@@ -86,7 +86,8 @@ int temporaries(const std::string& d) {
 TEST(Frames, ChunkedOutputIsByteIdenticalToOneProcess) {
   const std::string out = freshDir("chunked") + "/seq";
   for (const int task : {2, 0, 1}) {  // any order: each chunk is a pure function of its frame indices
-    const RunResult r = runPteryla("frames " + kScene + kRange + " --chunk 3 --task " + std::to_string(task) + " -o " + out);
+    const RunResult r =
+        runPteryla("frames " + kScene + kRange + " --chunk 3 --task " + std::to_string(task) + " -o " + out);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(contains(r.err, "chunk " + std::to_string(task) + " of 3")) << r.err;
   }
@@ -153,7 +154,9 @@ TEST(Frames, AChunkKeepsOtherFramesAndAssembleRemovesStaleOnes) {
   ASSERT_EQ(runPteryla("frames " + kScene + kRange + " -q --chunk 3 --task 2 -o " + out).code, 0);
   for (const int k : {0, 1, 100}) EXPECT_TRUE(fs::exists(out + "/" + frame(k))) << frame(k);
   for (const int task : {0, 1}) {
-    ASSERT_EQ(runPteryla("frames " + kScene + kRange + " -q --chunk 3 --task " + std::to_string(task) + " -o " + out).code, 0);
+    ASSERT_EQ(
+        runPteryla("frames " + kScene + kRange + " -q --chunk 3 --task " + std::to_string(task) + " -o " + out).code,
+        0);
   }
   const RunResult a = runPteryla("frames " + kScene + kRange + " --assemble -o " + out);
   ASSERT_EQ(a.code, 0) << a.err;
@@ -166,10 +169,14 @@ TEST(Frames, BadChunkOrTaskExits2NamingTheOption) {
   const struct {
     std::string args, name;
   } cases[] = {
-      {"--chunk 0 --task 0", "--chunk"},     {"--chunk -3 --task 0", "--chunk"},
-      {"--chunk 3 --task 3", "--task"},      {"--chunk 3 --task -1", "--task"},
-      {"--chunk 3", "--task"},               {"--task 0", "--chunk"},
-      {"--chunk x --task 0", "--chunk"},     {"--chunk 3 --task 1.5", "--task"},
+      {"--chunk 0 --task 0", "--chunk"},
+      {"--chunk -3 --task 0", "--chunk"},
+      {"--chunk 3 --task 3", "--task"},
+      {"--chunk 3 --task -1", "--task"},
+      {"--chunk 3", "--task"},
+      {"--task 0", "--chunk"},
+      {"--chunk x --task 0", "--chunk"},
+      {"--chunk 3 --task 1.5", "--task"},
       {"--chunk 3 --task 0 --assemble", "--assemble"},
   };
   for (const auto& c : cases) {
@@ -186,11 +193,12 @@ TEST(Frames, BadChunkOrTaskExits2NamingTheOption) {
 
 TEST(Frames, FarmSlurmDryRunWritesScriptsThatReproduceTheSequence) {
   const std::string out = freshDir("slurm_dry") + "/seq";
-  const RunResult r = runPteryla("farm slurm " + kScene + kRange + " --chunk 3 --partition render --mem 2G --dry-run -o " + out);
+  const RunResult r =
+      runPteryla("farm slurm " + kScene + kRange + " --chunk 3 --partition render --mem 2G --dry-run -o " + out);
   ASSERT_EQ(r.code, 0) << r.err;
   for (const char* s : {"#SBATCH --array=0-2", "#SBATCH --partition=render", "#SBATCH --mem=2G",
-                        "--chunk 3 --task \"$SLURM_ARRAY_TASK_ID\"", "--assemble", "--dependency=afterok:",
-                        "JOB=$(sbatch --parsable", "nothing was submitted"})
+                        "--chunk 3 --task \"$SLURM_ARRAY_TASK_ID\"", "--assemble",
+                        "--dependency=afterok:", "JOB=$(sbatch --parsable", "nothing was submitted"})
     EXPECT_TRUE(contains(r.out, s)) << "missing '" << s << "' in:\n" << r.out;
   EXPECT_TRUE(contains(r.out, "'" + fs::absolute(kScene).lexically_normal().string() + "'")) << r.out;
   EXPECT_TRUE(contains(r.out, "'" + fs::absolute(out).lexically_normal().string() + "'")) << r.out;
@@ -227,7 +235,8 @@ TEST(Frames, FarmSlurmSubmitsTheArrayThenTheDependentAssembly) {
   EXPECT_EQ(j["tasks"].get<int>(), 4);
   EXPECT_EQ(j["assemble_job"].get<int>(), 43);
   const std::string log = readAll(d + "/sbatch.log");
-  EXPECT_TRUE(contains(log, "--parsable " + fs::absolute(d + "/seq").lexically_normal().string() + "/slurm/frames.sbatch"))
+  EXPECT_TRUE(
+      contains(log, "--parsable " + fs::absolute(d + "/seq").lexically_normal().string() + "/slurm/frames.sbatch"))
       << log;
   EXPECT_TRUE(contains(log, "--dependency=afterok:42 ")) << log;
 
@@ -255,13 +264,15 @@ std::string exported(int k, const std::string& ext) {
 
 TEST(FramesExport, EachFrameIsTheFileExportWritesAtItsTime) {
   const std::string d = freshDir("export_usda");
-  const RunResult r = runPteryla("frames " + kScene + " --from 0 --to 4 --fps 1 --lod 0.1 --export usda --as cards -o " + d + "/seq");
+  const RunResult r =
+      runPteryla("frames " + kScene + " --from 0 --to 4 --fps 1 --lod 0.1 --export usda --as cards -o " + d + "/seq");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(contains(r.err, "exported 5 frames")) << r.err;
   EXPECT_FALSE(fs::exists(d + "/seq/" + frame(0)));  // no PNG
-  for (const int k : {0, 4}) {  // before and during the moult: the coat differs
+  for (const int k : {0, 4}) {                       // before and during the moult: the coat differs
     const std::string one = d + "/one_" + std::to_string(k) + ".usda";
-    const RunResult e = runPteryla("export " + kScene + " --time " + std::to_string(k) + " --fps 1 --lod 0.1 --as cards -q -o " + one);
+    const RunResult e =
+        runPteryla("export " + kScene + " --time " + std::to_string(k) + " --fps 1 --lod 0.1 --as cards -q -o " + one);
     ASSERT_EQ(e.code, 0) << e.err;
     EXPECT_EQ(readAll(d + "/seq/" + exported(k, ".usda")), readAll(one)) << k;
   }
@@ -277,7 +288,8 @@ TEST(FramesExport, EachFrameIsTheFileExportWritesAtItsTime) {
   EXPECT_FALSE(side["params"].contains("width"));  // an export has no image size
 
   // Another --as is another file: nothing is skipped.
-  const RunResult again = runPteryla("frames " + kScene + " --from 0 --to 4 --fps 1 --lod 0.1 --export .usda -o " + d + "/seq");
+  const RunResult again =
+      runPteryla("frames " + kScene + " --from 0 --to 4 --fps 1 --lod 0.1 --export .usda -o " + d + "/seq");
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_TRUE(contains(again.err, "exported 5 frames")) << again.err;
   EXPECT_TRUE(contains(readAll(d + "/seq/" + exported(2, ".usda")), "BasisCurves"));
@@ -288,7 +300,8 @@ TEST(FramesExport, ChunksAreByteIdenticalToOneProcessAndRerunsSkipThem) {
   const std::string range = " --from 0 --to 3 --fps 1 --lod 0.1 --export .glb";  // 4 frames, 2 chunks
   ASSERT_EQ(runPteryla("frames " + kScene + range + " -q -o " + d + "/one").code, 0);
   for (const int task : {1, 0}) {
-    const RunResult r = runPteryla("frames " + kScene + range + " --chunk 2 --task " + std::to_string(task) + " -o " + d + "/chunked");
+    const RunResult r =
+        runPteryla("frames " + kScene + range + " --chunk 2 --task " + std::to_string(task) + " -o " + d + "/chunked");
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(contains(r.err, "exported")) << r.err;
   }
@@ -322,7 +335,8 @@ TEST(FramesExport, ChunksAreByteIdenticalToOneProcessAndRerunsSkipThem) {
   // Goldens of exported frames compare bytes: one changed byte is a failure.
   const std::string golden = d + "/golden";
   fs::copy(d + "/one", golden);
-  ASSERT_EQ(runPteryla("frames " + kScene + range + " -q --assemble --golden " + golden + " -o " + d + "/chunked").code, 0);
+  ASSERT_EQ(runPteryla("frames " + kScene + range + " -q --assemble --golden " + golden + " -o " + d + "/chunked").code,
+            0);
   std::string g = readAll(golden + "/" + exported(2, ".glb"));
   g[g.size() - 1] ^= 1;
   std::ofstream(golden + "/" + exported(2, ".glb"), std::ios::binary) << g;
@@ -336,10 +350,14 @@ TEST(FramesExport, BadExportOptionsExit2NamingTheOption) {
   const struct {
     std::string args, name;
   } cases[] = {
-      {"--export .obj", "--export"},          {"--export png", "--export"},
-      {"--export .glb --as curves", "--as"},  {"--as cards", "--as"},
-      {"--export .usda --as hair", "--as"},   {"--export .usda --size 64x64", "--size"},
-      {"--export .usda --style shaded", "--style"}, {"--meters-per-unit 0.01", "--meters-per-unit"},
+      {"--export .obj", "--export"},
+      {"--export png", "--export"},
+      {"--export .glb --as curves", "--as"},
+      {"--as cards", "--as"},
+      {"--export .usda --as hair", "--as"},
+      {"--export .usda --size 64x64", "--size"},
+      {"--export .usda --style shaded", "--style"},
+      {"--meters-per-unit 0.01", "--meters-per-unit"},
       {"--export .usda --meters-per-unit -1", "--meters-per-unit"},
   };
   for (const auto& c : cases) {
@@ -354,11 +372,14 @@ TEST(FramesExport, FarmSlurmScriptsCarryTheExport) {
   const std::string out = freshDir("export_slurm") + "/seq";
   const RunResult r = runPteryla("farm slurm " + kScene +
                                  " --from 0 --to 3 --fps 1 --lod 0.1 --chunk 2 --export USDA --as instances "
-                                 "--meters-per-unit 0.01 --dry-run -o " + out);
+                                 "--meters-per-unit 0.01 --dry-run -o " +
+                                 out);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(contains(r.out, "--export .usda --as 'instances' --meters-per-unit 0.01")) << r.out;
   for (const int task : {0, 1})
-    ASSERT_EQ(std::system(("SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " bash '" + out + "/slurm/frames.sbatch'").c_str()), 0);
+    ASSERT_EQ(std::system(
+                  ("SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " bash '" + out + "/slurm/frames.sbatch'").c_str()),
+              0);
   ASSERT_EQ(std::system(("bash '" + out + "/slurm/assemble.sbatch'").c_str()), 0);
   for (int k = 0; k < 4; ++k) EXPECT_TRUE(contains(readAll(out + "/" + exported(k, ".usda")), "PointInstancer")) << k;
   EXPECT_TRUE(fs::exists(out + "/frames.json"));

@@ -126,7 +126,8 @@ TEST(FramesGolden, ComparesEveryFrameAndReportsTheOnesThatDiffer) {
   EXPECT_FALSE(fs::exists(d + "/run2/golden_diff/frame_0000.png"));
 
   // The assembly step of a farm run compares too.
-  const RunResult assembled = runPteryla("frames " + scene + range + " -o " + d + "/run2 --assemble --golden " + d + "/golden");
+  const RunResult assembled =
+      runPteryla("frames " + scene + range + " -o " + d + "/run2 --assemble --golden " + d + "/golden");
   EXPECT_EQ(assembled.code, 1) << assembled.err;
 
   const RunResult noDir = runPteryla("frames " + scene + range + " -o " + d + "/run3 --golden " + d + "/absent");

@@ -139,8 +139,8 @@ std::string png(uint32_t w, uint32_t h, uint32_t rows) {
 TEST(Robust, MeshComponentsFarApartAreRefusedQuickly) {
   // Used to loop in CellGrid::kNearest (shells over 1e6 cells).
   const std::string d = dir("far");
-  const auto mesh = writeFile(d + "/far.obj",
-                              "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 1e6 0 0\nv 1000001 0 0\nv 1e6 0 1\nf 1 2 3\nf 4 5 6\n");
+  const auto mesh =
+      writeFile(d + "/far.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nv 1e6 0 0\nv 1000001 0 0\nv 1e6 0 1\nf 1 2 3\nf 4 5 6\n");
   const auto r = run(60, "check " + mesh);
   expectBadInput(r, {"far.obj", "vertex 4"});
 }
@@ -187,16 +187,17 @@ TEST(Robust, CoatsAboveTheMemoryCeilingAreRefusedBeforeAllocating) {
   auto r = run(30, "check " + patchScene(d + "/count.json", [](auto& j) { j["tracts"][0]["count"] = 2000000; }));
   expectBadInput(r, {"count.json", "tracts[0].count", "--max-memory"});
   r = run(30, "check " + patchScene(d + "/density.json", [](auto& j) {
-            j["tracts"][0].erase("count");
-            j["tracts"][0]["density"] = 1e7;
-          }));
+                j["tracts"][0].erase("count");
+                j["tracts"][0]["density"] = 1e7;
+              }));
   expectBadInput(r, {"density.json", "tracts[0].density", "--max-memory"});
   // A 100,000-barb feather on every follicle: the geometry estimate refuses it.
   nlohmann::json f = nlohmann::json::parse(readAll(kData + "/feathers/contour.json"));
   f["barbs"]["spacing_base"] = 2.5e-5;
   f["barbs"]["spacing_tip"] = 2.5e-5;
   writeFile(d + "/dense_feather.json", f.dump());
-  r = run(60, "check " + patchScene(d + "/barbs.json", [&](auto& j) { j["feathers"]["contour"] = d + "/dense_feather.json"; }));
+  r = run(60, "check " + patchScene(d + "/barbs.json",
+                                    [&](auto& j) { j["feathers"]["contour"] = d + "/dense_feather.json"; }));
   expectBadInput(r, {"barbs.json", "feathers.contour", "barbs", "--max-memory"});
   // The ceiling is a flag: a tiny one refuses even the bundled patch.
   r = run(60, "check " + kData + "/scenes/patch.json --max-memory 0.001");
@@ -216,7 +217,8 @@ TEST(Robust, HugeAndOverwideTexturesAreRefusedOrResampled) {
     nlohmann::json f = nlohmann::json::parse(readAll(kData + "/feathers/contour.json"));
     f["material"] = {{"texture", png}};
     writeFile(d + "/" + name + "_feather.json", f.dump());
-    return patchScene(d + "/" + name + ".json", [&](auto& j) { j["feathers"]["contour"] = d + "/" + name + "_feather.json"; });
+    return patchScene(d + "/" + name + ".json",
+                      [&](auto& j) { j["feathers"]["contour"] = d + "/" + name + "_feather.json"; });
   };
   // Declares 65535 x 65535 (its data is one row): refused from the header, before decoding.
   writeFile(d + "/huge.png", png(65535, 65535, 0));
@@ -261,25 +263,29 @@ TEST(Robust, AbsurdNumbersAreBadInputNamingTheKey) {
   expectBadInput(r, {"width.json", "rachis.width"});
 
   r = run(30, "check " + patchScene(d + "/pinned.json", [](auto& j) {
-            j["tracts"][0]["pinned"] = {{{"at", {1e154, 0, 0}}}};
-          }));
+                j["tracts"][0]["pinned"] = {{{"at", {1e154, 0, 0}}}};
+              }));
   expectBadInput(r, {"pinned.json", "tracts[0].pinned[0].at"});
-  r = run(30, "check " + patchScene(d + "/key.json", [](auto& j) { j["tracts"][0]["key_feathers"][0]["at"] = {1e154, 0, 0}; }));
+  r = run(30, "check " + patchScene(d + "/key.json", [](auto& j) {
+                j["tracts"][0]["key_feathers"][0]["at"] = {1e154, 0, 0};
+              }));
   expectBadInput(r, {"key.json", "key_feathers[0].at"});
   r = run(30, "check " + patchScene(d + "/spacing.json", [](auto& j) { j["packing"]["skin_sample_spacing"] = 1e308; }));
   expectBadInput(r, {"spacing.json", "packing.skin_sample_spacing"});
   r = run(30, "check " + writeFile(d + "/far.obj", "v 0 0 0\nv 1e150 0 0\nv 0 1 0\nf 1 2 3\n"));
   expectBadInput(r, {"far.obj", "vertex 1"});
-  r = run(30, "export " + writeFile(d + "/e20.obj", "v 0 0 0\nv 1e20 0 0\nv 0 1e20 0\nf 1 2 3\n") + " -o " + d + "/e20_out.obj");
+  r = run(30, "export " + writeFile(d + "/e20.obj", "v 0 0 0\nv 1e20 0 0\nv 0 1e20 0\nf 1 2 3\n") + " -o " + d +
+                  "/e20_out.obj");
   expectBadInput(r, {"e20.obj", "vertex 1"});
   EXPECT_FALSE(fs::exists(d + "/e20_out.obj"));
 }
 
 TEST(Robust, NanTextureCoordinatesAndSkeletonJointsAreRefused) {
   const std::string d = dir("nan");
-  auto r = run(30, "export " +
-                       writeFile(d + "/vtnan.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\nvt 0 1\nf 1/1 2/2 3/3\n") +
-                       " -o " + d + "/vtnan_out.obj");
+  auto r =
+      run(30, "export " +
+                  writeFile(d + "/vtnan.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\nvt 0 1\nf 1/1 2/2 3/3\n") +
+                  " -o " + d + "/vtnan_out.obj");
   expectBadInput(r, {"vtnan.obj"});
   EXPECT_FALSE(fs::exists(d + "/vtnan_out.obj"));
   std::string skel = readAll(kData + "/meshes/wing.skeleton.json");
@@ -304,9 +310,9 @@ TEST(Robust, OptionsOutOfRangeAreRefused) {
   r = run(30, "check " + kData + "/scenes/patch.json --seed -1");
   expectBadInput(r, {"--seed", "-1"});
   r = run(30, "check " + patchScene(d + "/high.json", [](auto& j) {
-            j["tracts"][0].erase("count");
-            j["tracts"][0]["density"] = "high";
-          }));
+                j["tracts"][0].erase("count");
+                j["tracts"][0]["density"] = "high";
+              }));
   expectBadInput(r, {"high.json", "tracts[0].density"});
 }
 
@@ -329,8 +335,8 @@ TEST(Robust, FailedWritesKeepTheOldFile) {
     expectBadInput(r, {out});
     EXPECT_EQ(readAll(out), old) << ext;
     const std::string feather = writeFile(d + "/feather" + ext, old);
-    const auto rf = runShell("trap \"\" XFSZ; ulimit -f 8;", 60,
-                             "feather " + kData + "/feathers/contour.json -o " + feather);
+    const auto rf =
+        runShell("trap \"\" XFSZ; ulimit -f 8;", 60, "feather " + kData + "/feathers/contour.json -o " + feather);
     expectBadInput(rf, {feather});
     EXPECT_EQ(readAll(feather), old) << ext;
   }
@@ -357,8 +363,10 @@ TEST(Robust, FramesWriteAManifestAndRemoveStaleFrames) {
   writeFile(out + "/frame_notes.png", "not ours");
   const auto r = run(240, "frames " + kData + "/scenes/patch.json --from 0 --to 0.2 --fps 10 --size 32x32 -o " + out);
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* f : {"frame_0000.png", "frame_0001.png", "frame_0002.png"}) EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
-  for (const char* f : {"frame_0003.png", "frame_0100.png", "frame_12345.png"}) EXPECT_FALSE(fs::exists(out + "/" + f)) << f;
+  for (const char* f : {"frame_0000.png", "frame_0001.png", "frame_0002.png"})
+    EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
+  for (const char* f : {"frame_0003.png", "frame_0100.png", "frame_12345.png"})
+    EXPECT_FALSE(fs::exists(out + "/" + f)) << f;
   EXPECT_TRUE(fs::exists(out + "/frame_notes.png"));
   const auto m = nlohmann::json::parse(readAll(out + "/frames.json"));
   EXPECT_EQ(m["count"].get<int>(), 3);
@@ -380,16 +388,16 @@ TEST(Robust, FramesOfAFailingSceneCreateNoDirectory) {
 TEST(Robust, ErrorsNameTheSceneFileAndKey) {
   const std::string d = dir("messages");
   auto r = run(60, "check " + patchScene(d + "/styling.json", [](auto& j) {
-            j["packing"]["styling"] = {{{"select", "ids"}, {"ids", {100000}}, {"elevation_deg", 10}}};
-          }));
+                     j["packing"]["styling"] = {{{"select", "ids"}, {"ids", {100000}}, {"elevation_deg", 10}}};
+                   }));
   expectBadInput(r, {"styling.json", "packing.styling[0].ids[0]"});
   r = run(60, "check " + patchScene(d + "/nomesh.json", [](auto& j) { j["mesh"] = "missing_mesh.obj"; }));
   expectBadInput(r, {"nomesh.json", "mesh", "missing_mesh.obj"});
   fs::create_directories(d + "/labels_dir");
   r = run(60, "check " + patchScene(d + "/labels.json", [&](auto& j) {
-            j["tracts"][0]["labels_file"] = d + "/labels_dir";
-            j["tracts"][0]["label"] = 1;
-          }));
+                j["tracts"][0]["labels_file"] = d + "/labels_dir";
+                j["tracts"][0]["label"] = 1;
+              }));
   expectBadInput(r, {"labels.json", "tracts[0].labels_file", "directory"});
 }
 
@@ -403,8 +411,9 @@ TEST(Robust, QuietMeansQuietForLibraries) {
   // A scene around the mesh with a small coat: the bare mesh's default 3,000 follicles on this one
   // triangle took 37 s in Release and over the time limit under AddressSanitizer, for nothing this test checks.
   const std::string mesh = writeFile(d + "/extra.ply", ply);
-  const std::string scene = writeFile(d + "/extra.json", "{\"pteryla\": 1, \"mesh\": \"" + mesh +
-                                                            "\", \"tracts\": [{\"name\": \"all\", \"all\": true, \"count\": 30}]}");
+  const std::string scene =
+      writeFile(d + "/extra.json", "{\"pteryla\": 1, \"mesh\": \"" + mesh +
+                                       "\", \"tracts\": [{\"name\": \"all\", \"all\": true, \"count\": 30}]}");
   const auto r = run(120, "render " + scene + " --size 32x32 -o " + d + "/extra.png");
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err, "");

@@ -46,7 +46,8 @@ TEST(CliScan, WritesAFeatherFileThatRendersAndMovesWithItsTexture) {
   char rachis[128];
   std::snprintf(rachis, sizeof rachis, "%.2f,%.2f,%.2f,%.2f", scan.base.x, scan.base.y, scan.tip.x, scan.tip.y);
   const fs::path out = dir / "made" / "feather.json";
-  const std::string cmd = "feather --from-scan " + q(image) + " --rachis " + rachis + " --pixels-per-unit 170 --out " + q(out);
+  const std::string cmd =
+      "feather --from-scan " + q(image) + " --rachis " + rachis + " --pixels-per-unit 170 --out " + q(out);
   RunResult r = runPteryla(cmd);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(contains(r.err, "rachis marked")) << r.err;
@@ -67,11 +68,13 @@ TEST(CliScan, WritesAFeatherFileThatRendersAndMovesWithItsTexture) {
   fs::create_directories(dir / "moved");
   fs::rename(dir / "made" / "feather.json", dir / "moved" / "feather.json");
   fs::rename(dir / "made" / "feather_texture.png", dir / "moved" / "feather_texture.png");
-  r = runPteryla("feather " + q(dir / "moved" / "feather.json") + " --out " + q(dir / "moved.png") + " --size 96x128 -q");
+  r = runPteryla("feather " + q(dir / "moved" / "feather.json") + " --out " + q(dir / "moved.png") +
+                 " --size 96x128 -q");
   EXPECT_EQ(r.code, 0) << r.err;
   // Without the texture beside it, rendering fails naming the texture.
   fs::remove(dir / "moved" / "feather_texture.png");
-  r = runPteryla("feather " + q(dir / "moved" / "feather.json") + " --out " + q(dir / "broken.png") + " --size 96x128 -q");
+  r = runPteryla("feather " + q(dir / "moved" / "feather.json") + " --out " + q(dir / "broken.png") +
+                 " --size 96x128 -q");
   EXPECT_EQ(r.code, 2);
   EXPECT_TRUE(contains(r.err, "feather_texture.png")) << r.err;
 
@@ -85,7 +88,8 @@ TEST(CliScan, WritesAFeatherFileThatRendersAndMovesWithItsTexture) {
   EXPECT_NEAR(found.rachisLength, truth.rachisLength, 0.02 * truth.rachisLength);
   EXPECT_TRUE(found.material.texture.empty());
   EXPECT_FALSE(fs::exists(dir / "second_texture.png"));
-  for (const auto& e : fs::directory_iterator(dir)) EXPECT_FALSE(contains(e.path().filename().string(), ".tmp-")) << e.path();
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_FALSE(contains(e.path().filename().string(), ".tmp-")) << e.path();
 }
 
 TEST(CliScan, BadInputExitsTwoNamingTheFileOrOption) {

@@ -17,7 +17,8 @@ namespace coat2test {
 using namespace pteryla;
 using namespace pteryla::coat;
 
-inline Follicles scatterTracts(const SkinMesh& mesh, const std::vector<Tract>& tracts, size_t perTract, uint64_t seed = 7) {
+inline Follicles scatterTracts(const SkinMesh& mesh, const std::vector<Tract>& tracts, size_t perTract,
+                               uint64_t seed = 7) {
   Follicles all;
   for (uint32_t t = 0; t < tracts.size(); ++t) {
     ScatterOptions o;

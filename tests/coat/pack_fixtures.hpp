@@ -65,9 +65,8 @@ inline CoatFeathers sphereCoat(const SkinMesh& skin, size_t count, double scale,
   }
   c.layerOrder.resize(c.size());
   std::iota(c.layerOrder.begin(), c.layerOrder.end(), 0u);
-  std::stable_sort(c.layerOrder.begin(), c.layerOrder.end(), [&](uint32_t a, uint32_t b) {
-    return c.frames[a].origin.z < c.frames[b].origin.z;
-  });
+  std::stable_sort(c.layerOrder.begin(), c.layerOrder.end(),
+                   [&](uint32_t a, uint32_t b) { return c.frames[a].origin.z < c.frames[b].origin.z; });
   return c;
 }
 

@@ -38,7 +38,8 @@ TriMesh soup(size_t triangles, uint32_t feathers, uint64_t seed, bool shuffled =
   std::vector<uint32_t> featherOf(triangles);
   for (size_t t = 0; t < triangles; ++t) featherOf[t] = static_cast<uint32_t>(t * feathers / triangles);
   if (shuffled)
-    for (size_t t = triangles; t-- > 1;) std::swap(featherOf[t], featherOf[static_cast<size_t>(rng.uniform(0, double(t) + 1)) % (t + 1)]);
+    for (size_t t = triangles; t-- > 1;)
+      std::swap(featherOf[t], featherOf[static_cast<size_t>(rng.uniform(0, double(t) + 1)) % (t + 1)]);
   TriMesh m;
   for (size_t t = 0; t < triangles; ++t) {
     const dvec3 c(rng.uniform(0, 1), rng.uniform(0, 1), rng.uniform(0, 0.2));
@@ -56,7 +57,9 @@ TriMesh soup(size_t triangles, uint32_t feathers, uint64_t seed, bool shuffled =
 }
 
 dvec3 vert(const TriMesh& m, size_t t, int k) { return dvec3(m.positions[m.indices[3 * t + k]]); }
-uint32_t featherOfTriangle(const TriMesh& m, size_t t) { return m.featherId.empty() ? 0 : m.featherId[m.indices[3 * t]]; }
+uint32_t featherOfTriangle(const TriMesh& m, size_t t) {
+  return m.featherId.empty() ? 0 : m.featherId[m.indices[3 * t]];
+}
 
 // Every pair of triangles of different feathers, Moeller's test on the lower index first: (t << 32 | u).
 std::vector<uint64_t> bruteForcePairs(const TriMesh& m) {
@@ -65,7 +68,8 @@ std::vector<uint64_t> bruteForcePairs(const TriMesh& m) {
   for (size_t t = 0; t < nt; ++t)
     for (size_t u = t + 1; u < nt; ++u) {
       if (featherOfTriangle(m, t) == featherOfTriangle(m, u)) continue;
-      if (detail::trianglesIntersect(vert(m, t, 0), vert(m, t, 1), vert(m, t, 2), vert(m, u, 0), vert(m, u, 1), vert(m, u, 2)))
+      if (detail::trianglesIntersect(vert(m, t, 0), vert(m, t, 1), vert(m, t, 2), vert(m, u, 0), vert(m, u, 1),
+                                     vert(m, u, 2)))
         out.push_back((uint64_t(t) << 32) | u);
     }
   return out;
@@ -141,7 +145,8 @@ TEST(FastCheck, CheckCountsAreTheBruteForceCounts) {
       const bool dip = rng.uniform(0, 1) < 0.1;
       const double r = dip ? rng.uniform(0.5, 0.9) : rng.uniform(1.05, 1.3);
       const dvec3 c = r * dir;
-      const dvec3 side = glm::normalize(glm::cross(dir, dvec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1))));
+      const dvec3 side =
+          glm::normalize(glm::cross(dir, dvec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1))));
       const dvec3 a = c + 0.2 * side, b = c + 0.03 * glm::normalize(glm::cross(dir, side));
       for (const dvec3& p : {c, a, b}) {
         m.positions.emplace_back(p);
@@ -176,9 +181,13 @@ TEST(FastCheck, CheckCountsAreTheBruteForceCounts) {
   size_t covered = 0;
   for (size_t s = 0; s < o.coverageSamples; ++s) {
     const double x = pteryla::hashUniform(o.seed, s, 0) * acc;
-    const size_t k = std::min(static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin()), cdf.size() - 1);
+    const size_t k =
+        std::min(static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin()), cdf.size() - 1);
     double a = pteryla::hashUniform(o.seed, s, 1), b = pteryla::hashUniform(o.seed, s, 2);
-    if (a + b > 1) { a = 1 - a; b = 1 - b; }
+    if (a + b > 1) {
+      a = 1 - a;
+      b = 1 - b;
+    }
     const dvec3 bary(1 - a - b, a, b);
     const uint32_t f = static_cast<uint32_t>(k);
     const dvec3 origin = coat::pointAt(skin, f, bary) + 1e-6 * diag * skin.faceNormals[f];
@@ -215,7 +224,8 @@ TEST(FastCheck, NearestFaceIsTheLinearScansFace) {
     double wantD = std::numeric_limits<double>::infinity();
     for (size_t f = 0; f < skin.faces.size(); ++f) {
       const auto& t = skin.faces[f];
-      const dvec3 d = coat::closestPointOnTriangle(p, skin.positions[t[0]], skin.positions[t[1]], skin.positions[t[2]]) - p;
+      const dvec3 d =
+          coat::closestPointOnTriangle(p, skin.positions[t[0]], skin.positions[t[1]], skin.positions[t[2]]) - p;
       const double dd = glm::dot(d, d);
       if (dd < wantD) {
         wantD = dd;
@@ -228,7 +238,8 @@ TEST(FastCheck, NearestFaceIsTheLinearScansFace) {
     EXPECT_EQ(d2, wantD);
     // Bounded by an arbitrary face's distance: still the nearest.
     const auto& t = skin.faces[static_cast<size_t>(q) % skin.faces.size()];
-    const dvec3 d = coat::closestPointOnTriangle(p, skin.positions[t[0]], skin.positions[t[1]], skin.positions[t[2]]) - p;
+    const dvec3 d =
+        coat::closestPointOnTriangle(p, skin.positions[t[0]], skin.positions[t[1]], skin.positions[t[2]]) - p;
     EXPECT_EQ(bvh.nearest(p, glm::dot(d, d), bary, d2), want) << q;
   }
 }

@@ -141,7 +141,8 @@ TEST(Coat2Directions, FramesFollowTheDeformedSkin) {
   evaluateFrames(posed, fol, dirs, moved);
   for (size_t i = 0; i < fol.size(); ++i) {
     expectFrame(moved.frames[i]);
-    EXPECT_NEAR(glm::length(moved.frames[i].origin - glm::dvec3(m * glm::dvec4(restCoat.frames[i].origin, 1.0))), 0, 1e-9);
+    EXPECT_NEAR(glm::length(moved.frames[i].origin - glm::dvec3(m * glm::dvec4(restCoat.frames[i].origin, 1.0))), 0,
+                1e-9);
     EXPECT_NEAR(glm::length(moved.frames[i].normal - rot * restCoat.frames[i].normal), 0, 1e-9);
     EXPECT_NEAR(glm::length(moved.frames[i].tangent - rot * restCoat.frames[i].tangent), 0, 1e-9);
   }
@@ -185,8 +186,8 @@ TEST(Coat2Directions, PerTractFieldsAndParsing) {
   CoatFeathers coat = coatOf(fol);
   evaluateFrames(grid, fol, dirs, coat);
   for (size_t i = 0; i < fol.size(); ++i)
-    EXPECT_NEAR(glm::length(coat.frames[i].tangent - (fol.tract[i] == 0 ? glm::dvec3(0, -1, 0) : glm::dvec3(1, 0, 0))), 0,
-                1e-12);
+    EXPECT_NEAR(glm::length(coat.frames[i].tangent - (fol.tract[i] == 0 ? glm::dvec3(0, -1, 0) : glm::dvec3(1, 0, 0))),
+                0, 1e-12);
   two.tracts[0].first = "tail";
   EXPECT_THROW(computeSurfaceDirections(grid, tracts, fol, two), Error);
 
@@ -285,7 +286,8 @@ TEST(Coat2Ordering, TractOrderAndBodyAxis) {
   o.axis = dopt.field.axis;
   orderLayers(sphere, tracts, params, fol, dirs, o, coat);
   for (size_t k = 0; k + 1 < coat.size(); ++k)
-    EXPECT_LE(fol.position[coat.follicle[coat.layerOrder[k]]].z, fol.position[coat.follicle[coat.layerOrder[k + 1]]].z + 1e-12);
+    EXPECT_LE(fol.position[coat.follicle[coat.layerOrder[k]]].z,
+              fol.position[coat.follicle[coat.layerOrder[k + 1]]].z + 1e-12);
 
   // Body axis with a listed tract: "front" is packed first (the bottom layer, e.g. flight feathers under
   // their coverts), each group in the axis order; without the list the order is the global axis order.
@@ -306,8 +308,8 @@ TEST(Coat2Ordering, TractOrderAndBodyAxis) {
   const OrderOptions parsed = parseOrdering(r);
   EXPECT_EQ(parsed.method, OrderMethod::Axis);
   EXPECT_EQ(parsed.tractOrder, (std::vector<std::string>{"a", "b"}));
-  for (const char* bad : {R"({"method": "axis"})", R"({"method": "random"})", R"({"order": []})",
-                          R"({"tracts": [1]})"}) {
+  for (const char* bad :
+       {R"({"method": "axis"})", R"({"method": "random"})", R"({"order": []})", R"({"tracts": [1]})"}) {
     const Json b = Json::parse(bad);
     JsonReader br(b, "scene.json", "ordering");
     EXPECT_THROW(parseOrdering(br), Error) << bad;

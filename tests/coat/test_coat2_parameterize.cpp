@@ -132,9 +132,8 @@ TEST(Coat2Parameterize, ClosedSphereIsRejectedByLscmAndCutByAuto) {
 
 TEST(Coat2Parameterize, AnnulusAndCylinderAreRejectedByLscmAndCutByAuto) {
   const SkinMesh grid = makeGridPatch(10, 10, 1.0, 1.0);
-  const std::vector<Tract> ring{tractWhere(grid, "ring", [](const glm::dvec3& c) {
-    return std::abs(c.x - 0.5) > 0.2 || std::abs(c.y - 0.5) > 0.2;
-  })};
+  const std::vector<Tract> ring{tractWhere(
+      grid, "ring", [](const glm::dvec3& c) { return std::abs(c.x - 0.5) > 0.2 || std::abs(c.y - 0.5) > 0.2; })};
   const TractTopology topo = tractTopology(grid, ring[0]);
   EXPECT_EQ(topo.boundaryLoops, 2u);
   EXPECT_EQ(topo.eulerCharacteristic(), 0);
@@ -171,7 +170,8 @@ TEST(Coat2Parameterize, AnnulusAndCylinderAreRejectedByLscmAndCutByAuto) {
 TEST(Coat2Parameterize, AutoProjectsFlatPiecesAndRejectsHandles) {
   // Two separate strips of a flat patch: not one surface, but seen from the front: projected.
   const SkinMesh grid = makeGridPatch(10, 4, 1.0, 0.4);
-  const std::vector<Tract> pieces{tractWhere(grid, "pieces", [](const glm::dvec3& c) { return c.x < 0.3 || c.x > 0.7; })};
+  const std::vector<Tract> pieces{
+      tractWhere(grid, "pieces", [](const glm::dvec3& c) { return c.x < 0.3 || c.x > 0.7; })};
   EXPECT_EQ(tractTopology(grid, pieces[0]).components, 2u);
   const Follicles fol = scatterTracts(grid, pieces, 20);
   const TractParameterization p = parameterizeTract(grid, pieces[0], 0, fol);
@@ -268,8 +268,8 @@ TEST(Coat2Parameterize, GridDistortionCarriesTheGridAlongWithTheMove) {
 }
 
 TEST(Coat2Parameterize, GridDistortionIsReadAndFoldsAreRefused) {
-  const Json good = Json::parse(
-      R"({"method": "projection", "distortion": [{"at": [0.5, 0.5], "move": [0.05, 0], "radius": 0.2}]})");
+  const Json good =
+      Json::parse(R"({"method": "projection", "distortion": [{"at": [0.5, 0.5], "move": [0.05, 0], "radius": 0.2}]})");
   JsonReader r(good, "scene.json", "tracts[0].parameterization");
   const ParameterizeOptions o = parseParameterization(r);
   ASSERT_EQ(o.distortion.size(), 1u);

@@ -76,8 +76,8 @@ TEST(Scatter, FolliclesLieInsideTractFacesWithUnitNormals) {
 
 TEST(Scatter, AreaWeightedFaceChoice) {
   // One small and one large triangle: follicles split by area (9:1).
-  const SkinMesh m = makeSkinMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-3, 0, 0}, {0, -3, 0}},
-                                  {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}});
+  const SkinMesh m =
+      makeSkinMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-3, 0, 0}, {0, -3, 0}}, {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}});
   Tract t;
   t.faces = {0, 2};  // areas 0.5 and 4.5
   ScatterOptions o;

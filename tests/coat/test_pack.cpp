@@ -40,7 +40,8 @@ bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) =
 void expectIdentical(const PackResult& a, const PackResult& b) {
   ASSERT_EQ(a.elevation.size(), b.elevation.size());
   for (size_t i = 0; i < a.elevation.size(); ++i) {
-    ASSERT_TRUE(sameBits(a.elevation[i], b.elevation[i])) << "feather " << i << ": " << a.elevation[i] << " vs " << b.elevation[i];
+    ASSERT_TRUE(sameBits(a.elevation[i], b.elevation[i]))
+        << "feather " << i << ": " << a.elevation[i] << " vs " << b.elevation[i];
   }
   // The packed key barbs, bit for bit.
   const PackedKeyBarbs &ka = a.packedKeys, &kb = b.packedKeys;
@@ -160,7 +161,8 @@ TEST(Pack, KeyBarbsNeverBelowTheirHeightField) {
       if (sAlong < 0.05 * f.length || sAlong > f.length) continue;
       const double field = f.field.at(sAlong);
       if (!std::isfinite(field)) continue;
-      EXPECT_GE(h, field - 1e-7) << "feather " << f.feather << " vane " << int(f.vane) << " key " << f.key << " s " << sAlong;
+      EXPECT_GE(h, field - 1e-7) << "feather " << f.feather << " vane " << int(f.vane) << " key " << f.key << " s "
+                                 << sAlong;
       ++checked;
     }
   }
@@ -213,7 +215,8 @@ TEST(Pack, ReducesIntersectingPairsAndSkinPenetrations) {
               before.intersectingPairs, before.skinPenetrations, before.coverage, after.intersectingPairs,
               after.skinPenetrations, after.coverage);
   ASSERT_GT(before.intersectingPairs, 1000u);
-  EXPECT_LE(after.intersectingPairs * 20, before.intersectingPairs) << "packing must remove >= 95% of the intersecting pairs";
+  EXPECT_LE(after.intersectingPairs * 20, before.intersectingPairs)
+      << "packing must remove >= 95% of the intersecting pairs";
   EXPECT_GT(before.skinPenetrations, 0u);
   EXPECT_EQ(after.skinPenetrations, 0u);
   EXPECT_GE(after.coverage, 0.97);
@@ -541,7 +544,8 @@ TEST(Style, SelectionsPickTheRightFeathers) {
   sphere.kind = StyleKind::Sphere;
   sphere.center = {0, 1, 0};
   sphere.radius = 0.3;
-  for (uint32_t i : selectFeathers(s.coat, sphere)) EXPECT_LE(glm::length(s.coat.frames[i].origin - sphere.center), 0.3);
+  for (uint32_t i : selectFeathers(s.coat, sphere))
+    EXPECT_LE(glm::length(s.coat.frames[i].origin - sphere.center), 0.3);
   StyleSelection comb;
   comb.kind = StyleKind::Comb;
   comb.from = {1, 0, 0.2};

@@ -46,7 +46,8 @@ BorderScene borderScene(double turnDeg, double spacing = 0.1, double lengthInSpa
       if (y > 0.7) continue;
       FeatherFrame f;
       // Small seeded jitter so no two rows are exactly aligned.
-      f.origin = {kC + x + 0.1 * spacing * (hashUniform(7, id, 0) - 0.5), kC + y + 0.1 * spacing * (hashUniform(7, id, 1) - 0.5), 0};
+      f.origin = {kC + x + 0.1 * spacing * (hashUniform(7, id, 0) - 0.5),
+                  kC + y + 0.1 * spacing * (hashUniform(7, id, 1) - 0.5), 0};
       f.normal = {0, 0, 1};
       const bool right = f.origin.x > kC;
       f.tangent = right ? dvec3(std::cos(turn), std::sin(turn), 0) : dvec3(1, 0, 0);

@@ -25,7 +25,8 @@ void expectRejected(const std::string& file, const std::string& element, const s
     loadSkinMesh(data(file), opt);
     FAIL() << file << " was accepted";
   } catch (const Error& e) {
-    EXPECT_NE(e.element().find(element), std::string::npos) << file << ": element '" << e.element() << "' in " << e.what();
+    EXPECT_NE(e.element().find(element), std::string::npos)
+        << file << ": element '" << e.element() << "' in " << e.what();
     EXPECT_NE(e.detail().find(message), std::string::npos) << file << ": " << e.what();
     EXPECT_NE(e.file().find(file), std::string::npos) << e.what();
   }
@@ -97,7 +98,7 @@ TEST(SkinLoad, ObjNegativeIndicesCrlfContinuationsAndPolygons) {
   }
   const SkinMesh m = loadSkinMesh(path);
   EXPECT_EQ(m.sourceFaceCount, 2u);
-  EXPECT_EQ(m.faceCount(), 5u);  // pentagon fan (3) + quad (2)
+  EXPECT_EQ(m.faceCount(), 5u);        // pentagon fan (3) + quad (2)
   ASSERT_EQ(m.groupNames.size(), 1u);  // usemtl when there are no g/o statements
   EXPECT_EQ(m.groupNames[0], "feathered");
   EXPECT_EQ(m.faceGroup[0], 0);
@@ -164,7 +165,8 @@ TEST(SkinLoad, LayoutsOpenMeshWouldMisreadAreRefused) {
       {"ply\nformat ascii 1.0\nelement vertex 4294967296\n" + props + "end_header\n", "4294967295"},
       {"ply\nformat ascii 1.0\n" + tri + "element face 1\nproperty list uchar int vertex_indices\nend_header\n" + body,
        "second 'face'"},
-      {"ply\nformat ascii 1.0\nelement vertex 3\n" + props + "property list uchar float w\nelement face 1\n"
+      {"ply\nformat ascii 1.0\nelement vertex 3\n" + props +
+           "property list uchar float w\nelement face 1\n"
            "property list uchar int vertex_indices\nend_header\n0 0 0 0\n1 0 0 0\n0 1 0 0\n3 0 1 2\n",
        "list property 'w'"},
       {"ply\nformat ascii 1.0\n" + tri + "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1-2 2\n", "'1-2'"},
@@ -185,8 +187,9 @@ TEST(SkinLoad, LayoutsOpenMeshWouldMisreadAreRefused) {
     EXPECT_NE(what.find(message), std::string::npos) << "'" << message << "' not in '" << what << "' for:\n" << content;
   }
   // Binary PLY with CRLF line ends, COFF with colours, NOFF with normals and a binary OFF load.
-  std::string crlf = "ply\r\nformat binary_little_endian 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n"
-                     "property float z\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\nend_header\r\n";
+  std::string crlf =
+      "ply\r\nformat binary_little_endian 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n"
+      "property float z\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\nend_header\r\n";
   const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   crlf.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
   crlf += '\3';
@@ -194,7 +197,9 @@ TEST(SkinLoad, LayoutsOpenMeshWouldMisreadAreRefused) {
   crlf.append(reinterpret_cast<const char*>(idx), sizeof idx);
   EXPECT_EQ(loadText("crlf.ply", crlf, &faces), "");
   EXPECT_EQ(faces, 1u);
-  EXPECT_EQ(loadText("colour.off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2 9 9 9\n", &faces), "");
+  EXPECT_EQ(loadText("colour.off",
+                     "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2 9 9 9\n", &faces),
+            "");
   EXPECT_EQ(faces, 1u);
   EXPECT_EQ(loadText("normals.off", "NOFF\n3 1 0\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n", &faces), "");
   EXPECT_EQ(faces, 1u);

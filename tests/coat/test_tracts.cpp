@@ -120,7 +120,8 @@ TEST(Tracts, ReadTractLeavesOtherKeysToTheCaller) {
   }
   {
     const Json two = Json::parse(R"([{"name": "a"}, {"name": "a"}])");
-    std::vector<JsonReader> items = {JsonReader(two[0], "s.json", "tracts[0]"), JsonReader(two[1], "s.json", "tracts[1]")};
+    std::vector<JsonReader> items = {JsonReader(two[0], "s.json", "tracts[0]"),
+                                     JsonReader(two[1], "s.json", "tracts[1]")};
     try {
       readTracts(items, m);
       FAIL();

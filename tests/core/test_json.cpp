@@ -24,18 +24,45 @@ TEST(JsonReader, RejectsUnknownKeyWithPath) {
 TEST(JsonReader, RangeAndTypeErrorsNameTheField) {
   Json j = Json::parse(R"({"rp": 1.5, "name": 3, "arr": [{"v": "x"}]})");
   JsonReader r(j, "f.json");
-  try { r.number("rp", 0.0, 1.0); FAIL(); } catch (const Error& e) { EXPECT_EQ(e.element(), "rp"); }
-  try { r.string("name"); FAIL(); } catch (const Error& e) { EXPECT_EQ(e.element(), "name"); }
+  try {
+    r.number("rp", 0.0, 1.0);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.element(), "rp");
+  }
+  try {
+    r.string("name");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.element(), "name");
+  }
   auto arr = r.objects("arr");
   ASSERT_EQ(arr.size(), 1u);
-  try { arr[0].number("v"); FAIL(); } catch (const Error& e) { EXPECT_EQ(e.element(), "arr[0].v"); }
-  try { r.number("missing"); FAIL(); } catch (const Error& e) { EXPECT_NE(std::string(e.what()).find("missing"), std::string::npos); }
+  try {
+    arr[0].number("v");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.element(), "arr[0].v");
+  }
+  try {
+    r.number("missing");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing"), std::string::npos);
+  }
 }
 
 TEST(JsonFile, MalformedJsonReportsLine) {
   const std::string path = std::string(PTERYLA_BUILD_DIR) + "/malformed_test.json";
-  { FILE* f = fopen(path.c_str(), "w"); fputs("{\n  \"a\": 1,\n  \"b\": ]\n}\n", f); fclose(f); }
-  try { readJsonFile(path); FAIL(); } catch (const Error& e) {
+  {
+    FILE* f = fopen(path.c_str(), "w");
+    fputs("{\n  \"a\": 1,\n  \"b\": ]\n}\n", f);
+    fclose(f);
+  }
+  try {
+    readJsonFile(path);
+    FAIL();
+  } catch (const Error& e) {
     EXPECT_EQ(e.file(), path);
     EXPECT_NE(std::string(e.what()).find("line 3"), std::string::npos) << e.what();
   }
@@ -46,8 +73,15 @@ TEST(JsonFile, MalformedJsonReportsLine) {
 // which escaped as an internal failure instead of a pteryla::Error naming the file.
 TEST(JsonFile, NumberOverflowIsBadInput) {
   const std::string path = std::string(PTERYLA_BUILD_DIR) + "/overflow_test.json";
-  { FILE* f = fopen(path.c_str(), "w"); fputs("{\n  \"length\": 1e3081\n}\n", f); fclose(f); }
-  try { readJsonFile(path); FAIL(); } catch (const Error& e) {
+  {
+    FILE* f = fopen(path.c_str(), "w");
+    fputs("{\n  \"length\": 1e3081\n}\n", f);
+    fclose(f);
+  }
+  try {
+    readJsonFile(path);
+    FAIL();
+  } catch (const Error& e) {
     EXPECT_EQ(e.file(), path);
     EXPECT_NE(std::string(e.what()).find("number overflow"), std::string::npos) << e.what();
   }

@@ -62,7 +62,8 @@ TEST(AtomicFile, AWriteErrorKeepsTheOldFileAndNamesIt) {
   const std::string p = d + "/out.bin";
   writeFileAtomic(p, "previous");
   // Files may not grow past 4 KB: writes beyond fail with EFBIG, as on a full disk.
-  struct sigaction ignore {}, before {};
+  struct sigaction ignore {
+  }, before{};
   ignore.sa_handler = SIG_IGN;
   sigaction(SIGXFSZ, &ignore, &before);
   rlimit old{};

@@ -104,7 +104,8 @@ size_t checkCurves(const usda::Prim& c) {
   EXPECT_EQ(len(c.attr("widths")), total);
   EXPECT_EQ(c.attr("widths").meta.at("interpolation").text, "vertex");
   EXPECT_EQ(len(c.attr("primvars:st")), total);
-  for (const char* u : {"primvars:feather_id", "primvars:tract", "primvars:layer", "primvars:age", "primvars:displayColor"}) {
+  for (const char* u :
+       {"primvars:feather_id", "primvars:tract", "primvars:layer", "primvars:age", "primvars:displayColor"}) {
     EXPECT_EQ(len(c.attr(u)), counts.size()) << u;
     EXPECT_EQ(c.attr(u).meta.at("interpolation").text, "uniform") << u;
   }
@@ -142,9 +143,11 @@ TEST(ExportUsd, TinyCoatMatchesGolden) {
   auto p = load(kTiny);
   const std::string out = outDir() + "/tiny_coat.usda";
   exchange::exportCoat(*p, out, {});
-  if (const char* u = std::getenv("PTERYLA_UPDATE_GOLDEN"); u && std::string(u) == "1") fs::copy_file(out, kGolden, fs::copy_options::overwrite_existing);
+  if (const char* u = std::getenv("PTERYLA_UPDATE_GOLDEN"); u && std::string(u) == "1")
+    fs::copy_file(out, kGolden, fs::copy_options::overwrite_existing);
   ASSERT_TRUE(fs::exists(kGolden));
-  EXPECT_TRUE(slurp(out) == slurp(kGolden)) << "export of " << kTiny << " differs from " << kGolden << "; actual: " << out;
+  EXPECT_TRUE(slurp(out) == slurp(kGolden))
+      << "export of " << kTiny << " differs from " << kGolden << "; actual: " << out;
 }
 
 // Reading the golden back gives exactly the pipeline's floats: skin points in order, and every curve
@@ -159,7 +162,8 @@ TEST(ExportUsd, GoldenReadsBackExactly) {
   const auto& pts = prim(l, {"pteryla", "skin"}).attr("points").value.items;
   ASSERT_EQ(pts.size(), skin.positions.size());
   for (size_t i = 0; i < pts.size(); ++i)
-    for (int c = 0; c < 3; ++c) EXPECT_EQ(asFloat(pts[i].items[size_t(c)]), skin.positions[i][c]) << "skin vertex " << i;
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(asFloat(pts[i].items[size_t(c)]), skin.positions[i][c]) << "skin vertex " << i;
   const TriMesh& coat = p->coatMesh().mesh;
   std::set<std::array<float, 3>> vertices;
   for (const auto& v : coat.positions) vertices.insert({v.x, v.y, v.z});
@@ -167,7 +171,8 @@ TEST(ExportUsd, GoldenReadsBackExactly) {
   ASSERT_FALSE(barbs.empty());
   for (const auto& b : barbs) {
     const std::array<float, 3> q = {asFloat(b.items[0]), asFloat(b.items[1]), asFloat(b.items[2])};
-    EXPECT_TRUE(vertices.count(q)) << "barb point " << b.items[0].text << " " << b.items[1].text << " " << b.items[2].text;
+    EXPECT_TRUE(vertices.count(q)) << "barb point " << b.items[0].text << " " << b.items[1].text << " "
+                                   << b.items[2].text;
     for (const auto& x : b.items) {
       char buf[32];
       const auto r = std::to_chars(buf, buf + sizeof buf, asFloat(x));
@@ -180,8 +185,10 @@ TEST(ExportUsd, GoldenReadsBackExactly) {
 // it. Every float must still read back bit for bit, across chunk boundaries (16384 values), for repeats,
 // for -0 next to 0 (equal as floats, different texts), denormals and the extremes.
 TEST(ExportUsd, ArraysReadBackBitExactly) {
-  const float special[] = {0.0f, -0.0f, -0.0f, 0.0f, 0.0f, 1.0f / 3.0f, 1.0f / 3.0f, -1.17549435e-38f,
-                           1.4e-45f, -1.4e-45f, 3.40282347e38f, -3.40282347e38f, 1e-7f, 123456.789f};
+  const float special[] = {0.0f,     -0.0f,       -0.0f,          0.0f,
+                           0.0f,     1.0f / 3.0f, 1.0f / 3.0f,    -1.17549435e-38f,
+                           1.4e-45f, -1.4e-45f,   3.40282347e38f, -3.40282347e38f,
+                           1e-7f,    123456.789f};
   exchange::detail::ExportScene scene;
   exchange::detail::ExportFrame frame;
   const size_t n = 40000;  // three chunks
@@ -203,8 +210,8 @@ TEST(ExportUsd, ArraysReadBackBitExactly) {
   for (size_t i = 0; i < n; ++i)
     for (int c = 0; c < 3; ++c) {
       const float expected = frame.skin.positions[i][c], actual = asFloat(pts[i].items[size_t(c)]);
-      ASSERT_EQ(std::memcmp(&expected, &actual, sizeof(float)), 0) << "vertex " << i << " component " << c << ": "
-                                                                  << pts[i].items[size_t(c)].text;
+      ASSERT_EQ(std::memcmp(&expected, &actual, sizeof(float)), 0)
+          << "vertex " << i << " component " << c << ": " << pts[i].items[size_t(c)].text;
     }
   const auto& idx = prim(l, {"pteryla", "skin"}).attr("faceVertexIndices").value.items;
   ASSERT_EQ(idx.size(), frame.skin.indices.size());
@@ -268,7 +275,8 @@ TEST(ExportUsd, CardsMatchTheMesh) {
   EXPECT_EQ(len(c.attr("primvars:st")), points);
   EXPECT_EQ(len(c.attr("primvars:displayOpacity")), points);
   EXPECT_EQ(len(c.attr("normals")), points);
-  for (const char* u : {"primvars:feather_id", "primvars:tract", "primvars:layer", "primvars:age"}) EXPECT_EQ(len(c.attr(u)), faces) << u;
+  for (const char* u : {"primvars:feather_id", "primvars:tract", "primvars:layer", "primvars:age"})
+    EXPECT_EQ(len(c.attr(u)), faces) << u;
 }
 
 // Instances over a moulting coat: one per feather, the moulted ones invisible, and each instance's
@@ -282,7 +290,8 @@ TEST(ExportUsd, InstancesHideMoultedFeathers) {
   EXPECT_EQ(pi.type, "PointInstancer");
   const coat::CoatFeathers& f = p->feathers();
   const size_t n = f.size();
-  for (const char* a : {"ids", "protoIndices", "positions", "orientations", "scales", "primvars:feather_id", "primvars:age"})
+  for (const char* a :
+       {"ids", "protoIndices", "positions", "orientations", "scales", "primvars:feather_id", "primvars:age"})
     EXPECT_EQ(len(pi.attr(a)), n) << a;
   const auto& targets = pi.rels.at("prototypes");
   const usda::Prim* protos = pi.child("Prototypes");
@@ -301,11 +310,13 @@ TEST(ExportUsd, InstancesHideMoultedFeathers) {
   const auto& q = pi.attr("orientations").value.items;
   const std::vector<double>& elev = p->elevations();
   for (size_t i = 0; i < n; ++i) {
-    const double w = q[i].items[0].number(), x = q[i].items[1].number(), y = q[i].items[2].number(), z = q[i].items[3].number();
+    const double w = q[i].items[0].number(), x = q[i].items[1].number(), y = q[i].items[2].number(),
+                 z = q[i].items[3].number();
     EXPECT_NEAR(w * w + x * x + y * y + z * z, 1.0, 2e-3);
     // Rotate (1, 0, 0) by the quaternion: first column of its matrix.
     const glm::dvec3 shaft(1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y));
-    const auto pl = feather::FeatherPlacement::fromFollicle(f.frames[i].origin, f.frames[i].tangent, f.frames[i].normal, elev[i]);
+    const auto pl =
+        feather::FeatherPlacement::fromFollicle(f.frames[i].origin, f.frames[i].tangent, f.frames[i].normal, elev[i]);
     EXPECT_GT(glm::dot(shaft, pl.x), 0.995) << "feather " << i;
   }
 }
@@ -344,7 +355,8 @@ TEST(ExportGltf, ReadsBack) {
   tinygltf::Model m;
   std::string err, warn;
   const std::string bytes = slurp(path);
-  ASSERT_TRUE(loader.LoadBinaryFromMemory(&m, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()), unsigned(bytes.size())))
+  ASSERT_TRUE(loader.LoadBinaryFromMemory(&m, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                          unsigned(bytes.size())))
       << err;
   ASSERT_EQ(m.meshes.size(), 1u);
   ASSERT_EQ(m.nodes.size(), 1u);
@@ -364,7 +376,8 @@ TEST(ExportGltf, ReadsBack) {
         for (int c = 0; c < 3; ++c) ASSERT_EQ(f[3 * i + size_t(c)], skin.positions[i][c]);
       continue;
     }
-    for (const char* name : {"POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "COLOR_0", "_FEATHER_ID", "_TRACT", "_LAYER", "_AGE"})
+    for (const char* name :
+         {"POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "COLOR_0", "_FEATHER_ID", "_TRACT", "_LAYER", "_AGE"})
       ASSERT_TRUE(prim.attributes.count(name)) << name;
     const auto& mat = m.materials[size_t(prim.material)];
     EXPECT_TRUE(mat.extensions.count("KHR_materials_anisotropy"));
@@ -381,7 +394,9 @@ TEST(ExportGltf, ReadsBack) {
   }
   EXPECT_GT(featherIdsSeen, 0u);
   EXPECT_EQ(triangles, skin.triangleCount() + liveCoatTriangles(*p));
-  ASSERT_EQ(std::find(m.extensionsUsed.begin(), m.extensionsUsed.end(), "KHR_materials_anisotropy") != m.extensionsUsed.end(), true);
+  ASSERT_EQ(
+      std::find(m.extensionsUsed.begin(), m.extensionsUsed.end(), "KHR_materials_anisotropy") != m.extensionsUsed.end(),
+      true);
 }
 
 TEST(ExportGltf, FrameRangeIsAFlipbook) {

@@ -15,8 +15,8 @@ namespace usda {
 
 struct Value {
   enum class Kind { Number, String, Token, Path, Tuple, Array } kind = Kind::Number;
-  std::string text;           // number text, string contents, token, path
-  std::vector<Value> items;   // tuple or array elements
+  std::string text;          // number text, string contents, token, path
+  std::vector<Value> items;  // tuple or array elements
   double number() const { return std::strtod(text.c_str(), nullptr); }
 };
 
@@ -89,7 +89,9 @@ class Reader {
   std::string word() {
     skip();
     const size_t b = p_;
-    while (p_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[p_])) || s_[p_] == '_' || s_[p_] == ':' || s_[p_] == '.')) ++p_;
+    while (p_ < s_.size() &&
+           (std::isalnum(static_cast<unsigned char>(s_[p_])) || s_[p_] == '_' || s_[p_] == ':' || s_[p_] == '.'))
+      ++p_;
     if (b == p_) fail("expected a name");
     return s_.substr(b, p_ - b);
   }
@@ -109,8 +111,9 @@ class Reader {
     skip();
     const size_t b = p_;
     if (s_[p_] == '-' || s_[p_] == '+') ++p_;
-    while (p_ < s_.size() && (std::isdigit(static_cast<unsigned char>(s_[p_])) || s_[p_] == '.' || s_[p_] == 'e' || s_[p_] == 'E' ||
-                              ((s_[p_] == '-' || s_[p_] == '+') && (s_[p_ - 1] == 'e' || s_[p_ - 1] == 'E'))))
+    while (p_ < s_.size() &&
+           (std::isdigit(static_cast<unsigned char>(s_[p_])) || s_[p_] == '.' || s_[p_] == 'e' || s_[p_] == 'E' ||
+            ((s_[p_] == '-' || s_[p_] == '+') && (s_[p_ - 1] == 'e' || s_[p_ - 1] == 'E'))))
       ++p_;
     Value v;
     v.text = s_.substr(b, p_ - b);
@@ -168,8 +171,9 @@ class Reader {
     return m;
   }
   static bool knownType(const std::string& t) {
-    static const char* kinds[] = {"int[]", "int64[]", "float[]", "point3f[]", "normal3f[]", "texCoord2f[]", "color3f[]", "float3[]",
-                                  "quath[]", "string[]", "token", "bool", "string"};
+    static const char* kinds[] = {"int[]",        "int64[]",   "float[]",  "point3f[]", "normal3f[]",
+                                  "texCoord2f[]", "color3f[]", "float3[]", "quath[]",   "string[]",
+                                  "token",        "bool",      "string"};
     for (const char* k : kinds)
       if (t == k) return true;
     return false;
@@ -194,13 +198,15 @@ class Reader {
         return;
       }
       if (arity) {
-        if (e.kind != Value::Kind::Tuple || e.items.size() != arity) fail(type + ": expected " + std::to_string(arity) + "-tuples");
+        if (e.kind != Value::Kind::Tuple || e.items.size() != arity)
+          fail(type + ": expected " + std::to_string(arity) + "-tuples");
         for (const Value& x : e.items)
           if (x.kind != Value::Kind::Number) fail(type + ": tuple of non-numbers");
         return;
       }
       if (e.kind != Value::Kind::Number) fail(type + ": expected a number");
-      if (integer && e.text.find_first_of(".eE") != std::string::npos) fail(type + ": expected an integer, got " + e.text);
+      if (integer && e.text.find_first_of(".eE") != std::string::npos)
+        fail(type + ": expected an integer, got " + e.text);
     };
     if (type == "token") {
       if (v.kind != Value::Kind::String) fail("token: expected a quoted token");

@@ -4,7 +4,9 @@
 
 namespace pteryla::feather::testing {
 
-inline KeyBarb straightKey(double rp, double chord = 1.0) { return {rp, {{0, 0, 0}, {chord / 3, 0, 0}, {2 * chord / 3, 0, 0}, {chord, 0, 0}}}; }
+inline KeyBarb straightKey(double rp, double chord = 1.0) {
+  return {rp, {{0, 0, 0}, {chord / 3, 0, 0}, {2 * chord / 3, 0, 0}, {chord, 0, 0}}};
+}
 
 // A contour-like feather with explicit key barbs on both vanes.
 inline FeatherParams contourParams() {

@@ -53,10 +53,10 @@ inline FeatherParams scanTruth(double bendBase = 0, double bendTip = 0) {
 
 struct SyntheticScan {
   int width = 0, height = 0;
-  std::vector<float> rgb;            // 3 floats per pixel, row 0 at the top
+  std::vector<float> rgb;  // 3 floats per pixel, row 0 at the top
   double pixelsPerUnit = 0;
-  glm::dvec2 base{0.0}, tip{0.0};    // rachis base (superior umbilicus) and tip, pixels
-  GrayImage gray() const {           // luminance, as loadGrayImage computes it
+  glm::dvec2 base{0.0}, tip{0.0};  // rachis base (superior umbilicus) and tip, pixels
+  GrayImage gray() const {         // luminance, as loadGrayImage computes it
     GrayImage g;
     g.width = width, g.height = height;
     g.pixels.resize(static_cast<size_t>(width) * height);
@@ -138,7 +138,8 @@ inline SyntheticScan renderScan(const FeatherParams& p, double pixelsPerUnit, do
           cover[static_cast<size_t>(sy / kSS) * s.width + sx / kSS] += 1.0f / (kSS * kSS);
     }
     for (int y = 0; y < s.height; ++y)
-      for (int x = 0; x < s.width; ++x) blend(x, y, vane[v], std::min(1.0f, cover[static_cast<size_t>(y) * s.width + x]));
+      for (int x = 0; x < s.width; ++x)
+        blend(x, y, vane[v], std::min(1.0f, cover[static_cast<size_t>(y) * s.width + x]));
   }
   // Anti-aliased segment of width `w` pixels: coverage = clamp(w/2 + 0.5 - distance, 0, 1).
   std::vector<float> dark(static_cast<size_t>(s.width) * s.height);
@@ -160,7 +161,8 @@ inline SyntheticScan renderScan(const FeatherParams& p, double pixelsPerUnit, do
   std::vector<glm::vec3> line;
   for (uint32_t i = c.barbBegin[0]; i < c.barbEnd[0]; ++i) {
     barbPolyline(c, c.barbs[i], 16, line);
-    for (size_t j = 0; j + 1 < line.size(); ++j) segment(toPx(glm::dvec3(line[j])), toPx(glm::dvec3(line[j + 1])), 1.4, 1.4);
+    for (size_t j = 0; j + 1 < line.size(); ++j)
+      segment(toPx(glm::dvec3(line[j])), toPx(glm::dvec3(line[j + 1])), 1.4, 1.4);
   }
   for (int y = 0; y < s.height; ++y)
     for (int x = 0; x < s.width; ++x) blend(x, y, ink, dark[static_cast<size_t>(y) * s.width + x]);

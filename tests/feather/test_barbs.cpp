@@ -224,7 +224,10 @@ TEST(Barbs, SplitsAreReproducibleFromTheSeed) {
   ASSERT_EQ(a.cvs.size(), b.cvs.size());
   EXPECT_EQ(0, std::memcmp(a.cvs.data(), b.cvs.data(), a.cvs.size() * sizeof(glm::vec3)));
   int edges = 0, after = 0;
-  for (const BarbCurve& x : a.barbs) { edges += x.isSplitEdge; after += x.splitAfter; }
+  for (const BarbCurve& x : a.barbs) {
+    edges += x.isSplitEdge;
+    after += x.splitAfter;
+  }
   EXPECT_GE(after, 2);  // at least some splits land between distinct barbs
   EXPECT_GE(edges, after);
   // The barbs beside a split open away from each other.

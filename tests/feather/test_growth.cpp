@@ -94,7 +94,8 @@ TEST(FeatherGrowth, LengthsGrowMonotonicallyThenWearShortens) {
     EXPECT_GE(g.rachisWidth, prevWidth) << age;
     const FeatherCurves c = generateBarbs(g);
     double arc = 0;  // shaft arc length (straight until 0.8, then curving)
-    for (size_t k = 1; k < c.shafts[0].points.size(); ++k) arc += glm::length(c.shafts[0].points[k] - c.shafts[0].points[k - 1]);
+    for (size_t k = 1; k < c.shafts[0].points.size(); ++k)
+      arc += glm::length(c.shafts[0].points[k] - c.shafts[0].points[k - 1]);
     EXPECT_GE(arc, prevShaftLen - 1e-4 * p.totalLength()) << age;  // polyline chords shorten as it curves
     prevShaftLen = arc;
     prevTotal = g.totalLength();
@@ -130,8 +131,12 @@ TEST(FeatherGrowth, PinFeatherBarbsLieAlongTheShaftThenOpenTipToBase) {
       const VaneParams& v = p.vane(b.vane);
       const double finalAngle = v.baseAngle * (1 - b.rp) + v.tipAngle * b.rp;
       const double a = barbAngle(g, c, b);
-      if (b.rp > 0.55) { EXPECT_GT(a, 0.4 * finalAngle) << b.rp; }
-      if (b.rp < 0.2) { EXPECT_LT(a, 0.05) << b.rp; }
+      if (b.rp > 0.55) {
+        EXPECT_GT(a, 0.4 * finalAngle) << b.rp;
+      }
+      if (b.rp < 0.2) {
+        EXPECT_LT(a, 0.05) << b.rp;
+      }
     }
   }
   {  // open at 80%: final angles, straight barbs
@@ -181,8 +186,12 @@ TEST(FeatherGrowth, SheathShedsFromTipToBase) {
   // At mid shedding the sheathed vertices are the ones near the base.
   const TriMesh m = buildFeatherMesh(p, 0.65, 1.0);
   for (size_t i = 0; i < m.vertexCount(); ++i) {
-    if (m.uvGrowth[i].y < 0.3f) { EXPECT_EQ(m.sheath[i], 1.0f); }
-    if (m.uvGrowth[i].y > 0.7f) { EXPECT_EQ(m.sheath[i], 0.0f); }
+    if (m.uvGrowth[i].y < 0.3f) {
+      EXPECT_EQ(m.sheath[i], 1.0f);
+    }
+    if (m.uvGrowth[i].y > 0.7f) {
+      EXPECT_EQ(m.sheath[i], 0.0f);
+    }
   }
   EXPECT_EQ(sheathWeight(0.0, 0.0, 0.05), 1.0);
   EXPECT_EQ(sheathWeight(1.0, 0.0, 0.05), 1.0);
@@ -238,13 +247,16 @@ TEST(FeatherGrowth, BadSchedulesAreRejectedWithTheirPath) {
     }
     return std::string("no error");
   };
-  EXPECT_EQ(element(R"({"ramps": [{"parameter": "shaft_lenght", "start": 0, "end": 0.3}]})"), "growth.ramps[0].parameter");
+  EXPECT_EQ(element(R"({"ramps": [{"parameter": "shaft_lenght", "start": 0, "end": 0.3}]})"),
+            "growth.ramps[0].parameter");
   EXPECT_EQ(element(R"({"ramps": [{"parameter": "barb_length", "start": 0.5, "end": 1.2}]})"), "growth.ramps[0].end");
   EXPECT_EQ(element(R"({"ramps": [{"parameter": "barb_length", "start": 0.5, "end": 0.4}]})"), "growth.ramps[0].end");
   EXPECT_EQ(element(R"({"ramps": [{"parameter": "wear_splits", "start": 0.5, "end": 1.5}]})"), "growth.ramps[0].start");
   EXPECT_EQ(element(R"({"ramps": [{"parameter": "sheath", "start": 0, "end": 1},
-                                  {"parameter": "sheath", "start": 0, "end": 1}]})"), "growth.ramps[1].parameter");
-  EXPECT_EQ(element(R"({"ramps": [{"parameter": "sheath", "start": 0, "end": 1, "easing": "bouncy"}]})"), "growth.ramps[0].easing");
+                                  {"parameter": "sheath", "start": 0, "end": 1}]})"),
+            "growth.ramps[1].parameter");
+  EXPECT_EQ(element(R"({"ramps": [{"parameter": "sheath", "start": 0, "end": 1, "easing": "bouncy"}]})"),
+            "growth.ramps[0].easing");
   EXPECT_EQ(element(R"({"ramps": [], "speed": 2})"), "growth.speed");
   EXPECT_THROW(featherAtAge(geomtest::contour(), std::nan("")), Error);
 }

@@ -93,7 +93,7 @@ TEST(HelicalCollar, CircleAndBezierAreArcLengthParameterized) {
   // A squarish closed Bezier (4 segments, counter-clockwise): equal s steps give equal arc steps.
   CollarShape sq;
   sq.kind = CollarShape::Kind::Bezier;
-  sq.points = {{1, 0}, {1, 0.6}, {0.6, 1}, {0, 1}, {-0.6, 1}, {-1, 0.6},
+  sq.points = {{1, 0},  {1, 0.6},   {0.6, 1},   {0, 1},  {-0.6, 1}, {-1, 0.6},
                {-1, 0}, {-1, -0.6}, {-0.6, -1}, {0, -1}, {0.6, -1}, {1, -0.6}};
   const Collar bz(sq);
   EXPECT_NEAR(glm::length(bz.point(0.0) - glm::dvec2(1, 0)), 0, 1e-12);
@@ -282,9 +282,9 @@ TEST(HelicalSpacing, ArcLengthSpawningRemovesTheTipAnomaly) {
   const HelicalSpacingStats arcStats = helicalSpacingStats(HelicalGrowth(p));
   for (int v = 0; v < 2; ++v) {
     const VaneSpacingStats &t = timeStats.vane[v], &a = arcStats.vane[v];
-    std::cout << (v ? "right" : "left") << " vane tip spacing / median spacing: time mode " << t.tipRatio
-              << " (max " << t.tipMaxRatio << ", " << t.tipBarbs << " tip barbs), arc-length mode " << a.tipRatio
-              << " (max " << a.tipMaxRatio << ", " << a.tipBarbs << " tip barbs)\n";
+    std::cout << (v ? "right" : "left") << " vane tip spacing / median spacing: time mode " << t.tipRatio << " (max "
+              << t.tipMaxRatio << ", " << t.tipBarbs << " tip barbs), arc-length mode " << a.tipRatio << " (max "
+              << a.tipMaxRatio << ", " << a.tipBarbs << " tip barbs)\n";
     RecordProperty(v ? "tip_ratio_time_right" : "tip_ratio_time_left", std::to_string(t.tipRatio));
     RecordProperty(v ? "tip_ratio_arc_right" : "tip_ratio_arc_left", std::to_string(a.tipRatio));
     EXPECT_FALSE(t.tipRatio >= 0.5 && t.tipRatio <= 2.0) << t.tipRatio;
@@ -410,7 +410,7 @@ TEST(HelicalGrowth, BezierCollarGrowsAFeather) {
   HelicalParams p = exampleParams(kContour);
   p.collar.kind = CollarShape::Kind::Bezier;
   // An ellipse-like collar, wider across than deep.
-  p.collar.points = {{2, 0}, {2, 0.8}, {1.1, 1.2}, {0, 1.2}, {-1.1, 1.2}, {-2, 0.8},
+  p.collar.points = {{2, 0},  {2, 0.8},   {1.1, 1.2},   {0, 1.2},  {-1.1, 1.2}, {-2, 0.8},
                      {-2, 0}, {-2, -0.8}, {-1.1, -1.2}, {0, -1.2}, {1.1, -1.2}, {2, -0.8}};
   const HelicalGrowth g(p);
   const HelicalFeather f = helicalFeather(g, 1, 1);

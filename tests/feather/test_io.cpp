@@ -75,7 +75,8 @@ TEST(FeatherFile, MalformedFilesNameTheField) {
       {"rp above 1", [](Json& j) { j["left_vane"]["key_barbs"][0]["rp"] = 1.5; }, "left_vane.key_barbs[0].rp"},
       {"rp below 0", [](Json& j) { j["left_vane"]["key_barbs"][0]["rp"] = -0.1; }, "left_vane.key_barbs[0].rp"},
       {"NaN as text", [](Json& j) { j["barbs"]["length"] = "NaN"; }, "barbs.length"},
-      {"infinite", [](Json& j) { j["barbs"]["spacing_tip"] = std::numeric_limits<double>::infinity(); }, "barbs.spacing_tip"},
+      {"infinite", [](Json& j) { j["barbs"]["spacing_tip"] = std::numeric_limits<double>::infinity(); },
+       "barbs.spacing_tip"},
       {"one control vertex", [](Json& j) { j["left_vane"]["key_barbs"][0]["cvs"] = Json::parse("[[0,0,0]]"); },
        "left_vane.key_barbs[0].cvs"},
       {"bad control vertex", [](Json& j) { j["left_vane"]["key_barbs"][0]["cvs"][1] = Json::parse("[0,1]"); },
@@ -89,12 +90,18 @@ TEST(FeatherFile, MalformedFilesNameTheField) {
       {"unknown generator", [](Json& j) { j["generator"] = "nope"; }, "generator"},
       {"silhouette rp order", [](Json& j) { j["silhouette"] = Json::parse(R"({"left": [[0.5, 1], [0.2, 1]]})"); },
        "silhouette.left[1][0]"},
-      {"material colour", [](Json& j) { j["material"] = Json::parse(R"({"base_color": [1, 2, 0]})"); }, "material.base_color"},
+      {"material colour", [](Json& j) { j["material"] = Json::parse(R"({"base_color": [1, 2, 0]})"); },
+       "material.base_color"},
       {"material unknown key", [](Json& j) { j["material"] = Json::parse(R"({"colour": "red"})"); }, "material.colour"},
       {"splits range", [](Json& j) { j["splits"] = Json::parse(R"({"count": 2, "rp_min": 0.9, "rp_max": 0.1})"); },
        "splits.rp_min"},
-      {"afterfeather field", [](Json& j) { j["afterfeather"] = j; j["afterfeather"].erase("pteryla_feather");
-                                           j["afterfeather"]["rachis"]["width"] = -1; }, "afterfeather.rachis.width"},
+      {"afterfeather field",
+       [](Json& j) {
+         j["afterfeather"] = j;
+         j["afterfeather"].erase("pteryla_feather");
+         j["afterfeather"]["rachis"]["width"] = -1;
+       },
+       "afterfeather.rachis.width"},
   };
   for (const Case& c : cases) {
     std::string element;
@@ -157,7 +164,8 @@ TEST(FeatherFile, EmbeddedDefinitionCarriesItsPath) {
 
 TEST(FeatherFile, OutlineSilhouetteIsConverted) {
   Json j = Json::parse(kMinimal);
-  j["silhouette"] = Json::parse(R"({"outline": [[0.1, 0], [0.1, 0.5], [1.1, 0.5], [1.1, -0.5], [0.1, -0.5]], "samples": 5})");
+  j["silhouette"] =
+      Json::parse(R"({"outline": [[0.1, 0], [0.1, 0.5], [1.1, 0.5], [1.1, -0.5], [0.1, -0.5]], "samples": 5})");
   const std::string path = tmpPath("outline.json");
   writeJsonFile(path, j);
   const FeatherParams p = loadFeather(path);
@@ -170,9 +178,10 @@ TEST(FeatherFile, EveryLibraryFeatherLoadsAndGenerates) {
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(dir))
     if (e.path().extension() == ".json") names.push_back(e.path().stem().string());
-  for (const char* required : {"down", "semiplume", "contour", "covert", "primary", "secondary", "rectrix",
-                               "filoplume", "bristle", "eyespot"})
-    EXPECT_NE(std::find(names.begin(), names.end(), required), names.end()) << "missing data/feathers/" << required << ".json";
+  for (const char* required :
+       {"down", "semiplume", "contour", "covert", "primary", "secondary", "rectrix", "filoplume", "bristle", "eyespot"})
+    EXPECT_NE(std::find(names.begin(), names.end(), required), names.end())
+        << "missing data/feathers/" << required << ".json";
   for (const auto& n : names) {
     SCOPED_TRACE(n);
     const std::string path = (dir / (n + ".json")).string();
@@ -193,7 +202,8 @@ TEST(FeatherFile, PrimaryHasNarrowerLeadingVane) {
   double extent[2] = {0, 0};  // widest reach across the shaft per vane
   for (const BarbCurve& b : c.barbs) {
     if (b.part != 0) continue;
-    for (uint16_t k = 0; k < b.cvCount; ++k) extent[b.vane] = std::max(extent[b.vane], double(std::abs(c.cvs[b.cvOffset + k].y)));
+    for (uint16_t k = 0; k < b.cvCount; ++k)
+      extent[b.vane] = std::max(extent[b.vane], double(std::abs(c.cvs[b.cvOffset + k].y)));
   }
   // The right vane leads (outer edge of the wing): clearly narrower than the trailing left vane.
   EXPECT_LT(extent[1], 0.6 * extent[0]);

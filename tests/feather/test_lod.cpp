@@ -55,11 +55,15 @@ TEST(FeatherLod, OrderIsPermutationWithPinnedBarbsFirst) {
     const bool last = i + 1 == c.barbs.size() || c.barbs[i + 1].vane != b.vane || c.barbs[i + 1].part != b.part;
     keys += b.isKey;
     splitEdges += b.isSplitEdge;
-    if (b.isSplitEdge || first || last) { EXPECT_LT(o.rank[i], o.pinned) << "barb " << i; }
+    if (b.isSplitEdge || first || last) {
+      EXPECT_LT(o.rank[i], o.pinned) << "barb " << i;
+    }
   }
   // Key barbs come right after the pinned ones: kept at every level that keeps more than the pinned.
   for (size_t i = 0; i < c.barbs.size(); ++i)
-    if (c.barbs[i].isKey && o.rank[i] >= o.pinned) { EXPECT_LT(o.rank[i], o.pinned + keys) << "barb " << i; }
+    if (c.barbs[i].isKey && o.rank[i] >= o.pinned) {
+      EXPECT_LT(o.rank[i], o.pinned + keys) << "barb " << i;
+    }
   EXPECT_EQ(keys, 3u);
   EXPECT_GE(splitEdges, 4u);
   EXPECT_LT(o.pinned, c.barbs.size() / 4);
@@ -265,7 +269,8 @@ TEST(FeatherLod, OutlineAtTenthDetailWithinTenPercent) {
     FeatherMeshRanges r;
     appendFeatherMesh(in, MeshOptions{}, m, &r);
     std::vector<glm::dvec2> pts;
-    for (uint32_t i = r.leftFirst; i < r.rightFirst + r.rightCount; ++i) pts.emplace_back(m.positions[m.indices[i]].x, m.positions[m.indices[i]].y);
+    for (uint32_t i = r.leftFirst; i < r.rightFirst + r.rightCount; ++i)
+      pts.emplace_back(m.positions[m.indices[i]].x, m.positions[m.indices[i]].y);
     return geomtest::hullArea(pts);
   };
   const double full = outline(1.0);

@@ -58,14 +58,16 @@ void expectConsistent(const TriMesh& m) {
 }
 
 glm::vec3 faceNormal(const TriMesh& m, size_t t) {
-  const glm::vec3 a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]], c = m.positions[m.indices[3 * t + 2]];
+  const glm::vec3 a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]],
+                  c = m.positions[m.indices[3 * t + 2]];
   return glm::cross(b - a, c - a);
 }
 
 // Vertex index of each position (exact float match).
 std::map<std::tuple<float, float, float>, uint32_t> vertexIndex(const TriMesh& m) {
   std::map<std::tuple<float, float, float>, uint32_t> idx;
-  for (uint32_t i = 0; i < m.positions.size(); ++i) idx.emplace(std::make_tuple(m.positions[i].x, m.positions[i].y, m.positions[i].z), i);
+  for (uint32_t i = 0; i < m.positions.size(); ++i)
+    idx.emplace(std::make_tuple(m.positions[i].x, m.positions[i].y, m.positions[i].z), i);
   return idx;
 }
 
@@ -82,7 +84,8 @@ TEST(FeatherMesh, AttributesAreCompleteAndInRange) {
 TEST(FeatherMesh, VaneNormalsAreDorsalAndAgreeWithWinding) {
   // Pennaceous barbs everywhere (the default plumulaceous base barbs legitimately cross each other).
   FeatherParams p = geomtest::contour(true);
-  for (int v = 0; v < 2; ++v) p.vane(v).keyBarbs.insert(p.vane(v).keyBarbs.begin(), geomtest::key(0.0, {{0, 0, 0}, {1, 0, 0}}));
+  for (int v = 0; v < 2; ++v)
+    p.vane(v).keyBarbs.insert(p.vane(v).keyBarbs.begin(), geomtest::key(0.0, {{0, 0, 0}, {1, 0, 0}}));
   const FeatherCurves c = generateBarbs(p);
   FeatherMeshRanges r;
   const TriMesh m = meshOf(c, 1.0, &r);
@@ -99,9 +102,12 @@ TEST(FeatherMesh, VaneNormalsAreDorsalAndAgreeWithWinding) {
   for (uint32_t i = r.shaftFirst; i < r.shaftFirst + r.shaftCount; i += 3) {
     const glm::vec3 fn = faceNormal(m, i / 3);
     if (glm::length(fn) < 1e-12f) continue;
-    const glm::vec3 centroid = (m.positions[m.indices[i]] + m.positions[m.indices[i + 1]] + m.positions[m.indices[i + 2]]) / 3.0f;
+    const glm::vec3 centroid =
+        (m.positions[m.indices[i]] + m.positions[m.indices[i + 1]] + m.positions[m.indices[i + 2]]) / 3.0f;
     const glm::vec3 radial(0, centroid.y, centroid.z);
-    if (glm::length(radial) > 1e-6f) { EXPECT_GT(glm::dot(fn, radial), 0.0f); }
+    if (glm::length(radial) > 1e-6f) {
+      EXPECT_GT(glm::dot(fn, radial), 0.0f);
+    }
   }
 }
 
@@ -194,8 +200,12 @@ TEST(FeatherMesh, TextureCoordinatesContinuousAlongBarbs) {
   // Global map orientation: left vane u < 0.5, right vane u > 0.5; v grows toward the tip.
   float vMin = 1, vMax = 0;
   for (size_t i = 0; i < m.positions.size(); ++i) {
-    if (m.positions[i].y > 0.05f) { EXPECT_LT(m.uvGlobal[i].x, 0.5f); }
-    if (m.positions[i].y < -0.05f) { EXPECT_GT(m.uvGlobal[i].x, 0.5f); }
+    if (m.positions[i].y > 0.05f) {
+      EXPECT_LT(m.uvGlobal[i].x, 0.5f);
+    }
+    if (m.positions[i].y < -0.05f) {
+      EXPECT_GT(m.uvGlobal[i].x, 0.5f);
+    }
     vMin = std::min(vMin, m.uvGlobal[i].y);
     vMax = std::max(vMax, m.uvGlobal[i].y);
   }
@@ -229,7 +239,10 @@ TEST(FeatherMesh, AlphaFallsOffQuadraticallyEarlierOnTheEdges) {
     uint32_t bi = 0;
     for (uint32_t i = 0; i < m.positions.size(); ++i) {
       const float d = glm::length(m.positions[i] - mid);
-      if (d < best) { best = d; bi = i; }
+      if (d < best) {
+        best = d;
+        bi = i;
+      }
     }
     ASSERT_LT(best, 1e-5f);
     e.push_back(m.alpha[bi]);
@@ -246,7 +259,8 @@ TEST(FeatherMesh, BarbCountIsOneAtFullDetailAndGrowsAtLowDetail) {
   for (uint32_t i = r.leftFirst; i < r.rightFirst + r.rightCount; ++i) EXPECT_EQ(full.barbCount[full.indices[i]], 1.0f);
   const TriMesh low = meshOf(c, 0.1, &r);
   float maxCount = 0;
-  for (uint32_t i = r.leftFirst; i < r.rightFirst + r.rightCount; ++i) maxCount = std::max(maxCount, low.barbCount[low.indices[i]]);
+  for (uint32_t i = r.leftFirst; i < r.rightFirst + r.rightCount; ++i)
+    maxCount = std::max(maxCount, low.barbCount[low.indices[i]]);
   EXPECT_GT(maxCount, 4.0f);
   // Summed over kept barbs' centre rows (t = 0 vertices) the counts cover every barb once.
   double sum = 0;
@@ -330,8 +344,10 @@ TEST(FeatherMesh, BatchEqualsSequentialAppends) {
   for (size_t i = 0; i < rs.size(); ++i) {
     EXPECT_EQ(rs[i].leftFirst, rp[i].leftFirst);
     EXPECT_EQ(rs[i].afterCount, rp[i].afterCount);
-    if (i % 2) { EXPECT_GT(rs[i].afterCount, 0u); }
-    else EXPECT_EQ(rs[i].afterCount, 0u);
+    if (i % 2) {
+      EXPECT_GT(rs[i].afterCount, 0u);
+    } else
+      EXPECT_EQ(rs[i].afterCount, 0u);
   }
 }
 

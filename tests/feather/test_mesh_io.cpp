@@ -44,8 +44,11 @@ TEST(FeatherMeshIo, ObjHasVerticesTexcoordsNormalsFaces) {
     if (line.rfind("vn ", 0) == 0) ++vn;
     if (line.rfind("f ", 0) == 0) {
       unsigned a[9];
-      faceOk = faceOk && std::sscanf(line.c_str(), "f %u/%u/%u %u/%u/%u %u/%u/%u", a, a + 1, a + 2, a + 3, a + 4, a + 5, a + 6, a + 7, a + 8) == 9 &&
-               a[0] == m.indices[3 * faces] + 1 && a[3] == m.indices[3 * faces + 1] + 1 && a[6] == m.indices[3 * faces + 2] + 1;
+      faceOk = faceOk &&
+               std::sscanf(line.c_str(), "f %u/%u/%u %u/%u/%u %u/%u/%u", a, a + 1, a + 2, a + 3, a + 4, a + 5, a + 6,
+                           a + 7, a + 8) == 9 &&
+               a[0] == m.indices[3 * faces] + 1 && a[3] == m.indices[3 * faces + 1] + 1 &&
+               a[6] == m.indices[3 * faces + 2] + 1;
       ++faces;
     }
   }

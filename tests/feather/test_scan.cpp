@@ -23,15 +23,15 @@ constexpr double kDeg = kPi / 180;
 
 // Tolerances (docs/feather-format.md, "Feathers from scans"); measured errors on these scans are about
 // half of them or less.
-constexpr double kLengthTol = 0.02;          // rachis length, relative
-constexpr double kCurvatureTol = 0.03;       // lateral curvature, radians
-constexpr double kSpacingTol = 0.04;         // spacing at base and tip, relative
-constexpr double kAngleTol = 1.5 * kDeg;     // barb angles at base and tip, straight barbs
-constexpr double kBentAngleTol = 3 * kDeg;   // ... bent barbs
-constexpr double kBendTol = 0.1;             // key barb turning, radians
-constexpr double kSilhouetteTol = 0.05;      // barb length, fraction of the longest barb, rp in [0.1, 0.9]
-constexpr double kCalamusTol = 0.1;          // calamus length, relative
-constexpr double kWidthTol = 0.2;            // rachis width, relative (8 pixels at the base)
+constexpr double kLengthTol = 0.02;         // rachis length, relative
+constexpr double kCurvatureTol = 0.03;      // lateral curvature, radians
+constexpr double kSpacingTol = 0.04;        // spacing at base and tip, relative
+constexpr double kAngleTol = 1.5 * kDeg;    // barb angles at base and tip, straight barbs
+constexpr double kBentAngleTol = 3 * kDeg;  // ... bent barbs
+constexpr double kBendTol = 0.1;            // key barb turning, radians
+constexpr double kSilhouetteTol = 0.05;     // barb length, fraction of the longest barb, rp in [0.1, 0.9]
+constexpr double kCalamusTol = 0.1;         // calamus length, relative
+constexpr double kWidthTol = 0.2;           // rachis width, relative (8 pixels at the base)
 
 void printFit(const ScanResult& r) {
   const FeatherParams& p = r.feather;
@@ -80,7 +80,8 @@ void expectRecovered(const FeatherParams& truth, const ScanResult& r, double ben
       const double e = std::abs(p.barbLengthAt(v, rp) - truth.barbLengthAt(v, rp));
       if (e > worst) worst = e, worstRp = rp;
     }
-    std::printf("vane %d: silhouette error %.4f (%.1f%% of the longest barb) at rp %.2f\n", v, worst, 100 * worst / longest, worstRp);
+    std::printf("vane %d: silhouette error %.4f (%.1f%% of the longest barb) at rp %.2f\n", v, worst,
+                100 * worst / longest, worstRp);
     EXPECT_LT(worst, kSilhouetteTol * longest) << "at rp " << worstRp;
   }
 }

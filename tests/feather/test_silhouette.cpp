@@ -14,8 +14,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Outline of a vane with a blunt base and a pointed tip around the shaft, feather-local (x along the shaft, y left); the right
-// half is narrower (asymmetric feather).
+// Outline of a vane with a blunt base and a pointed tip around the shaft, feather-local (x along the shaft, y left);
+// the right half is narrower (asymmetric feather).
 std::vector<glm::dvec2> ovalOutline(double c, double L, double wl, double wr, int n = 200) {
   std::vector<glm::dvec2> pts;
   for (int i = 0; i <= n; ++i) {  // left edge, base to tip
@@ -56,8 +56,10 @@ TEST(Silhouette, GeneratedBarbsReachTheOutline) {
   p.rachisLength = 2.0;
   p.rachisWidth = 0.02;
   p.spacingBase = p.spacingTip = 0.02;
-  p.left.baseAngle = 1.2; p.left.tipAngle = 0.6;
-  p.right.baseAngle = 1.0; p.right.tipAngle = 0.5;
+  p.left.baseAngle = 1.2;
+  p.left.tipAngle = 0.6;
+  p.right.baseAngle = 1.0;
+  p.right.tipAngle = 0.5;
   p.left.keyBarbs = {{0, {{0, 0, 0}, {1, 0, 0}}}, {1, {{0, 0, 0}, {1, 0, 0}}}};
   p.right.keyBarbs = p.left.keyBarbs;
   const auto outline = ovalOutline(0.2, 2.0, 0.5, 0.25);
@@ -89,8 +91,10 @@ TEST(Silhouette, FromSyntheticImageMatchesOutline) {
     truth.rachisLength = 2.0;
     truth.rachisWidth = 0.01;
     truth.rachisLateralCurvature = lateral;
-    truth.left.baseAngle = 1.1; truth.left.tipAngle = 0.6;
-    truth.right.baseAngle = 0.8; truth.right.tipAngle = 0.4;
+    truth.left.baseAngle = 1.1;
+    truth.left.tipAngle = 0.6;
+    truth.right.baseAngle = 0.8;
+    truth.right.tipAngle = 0.4;
     // Outline follows the curved rachis: offset the straight oval by the rachis displacement.
     std::vector<glm::dvec2> outline = ovalOutline(0.2, 2.0, 0.55, 0.3);
     for (auto& q : outline) {
@@ -131,7 +135,8 @@ TEST(Silhouette, FromSyntheticImageMatchesOutline) {
     const double radius = 1.5 / scale;
     for (int i = -100; i <= 2000; ++i) {
       // rachis (i >= 0) and calamus (i < 0) centre line
-      const glm::dvec2 c = i >= 0 ? glm::dvec2(rachisFrame(truth, i / 2000.0).point) : glm::dvec2(0.2 * (i + 100) / 100.0, 0);
+      const glm::dvec2 c =
+          i >= 0 ? glm::dvec2(rachisFrame(truth, i / 2000.0).point) : glm::dvec2(0.2 * (i + 100) / 100.0, 0);
       const double cx = (origin.x - c.y * scale) * kSS, cy = (origin.y - c.x * scale) * kSS;
       const int r = int(std::ceil(radius * scale * kSS)) + 1;
       for (int sy = int(cy) - r; sy <= int(cy) + r; ++sy)
@@ -147,7 +152,9 @@ TEST(Silhouette, FromSyntheticImageMatchesOutline) {
           for (int sx = 0; sx < kSS; ++sx) acc += canvas[size_t(py * kSS + sy) * sw + px * kSS + sx];
         img.pixels[size_t(py) * img.width + px] = float(acc / (kSS * kSS));
       }
-    const std::string path = (fs::path(PTERYLA_BUILD_DIR) / ("test_feather_silhouette_" + std::to_string(int(lateral * 100)) + ".png")).string();
+    const std::string path =
+        (fs::path(PTERYLA_BUILD_DIR) / ("test_feather_silhouette_" + std::to_string(int(lateral * 100)) + ".png"))
+            .string();
     saveGrayImage(path, img);
 
     // The user marks the rachis with a straight line from base to tip; refinement finds the curve.

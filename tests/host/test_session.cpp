@@ -185,7 +185,8 @@ TEST(HostSession, TranslatedPoseTranslatesTheCoat) {
   Session s = evaluated(skin, setup);
   const Frame& f0 = s.frame();
   const std::vector<uint64_t> keys(f0.follicleKeys.begin(), f0.follicleKeys.end());
-  const std::vector<double> origins(f0.origins.begin(), f0.origins.end()), normals(f0.normals.begin(), f0.normals.end());
+  const std::vector<double> origins(f0.origins.begin(), f0.origins.end()),
+      normals(f0.normals.begin(), f0.normals.end());
   const std::vector<float> coat(f0.positions.begin(), f0.positions.end());
   const std::vector<uint32_t> indices(f0.indices.begin(), f0.indices.end());
 
@@ -242,8 +243,10 @@ TEST(HostSession, FollowPoseCarriesTheRestCoatRigidly) {
   s.setPoseMode(pteryla::PoseMode::Follow);
   ASSERT_TRUE(s.evaluate());
   const Frame& f0 = s.frame();
-  const std::vector<float> coat(f0.positions.begin(), f0.positions.end()), vn(f0.vertexNormals.begin(), f0.vertexNormals.end());
-  const std::vector<double> origins(f0.origins.begin(), f0.origins.end()), tangents(f0.tangents.begin(), f0.tangents.end());
+  const std::vector<float> coat(f0.positions.begin(), f0.positions.end()),
+      vn(f0.vertexNormals.begin(), f0.vertexNormals.end());
+  const std::vector<double> origins(f0.origins.begin(), f0.origins.end()),
+      tangents(f0.tangents.begin(), f0.tangents.end());
   const std::vector<double> elevations(f0.elevations.begin(), f0.elevations.end());
   const std::vector<uint32_t> indices(f0.indices.begin(), f0.indices.end());
 
@@ -269,7 +272,8 @@ TEST(HostSession, FollowPoseCarriesTheRestCoatRigidly) {
   EXPECT_TRUE(std::equal(indices.begin(), indices.end(), f1.indices.begin()));
   double worstP = 0, worstN = 0, worstO = 0, worstT = 0;
   for (size_t v = 0; v < coat.size() / 3; ++v) {
-    const double p[3] = {coat[3 * v], coat[3 * v + 1], coat[3 * v + 2]}, n[3] = {vn[3 * v], vn[3 * v + 1], vn[3 * v + 2]};
+    const double p[3] = {coat[3 * v], coat[3 * v + 1], coat[3 * v + 2]},
+                 n[3] = {vn[3 * v], vn[3 * v + 1], vn[3 * v + 2]};
     double q[3], m[3];
     rotate(p, q, true);
     rotate(n, m, false);
@@ -303,7 +307,8 @@ TEST(HostSession, FollowPoseCarriesTheRestCoatRigidly) {
   ASSERT_EQ(rest.frame().positions.size, moved02.size());
   double worst02 = 0;
   for (size_t v = 0; v < moved02.size() / 3; ++v) {
-    const double p[3] = {rest.frame().positions[3 * v], rest.frame().positions[3 * v + 1], rest.frame().positions[3 * v + 2]};
+    const double p[3] = {rest.frame().positions[3 * v], rest.frame().positions[3 * v + 1],
+                         rest.frame().positions[3 * v + 2]};
     double q[3];
     rotate(p, q, true);
     for (int k = 0; k < 3; ++k) worst02 = std::max(worst02, std::abs(double(moved02[3 * v + k]) - q[k]));
@@ -662,16 +667,18 @@ TEST(HostSession, TypedSetupEqualsTheEquivalentSceneFile) {
   std::filesystem::create_directories(dir);
   const std::string file = (dir / "typed_equivalent.json").string();
   const pteryla::Json axis = {{0, 1.5, 0}, {0, -1.5, 0}};
-  const pteryla::Json scene = {
-      {"pteryla", 1},
-      {"seed", 12},
-      {"mesh", kData + "/meshes/sphere_250.obj"},
-      {"feathers", {{"contour", kData + "/feathers/contour.json"}}},
-      {"tracts",
-       {{{"name", "all"}, {"count", 150}, {"feather_spacings", 3.0}, {"parameterization", {{"method", "projection"}}}}}},
-      {"directions", {{"axis", axis}}},
-      {"ordering", {{"method", "axis"}, {"axis", axis}}},
-      {"packing", {{"method", "height_field"}}}};
+  const pteryla::Json scene = {{"pteryla", 1},
+                               {"seed", 12},
+                               {"mesh", kData + "/meshes/sphere_250.obj"},
+                               {"feathers", {{"contour", kData + "/feathers/contour.json"}}},
+                               {"tracts",
+                                {{{"name", "all"},
+                                  {"count", 150},
+                                  {"feather_spacings", 3.0},
+                                  {"parameterization", {{"method", "projection"}}}}}},
+                               {"directions", {{"axis", axis}}},
+                               {"ordering", {{"method", "axis"}, {"axis", axis}}},
+                               {"packing", {{"method", "height_field"}}}};
   pteryla::writeJsonFile(file, scene);
 
   Session typed = evaluated(skin, c);

@@ -129,7 +129,7 @@ TEST(HostServices, SessionsKeepTheirRenderersApart) {
     Session a = Session::fromSceneFile(kData + "/scenes/sphere.json");
     a.setLod(0.2);
     EXPECT_NE(a.renderImage(small).rgba, before.rgba);  // another coat: the comparison below means something
-  }  // a's renderer goes with a, while a's context is current
+  }                                                     // a's renderer goes with a, while a's context is current
   EXPECT_EQ(b.renderImage(small).rgba, before.rgba);
   Session c = smallSession();
   c.renderImage(small);

@@ -71,10 +71,13 @@ struct Expect {
 };
 
 const std::vector<Expect> kExpected = {
-    {"bird", true, 3000, 8000,
+    {"bird",
+     true,
+     3000,
+     8000,
      {"capital", "spinal", "humeral_left", "humeral_right", "alar_left", "alar_right", "remiges_left", "remiges_right",
-      "caudal", "ventral", "femoral_left", "femoral_right", "crural_left", "crural_right", "apteria_beak", "apteria_eye",
-      "apteria_cervical_lateral"}},
+      "caudal", "ventral", "femoral_left", "femoral_right", "crural_left", "crural_right", "apteria_beak",
+      "apteria_eye", "apteria_cervical_lateral"}},
     {"wing", true, 1000, 4000, {"coverts", "remiges_base"}},
     {"head", true, 1500, 6000, {"crest", "capital", "apteria"}},
     {"sphere_250", true, 240, 260, {}},
@@ -210,7 +213,8 @@ TEST(MeshgenFiles, AxesLieOnTheSurface) {
     }
   };
   const auto bird = loadJson("bird.axes.json");
-  for (const char* k : {"trailing_edge_left", "trailing_edge_right", "primaries_left", "secondaries_left", "tail_edge"}) {
+  for (const char* k :
+       {"trailing_edge_left", "trailing_edge_right", "primaries_left", "secondaries_left", "tail_edge"}) {
     ASSERT_TRUE(bird.contains(k)) << k;
     EXPECT_GE(bird.at(k).size(), 5u);
     onSurface("bird", bird.at(k));
@@ -316,7 +320,8 @@ mg::GroupedMesh pose(const std::string& name, const std::map<std::string, glm::d
 double maxCreaseChange(const mg::GroupedMesh& rest, const mg::GroupedMesh& bent) {
   auto normal = [](const mg::GroupedMesh& m, size_t t) {
     const auto& tri = m.triangles[t];
-    return glm::normalize(glm::cross(m.positions[tri[1]] - m.positions[tri[0]], m.positions[tri[2]] - m.positions[tri[0]]));
+    return glm::normalize(
+        glm::cross(m.positions[tri[1]] - m.positions[tri[0]], m.positions[tri[2]] - m.positions[tri[0]]));
   };
   std::map<std::pair<uint32_t, uint32_t>, size_t> firstFace;
   double worst = 0;
@@ -354,8 +359,10 @@ TEST(MeshgenFiles, BendingJointsDeformsSmoothly) {
   }
   // Wings raised and lowered at the shoulders (rotation about the body axis, X), elbows flexed.
   for (double deg : {-30.0, 30.0}) {
-    const auto flap = pose("bird", {{"shoulder_left", {deg, 0, 0}}, {"shoulder_right", {-deg, 0, 0}},
-                                    {"elbow_left", {0, 20, 0}}, {"elbow_right", {0, -20, 0}}});
+    const auto flap = pose("bird", {{"shoulder_left", {deg, 0, 0}},
+                                    {"shoulder_right", {-deg, 0, 0}},
+                                    {"elbow_left", {0, 20, 0}},
+                                    {"elbow_right", {0, -20, 0}}});
     const auto c = mg::checkMesh(flap, true);
     EXPECT_TRUE(c.ok()) << mg::formatCheck("flapping bird", c);
     EXPECT_GT(c.minAngleDeg, 5.0);

@@ -93,9 +93,8 @@ SmallCoat smallCoat() {
   // Roof tiles: feathers further along +X (the direction they point) lie lower.
   std::vector<uint32_t> order(s.coat.size());
   for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    return s.coat.frames[a].origin.x > s.coat.frames[b].origin.x;
-  });
+  std::sort(order.begin(), order.end(),
+            [&](uint32_t a, uint32_t b) { return s.coat.frames[a].origin.x > s.coat.frames[b].origin.x; });
   s.coat.layerOrder = order;
   return s;
 }
@@ -145,8 +144,7 @@ TEST(Controls, ClosedFormSpringMatchesIntegration) {
       for (double t : {0.6, 1.7, 2.2, 4.5}) {
         const glm::dvec3 exact = springLag(u, 1.2, zeta, t);
         const glm::dvec3 numeric = integrateLag(u, 1.2, zeta, t);
-        EXPECT_LT(glm::length(exact - numeric), 1e-6)
-            << interpolationName(in) << " zeta " << zeta << " t " << t;
+        EXPECT_LT(glm::length(exact - numeric), 1e-6) << interpolationName(in) << " zeta " << zeta << " t " << t;
       }
     }
   }

@@ -41,9 +41,7 @@ const MoultSequence kAll[] = {MoultSequence::CentreOut,   MoultSequence::Boundar
                               MoultSequence::DecreasingV, MoultSequence::Radial,      MoultSequence::Random};
 
 // The time at which feather i leaves the Old phase.
-double dropTime(const MoultPlan& p, size_t i) {
-  return p.options.start + p.options.duration * p.order[i] / p.sweep;
-}
+double dropTime(const MoultPlan& p, size_t i) { return p.options.start + p.options.duration * p.order[i] / p.sweep; }
 
 }  // namespace
 
@@ -128,18 +126,30 @@ TEST(MoultSchedule, SequencesVisitFeathersInDeclaredOrder) {
     const glm::dvec2 half = glm::max(centre - lo, hi - centre);
     const glm::dvec2 e = (q - centre) / half;
     switch (s) {
-      case MoultSequence::CentreOut: return glm::length(e);
-      case MoultSequence::BoundaryIn: return -glm::length(e);
-      case MoultSequence::CentreOutU: return std::abs(q.x - centre.x);
-      case MoultSequence::BoundaryInU: return -std::abs(q.x - centre.x);
-      case MoultSequence::CentreOutV: return std::abs(q.y - centre.y);
-      case MoultSequence::BoundaryInV: return -std::abs(q.y - centre.y);
-      case MoultSequence::IncreasingU: return q.x;
-      case MoultSequence::DecreasingU: return -q.x;
-      case MoultSequence::IncreasingV: return q.y;
-      case MoultSequence::DecreasingV: return -q.y;
-      case MoultSequence::Radial: return glm::length(q - centre);
-      case MoultSequence::Random: return 0;
+      case MoultSequence::CentreOut:
+        return glm::length(e);
+      case MoultSequence::BoundaryIn:
+        return -glm::length(e);
+      case MoultSequence::CentreOutU:
+        return std::abs(q.x - centre.x);
+      case MoultSequence::BoundaryInU:
+        return -std::abs(q.x - centre.x);
+      case MoultSequence::CentreOutV:
+        return std::abs(q.y - centre.y);
+      case MoultSequence::BoundaryInV:
+        return -std::abs(q.y - centre.y);
+      case MoultSequence::IncreasingU:
+        return q.x;
+      case MoultSequence::DecreasingU:
+        return -q.x;
+      case MoultSequence::IncreasingV:
+        return q.y;
+      case MoultSequence::DecreasingV:
+        return -q.y;
+      case MoultSequence::Radial:
+        return glm::length(q - centre);
+      case MoultSequence::Random:
+        return 0;
     }
     return 0;
   };
@@ -212,7 +222,8 @@ TEST(MoultSchedule, LargerFeathersAndBoundaryFeathersGrowSlower) {
   EXPECT_NEAR(q.window[centreMost] / b.window, 1.0, 0.2);
   EXPECT_NEAR(q.window[outerMost] / b.window, 3.0, 1e-9);
   // A wider window is still fully swept by the end of the moult.
-  for (size_t i = 0; i < t.uv.size(); ++i) EXPECT_EQ(moultStateAt(q, i, b.start + b.duration).phase, MoultPhase::Renewed);
+  for (size_t i = 0; i < t.uv.size(); ++i)
+    EXPECT_EQ(moultStateAt(q, i, b.start + b.duration).phase, MoultPhase::Renewed);
 }
 
 TEST(MoultSchedule, CoatPlanFollowsTractsAndOverrides) {

@@ -282,7 +282,8 @@ TEST(TimePipeline, BadSectionsAreErrorsWithKeyPaths) {
   j["tracts"][1]["moult"] = Json::parse(R"({"sequence": "sideways"})");
   expectError(j, "tracts[1].moult.sequence");
   j = wingScene();
-  j["skeleton"] = Json::parse(R"({"file": "../meshes/wing.skeleton.json", "keys": [{"joint": "knee", "t": 0, "rotation": [0, 0, 1, 5]}]})");
+  j["skeleton"] = Json::parse(
+      R"({"file": "../meshes/wing.skeleton.json", "keys": [{"joint": "knee", "t": 0, "rotation": [0, 0, 1, 5]}]})");
   expectError(j, "skeleton.keys[0].joint");
   j = wingScene();
   j["skeleton"] = Json::parse(R"({"file": "../meshes/bird.skeleton.json"})");  // another mesh's weights

@@ -67,8 +67,9 @@ TEST(Wear, FeatherFileGrowthRoundTripsAndIsComparedByValue) {
   ASSERT_TRUE(p.growth);
   EXPECT_EQ(p.growth->wearMaxShortening, 0.5);
   const feather::GrowthSchedule& s = feather::growthScheduleOf(p);
-  const auto it = std::find_if(s.ramps.begin(), s.ramps.end(),
-                               [](const feather::GrowthRamp& g) { return g.parameter == feather::GrowthParam::WearLength; });
+  const auto it = std::find_if(s.ramps.begin(), s.ramps.end(), [](const feather::GrowthRamp& g) {
+    return g.parameter == feather::GrowthParam::WearLength;
+  });
   ASSERT_NE(it, s.ramps.end());
   EXPECT_EQ(it->end, 1.25);
   // Ramps not given keep the default schedule's.

@@ -40,9 +40,9 @@ struct Reference {
 };
 
 // Every pair of triangles of different feathers, Moeller's test on the lower index first: all pairs
-// whose boxes overlap, found by sorting on the longest axis and sweeping (no tree; the full O(n^2) scan of the coat-level
-// tests takes minutes on a real coat). Boxes padded by 1e-6 of the coat's size only skip pairs far
-// apart (far more than the test's tolerance).
+// whose boxes overlap, found by sorting on the longest axis and sweeping (no tree; the full O(n^2) scan of the
+// coat-level tests takes minutes on a real coat). Boxes padded by 1e-6 of the coat's size only skip pairs far apart
+// (far more than the test's tolerance).
 Reference bruteForce(const TriMesh& m) {
   const size_t nt = m.triangleCount();
   auto v = [&](size_t t, int k) { return glm::dvec3(m.positions[m.indices[3 * t + k]]); };

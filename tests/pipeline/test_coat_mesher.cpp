@@ -34,7 +34,8 @@ Coat patchCoat() {
     "tracts": [{"name": "patch", "groups": ["patch"], "count": 220, "feather_scale": "auto",
                 "feather_spacings": 1.5, "relax": {"iterations": 10}}],
     "directions": {"vectors": [{"at": [0, 0, 0], "direction": [1, 0, 0]}]},
-    "packing": {"method": "height_field", "clearance": 0.0004, "skin_sample_spacing": 0.01}})"), kSceneFile);
+    "packing": {"method": "height_field", "clearance": 0.0004, "skin_sample_spacing": 0.01}})"),
+                                                        kSceneFile);
   pipeline::Pipeline p(scene);
   Coat c;
   c.feathers = p.feathers();
@@ -90,8 +91,8 @@ TEST(CoatMesher, IncrementalUpdateEqualsFullMesh) {
   c.lods.assign(n, 1.0);
   c.lods[25] = 0.5;
   incremental.update(input(c), mesh);
-  EXPECT_EQ(incremental.regenerated(), 2u);           // the growing feathers
-  EXPECT_EQ(incremental.reused(), n - 1 - 3);         // all present but the growing and the lowered one
+  EXPECT_EQ(incremental.regenerated(), 2u);    // the growing feathers
+  EXPECT_EQ(incremental.reused(), n - 1 - 3);  // all present but the growing and the lowered one
   CoatMesher full;
   TriMesh fresh;
   full.update(input(c), fresh);

@@ -59,7 +59,8 @@ TEST(Drape, FeathersFollowTheSkinInsteadOfStandingOff) {
   for (const auto& v : m.positions) worst = std::max(worst, std::abs(double(glm::length(v)) - 1.0));
   Pipeline rigid(sphereScene("height_field"));
   double worstRigid = 0;
-  for (const auto& v : rigid.coatMesh().mesh.positions) worstRigid = std::max(worstRigid, std::abs(double(glm::length(v)) - 1.0));
+  for (const auto& v : rigid.coatMesh().mesh.positions)
+    worstRigid = std::max(worstRigid, std::abs(double(glm::length(v)) - 1.0));
   EXPECT_LT(worst, 0.15) << "rigid " << worstRigid;  // corners rise to the need under them (conservative)
   EXPECT_GT(worstRigid, 2 * worst);
 }
@@ -81,7 +82,8 @@ TEST(Drape, UnpackedBaselineDependsOnTheInputOnly) {
 }
 
 TEST(Drape, BareMeshScenesDrapeAndTheMethodRoundTrips) {
-  Json j = Json::parse(R"({"pteryla": 1, "mesh": "meshes/sphere_250.obj", "feathers": {"contour": "feathers/contour.json"},
+  Json j =
+      Json::parse(R"({"pteryla": 1, "mesh": "meshes/sphere_250.obj", "feathers": {"contour": "feathers/contour.json"},
                          "packing": {"method": "drape", "drape_max_slope_deg": 10}})");
   const Scene s = sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
   JsonReader r(s.packing, "scene_test.json", "packing");
@@ -179,7 +181,8 @@ Scene discScene(const std::string& dir) {
   }
   out.close();
   Json j = Json::parse(R"({"pteryla": 1, "seed": 5, "mesh": "disc.obj",
-    "feathers": {"contour": ")" + std::string(PTERYLA_DATA_DIR) + R"(/feathers/contour.json"},
+    "feathers": {"contour": ")" +
+                       std::string(PTERYLA_DATA_DIR) + R"(/feathers/contour.json"},
     "tracts": [{"name": "all", "count": 500, "feather_scale": "auto", "feather_spacings": 3.0,
                 "parameterization": {"method": "projection", "view_direction": [0, -1, 0]}}],
     "directions": {"axis": [[-1.5, 0, 0], [1.5, 0, 0]]},

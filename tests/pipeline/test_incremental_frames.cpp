@@ -212,7 +212,7 @@ TEST(IncrementalFrames, LiftControlsReuseTheNaturalPack) {
     EXPECT_TRUE(r.naturalIncremental);
     EXPECT_EQ(r.naturalRecomputed, 0u) << t;  // same natural inputs: the pack is reused
     EXPECT_TRUE(r.packIncremental);
-    EXPECT_GT(r.packChanged, 0u);             // the raised feathers
+    EXPECT_GT(r.packChanged, 0u);  // the raised feathers
     EXPECT_LT(r.packRecomputed, scrub.feathers().size());
     expectIdentical(f, fresh(scene, t, 0.2), t);
   }
@@ -267,8 +267,8 @@ TEST(IncrementalFrames, UnplacedMeshPlacedLaterEqualsPlacedMesh) {
       in.lod = lod;
       in.sheathShed = growing ? st[feather::GrowthParam::Sheath] : 1.0;
       in.featherId = 7;
-      in.placement = feather::FeatherPlacement::fromFollicle({0.3, -1.2, 0.05}, glm::normalize(glm::dvec3(1, 0.2, -0.1)),
-                                                             glm::normalize(glm::dvec3(-0.2, 1, 0.05)), 0.37);
+      in.placement = feather::FeatherPlacement::fromFollicle(
+          {0.3, -1.2, 0.05}, glm::normalize(glm::dvec3(1, 0.2, -0.1)), glm::normalize(glm::dvec3(-0.2, 1, 0.05)), 0.37);
       TriMesh placedMesh, unplacedMesh;
       feather::appendFeatherMesh(in, {}, placedMesh);
       in.unplaced = true;

@@ -51,7 +51,8 @@ Scene baseScene() {
       {"joint": "elbow", "t": 0, "rotation": [0, 0, 1, 0]}, {"joint": "elbow", "t": 10, "rotation": [0, 0, 1, 30]}]},
     "controls": [{"name": "raise", "at": [0.9, 0.1, 0.0], "radius": 0.35, "keys": [{"t": 0, "lift": 0}, {"t": 8, "lift": 1}]}],
     "render": {"lod": 0.2}
-  })"), kSceneFile);
+  })"),
+                                 kSceneFile);
 }
 
 // The wing's mesh scaled by 2%: same vertices, faces and groups (the skeleton's weights still fit).
@@ -86,13 +87,20 @@ std::vector<Edit> edits() {
       {"mesh", "", [](Scene& s) { s.meshPath = scaledWing(); }},
       // The wing needs no repair: the stale frame (no re-load) is the same coat.
       {"mesh_repair", "", [](Scene& s) { s.meshRepair = true; }, false},
-      {"feathers", "", [](Scene& s) { s.feathers["contour"] = std::string(PTERYLA_DATA_DIR) + "/feathers/covert.json"; }},
+      {"feathers", "",
+       [](Scene& s) { s.feathers["contour"] = std::string(PTERYLA_DATA_DIR) + "/feathers/covert.json"; }},
       {"tracts", "", [](Scene& s) { s.tracts[0]["count"] = 80; }},
       {"tracts", "moult", [](Scene& s) { s.tracts[1]["moult"] = false; }},
-      {"growth", "", [](Scene& s) { s.growth = Json::parse(R"({"ramps": [{"parameter": "shaft_length", "start": 0, "end": 0.6}]})"); }},
+      {"growth", "",
+       [](Scene& s) {
+         s.growth = Json::parse(R"({"ramps": [{"parameter": "shaft_length", "start": 0, "end": 0.6}]})");
+       }},
       {"seed", "", [](Scene& s) { s.seed = 6; }},
       {"directions", "", [](Scene& s) { s.directions["axis"] = Json::parse("[[0, 0, -0.2], [2, 0, 0.1]]"); }},
-      {"ordering", "", [](Scene& s) { s.ordering = {{"method", "tracts"}, {"tracts", {"remiges", "coverts"}}}; }},
+      {"ordering", "",
+       [](Scene& s) {
+         s.ordering = {{"method", "tracts"}, {"tracts", {"remiges", "coverts"}}};
+       }},
       {"skeleton", "", [](Scene& s) { s.skeleton["keys"][1]["rotation"] = Json::parse("[0, 0, 1, 10]"); }},
       {"moult", "", [](Scene& s) { s.moult["window"] = 0.35; }},
       {"controls", "", [](Scene& s) { s.controls[0]["radius"] = 0.5; }},

@@ -54,8 +54,8 @@ std::string outputDir(const std::string& name) {
                                          << "/actual.png";
   }
   const OIIO::ImageBuf a = wrap(actual), b = wrap(expected);
-  const auto r = OIIO::ImageBufAlgo::compare(a, b, static_cast<float>(tol.pixelThreshold),
-                                             static_cast<float>(tol.pixelThreshold));
+  const auto r =
+      OIIO::ImageBufAlgo::compare(a, b, static_cast<float>(tol.pixelThreshold), static_cast<float>(tol.pixelThreshold));
   const double pixels = static_cast<double>(actual.width) * actual.height;
   const double failFraction = static_cast<double>(r.nfail) / pixels;
   std::ostringstream msg;

@@ -185,10 +185,10 @@ TEST(DrawPlan, FeathersFollowTheRangesOrderWhateverTheirPlaceInTheIndexList) {
 
 TEST(DrawPlan, FeathersOutsideTheFrustumAreDropped) {
   Coat coat;
-  coat.feather({0, 0, 0}, 2);    // in view
-  coat.feather({50, 0, 0}, 2);   // far to the side
-  coat.feather({0, 0, 9}, 2);    // behind the eye
-  coat.feather({0, 0, -200}, 2); // beyond the far plane
+  coat.feather({0, 0, 0}, 2);     // in view
+  coat.feather({50, 0, 0}, 2);    // far to the side
+  coat.feather({0, 0, 9}, 2);     // behind the eye
+  coat.feather({0, 0, -200}, 2);  // beyond the far plane
   coat.feather({0.4f, 0.2f, 0}, 2);
   DrawPlan plan = coat.plan();
   plan.build(front(), kSize, kSize, DrawOptions());

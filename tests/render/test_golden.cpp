@@ -31,8 +31,8 @@ TEST(RendererGolden, SkinSphere) {
   RenderSettings s;
   s.width = s.height = 128;
   s.background = {0.1f, 0.12f, 0.15f, 1.0f};
-  EXPECT_TRUE(golden::matchesGolden(r.renderImage(cam, {Light{{0.5f, 0.8f, 0.6f}, {0.9f, 0.9f, 0.85f}}}, s),
-                                     "skin_sphere"));
+  EXPECT_TRUE(
+      golden::matchesGolden(r.renderImage(cam, {Light{{0.5f, 0.8f, 0.6f}, {0.9f, 0.9f, 0.85f}}}, s), "skin_sphere"));
 }
 
 TEST(RendererGolden, SyntheticFeatherWithAlphaAndBrdf) {
@@ -113,7 +113,8 @@ TEST(ScratchboardGolden, SmallCoat) {
 // the look, 7.1.3), as `pteryla feather F.json --out F.png` draws them.
 TEST(FeatherGolden, BundledTypesAtTwoLevels) {
   for (const char* type : {"contour", "primary", "down"}) {
-    const feather::FeatherParams p = feather::loadFeather(std::string(PTERYLA_DATA_DIR) + "/feathers/" + type + ".json");
+    const feather::FeatherParams p =
+        feather::loadFeather(std::string(PTERYLA_DATA_DIR) + "/feathers/" + type + ".json");
     for (const double lod : {1.0, 0.3}) {
       const std::string name = std::string("feather_") + type + (lod == 1.0 ? "_100" : "_30");
       const Image img = renderFeatherImage(context(), p, feather::buildFeatherMesh(p, 1.0, lod), 96, 160);

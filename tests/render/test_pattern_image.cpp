@@ -82,8 +82,8 @@ TEST(Pattern, BarbAlphaFallsOffQuadraticallyNearTipEarlierAtEdges) {
   BarbAlphaParams p;
   const Image a = generateBarbAlpha(p);
   const int cx = p.width / 2;
-  EXPECT_EQ(a.pixel(cx, p.height - 1)[0], 255);  // barb core at the rachis
-  EXPECT_LT(a.pixel(cx, 0)[0], 20);              // tip transparent
+  EXPECT_EQ(a.pixel(cx, p.height - 1)[0], 255);                          // barb core at the rachis
+  EXPECT_LT(a.pixel(cx, 0)[0], 20);                                      // tip transparent
   EXPECT_LT(a.pixel(1, p.height / 2)[0], a.pixel(cx, p.height / 2)[0]);  // fringe lighter than the barb
   // Just before the core starts to fade (t = 1 - tipFalloff), the fringe edge already fades (edgeLead).
   const int row = static_cast<int>(p.tipFalloff * p.height);  // t slightly below 1 - tipFalloff
@@ -97,8 +97,8 @@ TEST(Pattern, BarbAlphaFallsOffQuadraticallyNearTipEarlierAtEdges) {
 TEST(Pattern, StandardSetWritesReadablePngs) {
   const std::string dir = scratchDir("patterns");
   const std::vector<std::string> paths = writeStandardTextures(dir, 1);
-  const char* expected[] = {"barred_brown", "scalloped_grey", "spotted", "eyespot", "plain_white",
-                            "down_grey", "flight_dark", "barb_alpha", "down_alpha"};
+  const char* expected[] = {"barred_brown", "scalloped_grey", "spotted",    "eyespot",   "plain_white",
+                            "down_grey",    "flight_dark",    "barb_alpha", "down_alpha"};
   ASSERT_EQ(paths.size(), 9u);
   for (size_t i = 0; i < paths.size(); ++i) {
     EXPECT_EQ(paths[i], dir + "/" + expected[i] + ".png");

@@ -22,7 +22,8 @@ namespace {
 using gltest::context;
 
 // Quad centred at c spanning c +- a +- b, normal n, tangent t; uv (0,0) at c - a - b, (1,1) at c + a + b.
-TriMesh quad(glm::vec3 c, glm::vec3 a, glm::vec3 b, float alpha = 1.0f, glm::vec3 t = {1, 0, 0}, float barbCount = 1.0f) {
+TriMesh quad(glm::vec3 c, glm::vec3 a, glm::vec3 b, float alpha = 1.0f, glm::vec3 t = {1, 0, 0},
+             float barbCount = 1.0f) {
   TriMesh m;
   const glm::vec3 n = glm::normalize(glm::cross(a, b));
   const glm::vec2 uv[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
@@ -109,8 +110,8 @@ TEST(Renderer, ReadbackIsTopRowFirstAndMatchesDefaultFramebuffer) {
   RenderSettings s = flatSettings(64);
   s.skinColor = {1, 1, 1};
   const Image img = r.renderImage(frontCamera(), kFrontLight, s);
-  EXPECT_GT(img.pixel(32, 5)[0], 200);   // top row area covered
-  EXPECT_EQ(img.pixel(32, 58)[0], 0);    // bottom is background
+  EXPECT_GT(img.pixel(32, 5)[0], 200);  // top row area covered
+  EXPECT_EQ(img.pixel(32, 58)[0], 0);   // bottom is background
   // The same frame drawn into the context's own framebuffer reads back identically.
   r.render(frontCamera(), kFrontLight, s);
   const Image direct = r.readPixels(64, 64);
@@ -196,10 +197,10 @@ TEST(Renderer, OctantRuleOrdersVanesAndBarbsByViewDirection) {
   TriMesh coat = quad({0, 0, 0.01f}, {2, 0, 0}, {0, 2, 0}, 0.5f);
   coat.append(quad({0, 0, 0.0f}, {2, 0, 0}, {0, 2, 0}, 0.5f));
   FeatherDrawRange f = whole(coat);
-  f.partCount[1] = 6;  // left vane: red through the colour texture
-  f.partCount[2] = 6;  // right vane: green
-  for (int i = 0; i < 4; ++i) coat.uvGlobal[i] = {0.25f, 0.5f};      // left vane samples red
-  for (int i = 4; i < 8; ++i) coat.uvGlobal[i] = {0.75f, 0.5f};      // right vane samples green
+  f.partCount[1] = 6;                                            // left vane: red through the colour texture
+  f.partCount[2] = 6;                                            // right vane: green
+  for (int i = 0; i < 4; ++i) coat.uvGlobal[i] = {0.25f, 0.5f};  // left vane samples red
+  for (int i = 4; i < 8; ++i) coat.uvGlobal[i] = {0.75f, 0.5f};  // right vane samples green
   Image tex(2, 1);
   tex.pixel(0, 0)[0] = 255, tex.pixel(0, 0)[1] = 0, tex.pixel(0, 0)[2] = 0;
   tex.pixel(1, 0)[0] = 0, tex.pixel(1, 0)[1] = 255, tex.pixel(1, 0)[2] = 0;
@@ -538,7 +539,6 @@ TEST(Renderer, FewerBarbsWithTexturesStayCloseToFullGeometry) {
   EXPECT_LT(e60, e20);
 }
 
-
 // renderImage draws off screen and must leave the caller's framebuffer bound (the viewer draws into
 // framebuffer 0 right after taking a screenshot).
 TEST(RendererState, RenderImageRestoresTheCallersFramebuffer) {
@@ -665,7 +665,8 @@ TEST(RendererShadows, FeathersShadowTheSkinAndTransparentOnesCastNone) {
   r.setSkin(TriMesh());
   faint.upload(r);
   img = r.renderImage(frontCamera(), faint.lights, s);
-  EXPECT_NEAR(Overlap::band(img, -0.16f, -0.04f), Overlap::band(img, -0.9f, -0.5f), 0.02 * Overlap::band(img, -0.9f, -0.5f));
+  EXPECT_NEAR(Overlap::band(img, -0.16f, -0.04f), Overlap::band(img, -0.9f, -0.5f),
+              0.02 * Overlap::band(img, -0.9f, -0.5f));
 }
 
 TEST(RendererShadows, TheMapIsDrawnAgainOnlyWhenWhatCastsItChanges) {
@@ -711,7 +712,8 @@ TEST(RendererTone, ExposureAndFilmicCurveFollowTheirFormulas) {
   EXPECT_NEAR(value(0.0f, false, 0.5f), 128, 1);
   EXPECT_NEAR(value(-1.0f, false, 0.5f), 64, 1);
   EXPECT_EQ(value(1.0f, false, 0.75f), 255);  // linear clips
-  for (const float light : {0.1f, 0.5f, 1.0f, 2.0f}) EXPECT_NEAR(value(0.0f, true, light), 255 * aces(light), 1.5) << light;
+  for (const float light : {0.1f, 0.5f, 1.0f, 2.0f})
+    EXPECT_NEAR(value(0.0f, true, light), 255 * aces(light), 1.5) << light;
   EXPECT_LT(value(0.0f, true, 2.0f), 255);  // filmic keeps highlights below white
 }
 

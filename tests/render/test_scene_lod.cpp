@@ -83,8 +83,10 @@ TEST(SceneLod, RenderBySizeDrawsFewerTrianglesAndKeepsTheLook) {
   const Image imgC = c.render(same, 320, 240);
   const size_t triC = same.coatMesh().mesh.triangleCount();
   const double maeUniform = meanAbsoluteError(imgA, imgC);
-  std::printf("screen-size LOD at 320x240: %zu of %zu triangles, mean absolute error %.4f (uniform level with "
-              "%zu triangles: %.4f)\n", triB, triA, mae, triC, maeUniform);
+  std::printf(
+      "screen-size LOD at 320x240: %zu of %zu triangles, mean absolute error %.4f (uniform level with "
+      "%zu triangles: %.4f)\n",
+      triB, triA, mae, triC, maeUniform);
   EXPECT_LT(mae, 0.02);
   EXPECT_NEAR(double(triC), double(triB), 0.1 * double(triB));
   EXPECT_LT(mae, 0.5 * maeUniform);
@@ -117,8 +119,10 @@ TEST(SceneLod, TexturesKeepTheLookAtFortyFivePercent) {
   const double withTextures = meanAbsoluteError(fullTex, lowTex);
   const double without = meanAbsoluteError(fullTex, lowPlain);
   const double plainVsPlain = meanAbsoluteError(fullPlain, lowPlain);
-  std::printf("45%% vs 100%% geometry: mean absolute error %.4f with alpha/BRDF textures, %.4f without (%.4f "
-              "against the full coat also drawn without)\n", withTextures, without, plainVsPlain);
+  std::printf(
+      "45%% vs 100%% geometry: mean absolute error %.4f with alpha/BRDF textures, %.4f without (%.4f "
+      "against the full coat also drawn without)\n",
+      withTextures, without, plainVsPlain);
   EXPECT_LT(withTextures, 0.02);
   EXPECT_LT(withTextures, 0.7 * without);
 }
@@ -138,7 +142,7 @@ TEST(SceneMaterials, TextureMappingFollowsTheFeatherFile) {
     ASSERT_EQ(m.size(), 1u);
     EXPECT_EQ(int(m[0].colorUv), std::string(uv) == "global" ? int(ColorUv::Global)
                                  : std::string(uv) == "barb" ? int(ColorUv::Barb)
-                                                               : int(ColorUv::Growth));
+                                                             : int(ColorUv::Growth));
     EXPECT_EQ(p.coatMesh().materials[0].uv, uv);
     SceneView view(context());
     images.push_back(view.render(p, 160, 120, "shaded"));
@@ -204,9 +208,13 @@ TEST(SceneLook, RenderKeysRoundTripAndBadValuesNameTheKey) {
   EXPECT_TRUE(rs.filmic);
   EXPECT_FALSE(rs.shadows);
   EXPECT_TRUE(rs.ground);
-  for (const auto& [key, value] : std::vector<std::pair<std::string, Json>>{
-           {"msaa", 3}, {"exposure", 9}, {"tone", "aces"}, {"light_rig", "three"}, {"shadow_strength", 1.5},
-           {"shadows", "yes"}, {"ground_color", {2, 0, 0}}}) {
+  for (const auto& [key, value] : std::vector<std::pair<std::string, Json>>{{"msaa", 3},
+                                                                            {"exposure", 9},
+                                                                            {"tone", "aces"},
+                                                                            {"light_rig", "three"},
+                                                                            {"shadow_strength", 1.5},
+                                                                            {"shadows", "yes"},
+                                                                            {"ground_color", {2, 0, 0}}}) {
     Json bad = j;
     bad["render"][key] = value;
     try {

@@ -90,4 +90,3 @@ TEST(Scratchboard, DeterministicPerSeed) {
   s.strokeSpacing = 0.0f;
   EXPECT_THROW(renderScratchboard(q, TriMesh(), front(), {Light{}}, s), Error);
 }
-

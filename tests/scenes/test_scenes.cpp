@@ -68,8 +68,8 @@ double meanElevation(pipeline::Pipeline& p, uint32_t tract) {
 
 TEST(Scenes, TheThesisScenesAreBundled) {
   const auto names = bundledScenes();
-  for (const char* n : {"bird.json", "wing.json", "moult.json", "moult_radial.json", "crest.json", "patch.json", "patch_grid.json",
-                        "patch_hex.json", "patch_stretched.json", "sphere.json", "sphere_small.json",
+  for (const char* n : {"bird.json", "wing.json", "moult.json", "moult_radial.json", "crest.json", "patch.json",
+                        "patch_grid.json", "patch_hex.json", "patch_stretched.json", "sphere.json", "sphere_small.json",
                         "sphere_large.json", "sphere_250_small.json", "sphere_250.json", "sphere_250_large.json"})
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
@@ -95,7 +95,8 @@ TEST(Scenes, EverySceneEvaluatesAndStaysAboveTheSkin) {
     for (const auto& f : p.feathers().params) longest = std::max(longest, f.totalLength());
     size_t far = 0;
     for (const auto& v : mesh.mesh.positions)
-      far += glm::any(glm::lessThan(glm::dvec3(v), lo - longest)) || glm::any(glm::greaterThan(glm::dvec3(v), hi + longest));
+      far += glm::any(glm::lessThan(glm::dvec3(v), lo - longest)) ||
+             glm::any(glm::greaterThan(glm::dvec3(v), hi + longest));
     EXPECT_EQ(far, 0u);
     if (name == "wing.json") continue;
     EXPECT_EQ(skinPenetrations(p), 0u) << "at t = " << p.time();
@@ -113,7 +114,8 @@ TEST(Scenes, TheDrapedBirdStaysNearItsBodyAtItsRenderDetail) {
   for (const auto& f : p.feathers().params) longest = std::max(longest, f.totalLength());
   size_t far = 0;
   for (const auto& v : p.coatMesh().mesh.positions)
-    far += glm::any(glm::lessThan(glm::dvec3(v), lo - longest)) || glm::any(glm::greaterThan(glm::dvec3(v), hi + longest));
+    far +=
+        glm::any(glm::lessThan(glm::dvec3(v), lo - longest)) || glm::any(glm::greaterThan(glm::dvec3(v), hi + longest));
   EXPECT_EQ(far, 0u);
 }
 
@@ -125,8 +127,8 @@ TEST(Scenes, WingBendsDownAndUpWithoutSkinPenetrations) {
   EXPECT_EQ(p.tracts().size(), 2u);
   // The wing tip: the rest vertex farthest along the span (+X).
   const auto& rest = p.restSkin().positions;
-  const size_t tip = size_t(std::max_element(rest.begin(), rest.end(), [](auto& a, auto& b) { return a.x < b.x; }) -
-                            rest.begin());
+  const size_t tip =
+      size_t(std::max_element(rest.begin(), rest.end(), [](auto& a, auto& b) { return a.x < b.x; }) - rest.begin());
   std::map<double, double> tipY;
   for (double t : {0.0, 1.0, 2.0, 3.0}) {
     SCOPED_TRACE(t);
@@ -155,8 +157,10 @@ TEST(Scenes, MoultShowsGapsAndRegrowthInEveryStrip) {
     for (size_t i = 0; i < c.size(); ++i) {
       if (c.tract[i] != t) continue;
       ++total;
-      if (!c.present[i]) ++lost;
-      else if (c.age[i] < 1) ++growing;
+      if (!c.present[i])
+        ++lost;
+      else if (c.age[i] < 1)
+        ++growing;
     }
     EXPECT_GT(lost, total / 30);
     EXPECT_GT(growing, total / 10);

@@ -180,9 +180,7 @@ TEST(Document, OnlyDownstreamStagesRerun) {
   Document d;
   d.reset(smallPatch(), "");
   ASSERT_TRUE(d.waitIdle());
-  auto evals = [&](pipeline::Stage s) {
-    return d.idlePipeline()->evaluations(s);
-  };
+  auto evals = [&](pipeline::Stage s) { return d.idlePipeline()->evaluations(s); };
   const auto distribute = evals(pipeline::Stage::Distribute), mesh = evals(pipeline::Stage::Mesh);
   d.setLod(0.3);
   ASSERT_TRUE(d.waitIdle());

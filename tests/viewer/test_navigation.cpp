@@ -40,12 +40,12 @@ pipeline::CoatMesh stripCoat(size_t n, size_t tris) {
 }  // namespace
 
 TEST(Navigation, LongFeathersFirstThenEveryKthWithinTheBudget) {
-  const pipeline::CoatMesh coat = stripCoat(100, 10);  // 1000 triangles; feathers 0, 10, ..., 90 long
+  const pipeline::CoatMesh coat = stripCoat(100, 10);        // 1000 triangles; feathers 0, 10, ..., 90 long
   EXPECT_TRUE(makeNavigationCoat(coat, 1000).mesh.empty());  // fits: nothing to do
   const NavigationCoat nav = makeNavigationCoat(coat, 300);
   EXPECT_LE(nav.mesh.triangleCount(), 300u);
-  EXPECT_EQ(nav.longKept, 10u);   // the ten long feathers: 100 triangles <= half the budget
-  EXPECT_EQ(nav.stride, 5u);      // 900 triangles of short feathers into the remaining 200
+  EXPECT_EQ(nav.longKept, 10u);  // the ten long feathers: 100 triangles <= half the budget
+  EXPECT_EQ(nav.stride, 5u);     // 900 triangles of short feathers into the remaining 200
   std::vector<uint32_t> kept;
   for (const auto& r : nav.ranges) kept.push_back(nav.mesh.featherId[nav.mesh.indices[r.firstIndex]]);
   for (uint32_t f = 0; f < 100; f += 10) EXPECT_NE(std::find(kept.begin(), kept.end(), f), kept.end()) << f;

@@ -53,8 +53,9 @@ TEST(ViewerRobust, ControlSlidersOnTheCrestScene) {
                            "frames 3\n"
                         << "save " << saved << "\n"
                         << "quit\n";
-  const ViewerRun r = runViewer("\"" + viewer_test::dataPath("scenes/crest.json") + "\" --lod 0.2 --script \"" + script + "\"",
-                                dir + "/stderr.txt", stateEnv(dir));
+  const ViewerRun r =
+      runViewer("\"" + viewer_test::dataPath("scenes/crest.json") + "\" --lod 0.2 --script \"" + script + "\"",
+                dir + "/stderr.txt", stateEnv(dir));
   const std::string err = slurp(dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << err;
   EXPECT_FALSE(reportedError(err)) << err;
@@ -90,8 +91,9 @@ TEST(ViewerRobust, RemoveKeyFeathersOfTheBird) {
                            "frames 3\n"
                         << "save " << saved << "\n"
                         << "quit\n";
-  const ViewerRun r = runViewer("\"" + viewer_test::dataPath("scenes/bird.json") + "\" --lod 0.2 --script \"" + script + "\"",
-                                dir + "/stderr.txt", stateEnv(dir));
+  const ViewerRun r =
+      runViewer("\"" + viewer_test::dataPath("scenes/bird.json") + "\" --lod 0.2 --script \"" + script + "\"",
+                dir + "/stderr.txt", stateEnv(dir));
   const std::string err = slurp(dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << err;
   EXPECT_FALSE(reportedError(err)) << err;
@@ -162,7 +164,8 @@ TEST(ViewerRobust, AutosaveRecoversTheGroomAfterACrash) {
   const std::string s2 = dir + "/s2.txt";
   std::ofstream(s2) << "save " << recovered << "\n"
                     << "quit\n";
-  const ViewerRun r2 = runViewer("\"" + scene + "\" --recover --script \"" + s2 + "\"", dir + "/stderr2.txt", stateEnv(dir));
+  const ViewerRun r2 =
+      runViewer("\"" + scene + "\" --recover --script \"" + s2 + "\"", dir + "/stderr2.txt", stateEnv(dir));
   const std::string err2 = slurp(dir + "/stderr2.txt");
   ASSERT_EQ(r2.code, 0) << err2;
   EXPECT_NE(err2.find("pteryla-viewer: restored unsaved work from "), std::string::npos) << err2;
@@ -175,7 +178,8 @@ TEST(ViewerRobust, AutosaveRecoversTheGroomAfterACrash) {
   EXPECT_EQ(filesIn(recoveryDir), 0u) << "saving removes the recovery file";
 
   // Nothing left to recover: --recover says so (exit 2).
-  const ViewerRun r3 = runViewer("\"" + scene + "\" --recover --script \"" + s2 + "\"", dir + "/stderr3.txt", stateEnv(dir));
+  const ViewerRun r3 =
+      runViewer("\"" + scene + "\" --recover --script \"" + s2 + "\"", dir + "/stderr3.txt", stateEnv(dir));
   EXPECT_EQ(r3.code, 2) << slurp(dir + "/stderr3.txt");
 }
 

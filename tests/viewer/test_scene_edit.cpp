@@ -1,5 +1,5 @@
-// Scene edits: which stage an edit re-runs (the pipeline's table, as the viewer uses it), JSON-pointer edits through the strict scene reader, tract
-// references.
+// Scene edits: which stage an edit re-runs (the pipeline's table, as the viewer uses it), JSON-pointer edits through
+// the strict scene reader, tract references.
 #include <gtest/gtest.h>
 
 #include "fixtures.hpp"
@@ -56,12 +56,12 @@ TEST(SceneEdit, SetPointerGoesThroughTheStrictReader) {
     EXPECT_NE(std::string(e.what()).find("brdf.h"), std::string::npos) << e.what();
   }
   EXPECT_THROW(setScenePointer(s, "/render/no_such_key", 1), Error);  // unknown key
-  EXPECT_THROW(setScenePointer(s, "/nosection/x", 1), Error);          // unknown section
+  EXPECT_THROW(setScenePointer(s, "/nosection/x", 1), Error);         // unknown section
   setScenePointer(s, "/moult/duration", 4);                           // omitted when empty: created
   EXPECT_EQ(s.moult["duration"], 4);
   setScenePointer(s, "/moult", Json::object());
-  EXPECT_THROW(setScenePointer(s, "/tracts/7/count", 1), Error);       // index out of range
-  EXPECT_THROW(setScenePointer(s, "no-slash", 1), Error);              // not a pointer
+  EXPECT_THROW(setScenePointer(s, "/tracts/7/count", 1), Error);  // index out of range
+  EXPECT_THROW(setScenePointer(s, "no-slash", 1), Error);         // not a pointer
   EXPECT_THROW(setScenePointer(s, "", 1), Error);
   EXPECT_EQ(sceneJson(s), before);
 }
@@ -102,7 +102,8 @@ TEST(SceneEdit, TimeSpanFromKeysAndMoultWindows) {
   EXPECT_FALSE(sceneTimeSpan(s).has_value());
   s.moult = {{"start", 2.0}, {"duration", 3.0}};
   EXPECT_EQ(sceneTimeSpan(s), std::make_pair(2.0, 5.0));
-  s.controls = Json::parse(R"([{"at": [0, 0, 0], "radius": 1, "keys": [{"t": -1, "lift": 0}, {"t": 7.5, "lift": 1}]}])");
+  s.controls =
+      Json::parse(R"([{"at": [0, 0, 0], "radius": 1, "keys": [{"t": -1, "lift": 0}, {"t": 7.5, "lift": 1}]}])");
   EXPECT_EQ(sceneTimeSpan(s), std::make_pair(-1.0, 7.5));
   s.tracts[0]["moult"] = {{"start", 9.0}};
   EXPECT_EQ(sceneTimeSpan(s), std::make_pair(-1.0, 10.0));

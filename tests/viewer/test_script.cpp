@@ -76,7 +76,8 @@ TEST(Script, SessionSavesASceneThatReloadsIdentically) {
                            "set /moult/duration 4\n"
                            "brdf 1.5 0.1\n"
                            "echo done\n"
-                           "save " + saved + "\n";
+                           "save " +
+                           saved + "\n";
   Document d;
   std::ostringstream out;
   for (const auto& c : parseScript(text, "session.txt")) {
@@ -94,9 +95,8 @@ TEST(Script, SessionSavesASceneThatReloadsIdentically) {
   EXPECT_EQ(back.moult["duration"], 4);
   // Saving to the document's own file is fine; once it lives elsewhere, replacing `saved` needs
   // "overwrite".
-  const auto saves = parseScript("save " + saved + "\nsave " + dir + "/other.json\nsave " + saved + "\nsave " + saved +
-                                     " overwrite",
-                                 "s");
+  const auto saves = parseScript(
+      "save " + saved + "\nsave " + dir + "/other.json\nsave " + saved + "\nsave " + saved + " overwrite", "s");
   runDocumentCommand(d, saves[0], "s", out);
   runDocumentCommand(d, saves[1], "s", out);
   EXPECT_THROW(runDocumentCommand(d, saves[2], "s", out), Error);

@@ -43,8 +43,10 @@ inline ViewerRun runViewer(const std::string& args, const std::string& errFile, 
   while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
   const int status = pclose(p);
   const std::string recorded = slurp(statusFile);
-  if (!recorded.empty()) r.code = std::atoi(recorded.c_str());  // the viewer ran: its own status
-  else r.code = WIFEXITED(status) ? 1000 + WEXITSTATUS(status) : 2000 + WTERMSIG(status);  // it never ran
+  if (!recorded.empty())
+    r.code = std::atoi(recorded.c_str());  // the viewer ran: its own status
+  else
+    r.code = WIFEXITED(status) ? 1000 + WEXITSTATUS(status) : 2000 + WTERMSIG(status);  // it never ran
   return r;
 }
 

@@ -15,32 +15,36 @@ namespace {
 
 enum Part { kBody = 0, kWingL, kWingR, kLegL, kLegR };
 
-const std::vector<std::string> kBirdGroupOrder = {
-    "capital", "capital_left", "capital_right", "capital_throat", "cervical_dorsal", "spinal", "ventral", "caudal",
-    "humeral_left", "humeral_right", "alar_left", "alar_right", "remiges_left", "remiges_right", "femoral_left",
-    "femoral_right", "crural_left", "crural_right", "apteria_beak", "apteria_eye", "apteria_cervical_lateral",
-    "apteria_ventral", "apteria_lateral", "apteria_axillary", "apteria_leg"};
+const std::vector<std::string> kBirdGroupOrder = {"capital",         "capital_left",    "capital_right",
+                                                  "capital_throat",  "cervical_dorsal", "spinal",
+                                                  "ventral",         "caudal",          "humeral_left",
+                                                  "humeral_right",   "alar_left",       "alar_right",
+                                                  "remiges_left",    "remiges_right",   "femoral_left",
+                                                  "femoral_right",   "crural_left",     "crural_right",
+                                                  "apteria_beak",    "apteria_eye",     "apteria_cervical_lateral",
+                                                  "apteria_ventral", "apteria_lateral", "apteria_axillary",
+                                                  "apteria_leg"};
 
 // Body spine, tail end (ring 0) to beak tip (ring 14).
 const std::vector<SpineKey> kBodyKeys = {
-    {-1.00, 0.07, 0.045, 0.04, 0.10},   // 0 tail end (rectrices root here)
-    {-0.90, 0.07, 0.065, 0.055, 0.11},  // 1 tail base
-    {-0.76, 0.06, 0.11, 0.10, 0.14},    // 2 uropygium
-    {-0.56, 0.03, 0.19, 0.19, 0.195},   // 3 hips (legs)
-    {-0.32, 0.01, 0.25, 0.26, 0.25},    // 4
-    {-0.08, 0.00, 0.28, 0.29, 0.28},    // 5 wing root, rear
-    {0.12, 0.02, 0.28, 0.29, 0.27},     // 6
-    {0.30, 0.06, 0.23, 0.25, 0.23},     // 7 wing root, front; breast
-    {0.44, 0.14, 0.16, 0.17, 0.15},     // 8 neck base
-    {0.54, 0.24, 0.11, 0.11, 0.10},     // 9 neck
-    {0.63, 0.33, 0.12, 0.11, 0.11},     // 10 back of the head
-    {0.74, 0.37, 0.12, 0.10, 0.11},     // 11 eyes
-    {0.84, 0.36, 0.075, 0.065, 0.07},   // 12 forehead, beak base
-    {0.905, 0.34, 0.036, 0.03, 0.032},  // 13 beak
-    {0.95, 0.327, 0.016, 0.013, 0.014}, // 14 beak tip
+    {-1.00, 0.07, 0.045, 0.04, 0.10},    // 0 tail end (rectrices root here)
+    {-0.90, 0.07, 0.065, 0.055, 0.11},   // 1 tail base
+    {-0.76, 0.06, 0.11, 0.10, 0.14},     // 2 uropygium
+    {-0.56, 0.03, 0.19, 0.19, 0.195},    // 3 hips (legs)
+    {-0.32, 0.01, 0.25, 0.26, 0.25},     // 4
+    {-0.08, 0.00, 0.28, 0.29, 0.28},     // 5 wing root, rear
+    {0.12, 0.02, 0.28, 0.29, 0.27},      // 6
+    {0.30, 0.06, 0.23, 0.25, 0.23},      // 7 wing root, front; breast
+    {0.44, 0.14, 0.16, 0.17, 0.15},      // 8 neck base
+    {0.54, 0.24, 0.11, 0.11, 0.10},      // 9 neck
+    {0.63, 0.33, 0.12, 0.11, 0.11},      // 10 back of the head
+    {0.74, 0.37, 0.12, 0.10, 0.11},      // 11 eyes
+    {0.84, 0.36, 0.075, 0.065, 0.07},    // 12 forehead, beak base
+    {0.905, 0.34, 0.036, 0.03, 0.032},   // 13 beak
+    {0.95, 0.327, 0.016, 0.013, 0.014},  // 14 beak tip
 };
-constexpr int kWingRing = 5;   // wing root spans rings 5..7, angles 1..2 (mirrored 6..7)
-constexpr int kLegRing = 3;    // leg root: rings 3..4, angles 3..4 (mirrored 4..5)
+constexpr int kWingRing = 5;  // wing root spans rings 5..7, angles 1..2 (mirrored 6..7)
+constexpr int kLegRing = 3;   // leg root: rings 3..4, angles 3..4 (mirrored 4..5)
 constexpr double kBeakS = 12.45;
 constexpr int kWristSection = 4;
 constexpr double kBirdBlendWidth = 0.14;  // elbow and wrist blend half-width, units
@@ -50,7 +54,7 @@ struct WingSection {
   double z, xLead, xTrail, y, thick;
 };
 const std::vector<WingSection> kWing = {
-    {0.38, 0.33, -0.12, 0.16, 0.13},   {0.50, 0.35, -0.11, 0.17, 0.10},  {0.62, 0.36, -0.08, 0.18, 0.085},
+    {0.38, 0.33, -0.12, 0.16, 0.13},   {0.50, 0.35, -0.11, 0.17, 0.10},   {0.62, 0.36, -0.08, 0.18, 0.085},
     {0.74, 0.35, -0.05, 0.19, 0.075},  {0.86, 0.29, -0.05, 0.195, 0.065}, {0.98, 0.21, -0.06, 0.20, 0.055},
     {1.09, 0.12, -0.08, 0.205, 0.047}, {1.18, 0.03, -0.10, 0.21, 0.04},
 };
@@ -63,7 +67,7 @@ const glm::dvec3 kShoulder(0.18, 0.15, 0.20), kElbow(0.10, 0.17, 0.47), kWrist(0
 // fraction u (0 leading, 1 trailing) and height h to space.
 template <class F>
 std::vector<glm::dvec3> wingLoop(F chordPoint, double t) {
-  return {chordPoint(0.0, 0.32 * t), chordPoint(0.45, 0.45 * t), chordPoint(1.0, 0.0),
+  return {chordPoint(0.0, 0.32 * t),   chordPoint(0.45, 0.45 * t),  chordPoint(1.0, 0.0),
           chordPoint(0.72, -0.18 * t), chordPoint(0.44, -0.30 * t), chordPoint(0.15, -0.36 * t)};
 }
 
@@ -77,8 +81,8 @@ double fromTop(double a) { return std::min(a, 8.0 - a); }
 Generated makeBird() {
   QuadCage cage;
   const auto rings = ringsAlongSpine(kBodyKeys, 0.8);
-  std::set<std::pair<int, int>> skip = {{kWingRing, 1}, {kWingRing + 1, 1}, {kWingRing, 6}, {kWingRing + 1, 6},
-                                        {kLegRing, 3},  {kLegRing, 4}};
+  std::set<std::pair<int, int>> skip = {{kWingRing, 1},     {kWingRing + 1, 1}, {kWingRing, 6},
+                                        {kWingRing + 1, 6}, {kLegRing, 3},      {kLegRing, 4}};
   const auto ring = loft(cage, rings, kBody, skip);
   const int last = static_cast<int>(rings.size()) - 1;
   auto loopOf = [&](int r) { return std::vector<uint32_t>(ring[r].begin(), ring[r].end()); };
@@ -90,7 +94,7 @@ Generated makeBird() {
   for (int side = 0; side < 2; ++side) {
     const int kUp = side == 0 ? 1 : 7, kLow = side == 0 ? 2 : 6;
     const int r = kWingRing;
-    const std::vector<uint32_t> root = {ring[r + 2][kUp], ring[r + 1][kUp], ring[r][kUp],
+    const std::vector<uint32_t> root = {ring[r + 2][kUp], ring[r + 1][kUp],  ring[r][kUp],
                                         ring[r][kLow],    ring[r + 1][kLow], ring[r + 2][kLow]};
     std::vector<std::vector<glm::dvec3>> sections;
     for (const auto& s : kWing) {
@@ -110,7 +114,11 @@ Generated makeBird() {
     const int r = kLegRing;
     const std::vector<uint32_t> root = {ring[r][kOut], ring[r][kMid], ring[r + 1][kMid], ring[r + 1][kOut]};
     // Tucked leg: drumstick down and back, then a thin tarsus stub pointing back.
-    struct LegKey { glm::dvec3 c; double r; glm::dvec3 dir; };
+    struct LegKey {
+      glm::dvec3 c;
+      double r;
+      glm::dvec3 dir;
+    };
     const std::vector<LegKey> keys = {
         {{-0.47, -0.27, 0.11}, 0.07, {-0.5, -1, 0}},
         {{-0.56, -0.33, 0.10}, 0.05, {-1, -0.6, 0}},
@@ -154,7 +162,10 @@ Generated makeBird() {
     for (size_t v = 0; v < bodyParam.size(); ++v) {
       if (std::isnan(bodyParam[v].x)) continue;
       const double d = glm::length(bodyParam[v] - target);
-      if (d < bestD) { bestD = d; best = v; }
+      if (d < bestD) {
+        bestD = d;
+        best = v;
+      }
     }
     return fine.positions[best];
   };

@@ -119,16 +119,23 @@ QuadCage subdivideCatmullClark(const QuadCage& c) {
   }
   std::vector<glm::dvec3> edgePt(ne);
   for (size_t e = 0; e < ne; ++e)
-    edgePt[e] = (c.positions[et.verts[e][0]] + c.positions[et.verts[e][1]] + facePt[et.faces[e][0]] +
-                 facePt[et.faces[e][1]]) * 0.25;
+    edgePt[e] =
+        (c.positions[et.verts[e][0]] + c.positions[et.verts[e][1]] + facePt[et.faces[e][0]] + facePt[et.faces[e][1]]) *
+        0.25;
 
   std::vector<glm::dvec3> faceSum(nv, glm::dvec3(0.0)), edgeMidSum(nv, glm::dvec3(0.0));
   std::vector<int> faceCount(nv, 0), edgeCount(nv, 0);
   for (size_t f = 0; f < nf; ++f)
-    for (uint32_t v : c.quads[f]) { faceSum[v] += facePt[f]; ++faceCount[v]; }
+    for (uint32_t v : c.quads[f]) {
+      faceSum[v] += facePt[f];
+      ++faceCount[v];
+    }
   for (size_t e = 0; e < ne; ++e) {
     const glm::dvec3 mid = (c.positions[et.verts[e][0]] + c.positions[et.verts[e][1]]) * 0.5;
-    for (uint32_t v : et.verts[e]) { edgeMidSum[v] += mid; ++edgeCount[v]; }
+    for (uint32_t v : et.verts[e]) {
+      edgeMidSum[v] += mid;
+      ++edgeCount[v];
+    }
   }
 
   QuadCage out;
@@ -153,8 +160,7 @@ QuadCage subdivideCatmullClark(const QuadCage& c) {
       const int jn = (j + 1) % 4, jp = (j + 3) % 4;
       const uint32_t en = static_cast<uint32_t>(nv + et.at(q[j], q[jn]));
       const uint32_t ep = static_cast<uint32_t>(nv + et.at(q[jp], q[j]));
-      out.addQuad({q[j], en, fp, ep}, c.tags[f].part,
-                  {p[j], (p[j] + p[jn]) * 0.5, pc, (p[jp] + p[j]) * 0.5});
+      out.addQuad({q[j], en, fp, ep}, c.tags[f].part, {p[j], (p[j] + p[jn]) * 0.5, pc, (p[jp] + p[j]) * 0.5});
     }
   }
   for (const auto& chain : c.chains) {
@@ -246,8 +252,7 @@ size_t improveByFlips(GroupedMesh& m, double maxDihedralDeg) {
     std::unordered_map<uint64_t, std::pair<uint32_t, int>> dir;
     dir.reserve(m.triangles.size() * 3);
     for (uint32_t t = 0; t < m.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k)
-        dir[(uint64_t(m.triangles[t][k]) << 32) | m.triangles[t][(k + 1) % 3]] = {t, k};
+      for (int k = 0; k < 3; ++k) dir[(uint64_t(m.triangles[t][k]) << 32) | m.triangles[t][(k + 1) % 3]] = {t, k};
     std::vector<char> touched(m.triangles.size(), 0);
     size_t flips = 0;
     for (uint32_t t0 = 0; t0 < m.triangles.size(); ++t0) {
@@ -316,7 +321,8 @@ struct TriangleGrid {
   }
   glm::i64vec3 index(const glm::dvec3& p) const {
     const glm::dvec3 q = (p - lo) / cell;
-    return {static_cast<int64_t>(std::floor(q.x)), static_cast<int64_t>(std::floor(q.y)), static_cast<int64_t>(std::floor(q.z))};
+    return {static_cast<int64_t>(std::floor(q.x)), static_cast<int64_t>(std::floor(q.y)),
+            static_cast<int64_t>(std::floor(q.z))};
   }
   void build(double cellSize) {
     cell = cellSize;
@@ -325,7 +331,8 @@ struct TriangleGrid {
       for (const auto& p : t) lo = glm::min(lo, p);
     for (uint32_t i = 0; i < tris.size(); ++i) {
       const auto& t = tris[i];
-      const glm::i64vec3 a = index(glm::min(glm::min(t[0], t[1]), t[2])), b = index(glm::max(glm::max(t[0], t[1]), t[2]));
+      const glm::i64vec3 a = index(glm::min(glm::min(t[0], t[1]), t[2])),
+                         b = index(glm::max(glm::max(t[0], t[1]), t[2]));
       for (int64_t x = a.x; x <= b.x; ++x)
         for (int64_t y = a.y; y <= b.y; ++y)
           for (int64_t z = a.z; z <= b.z; ++z) cells[key(x, y, z)].push_back(i);
@@ -344,7 +351,10 @@ struct TriangleGrid {
             if (glm::dot(normals[t], n) < 0.3) continue;
             const glm::dvec3 q = closestOnTriangle(p, tris[t][0], tris[t][1], tris[t][2]);
             const double d = glm::dot(q - p, q - p);
-            if (d < best) { best = d; out = q; }
+            if (d < best) {
+              best = d;
+              out = q;
+            }
           }
         }
     return best < 1e30;

@@ -179,8 +179,8 @@ inline double smoothstep(double e0, double e1, double x) {
 // elbow and wrist blend across their bisector planes over +-width.
 inline std::vector<SkinWeight> chainWeights(uint32_t vertex, const glm::dvec3& p, double beta0,
                                             const std::array<uint32_t, 5>& chain, const Skeleton& sk, double width) {
-  const glm::dvec3 s = sk.joints[chain[1]].position, e = sk.joints[chain[2]].position,
-                   w = sk.joints[chain[3]].position, t = sk.joints[chain[4]].position;
+  const glm::dvec3 s = sk.joints[chain[1]].position, e = sk.joints[chain[2]].position, w = sk.joints[chain[3]].position,
+                   t = sk.joints[chain[4]].position;
   const glm::dvec3 d0 = glm::normalize(e - s), d1 = glm::normalize(w - e), d2 = glm::normalize(t - w);
   const double b1 = smoothstep(-width, width, glm::dot(p - e, glm::normalize(d0 + d1)));
   const double b2 = smoothstep(-width, width, glm::dot(p - w, glm::normalize(d1 + d2)));
@@ -189,7 +189,10 @@ inline std::vector<SkinWeight> chainWeights(uint32_t vertex, const glm::dvec3& p
   std::vector<SkinWeight> out;
   double sum = 0;
   for (int k = 0; k < 4; ++k)
-    if (raw[k] >= 1e-3) { out.push_back({vertex, chain[k], raw[k]}); sum += raw[k]; }
+    if (raw[k] >= 1e-3) {
+      out.push_back({vertex, chain[k], raw[k]});
+      sum += raw[k];
+    }
   double rounded = 0;
   size_t big = 0;
   for (size_t k = 0; k < out.size(); ++k) {

@@ -59,7 +59,8 @@ size_t countSelfIntersections(const GroupedMesh& m) {
     hi[t] = glm::max(glm::max(m.positions[tri[0]], m.positions[tri[1]]), m.positions[tri[2]]);
     order[t] = static_cast<uint32_t>(t);
   }
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return lo[a].x < lo[b].x || (lo[a].x == lo[b].x && a < b); });
+  std::sort(order.begin(), order.end(),
+            [&](uint32_t a, uint32_t b) { return lo[a].x < lo[b].x || (lo[a].x == lo[b].x && a < b); });
   size_t hits = 0;
   for (size_t i = 0; i < nt; ++i) {
     const uint32_t A = order[i];
@@ -77,7 +78,8 @@ size_t countSelfIntersections(const GroupedMesh& m) {
         for (int k = 0; k < 3 && !hit; ++k) {
           const uint32_t e0 = s[k], e1 = s[(k + 1) % 3];
           if (std::find(t.begin(), t.end(), e0) != t.end() || std::find(t.begin(), t.end(), e1) != t.end()) continue;
-          hit = segmentHitsTriangle(m.positions[e0], m.positions[e1], m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]);
+          hit = segmentHitsTriangle(m.positions[e0], m.positions[e1], m.positions[t[0]], m.positions[t[1]],
+                                    m.positions[t[2]]);
         }
       };
       edgesAgainst(ta, tb);
@@ -176,7 +178,10 @@ MeshCheck checkMesh(const GroupedMesh& m, bool expectClosed) {
     uint32_t start = L[0][0];
     int starts = 0;
     for (const auto& e : L)
-      if (!indeg.count(e[0])) { start = e[0]; ++starts; }
+      if (!indeg.count(e[0])) {
+        start = e[0];
+        ++starts;
+      }
     bad |= starts > 1;
     size_t steps = 0;
     uint32_t cur = start;
@@ -206,7 +211,8 @@ MeshCheck checkMesh(const GroupedMesh& m, bool expectClosed) {
   if (r.nonFinite) problem(std::to_string(r.nonFinite) + " vertices with non-finite coordinates");
   if (r.degenerateFaces) problem(std::to_string(r.degenerateFaces) + " degenerate faces");
   if (r.unusedVertices) problem(std::to_string(r.unusedVertices) + " unused vertices");
-  if (r.misorientedEdges) problem(std::to_string(r.misorientedEdges) + " edges used twice in one direction (inconsistent orientation)");
+  if (r.misorientedEdges)
+    problem(std::to_string(r.misorientedEdges) + " edges used twice in one direction (inconsistent orientation)");
   if (r.nonManifoldEdges) problem(std::to_string(r.nonManifoldEdges) + " non-manifold edges");
   if (r.nonManifoldVertices) problem(std::to_string(r.nonManifoldVertices) + " non-manifold vertices");
   if (r.selfIntersections) problem(std::to_string(r.selfIntersections) + " self-intersecting face pairs");
@@ -231,8 +237,8 @@ std::string formatCheck(const std::string& title, const MeshCheck& c) {
     << " deg, " << c.facesBelow20Deg << " faces < 20 deg, " << c.facesBelow10Deg << " < 10 deg\n";
   for (const auto& g : c.groups) {
     char line[160];
-    std::snprintf(line, sizeof line, "  g %-26s %6zu faces  area %8.4f  (%zu < 20 deg)\n", g.name.c_str(), g.faces, g.area,
-                  g.facesBelow20Deg);
+    std::snprintf(line, sizeof line, "  g %-26s %6zu faces  area %8.4f  (%zu < 20 deg)\n", g.name.c_str(), g.faces,
+                  g.area, g.facesBelow20Deg);
     o << line;
   }
   o << (c.ok() ? "  OK: closed/manifold checks passed\n" : "  FAILED:\n");
@@ -244,7 +250,8 @@ void writeObj(const GroupedMesh& m, const std::string& path, const std::string& 
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) throw Error("cannot open for writing", path);
   std::fprintf(f, "# %s\n", comment.c_str());
-  std::fprintf(f, "# %zu vertices, %zu triangles, %zu groups\n", m.positions.size(), m.triangles.size(), m.groupNames.size());
+  std::fprintf(f, "# %zu vertices, %zu triangles, %zu groups\n", m.positions.size(), m.triangles.size(),
+               m.groupNames.size());
   for (const auto& p : m.positions) std::fprintf(f, "v %.6f %.6f %.6f\n", p.x, p.y, p.z);
   for (uint32_t g = 0; g < m.groupNames.size(); ++g) {
     std::fprintf(f, "g %s\n", m.groupNames[g].c_str());
@@ -288,7 +295,9 @@ GroupedMesh readObj(const std::string& path) {
         }
         if (v < 0) v += static_cast<long>(m.positions.size()) + 1;
         if (v < 1 || v > static_cast<long>(m.positions.size()))
-          throw Error("face index " + ref + " out of range (" + std::to_string(m.positions.size()) + " vertices so far)", path, where);
+          throw Error(
+              "face index " + ref + " out of range (" + std::to_string(m.positions.size()) + " vertices so far)", path,
+              where);
         idx.push_back(static_cast<uint32_t>(v - 1));
       }
       if (idx.size() < 3) throw Error("face needs at least three vertices", path, where);
@@ -322,8 +331,8 @@ void writeSkeletonJson(const Skeleton& s, const std::string& path) {
   o << "  ],\n  \"weights\": [\n";
   for (size_t i = 0; i < s.weights.size(); ++i) {
     char buf[80];
-    std::snprintf(buf, sizeof buf, "    [%u, %u, %.5f]%s\n", s.weights[i].vertex, s.weights[i].joint, s.weights[i].weight,
-                  i + 1 < s.weights.size() ? "," : "");
+    std::snprintf(buf, sizeof buf, "    [%u, %u, %.5f]%s\n", s.weights[i].vertex, s.weights[i].joint,
+                  s.weights[i].weight, i + 1 < s.weights.size() ? "," : "");
     o << buf;
   }
   o << "  ]\n}\n";

@@ -80,11 +80,11 @@ struct MeshCheck {
   size_t boundaryEdges = 0, nonManifoldEdges = 0, misorientedEdges = 0, nonManifoldVertices = 0;
   size_t degenerateFaces = 0, nonFinite = 0, unusedVertices = 0, selfIntersections = 0;
   size_t boundaryLoops = 0;
-  double area = 0, volume = 0;           // volume only meaningful for closed meshes
+  double area = 0, volume = 0;  // volume only meaningful for closed meshes
   double minAngleDeg = 180, meanMinAngleDeg = 0;
   size_t facesBelow20Deg = 0, facesBelow10Deg = 0;
   std::vector<GroupStat> groups;
-  std::vector<std::string> problems;     // empty when the mesh passed
+  std::vector<std::string> problems;  // empty when the mesh passed
   bool ok() const { return problems.empty(); }
 };
 
@@ -125,7 +125,7 @@ struct Polyline {
 void writeAxesJson(const std::vector<Polyline>& lines, const std::string& path);
 
 struct Generated {
-  std::string name;         // file stem in data/meshes
+  std::string name;  // file stem in data/meshes
   GroupedMesh mesh;
   bool closed = true;
   bool hasSkeleton = false;
@@ -137,7 +137,7 @@ Generated makeBird();
 Generated makeWing();
 Generated makeHead();
 Generated makeSphere(int pointCount, const std::string& name);  // 2*pointCount-4 triangles
-Generated makePatch(int cellsPerSide);                             // 2*cells^2 triangles
+Generated makePatch(int cellsPerSide);                          // 2*cells^2 triangles
 std::vector<Generated> makeAll();
 
 }  // namespace pteryla::meshgen

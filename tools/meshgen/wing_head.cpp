@@ -17,10 +17,9 @@ struct Station {
   double x, zLead, zTrail, thick;
 };
 const std::vector<Station> kStations = {
-    {0.00, -0.12, 0.38, 0.16}, {0.22, -0.14, 0.42, 0.14}, {0.45, -0.15, 0.43, 0.12},
-    {0.70, -0.15, 0.41, 0.11},  {0.95, -0.14, 0.37, 0.095}, {1.20, -0.12, 0.31, 0.08},
-    {1.42, -0.08, 0.25, 0.07},  {1.62, -0.04, 0.19, 0.06},  {1.78, 0.00, 0.14, 0.05},
-    {1.89, 0.03, 0.10, 0.04},
+    {0.00, -0.12, 0.38, 0.16},  {0.22, -0.14, 0.42, 0.14}, {0.45, -0.15, 0.43, 0.12}, {0.70, -0.15, 0.41, 0.11},
+    {0.95, -0.14, 0.37, 0.095}, {1.20, -0.12, 0.31, 0.08}, {1.42, -0.08, 0.25, 0.07}, {1.62, -0.04, 0.19, 0.06},
+    {1.78, 0.00, 0.14, 0.05},   {1.89, 0.03, 0.10, 0.04},
 };
 const glm::dvec3 kTip(1.97, 0.0, 0.07);
 constexpr int kWristStation = 5;
@@ -89,15 +88,15 @@ namespace {
 // Head: skull loft along +X (back of the skull -> beak tip), neck extruded down from the skull's
 // underside. Sized for close-ups: beak tip to back of skull about 1.1 units.
 const std::vector<SpineKey> kHeadKeys = {
-    {-0.40, 0.02, 0.12, 0.11, 0.11},   // 0 back of the skull
-    {-0.31, 0.04, 0.24, 0.22, 0.22},   // 1
-    {-0.15, 0.05, 0.30, 0.30, 0.27},   // 2 neck root (rings 1..3, bottom)
-    {0.03, 0.05, 0.30, 0.28, 0.27},    // 3 eyes
-    {0.19, 0.03, 0.24, 0.20, 0.21},    // 4
-    {0.31, 0.00, 0.16, 0.13, 0.14},    // 5 beak base
-    {0.44, -0.04, 0.095, 0.08, 0.085}, // 6 beak
-    {0.55, -0.08, 0.05, 0.04, 0.045},  // 7
-    {0.61, -0.105, 0.022, 0.018, 0.02},// 8 beak tip
+    {-0.40, 0.02, 0.12, 0.11, 0.11},     // 0 back of the skull
+    {-0.31, 0.04, 0.24, 0.22, 0.22},     // 1
+    {-0.15, 0.05, 0.30, 0.30, 0.27},     // 2 neck root (rings 1..3, bottom)
+    {0.03, 0.05, 0.30, 0.28, 0.27},      // 3 eyes
+    {0.19, 0.03, 0.24, 0.20, 0.21},      // 4
+    {0.31, 0.00, 0.16, 0.13, 0.14},      // 5 beak base
+    {0.44, -0.04, 0.095, 0.08, 0.085},   // 6 beak
+    {0.55, -0.08, 0.05, 0.04, 0.045},    // 7
+    {0.61, -0.105, 0.022, 0.018, 0.02},  // 8 beak tip
 };
 constexpr double kHeadBeakS = 5.3;
 
@@ -120,9 +119,11 @@ Generated makeHead() {
   glm::dvec3 rootCentre(0.0);
   for (uint32_t v : root) rootCentre += cage.positions[v];
   rootCentre /= double(root.size());
-  struct NeckKey { double y, dx, rx, rz; };
-  const std::vector<NeckKey> keys = {{-0.42, -0.06, 0.20, 0.19}, {-0.66, -0.10, 0.20, 0.19},
-                                     {-0.90, -0.12, 0.21, 0.20}, {-1.10, -0.13, 0.22, 0.21}};
+  struct NeckKey {
+    double y, dx, rx, rz;
+  };
+  const std::vector<NeckKey> keys = {
+      {-0.42, -0.06, 0.20, 0.19}, {-0.66, -0.10, 0.20, 0.19}, {-0.90, -0.12, 0.21, 0.20}, {-1.10, -0.13, 0.22, 0.21}};
   std::vector<std::vector<glm::dvec3>> sections;
   for (const auto& k : keys) {
     std::vector<glm::dvec3> loop;
@@ -148,7 +149,10 @@ Generated makeHead() {
     for (size_t v = 0; v < headParam.size(); ++v) {
       if (std::isnan(headParam[v].x)) continue;
       const double d = glm::length(headParam[v] - target);
-      if (d < bestD) { bestD = d; best = v; }
+      if (d < bestD) {
+        bestD = d;
+        best = v;
+      }
     }
     return fine.positions[best];
   };

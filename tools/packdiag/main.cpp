@@ -62,8 +62,9 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 
 int main(int argc, char** argv) {
   try {
-    const char* usage = "usage: %s SCENE.json [--set /pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME] [--cover] "
-                        "[--face-cover FILE] [--blame N] [--flat DEG] [--scale K] [--follicles FILE]\n";
+    const char* usage =
+        "usage: %s SCENE.json [--set /pointer=JSON ...] [--no-full] [--lod F] [--top N] [--tract NAME] [--cover] "
+        "[--face-cover FILE] [--blame N] [--flat DEG] [--scale K] [--follicles FILE]\n";
     if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
       std::fprintf(argc < 2 ? stderr : stdout, usage, argv[0]);
       return argc < 2 ? 2 : 0;
@@ -75,26 +76,33 @@ int main(int argc, char** argv) {
     std::string folliclesPath;  // --follicles FILE: "tract x y z length" per feather, then exit
     long blame = -1;            // --blame N
     double lod = 1.0;
-    double flatDeg = NAN;   // --flat DEG
-    double lengthScale = 1; // --scale K
+    double flatDeg = NAN;    // --flat DEG
+    double lengthScale = 1;  // --scale K
     int top = 15;
     std::vector<std::pair<std::string, std::string>> sets;
     for (int a = 2; a < argc; ++a) {
       const std::string s = argv[a];
-      if (s == "--no-full") full = false;
-      else if (s == "--cover") cover = true;
-      else if (s == "--lod" && a + 1 < argc) lod = std::stod(argv[++a]);
-      else if (s == "--top" && a + 1 < argc) top = std::stoi(argv[++a]);
-      else if (s == "--tract" && a + 1 < argc) listTract = argv[++a];
-      else if (s == "--face-cover" && a + 1 < argc) faceCoverPath = argv[++a];
-      else if (s == "--follicles" && a + 1 < argc) folliclesPath = argv[++a];
+      if (s == "--no-full")
+        full = false;
+      else if (s == "--cover")
+        cover = true;
+      else if (s == "--lod" && a + 1 < argc)
+        lod = std::stod(argv[++a]);
+      else if (s == "--top" && a + 1 < argc)
+        top = std::stoi(argv[++a]);
+      else if (s == "--tract" && a + 1 < argc)
+        listTract = argv[++a];
+      else if (s == "--face-cover" && a + 1 < argc)
+        faceCoverPath = argv[++a];
+      else if (s == "--follicles" && a + 1 < argc)
+        folliclesPath = argv[++a];
       else if (s == "--blame" && a + 1 < argc) {
         const std::string v = argv[++a];
         char* end = nullptr;
         blame = std::strtol(v.c_str(), &end, 10);
-        if (v.empty() || *end != '\0' || blame < 0) throw Error("--blame expects a feather index (a non-negative integer)", {}, v);
-      }
-      else if ((s == "--flat" || s == "--scale") && a + 1 < argc) {
+        if (v.empty() || *end != '\0' || blame < 0)
+          throw Error("--blame expects a feather index (a non-negative integer)", {}, v);
+      } else if ((s == "--flat" || s == "--scale") && a + 1 < argc) {
         const std::string v = argv[++a];
         char* end = nullptr;
         const double x = std::strtod(v.c_str(), &end);
@@ -103,8 +111,7 @@ int main(int argc, char** argv) {
         if (s == "--scale" && (v.empty() || *end != '\0' || !(x > 0 && std::isfinite(x))))
           throw Error("--scale expects a positive length factor", {}, v);
         (s == "--flat" ? flatDeg : lengthScale) = x;
-      }
-      else if (s == "--set" && a + 1 < argc) {
+      } else if (s == "--set" && a + 1 < argc) {
         const std::string kv = argv[++a];
         const size_t eq = kv.find('=');
         if (eq == std::string::npos) throw Error("--set needs /pointer=JSON", {}, kv);
@@ -118,12 +125,15 @@ int main(int argc, char** argv) {
     nlohmann::json j = nlohmann::json::parse(in);
     for (const auto& [ptr, val] : sets) j[nlohmann::json::json_pointer(ptr)] = nlohmann::json::parse(val);
     if (!std::isnan(flatDeg))
-      j["packing"]["styling"].push_back({{"select", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1e9}, {"elevation_deg", flatDeg}});
+      j["packing"]["styling"].push_back(
+          {{"select", "sphere"}, {"center", {0, 0, 0}}, {"radius", 1e9}, {"elevation_deg", flatDeg}});
     if (lengthScale != 1 && j.contains("tracts"))
       for (auto& t : j["tracts"]) {  // scene-format.md: feather_scale defaults to 1, feather_spacings to 3.5
         const bool automatic = t.contains("feather_scale") && t["feather_scale"] == "auto";
-        if (automatic) t["feather_spacings"] = t.value("feather_spacings", 3.5) * lengthScale;
-        else t["feather_scale"] = t.value("feather_scale", 1.0) * lengthScale;
+        if (automatic)
+          t["feather_spacings"] = t.value("feather_spacings", 3.5) * lengthScale;
+        else
+          t["feather_scale"] = t.value("feather_scale", 1.0) * lengthScale;
       }
     pipeline::Pipeline p(pipeline::sceneFromJson(j, path));
 
@@ -159,10 +169,11 @@ int main(int argc, char** argv) {
     size_t same = 0;
     for (size_t i = 0; i < n; ++i) same += pr.elevation[i] == elev[i] ? 1 : 0;
     const auto& st = pr.stats;
-    std::printf("pack %.3f s (pipeline's elevations reproduced for %zu/%zu): free %zu clamped %zu conflicts %zu "
-                "unopened %zu fixed %zu barbs elevated %zu lifted %zu unresolved %zu\n",
-                secondsSince(t0), same, n, st.free, st.shaftClamped, st.conflicts, st.unopened, st.fixed,
-                st.barbsElevated, st.barbsLifted, st.barbsUnresolved);
+    std::printf(
+        "pack %.3f s (pipeline's elevations reproduced for %zu/%zu): free %zu clamped %zu conflicts %zu "
+        "unopened %zu fixed %zu barbs elevated %zu lifted %zu unresolved %zu\n",
+        secondsSince(t0), same, n, st.free, st.shaftClamped, st.conflicts, st.unopened, st.fixed, st.barbsElevated,
+        st.barbsLifted, st.barbsUnresolved);
     if (!listTract.empty()) {
       if (std::none_of(tracts.begin(), tracts.end(), [&](const auto& t) { return t.name == listTract; }))
         throw Error("no tract of that name in the scene", path, "--tract " + listTract);
@@ -172,15 +183,17 @@ int main(int argc, char** argv) {
         if (tracts[coat.tract[i]].name != listTract) continue;
         const auto& f = coat.frames[i];
         const double fixed = i < styled.fixedElevation.size() ? styled.fixedElevation[i] : NAN;
-        std::printf("  feather %zu layer %u at (%.4f %.4f %.4f) T (%.3f %.3f %.3f) N (%.3f %.3f %.3f) elevation %.2f deg "
-                    "fixed %.2f len %.3f\n",
-                    i, layerPos[i], f.origin.x, f.origin.y, f.origin.z, f.tangent.x, f.tangent.y, f.tangent.z, f.normal.x,
-                    f.normal.y, f.normal.z, elev[i] * 57.29578, fixed * 57.29578, coat.params[i].rachisLength);
+        std::printf(
+            "  feather %zu layer %u at (%.4f %.4f %.4f) T (%.3f %.3f %.3f) N (%.3f %.3f %.3f) elevation %.2f deg "
+            "fixed %.2f len %.3f\n",
+            i, layerPos[i], f.origin.x, f.origin.y, f.origin.z, f.tangent.x, f.tangent.y, f.tangent.z, f.normal.x,
+            f.normal.y, f.normal.z, elev[i] * 57.29578, fixed * 57.29578, coat.params[i].rachisLength);
       }
     }
 
     if (blame >= 0) {
-      if (static_cast<size_t>(blame) >= n || !coat.present[blame]) throw Error("--blame: no such present feather", path, std::to_string(blame));
+      if (static_cast<size_t>(blame) >= n || !coat.present[blame])
+        throw Error("--blame: no such present feather", path, std::to_string(blame));
       const uint32_t b = static_cast<uint32_t>(blame);
       std::vector<uint32_t> pos(n, UINT32_MAX);
       for (size_t k = 0; k < coat.layerOrder.size(); ++k) pos[coat.layerOrder[k]] = static_cast<uint32_t>(k);
@@ -196,13 +209,15 @@ int main(int argc, char** argv) {
         drops.push_back({pr.elevation[b] - r.elevation[b], k});
       }
       std::sort(drops.rbegin(), drops.rend());
-      std::printf("feather %u (%s) elevation %.2f deg; %zu feathers under it within reach; without each, it would lie at:\n", b,
-                  tracts[coat.tract[b]].name.c_str(), pr.elevation[b] * 180 / M_PI, drops.size());
+      std::printf(
+          "feather %u (%s) elevation %.2f deg; %zu feathers under it within reach; without each, it would lie at:\n", b,
+          tracts[coat.tract[b]].name.c_str(), pr.elevation[b] * 180 / M_PI, drops.size());
       for (int k = 0; k < top && k < static_cast<int>(drops.size()); ++k) {
         const uint32_t q = drops[k].second;
-        std::printf("  without %5u (%s, e %.1f, len %.3f, dist %.3f): %.2f deg\n", q, tracts[coat.tract[q]].name.c_str(),
-                    pr.elevation[q] * 180 / M_PI, coat.params[q].totalLength(),
-                    glm::length(coat.frames[q].origin - coat.frames[b].origin), (pr.elevation[b] - drops[k].first) * 180 / M_PI);
+        std::printf("  without %5u (%s, e %.1f, len %.3f, dist %.3f): %.2f deg\n", q,
+                    tracts[coat.tract[q]].name.c_str(), pr.elevation[q] * 180 / M_PI, coat.params[q].totalLength(),
+                    glm::length(coat.frames[q].origin - coat.frames[b].origin),
+                    (pr.elevation[b] - drops[k].first) * 180 / M_PI);
       }
     }
 
@@ -226,14 +241,14 @@ int main(int argc, char** argv) {
     const TriMesh& packedMesh = full ? fullMesh : packedProxy;
     const coat::CheckResult cr = coat::check(skin, allFaces, packedMesh, co);
     std::printf("%s check %.1f s: %zu triangles, intersecting_pairs %zu, skin_penetrations %zu, coverage %.4f\n",
-                full ? "full" : "proxy", secondsSince(t0), cr.coatTriangles, cr.intersectingPairs,
-                cr.skinPenetrations, cr.coverage);
+                full ? "full" : "proxy", secondsSince(t0), cr.coatTriangles, cr.intersectingPairs, cr.skinPenetrations,
+                cr.coverage);
     if (!faceCoverPath.empty()) {
       std::ofstream fc(faceCoverPath);
       if (!fc) throw Error("cannot write", faceCoverPath, {});
       for (size_t f = 0; f < skin.faceAreas.size(); ++f)
-        fc << (f < cr.faceSamples.size() ? cr.faceSamples[f] : 0) << ' ' << (f < cr.faceUncovered.size() ? cr.faceUncovered[f] : 0)
-           << '\n';
+        fc << (f < cr.faceSamples.size() ? cr.faceSamples[f] : 0) << ' '
+           << (f < cr.faceUncovered.size() ? cr.faceUncovered[f] : 0) << '\n';
     }
 
     std::vector<double> flatE;
@@ -271,8 +286,10 @@ int main(int argc, char** argv) {
     for (const auto& q : cr.featherPairs) {
       const uint32_t ta = coat.tract[q.a], tb = coat.tract[q.b];
       tPairs[ta] += q.pairs;
-      if (tb != ta) tPairs[tb] += q.pairs;
-      else tSame[ta] += q.pairs;
+      if (tb != ta)
+        tPairs[tb] += q.pairs;
+      else
+        tSame[ta] += q.pairs;
       cross[{std::min(ta, tb), std::max(ta, tb)}] += q.pairs;
     }
     for (const auto& q : up) {
@@ -283,8 +300,8 @@ int main(int argc, char** argv) {
       tPp[coat.tract[q.a]] += q.pairs;
       if (coat.tract[q.b] != coat.tract[q.a]) tPp[coat.tract[q.b]] += q.pairs;
     }
-    std::printf("\n%-16s %5s %6s %6s %6s %6s %8s %8s %8s %8s %7s %5s %6s %6s\n", "tract", "n", "len", "e10", "e50", "e90",
-                "pairs", "within", "proxy", "unpack", "pen", "penF", "area", "cover");
+    std::printf("\n%-16s %5s %6s %6s %6s %6s %8s %8s %8s %8s %7s %5s %6s %6s\n", "tract", "n", "len", "e10", "e50",
+                "e90", "pairs", "within", "proxy", "unpack", "pen", "penF", "area", "cover");
     double areaAll = 0;
     for (const auto& t : tracts)
       for (uint32_t f : t.faces) areaAll += skin.faceAreas[f];
@@ -296,9 +313,9 @@ int main(int argc, char** argv) {
       const double cov = cover ? coat::check(skin, tracts[t].faces, packedMesh, cc).coverage : NAN;
       double area = 0;
       for (uint32_t f : tracts[t].faces) area += skin.faceAreas[f];
-      std::printf("%-16s %5zu %6.3f %6.1f %6.1f %6.1f %8zu %8zu %8zu %8zu %7zu %5zu %6.3f %6.3f\n", tracts[t].name.c_str(), tf[t],
-                  pct(tLen[t], 0.5), pct(tE[t], 0.1), pct(tE[t], 0.5), pct(tE[t], 0.9), tPairs[t], tSame[t], tPp[t],
-                  tUp[t], tPen[t], tPenF[t], area / areaAll, cov);
+      std::printf("%-16s %5zu %6.3f %6.1f %6.1f %6.1f %8zu %8zu %8zu %8zu %7zu %5zu %6.3f %6.3f\n",
+                  tracts[t].name.c_str(), tf[t], pct(tLen[t], 0.5), pct(tE[t], 0.1), pct(tE[t], 0.5), pct(tE[t], 0.9),
+                  tPairs[t], tSame[t], tPp[t], tUp[t], tPen[t], tPenF[t], area / areaAll, cov);
     }
     // Uncovered samples per tract by the direction of the skin normal (dominant axis, sign).
     std::printf("\nuncovered coverage samples by tract and normal direction (+x forward, +y up, +z left wing):\n");
@@ -325,8 +342,8 @@ int main(int argc, char** argv) {
     std::sort(cs.rbegin(), cs.rend());
     std::printf("\ntract pairs with the most intersecting pairs:\n");
     for (int k = 0; k < top && k < static_cast<int>(cs.size()); ++k)
-      std::printf("  %-16s x %-16s %8zu\n", tracts[cs[k].second.first].name.c_str(), tracts[cs[k].second.second].name.c_str(),
-                  cs[k].first);
+      std::printf("  %-16s x %-16s %8zu\n", tracts[cs[k].second.first].name.c_str(),
+                  tracts[cs[k].second.second].name.c_str(), cs[k].first);
 
     // Feather pairs: how far apart in layer order, which one is on top.
     std::vector<uint32_t> pos(n, UINT32_MAX);

@@ -29,15 +29,15 @@ struct CheckOptions {
   bool penetrations = true;
   bool coverage = true;
   size_t coverageSamples = 20000;
-  uint64_t seed = 1;               // coverage sample positions
-  double skinTolerance = 0;        // scene units below the surface still counted as on it; 0 = auto (1e-6 x skin diagonal)
-  double rayOffset = 0;            // scene units the coverage rays start above the skin; 0 = auto (1e-6 x skin diagonal)
-  double maxRayDistance = 0;       // scene units; 0 = unlimited
+  uint64_t seed = 1;          // coverage sample positions
+  double skinTolerance = 0;   // scene units below the surface still counted as on it; 0 = auto (1e-6 x skin diagonal)
+  double rayOffset = 0;       // scene units the coverage rays start above the skin; 0 = auto (1e-6 x skin diagonal)
+  double maxRayDistance = 0;  // scene units; 0 = unlimited
   // Coat vertices of feather f within featherBaseRadius[f] of featherOrigins[f] are exempt from the skin
   // test (the calamus sits in its follicle). Empty = no exemption; see setFeatherBases().
   std::vector<glm::dvec3> featherOrigins;
   std::vector<double> featherBaseRadius;
-  int threads = 0;                 // 0 = all available
+  int threads = 0;  // 0 = all available
   // Diagnostics: also list which feathers the intersecting pairs and skin penetrations belong to
   // (CheckResult::featherPairs, featherPenetrations). The counts are the same either way.
   bool attribute = false;
@@ -58,12 +58,12 @@ struct CheckResult {
   size_t intersectingPairs = 0;
   size_t coatTriangles = 0;
   size_t skinPenetrations = 0;
-  size_t samplePoints = 0;                 // coat vertices tested against the skin
+  size_t samplePoints = 0;                    // coat vertices tested against the skin
   std::vector<uint32_t> penetratingFeathers;  // featherIds with a penetrating vertex, ascending
-  double coverage = 0;                     // [0,1]
+  double coverage = 0;                        // [0,1]
   size_t coverageSamples = 0, coveredSamples = 0;
   double seconds = 0;
-  bool complete = false;                   // false: CheckOptions::progress asked to stop
+  bool complete = false;  // false: CheckOptions::progress asked to stop
   // CheckOptions::attribute only: per pair of feathers the intersecting triangle pairs (sorted by a, b;
   // the counts sum to intersectingPairs), and per featherId the penetrating vertices (sums to
   // skinPenetrations; sized to the largest featherId + 1).
@@ -97,8 +97,8 @@ void setFeatherBases(CheckOptions& options, const CoatFeathers& coat, double bas
 // consecutive barbs (barb polylines from feather::generateBarbs), the shaft as a ribbon in the vane plane;
 // unopened feathers (age < openingAge) as a straight ribbon. featherId = feather index.
 struct ProxyMeshOptions {
-  int barbStride = 1;      // use every n-th barb
-  int barbSegments = 4;    // polyline segments per barb
+  int barbStride = 1;    // use every n-th barb
+  int barbSegments = 4;  // polyline segments per barb
   int shaftSegments = 12;
   double openingAge = 0.8;
 };

@@ -13,20 +13,20 @@
 namespace pteryla::coat {
 
 struct FeatherFrame {
-  glm::dvec3 origin{0};   // follicle position on the skin
+  glm::dvec3 origin{0};  // follicle position on the skin
   glm::dvec3 normal{0, 0, 1};
   glm::dvec3 tangent{1, 0, 0};
   glm::dvec3 binormal{0, 1, 0};  // normal x tangent
 };
 
 struct CoatFeathers {
-  std::vector<uint32_t> follicle;               // follicle index per feather
-  std::vector<uint32_t> tract;                  // tract index per feather
-  std::vector<feather::FeatherParams> params;   // interpolated (and scaled) definition per feather
+  std::vector<uint32_t> follicle;              // follicle index per feather
+  std::vector<uint32_t> tract;                 // tract index per feather
+  std::vector<feather::FeatherParams> params;  // interpolated (and scaled) definition per feather
   std::vector<FeatherFrame> frames;
-  std::vector<double> age;                      // [0,1] growth age (1 = mature); set by moult
-  std::vector<uint8_t> present;                 // 0 = moulted out (a gap)
-  std::vector<uint32_t> layerOrder;             // feather indices, bottom layer first (packing order)
+  std::vector<double> age;           // [0,1] growth age (1 = mature); set by moult
+  std::vector<uint8_t> present;      // 0 = moulted out (a gap)
+  std::vector<uint32_t> layerOrder;  // feather indices, bottom layer first (packing order)
   size_t size() const { return follicle.size(); }
 };
 

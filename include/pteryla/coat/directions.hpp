@@ -38,10 +38,10 @@ struct StylingVector {
 
 // One direction field. Exactly one of axis / vectors, or neither (then the fallback everywhere).
 struct DirectionSpec {
-  std::vector<glm::dvec3> axis;          // body-axis polyline, head to tail, >= 2 distinct points
+  std::vector<glm::dvec3> axis;  // body-axis polyline, head to tail, >= 2 distinct points
   std::vector<StylingVector> vectors;
-  double falloff = 0.0;                  // scene units; 0 = inverse-distance-squared weights
-  glm::dvec3 fallback{0.0, -1.0, 0.0};   // object-space direction where the field is undefined
+  double falloff = 0.0;                 // scene units; 0 = inverse-distance-squared weights
+  glm::dvec3 fallback{0.0, -1.0, 0.0};  // object-space direction where the field is undefined
 };
 
 struct DirectionOptions {

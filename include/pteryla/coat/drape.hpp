@@ -19,10 +19,10 @@
 //  2. Height. In layer order (bottom first), a node's required height over the skin is the highest
 //     feather material already laid near its surface point (a hash over surface cells, split by normal
 //     class so the far side of a thin part does not count), plus a gap. An overhanging node has no skin
-//     under it: it clears the material already laid around the line through it along its normal. The feather's height is the
-//     smallest function above those requirements whose slope over the skin is at most `maxSlope` (the
-//     upper Lipschitz envelope): a stiff feather rides over what is under it instead of following each
-//     bump. Near the follicle the height ramps from the skin over the calamus.
+//     under it: it clears the material already laid around the line through it along its normal. The feather's height
+//     is the smallest function above those requirements whose slope over the skin is at most `maxSlope` (the upper
+//     Lipschitz envelope): a stiff feather rides over what is under it instead of following each bump. Near the
+//     follicle the height ramps from the skin over the calamus.
 //  3. Mesh. Every vertex of the feather mesh (built at elevation 0) is moved to its chart point plus its
 //     height along the chart normal; normals and tangents turn with the chart frame.
 //  4. Guarantees. A feather never covers the follicle of a feather laid after it, and one whose chart
@@ -42,12 +42,13 @@
 namespace pteryla::coat {
 
 struct DrapeOptions {
-  double gap = 0;          // scene units between stacked feathers and above the skin; 0 = auto (0.004 x median feather length)
-  double maxSlope = 1.0;   // largest rise of a feather's height over the skin per unit length (tan 45 degrees)
-  int gridAlong = 16;      // chart nodes along a feather (>= 2)
-  int gridAcross = 9;      // chart nodes across it (>= 2)
-  double baseAllowance = 0.08;  // fraction of a feather's length around its follicle the checks exempt (PackOptions::baseAllowance)
-  int threads = 0;         // 0 = all cores
+  double gap = 0;  // scene units between stacked feathers and above the skin; 0 = auto (0.004 x median feather length)
+  double maxSlope = 1.0;  // largest rise of a feather's height over the skin per unit length (tan 45 degrees)
+  int gridAlong = 16;     // chart nodes along a feather (>= 2)
+  int gridAcross = 9;     // chart nodes across it (>= 2)
+  double baseAllowance =
+      0.08;         // fraction of a feather's length around its follicle the checks exempt (PackOptions::baseAllowance)
+  int threads = 0;  // 0 = all cores
 };
 
 struct DrapeStats {
@@ -73,6 +74,7 @@ struct DrapeResult {
 // vertex; feathers absent from coat.layerOrder are left alone), over `skin`. Rewrites positions, normals
 // and tangents in place and collapses trimmed triangles to a point (index ranges stay valid).
 // Throws Error for inconsistent input (featherId out of range or missing).
-DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& options = {});
+DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
+                          const DrapeOptions& options = {});
 
 }  // namespace pteryla::coat

@@ -21,8 +21,8 @@ namespace pteryla::coat {
 
 // Follicle density over the skin, in follicles per unit area (scene units^-2).
 struct DensityField {
-  double uniform = 0.0;            // used when perVertex is empty
-  std::vector<double> perVertex;   // one value per mesh vertex (>= 0), linear across each face
+  double uniform = 0.0;           // used when perVertex is empty
+  std::vector<double> perVertex;  // one value per mesh vertex (>= 0), linear across each face
   // Optional factor >= 0 on top (e.g. a painted density texture sampled through uvAt). Scattering
   // evaluates it at face centroids (it picks faces, not points inside them); relaxation at quadrature
   // points, from several threads at once (it must be thread-safe and deterministic).
@@ -58,9 +58,9 @@ constexpr uint64_t kAutoFollicleId = std::numeric_limits<uint64_t>::max();
 
 struct ScatterOptions {
   uint64_t seed = 1;
-  DensityField density;          // follicles per unit area
-  size_t count = 0;              // > 0: exactly this many (density then only shapes where they go)
-  uint32_t tractIndex = 0;       // stored in Follicles::tract
+  DensityField density;                // follicles per unit area
+  size_t count = 0;                    // > 0: exactly this many (density then only shapes where they go)
+  uint32_t tractIndex = 0;             // stored in Follicles::tract
   uint64_t firstId = kAutoFollicleId;  // follicle k gets firstId + k
 };
 
@@ -75,8 +75,8 @@ Follicles scatterFollicles(const SkinMesh& mesh, const Tract& tract, const Scatt
 // tract closest to `position`. Returns the new index. Pinned follicles never move and act as Lloyd sites.
 size_t addPinnedFollicle(Follicles& follicles, const SkinMesh& mesh, const SurfacePoint& at, uint32_t tract,
                          uint64_t id);
-size_t addPinnedFollicleNear(Follicles& follicles, const SkinMesh& mesh, const Tract& tract,
-                             const glm::dvec3& position, uint32_t tractIndex, uint64_t id);
+size_t addPinnedFollicleNear(Follicles& follicles, const SkinMesh& mesh, const Tract& tract, const glm::dvec3& position,
+                             uint32_t tractIndex, uint64_t id);
 
 // Re-evaluates position and normal from (face, bary) after the skin deformed (recomputeGeometry first).
 void updateFollicleGeometry(const SkinMesh& mesh, Follicles& follicles);

@@ -34,25 +34,25 @@ using FeatherLibrary = std::map<std::string, feather::FeatherParams>;
 // A key feather as written in a scene: at a follicle (its stable Follicles::id) or at the follicle of the
 // tract nearest to a point in space.
 struct KeyFeatherSpec {
-  std::string feather;        // name in the FeatherLibrary
+  std::string feather;  // name in the FeatherLibrary
   bool byFollicle = false;
-  uint64_t follicleId = 0;    // byFollicle: Follicles::id
-  glm::dvec3 at{0.0};         // !byFollicle: scene units
-  std::string element;        // JSON path for errors, e.g. "tracts[2].key_feathers[1]"
+  uint64_t follicleId = 0;  // byFollicle: Follicles::id
+  glm::dvec3 at{0.0};       // !byFollicle: scene units
+  std::string element;      // JSON path for errors, e.g. "tracts[2].key_feathers[1]"
 };
 
 // A key feather resolved to a follicle of its tract.
 struct KeyFeather {
-  uint32_t follicle = 0;      // index into Follicles
-  std::string feather;        // name in the FeatherLibrary
+  uint32_t follicle = 0;  // index into Follicles
+  std::string feather;    // name in the FeatherLibrary
 };
 
 // Per-tract settings read from a tract object (see parseTractFeatherOptions).
 struct TractFeatherOptions {
   ParameterizeOptions parameterization;
   std::vector<KeyFeatherSpec> keys;
-  std::string feather;        // the tract's feather when it has no key feathers ("" = the library's only one)
-  double scaleJitter = 0.0;   // relative, in [0, 1)
+  std::string feather;       // the tract's feather when it has no key feathers ("" = the library's only one)
+  double scaleJitter = 0.0;  // relative, in [0, 1)
 };
 
 // Resolves key feathers of a tract: ids must be follicles of this tract, points pick the nearest
@@ -76,20 +76,20 @@ KeyTriangulation triangulateKeys(const std::vector<glm::dvec2>& keys);
 struct BlendWeights {
   std::array<uint32_t, 3> key{0, 0, 0};
   std::array<double, 3> weight{1, 0, 0};
-  uint8_t count = 1;          // 1 (a single key), 2 (hull edge / collinear chain) or 3 (triangle)
-  bool inside = true;         // false when the point lies outside the keys' convex hull
+  uint8_t count = 1;   // 1 (a single key), 2 (hull edge / collinear chain) or 3 (triangle)
+  bool inside = true;  // false when the point lies outside the keys' convex hull
 };
 BlendWeights locateInKeys(const KeyTriangulation& tri, const glm::dvec2& p);
 
 struct InterpolateOptions {
-  uint64_t seed = 1;          // scale jitter
+  uint64_t seed = 1;  // scale jitter
 };
 
 struct InterpolateStats {
   size_t feathers = 0;
-  size_t copied = 0;          // exact copies of a key feather
-  size_t blended = 0;         // blends of 2 or 3 key feathers
-  size_t outsideHull = 0;     // follicles outside their tract's key hull
+  size_t copied = 0;       // exact copies of a key feather
+  size_t blended = 0;      // blends of 2 or 3 key feathers
+  size_t outsideHull = 0;  // follicles outside their tract's key hull
 };
 
 // Inputs of one tract for interpolateCoatFeathers.

@@ -27,15 +27,15 @@ struct MetricsOptions {
 };
 
 struct DistributionMetrics {
-  size_t follicles = 0;       // all follicles considered (sites)
-  size_t interior = 0;        // measured follicles
-  double spacing = 0;         // hexagonal spacing for this density, scene units
-  double hexFraction = 0;     // share of interior follicles with exactly 6 Delaunay neighbours
-  double nnCv = 0;            // std / mean of nearest-neighbour distance (interior follicles)
-  double nnMean = 0;          // mean nearest-neighbour distance / spacing
-  double nnMin = 0;           // minimum nearest-neighbour distance / spacing
-  double meanDegree = 0;      // mean Delaunay degree
-  double psi6 = 0;            // mean |psi6| bond order
+  size_t follicles = 0;    // all follicles considered (sites)
+  size_t interior = 0;     // measured follicles
+  double spacing = 0;      // hexagonal spacing for this density, scene units
+  double hexFraction = 0;  // share of interior follicles with exactly 6 Delaunay neighbours
+  double nnCv = 0;         // std / mean of nearest-neighbour distance (interior follicles)
+  double nnMean = 0;       // mean nearest-neighbour distance / spacing
+  double nnMin = 0;        // minimum nearest-neighbour distance / spacing
+  double meanDegree = 0;   // mean Delaunay degree
+  double psi6 = 0;         // mean |psi6| bond order
 };
 
 // Delaunay neighbours on the surface for every follicle (CSR), computed in each tangent plane.

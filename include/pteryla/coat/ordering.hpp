@@ -47,9 +47,9 @@ struct OrderOptions {
 };
 
 struct OrderResult {
-  std::vector<double> key;              // per feather: s (Tracts), axis arc length (Axis) or phi (Flow); larger = lower
-  std::vector<glm::dvec2> tractFlow;    // per tract: unit mean direction in (u,v) (Tracts)
-  std::vector<uint32_t> tractRank;      // per tract: its group in the order (unlisted tracts share one with Axis, Flow)
+  std::vector<double> key;            // per feather: s (Tracts), axis arc length (Axis) or phi (Flow); larger = lower
+  std::vector<glm::dvec2> tractFlow;  // per tract: unit mean direction in (u,v) (Tracts)
+  std::vector<uint32_t> tractRank;    // per tract: its group in the order (unlisted tracts share one with Axis, Flow)
 };
 
 // Arc length along `axis` of the point of the polyline closest to p (ties: the earliest segment).

@@ -57,31 +57,33 @@ enum class PackMethod { Drape, HeightField };
 struct PackOptions {
   PackMethod method = PackMethod::Drape;
   double drapeMaxSlopeDeg = 45;  // drape: steepest rise of a feather over the skin, degrees
-  double clearance = 0;        // scene units kept between a feather and what is under it; 0 = auto (0.25 x median rachis width)
-  double skinClearance = 0;    // scene units kept above the skin; 0 = auto (= clearance)
-  double minElevation = 0;     // radians; lower bound for every computed elevation
+  double clearance =
+      0;  // scene units kept between a feather and what is under it; 0 = auto (0.25 x median rachis width)
+  double skinClearance = 0;                  // scene units kept above the skin; 0 = auto (= clearance)
+  double minElevation = 0;                   // radians; lower bound for every computed elevation
   double maxElevation = 1.5707963267948966;  // radians; upper bound (pi/2 = upright)
-  double conflictElevation = 1.3962634015954636;  // radians (80 deg): height-field bins asking for more are
-                               // layer-order conflicts and are ignored instead of standing the feather up
-  double openingAge = 0.8;     // feathers with age < openingAge are unopened: straight shaft only, no barb elevation (8.3)
-  double baseAllowance = 0.08; // fraction of the feather's total length around the follicle where the shaft may sink
-                               // into the skin (the calamus sits in the follicle); clearance ramps up over it
-  double shaftBand = 1.0;      // the shaft packs against candidates within this fraction of the vane half-width
-                               // of the shaft (1 = the whole vane, as in the thesis); the barbs handle the rest
-  int keyBarbsPerVane = 5;     // key barbs inserted per vane at uniform rp (>= 2)
-  int barbSamples = 6;         // points per key barb handed to later feathers
-  int shaftSamples = 12;       // rachis segments of the shaft polyline
-  int heightFieldBins = 48;    // radius bins of the shaft height field
-  int barbFieldBins = 16;      // bins along a key barb of its height field
-  double maxFlatten = 1.0;     // flattening fraction limit (1 = flat; up to 2 allows reverse curvature)
+  double conflictElevation =
+      1.3962634015954636;   // radians (80 deg): height-field bins asking for more are
+                            // layer-order conflicts and are ignored instead of standing the feather up
+  double openingAge = 0.8;  // feathers with age < openingAge are unopened: straight shaft only, no barb elevation (8.3)
+  double baseAllowance = 0.08;  // fraction of the feather's total length around the follicle where the shaft may sink
+                                // into the skin (the calamus sits in the follicle); clearance ramps up over it
+  double shaftBand = 1.0;       // the shaft packs against candidates within this fraction of the vane half-width
+                                // of the shaft (1 = the whole vane, as in the thesis); the barbs handle the rest
+  int keyBarbsPerVane = 5;      // key barbs inserted per vane at uniform rp (>= 2)
+  int barbSamples = 6;          // points per key barb handed to later feathers
+  int shaftSamples = 12;        // rachis segments of the shaft polyline
+  int heightFieldBins = 48;     // radius bins of the shaft height field
+  int barbFieldBins = 16;       // bins along a key barb of its height field
+  double maxFlatten = 1.0;      // flattening fraction limit (1 = flat; up to 2 allows reverse curvature)
   bool keepBarbArcLength = false;  // a flattened key barb is scaled about its root back to its arc length (6.4)
-  double maxBarbLift = 1.0;    // radians a key barb may rotate up about its root when flattening is not enough
-  bool elevateBarbs = true;    // 6.3.3 barb elevation
-  bool extendShaft = true;     // extend the shaft past its tip along the tip tangent to the footprint reach
-  bool skin = true;            // pack against the skin surface
-  double skinSampleSpacing = 0;  // scene units between skin samples; 0 = auto (0.05 x median feather reach)
-  int threads = 0;             // 0 = all available, 1 = sequential
-  bool captureFields = false;  // keep every key barb height field in PackResult::barbFields (tests, debugging)
+  double maxBarbLift = 1.0;        // radians a key barb may rotate up about its root when flattening is not enough
+  bool elevateBarbs = true;        // 6.3.3 barb elevation
+  bool extendShaft = true;         // extend the shaft past its tip along the tip tangent to the footprint reach
+  bool skin = true;                // pack against the skin surface
+  double skinSampleSpacing = 0;    // scene units between skin samples; 0 = auto (0.05 x median feather reach)
+  int threads = 0;                 // 0 = all available, 1 = sequential
+  bool captureFields = false;      // keep every key barb height field in PackResult::barbFields (tests, debugging)
 };
 
 // Per-feather constraints on a pack, resolved outside the packer: styling selections
@@ -119,7 +121,7 @@ struct BarbField {
   uint8_t vane = 0;
   uint16_t key = 0;
   glm::dvec3 root{0}, along{1, 0, 0}, up{0, 0, 1};
-  double length = 0;       // extent of the field along the barb
+  double length = 0;  // extent of the field along the barb
   HeightField1D field;
 };
 
@@ -167,13 +169,17 @@ struct UninitializedAllocator : std::allocator<T> {
     return std::allocator<T>::allocate(n);
   }
   void deallocate(T* p, size_t n) noexcept {
-    if (n * sizeof(T) >= detail::kHugeBlockMin) detail::freeHugeBlock(p);
-    else std::allocator<T>::deallocate(p, n);
+    if (n * sizeof(T) >= detail::kHugeBlockMin)
+      detail::freeHugeBlock(p);
+    else
+      std::allocator<T>::deallocate(p, n);
   }
   template <class U, class... A>
   void construct(U* p, A&&... a) {
-    if constexpr (sizeof...(A) == 0) ::new (static_cast<void*>(p)) U;
-    else ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
+    if constexpr (sizeof...(A) == 0)
+      ::new (static_cast<void*>(p)) U;
+    else
+      ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
   }
 };
 using PackedPoints = std::vector<glm::vec4, UninitializedAllocator<glm::vec4>>;
@@ -188,30 +194,30 @@ using PackedGroupBounds = std::vector<glm::vec4, UninitializedAllocator<glm::vec
 // absent, or unopened and packed as a straight shaft); they have no keys here. packedParams() below
 // rebuilds a feather's parameters from these and the coat that was packed.
 struct PackedKeyBarbs {
-  std::vector<uint32_t> keyOffset;  // feathers + 1
-  std::vector<uint32_t> leftKeys;   // per feather
-  std::vector<uint8_t> replaced;    // per feather
+  std::vector<uint32_t> keyOffset;                         // feathers + 1
+  std::vector<uint32_t> leftKeys;                          // per feather
+  std::vector<uint8_t> replaced;                           // per feather
   std::vector<double, UninitializedAllocator<double>> rp;  // per key barb
-  std::vector<uint32_t> cvOffset;   // key barbs + 1
+  std::vector<uint32_t> cvOffset;                          // key barbs + 1
   std::vector<glm::dvec3, UninitializedAllocator<glm::dvec3>> cvs;
 };
 
 struct PackResult {
-  std::vector<uint32_t> order;                   // layer order used (copy of CoatFeathers::layerOrder)
-  std::vector<double> elevation;                 // radians per feather (0 for feathers not packed)
-  PackedKeyBarbs packedKeys;                     // per feather: the elevated key barbs (packedParams())
-  std::vector<uint8_t> barbsChanged;             // 1 when fitting raised any of feather i's key barbs
-  std::vector<uint8_t> recomputed;               // 1 when this call computed feather i (else reused)
+  std::vector<uint32_t> order;        // layer order used (copy of CoatFeathers::layerOrder)
+  std::vector<double> elevation;      // radians per feather (0 for feathers not packed)
+  PackedKeyBarbs packedKeys;          // per feather: the elevated key barbs (packedParams())
+  std::vector<uint8_t> barbsChanged;  // 1 when fitting raised any of feather i's key barbs
+  std::vector<uint8_t> recomputed;    // 1 when this call computed feather i (else reused)
   // Packed geometry handed to later feathers, world coordinates: xyz and a thickness radius (shaft
   // points carry the shaft radius, barb points 0). Points of feather i: points[pointOffset[i] .. [i+1]).
   std::vector<uint32_t> pointOffset;
   PackedPoints points;
-  std::vector<glm::dvec4> bounds;                // per feather: sphere (centre, radius) around its points
+  std::vector<glm::dvec4> bounds;  // per feather: sphere (centre, radius) around its points
   // Point groups (the shaft, then each key barb's samples) with bounding spheres, for culling: the groups
   // of feather i are groupOffset[i] .. [i+1]; group g holds points groupPoint[g] .. groupPoint[g+1].
   std::vector<uint32_t> groupOffset, groupPoint;
   PackedGroupBounds groupBounds;
-  std::vector<BarbField> barbFields;             // captureFields only
+  std::vector<BarbField> barbFields;  // captureFields only
   PackStats stats;
   // The automatic values this pack resolved (the options' own values when they were given): scene-unit
   // clearances and the median feather reach that sizes the skin sample spacing. packOver packs with them.
@@ -264,8 +270,10 @@ glm::dvec3 placeDirection(const FeatherFrame& f, double elevation, const glm::dv
 // (coat must be the coat `result` was packed from, or one with the same parameters). `Into` reuses out's
 // storage; `Equal` compares without building them; `all` gives every feather's (e.g. for proxyCoatMesh).
 feather::FeatherParams packedParams(const CoatFeathers& coat, const PackResult& result, uint32_t feather);
-void packedParamsInto(const CoatFeathers& coat, const PackResult& result, uint32_t feather, feather::FeatherParams& out);
-bool packedParamsEqual(const feather::FeatherParams& p, const CoatFeathers& coat, const PackResult& result, uint32_t feather);
+void packedParamsInto(const CoatFeathers& coat, const PackResult& result, uint32_t feather,
+                      feather::FeatherParams& out);
+bool packedParamsEqual(const feather::FeatherParams& p, const CoatFeathers& coat, const PackResult& result,
+                       uint32_t feather);
 std::vector<feather::FeatherParams> allPackedParams(const CoatFeathers& coat, const PackResult& result);
 
 // World-space control vertices of every key barb of feather i as packed (effective key barbs of
@@ -273,9 +281,9 @@ std::vector<feather::FeatherParams> allPackedParams(const CoatFeathers& coat, co
 struct PlacedKeyBarb {
   uint8_t vane = 0;
   double rp = 0;
-  std::vector<glm::dvec3> cvs;   // world coordinates
+  std::vector<glm::dvec3> cvs;                      // world coordinates
   glm::dvec3 root{0}, along{1, 0, 0}, up{0, 0, 1};  // barb slicing frame (world)
-  double length = 0;             // barb length (scene units)
+  double length = 0;                                // barb length (scene units)
 };
 std::vector<PlacedKeyBarb> placedKeyBarbs(const CoatFeathers& coat, const PackResult& result, uint32_t feather);
 

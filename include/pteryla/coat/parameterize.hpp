@@ -20,8 +20,8 @@
 //
 // (u,v) is computed per face corner (corners of one vertex agree except across seams); follicles
 // interpolate their face's corners with their barycentric coordinates. The result is normalised to the
-// unit square keeping the aspect ratio (min corner at 0, the longer side spans [0,1]) and oriented so that faces are counter-clockwise in (u,v)
-// when seen from the normal side (a mirrored solution is flipped in u).
+// unit square keeping the aspect ratio (min corner at 0, the longer side spans [0,1]) and oriented so that faces are
+// counter-clockwise in (u,v) when seen from the normal side (a mirrored solution is flipped in u).
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -62,11 +62,11 @@ struct ParameterizeOptions {
   // vector (made orthogonal to the view direction); zero = world +y, or +z when the view is along y.
   glm::dvec3 viewDirection{0.0};
   glm::dvec3 up{0.0};
-  int arapIterations = 50;      // Arap only: local/global iterations
+  int arapIterations = 50;  // Arap only: local/global iterations
   // Auto only: largest fraction of the tract's area allowed to face away from the mean-normal view
   // before a non-disk tract is rejected instead of projected.
   double autoMaxBackfacing = 0.01;
-  bool autoSeams = true;        // Auto: cut non-disk genus-0 tracts open along seams (else project/reject)
+  bool autoSeams = true;                   // Auto: cut non-disk genus-0 tracts open along seams (else project/reject)
   std::vector<GridDistortion> distortion;  // any method; applied to the normalised (u,v)
 };
 
@@ -90,11 +90,11 @@ struct TractParameterization {
   std::vector<uint32_t> follicles;
   std::vector<glm::dvec2> follicleUv;
   // Diagnostics.
-  size_t flippedFaces = 0;       // tract faces with non-positive signed (u,v) area
-  size_t seamEdges = 0;          // Auto on a non-disk genus-0 tract: interior edges cut open
-  double scale = 1.0;            // scene units per unit of normalised (u,v) (sqrt of the area ratio)
-  glm::dvec3 viewDirection{0.0}; // Projection: the view direction used
-  std::string note;              // why Auto chose what it chose
+  size_t flippedFaces = 0;        // tract faces with non-positive signed (u,v) area
+  size_t seamEdges = 0;           // Auto on a non-disk genus-0 tract: interior edges cut open
+  double scale = 1.0;             // scene units per unit of normalised (u,v) (sqrt of the area ratio)
+  glm::dvec3 viewDirection{0.0};  // Projection: the view direction used
+  std::string note;               // why Auto chose what it chose
 
   // (u,v) at a point of a tract face; PTERYLA_CHECKs that the face belongs to the tract.
   glm::dvec2 uvAt(uint32_t face, const glm::dvec3& bary) const;
@@ -106,8 +106,10 @@ struct TractTopology {
   size_t vertices = 0, edges = 0, faces = 0;
   size_t boundaryLoops = 0;
   size_t components = 0;
-  bool nonManifold = false;       // a vertex whose faces do not form a single fan/disk (bow-tie)
-  long eulerCharacteristic() const { return static_cast<long>(vertices) - static_cast<long>(edges) + static_cast<long>(faces); }
+  bool nonManifold = false;  // a vertex whose faces do not form a single fan/disk (bow-tie)
+  long eulerCharacteristic() const {
+    return static_cast<long>(vertices) - static_cast<long>(edges) + static_cast<long>(faces);
+  }
   bool isDisk() const { return components == 1 && boundaryLoops == 1 && eulerCharacteristic() == 1 && !nonManifold; }
 };
 

@@ -32,24 +32,24 @@
 namespace pteryla::coat {
 
 struct BiasVector {
-  glm::dvec3 origin{0.0};            // where the bias acts (scene units, on or near the skin)
-  glm::dvec3 direction{1, 0, 0};     // row direction (sign irrelevant), projected onto the surface
-  double sigma = 0.0;                // Gaussian fall-off radius, scene units; <= 0: no fall-off (whole tract)
-  double stretch = 1.5;              // >= 1: spacing across rows / spacing along rows where the weight is 1
-  double densityGain = 0.0;          // >= 0: extra follicle density near the vector (factor 1 + gain)
+  glm::dvec3 origin{0.0};         // where the bias acts (scene units, on or near the skin)
+  glm::dvec3 direction{1, 0, 0};  // row direction (sign irrelevant), projected onto the surface
+  double sigma = 0.0;             // Gaussian fall-off radius, scene units; <= 0: no fall-off (whole tract)
+  double stretch = 1.5;           // >= 1: spacing across rows / spacing along rows where the weight is 1
+  double densityGain = 0.0;       // >= 0: extra follicle density near the vector (factor 1 + gain)
 };
 
 struct RelaxOptions {
-  int iterations = 50;               // from random starts: hex fraction ~0.77, nn CV ~0.054
-  double overRelaxation = 1.8;       // w in [1, 2): step x += w (c - x); 1 = textbook Lloyd
-  bool fixBoundary = true;           // 6.1.3: follicles within boundaryBand of the tract edge do not move
-  double boundaryBand = 0.5;         // in units of the mean follicle spacing
-  double edgeMargin = 0.05;          // free follicles keep this distance from tract edges (spacing units)
-  double tolerance = 0.0;            // stop when no follicle moves more than tolerance * spacing (0: off)
-  DensityField density;              // relative density (only its shape matters); empty = uniform
+  int iterations = 50;          // from random starts: hex fraction ~0.77, nn CV ~0.054
+  double overRelaxation = 1.8;  // w in [1, 2): step x += w (c - x); 1 = textbook Lloyd
+  bool fixBoundary = true;      // 6.1.3: follicles within boundaryBand of the tract edge do not move
+  double boundaryBand = 0.5;    // in units of the mean follicle spacing
+  double edgeMargin = 0.05;     // free follicles keep this distance from tract edges (spacing units)
+  double tolerance = 0.0;       // stop when no follicle moves more than tolerance * spacing (0: off)
+  DensityField density;         // relative density (only its shape matters); empty = uniform
   std::vector<BiasVector> bias;
-  int64_t onlyTract = -1;            // relax only follicles whose tract == onlyTract; -1: all of them
-  ProgressFn progress;               // stage "relax", fraction per iteration; returning false cancels
+  int64_t onlyTract = -1;  // relax only follicles whose tract == onlyTract; -1: all of them
+  ProgressFn progress;     // stage "relax", fraction per iteration; returning false cancels
 };
 
 struct RelaxResult {
@@ -57,16 +57,16 @@ struct RelaxResult {
   // (scene units^4), at the start of each iteration and after the last one: iterations + 1 values,
   // never increasing.
   std::vector<double> energy;
-  std::vector<double> maxMove;       // largest follicle displacement per iteration, scene units
-  int iterations = 0;                // iterations run
-  size_t follicles = 0;              // sites taking part (free + fixed + pinned)
-  size_t moved = 0;                  // free follicles
-  size_t fixedBoundary = 0;          // held because they lie along the tract boundary
+  std::vector<double> maxMove;  // largest follicle displacement per iteration, scene units
+  int iterations = 0;           // iterations run
+  size_t follicles = 0;         // sites taking part (free + fixed + pinned)
+  size_t moved = 0;             // free follicles
+  size_t fixedBoundary = 0;     // held because they lie along the tract boundary
   size_t pinned = 0;
-  double spacing = 0.0;              // mean hexagonal spacing sqrt(2 A / (sqrt(3) n)), scene units
-  double coverage = 0.0;             // share of the tract's area inside some cell after the last step
-  bool converged = false;            // stopped by tolerance
-  bool cancelled = false;            // stopped by the progress callback
+  double spacing = 0.0;    // mean hexagonal spacing sqrt(2 A / (sqrt(3) n)), scene units
+  double coverage = 0.0;   // share of the tract's area inside some cell after the last step
+  bool converged = false;  // stopped by tolerance
+  bool cancelled = false;  // stopped by the progress callback
   double seconds = 0.0;
 };
 

@@ -30,7 +30,6 @@ namespace pteryla::coat {
 constexpr double kMaxMeshCoordinate = 1e6;
 constexpr double kMaxMeshRange = 1e4;
 
-
 struct MeshLoadOptions {
   // Repair instead of rejecting: drop faces touching non-finite vertices, drop polygons with < 3 vertices,
   // weld vertices closer than weldTolerance, drop degenerate faces, drop faces that make an edge
@@ -38,40 +37,41 @@ struct MeshLoadOptions {
   // connected component (closed components outward). Out-of-range indices and non-orientable meshes stay
   // errors. Without repair, face orientation is kept exactly as in the file (it must be consistent).
   bool repair = false;
-  double weldTolerance = 1e-9;        // relative to the bounding-box diagonal (repair only)
-  double degenerateTolerance = 1e-14; // face is degenerate when area < tol * diagonal^2
+  double weldTolerance = 1e-9;         // relative to the bounding-box diagonal (repair only)
+  double degenerateTolerance = 1e-14;  // face is degenerate when area < tol * diagonal^2
 };
 
 struct MeshRepairLog {
-  size_t droppedNonFinite = 0;     // faces dropped because a vertex was NaN/inf
-  size_t droppedShortPolygons = 0; // polygons with fewer than 3 vertices
-  size_t weldedVertices = 0;       // vertices merged into an earlier one
+  size_t droppedNonFinite = 0;      // faces dropped because a vertex was NaN/inf
+  size_t droppedShortPolygons = 0;  // polygons with fewer than 3 vertices
+  size_t weldedVertices = 0;        // vertices merged into an earlier one
   size_t droppedDegenerate = 0;
   size_t droppedNonManifold = 0;
   size_t flippedFaces = 0;
   bool any() const {
     return droppedNonFinite + droppedShortPolygons + weldedVertices + droppedDegenerate + droppedNonManifold +
-               flippedFaces > 0;
+               flippedFaces >
+           0;
   }
 };
 
 struct SkinMesh {
   std::vector<glm::dvec3> positions;
-  std::vector<std::array<uint32_t, 3>> faces;  // counter-clockwise seen from the normal side
-  std::vector<glm::dvec3> vertexNormals;       // unit; zero for vertices no face uses
-  std::vector<glm::dvec3> faceNormals;         // unit
-  std::vector<double> faceAreas;               // scene units^2
-  std::vector<std::string> groupNames;         // OBJ g (else o, else usemtl) names
-  std::vector<int32_t> faceGroup;              // per triangle: index into groupNames, -1 = none
-  std::vector<uint32_t> sourceFace;            // per triangle: polygon index in the source file
+  std::vector<std::array<uint32_t, 3>> faces;      // counter-clockwise seen from the normal side
+  std::vector<glm::dvec3> vertexNormals;           // unit; zero for vertices no face uses
+  std::vector<glm::dvec3> faceNormals;             // unit
+  std::vector<double> faceAreas;                   // scene units^2
+  std::vector<std::string> groupNames;             // OBJ g (else o, else usemtl) names
+  std::vector<int32_t> faceGroup;                  // per triangle: index into groupNames, -1 = none
+  std::vector<uint32_t> sourceFace;                // per triangle: polygon index in the source file
   std::vector<std::array<glm::dvec2, 3>> faceUVs;  // per-corner texture coordinates; empty if the file has none
   // Adjacency, built once (connectivity never changes under deformation):
   std::vector<std::array<int32_t, 3>> faceNeighbors;  // face across edge (corner c -> c+1 mod 3), -1 = boundary
   std::vector<uint32_t> vertexFaceOffsets;            // CSR: faces around v are
   std::vector<uint32_t> vertexFaces;                  //   vertexFaces[vertexFaceOffsets[v] .. [v+1])
-  size_t sourceFaceCount = 0;  // number of polygons in the source (label files must have this many lines)
-  bool hasFileNormals = false; // vertexNormals came from the file (recomputeGeometry replaces them)
-  std::string file;            // source path, "" for in-memory meshes
+  size_t sourceFaceCount = 0;   // number of polygons in the source (label files must have this many lines)
+  bool hasFileNormals = false;  // vertexNormals came from the file (recomputeGeometry replaces them)
+  std::string file;             // source path, "" for in-memory meshes
   MeshRepairLog repairs;
 
   size_t vertexCount() const { return positions.size(); }
@@ -114,8 +114,8 @@ glm::dvec2 uvAt(const SkinMesh& mesh, uint32_t face, const glm::dvec3& bary);
 inline glm::dvec3 pointAt(const SkinMesh& mesh, const SurfacePoint& p) { return pointAt(mesh, p.face, p.bary); }
 
 // Closest point on triangle (a,b,c) to p; writes its barycentric coordinates when bary != nullptr.
-glm::dvec3 closestPointOnTriangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
-                                  const glm::dvec3& c, glm::dvec3* bary = nullptr);
+glm::dvec3 closestPointOnTriangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
+                                  glm::dvec3* bary = nullptr);
 // Closest point on the given faces (all faces when `faces` is null). Linear scan: for occasional queries
 // such as placing pinned follicles, not for inner loops.
 SurfacePoint closestSurfacePoint(const SkinMesh& mesh, const glm::dvec3& p,

@@ -23,23 +23,23 @@ enum class StyleKind {
 
 struct StyleSelection {
   StyleKind kind = StyleKind::Ids;
-  std::vector<uint32_t> ids;         // Ids
-  glm::dvec3 center{0};              // Sphere
-  glm::dvec3 from{0}, to{0};         // Comb
-  double radius = 0;                 // Sphere / Comb, scene units
-  std::optional<double> elevation;   // radians: fixed elevation of the selected feathers
-  std::optional<double> minElevation;  // radians: the selected feathers pack freely but never below this
-                                     // (e.g. flight feathers kept in the wing plane, packing above it)
+  std::vector<uint32_t> ids;            // Ids
+  glm::dvec3 center{0};                 // Sphere
+  glm::dvec3 from{0}, to{0};            // Comb
+  double radius = 0;                    // Sphere / Comb, scene units
+  std::optional<double> elevation;      // radians: fixed elevation of the selected feathers
+  std::optional<double> minElevation;   // radians: the selected feathers pack freely but never below this
+                                        // (e.g. flight feathers kept in the wing plane, packing above it)
   std::optional<glm::dvec3> direction;  // world direction: new surface direction (projected to each tangent plane)
-  std::optional<double> shaftBand;   // [0,1]: the selected feathers' shaft packs against candidates within this
-                                     // fraction of the vane half-width (overrides packing.shaft_band; e.g.
-                                     // flight feathers, whose stiff vanes overlap and lift their barbs instead)
+  std::optional<double> shaftBand;      // [0,1]: the selected feathers' shaft packs against candidates within this
+                                        // fraction of the vane half-width (overrides packing.shaft_band; e.g.
+                                        // flight feathers, whose stiff vanes overlap and lift their barbs instead)
 };
 
 struct StyleApplied {
-  std::vector<double> fixedElevation;  // per feather, NaN = free (for PackConstraints::fixedElevation)
-  std::vector<uint32_t> changed;       // feathers whose frame or fixed elevation the selections changed
-  std::vector<uint32_t> selectedCount; // feathers selected by each selection
+  std::vector<double> fixedElevation;   // per feather, NaN = free (for PackConstraints::fixedElevation)
+  std::vector<uint32_t> changed;        // feathers whose frame or fixed elevation the selections changed
+  std::vector<uint32_t> selectedCount;  // feathers selected by each selection
 };
 
 // Feathers selected by one selection, ascending. Ids out of range are an Error naming `where`.

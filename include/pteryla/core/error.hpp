@@ -44,28 +44,33 @@ template <class A, class B>
 std::string comparedValuesMessage(const A& a, const B& b, const std::string& msg) {
   auto text = [](const auto& v) -> std::string {
     using V = std::decay_t<decltype(v)>;
-    if constexpr (std::is_same_v<V, bool>) return v ? "true" : "false";
-    else if constexpr (std::is_arithmetic_v<V>) return std::to_string(v);
-    else if constexpr (std::is_null_pointer_v<V>) return "null";
-    else if constexpr (std::is_pointer_v<V>) return v ? "non-null" : "null";
-    else return "?";
+    if constexpr (std::is_same_v<V, bool>)
+      return v ? "true" : "false";
+    else if constexpr (std::is_arithmetic_v<V>)
+      return std::to_string(v);
+    else if constexpr (std::is_null_pointer_v<V>)
+      return "null";
+    else if constexpr (std::is_pointer_v<V>)
+      return v ? "non-null" : "null";
+    else
+      return "?";
   };
   return "(" + text(a) + " vs " + text(b) + "): " + msg;
 }
 
 }  // namespace pteryla
 
-#define PTERYLA_CHECK(cond, msg)                                               \
-  do {                                                                         \
-    if (!(cond)) ::pteryla::checkFailed(#cond, __FILE__, __LINE__, (msg));     \
+#define PTERYLA_CHECK(cond, msg)                                           \
+  do {                                                                     \
+    if (!(cond)) ::pteryla::checkFailed(#cond, __FILE__, __LINE__, (msg)); \
   } while (0)
 
-#define PTERYLA_CHECK_OP(a, op, b, msg)                                                             \
-  do {                                                                                              \
-    const auto& pteryla_check_a_ = (a);                                                             \
-    const auto& pteryla_check_b_ = (b);                                                             \
-    if (!(pteryla_check_a_ op pteryla_check_b_))                                                    \
-      ::pteryla::checkFailed(#a " " #op " " #b, __FILE__, __LINE__,                                 \
+#define PTERYLA_CHECK_OP(a, op, b, msg)                                                                    \
+  do {                                                                                                     \
+    const auto& pteryla_check_a_ = (a);                                                                    \
+    const auto& pteryla_check_b_ = (b);                                                                    \
+    if (!(pteryla_check_a_ op pteryla_check_b_))                                                           \
+      ::pteryla::checkFailed(#a " " #op " " #b, __FILE__, __LINE__,                                        \
                              ::pteryla::comparedValuesMessage(pteryla_check_a_, pteryla_check_b_, (msg))); \
   } while (0)
 #define PTERYLA_CHECK_EQ(a, b, msg) PTERYLA_CHECK_OP(a, ==, b, msg)

@@ -55,7 +55,7 @@ class JsonReader {
   // Sub-objects and arrays: the key is marked used; children carry their own path.
   JsonReader object(const std::string& key);
   std::vector<JsonReader> objects(const std::string& key);  // array of objects (missing -> empty)
-  const Json& raw(const std::string& key);                   // marks used, no type check
+  const Json& raw(const std::string& key);                  // marks used, no type check
   // Marks an optional key as known without reading it (so finish() accepts it).
   void allow(const std::string& key) { used_.insert(key); }
 

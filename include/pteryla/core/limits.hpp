@@ -17,6 +17,7 @@ PTERYLA_API void setMemoryLimitBytes(double bytes);
 
 // Throws Error(file, element) when `bytes` exceeds the ceiling:
 // "<what> needs about 6.3 GB, above the memory ceiling of 4 GB (raise it with --max-memory GB)".
-PTERYLA_API void requireMemory(double bytes, const std::string& what, const std::string& file, const std::string& element);
+PTERYLA_API void requireMemory(double bytes, const std::string& what, const std::string& file,
+                               const std::string& element);
 
 }  // namespace pteryla

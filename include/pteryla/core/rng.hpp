@@ -19,13 +19,20 @@ class Rng {
  public:
   explicit Rng(uint64_t seed = 0, uint64_t stream = 0) {
     uint64_t x = mix64(seed) ^ mix64(stream + 0x5851F42D4C957F2Dull);
-    for (auto& s : s_) { x = mix64(x); s = x; }
+    for (auto& s : s_) {
+      x = mix64(x);
+      s = x;
+    }
   }
   uint64_t next() {
     const uint64_t result = rotl(s_[1] * 5, 7) * 9;
     const uint64_t t = s_[1] << 17;
-    s_[2] ^= s_[0]; s_[3] ^= s_[1]; s_[1] ^= s_[2]; s_[0] ^= s_[3];
-    s_[2] ^= t; s_[3] = rotl(s_[3], 45);
+    s_[2] ^= s_[0];
+    s_[3] ^= s_[1];
+    s_[1] ^= s_[2];
+    s_[0] ^= s_[3];
+    s_[2] ^= t;
+    s_[3] = rotl(s_[3], 45);
     return result;
   }
   // Uniform in [0,1) with 53 random bits.

@@ -11,16 +11,16 @@ namespace pteryla {
 
 struct TriMesh {
   std::vector<glm::vec3> positions;
-  std::vector<glm::vec3> normals;      // unit, per vertex
-  std::vector<glm::vec3> tangents;     // barb (or shaft) direction, for the anisotropic BRDF
-  std::vector<glm::vec2> uvGlobal;     // feather-global texture coordinates (7.1.1)
-  std::vector<glm::vec2> uvBarb;       // barb-local texture coordinates
-  std::vector<glm::vec2> uvGrowth;     // growth mapping: u around the pin cone, v along the shaft
-  std::vector<float> alpha;            // per-vertex alpha (7.1.2)
-  std::vector<float> sheath;           // pin-feather sheath weight in [0,1] (8.1)
-  std::vector<float> barbCount;        // barbs represented by the polygon (alpha texture repeat)
-  std::vector<uint32_t> featherId;     // which feather of the coat a vertex belongs to
-  std::vector<uint32_t> indices;       // 3 per triangle
+  std::vector<glm::vec3> normals;   // unit, per vertex
+  std::vector<glm::vec3> tangents;  // barb (or shaft) direction, for the anisotropic BRDF
+  std::vector<glm::vec2> uvGlobal;  // feather-global texture coordinates (7.1.1)
+  std::vector<glm::vec2> uvBarb;    // barb-local texture coordinates
+  std::vector<glm::vec2> uvGrowth;  // growth mapping: u around the pin cone, v along the shaft
+  std::vector<float> alpha;         // per-vertex alpha (7.1.2)
+  std::vector<float> sheath;        // pin-feather sheath weight in [0,1] (8.1)
+  std::vector<float> barbCount;     // barbs represented by the polygon (alpha texture repeat)
+  std::vector<uint32_t> featherId;  // which feather of the coat a vertex belongs to
+  std::vector<uint32_t> indices;    // 3 per triangle
 
   size_t vertexCount() const { return positions.size(); }
   size_t triangleCount() const { return indices.size() / 3; }

@@ -27,7 +27,9 @@
 #include <string>
 #include <vector>
 
-namespace pteryla::pipeline { class Pipeline; }
+namespace pteryla::pipeline {
+class Pipeline;
+}
 
 namespace pteryla::exchange {
 
@@ -54,14 +56,14 @@ struct ExportOptions {
 };
 
 struct ExportResult {
-  size_t bytes = 0;        // size of the file written
-  double seconds = 0;      // wall time of evaluating every frame and writing
-  double writeSeconds = 0; // of that, building and writing the file
+  size_t bytes = 0;         // size of the file written
+  double seconds = 0;       // wall time of evaluating every frame and writing
+  double writeSeconds = 0;  // of that, building and writing the file
   size_t frames = 0;
-  size_t feathers = 0;     // present feathers in the first frame
-  size_t triangles = 0;    // cards: triangles written over all frames (skin included)
-  size_t curves = 0;       // curves written over all frames
-  size_t instances = 0;    // instances written (first frame) and prototypes
+  size_t feathers = 0;   // present feathers in the first frame
+  size_t triangles = 0;  // cards: triangles written over all frames (skin included)
+  size_t curves = 0;     // curves written over all frames
+  size_t instances = 0;  // instances written (first frame) and prototypes
   size_t prototypes = 0;
 };
 

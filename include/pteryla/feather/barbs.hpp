@@ -33,27 +33,27 @@ void barbPositions(const FeatherParams& p, std::vector<double>& rps);
 size_t barbCount(const FeatherParams& p);
 
 struct BarbCurve {
-  glm::vec3 root{0.0f};  // attachment point on the rachis, feather-local
-  float rp = 0;          // [0,1]
-  float angle = 0;       // radians between rachis tangent and barb in the vane plane (after splits)
-  float length = 0;      // barb length scale applied (scene units)
-  uint32_t cvOffset = 0; // first control vertex in FeatherCurves::cvs
+  glm::vec3 root{0.0f};   // attachment point on the rachis, feather-local
+  float rp = 0;           // [0,1]
+  float angle = 0;        // radians between rachis tangent and barb in the vane plane (after splits)
+  float length = 0;       // barb length scale applied (scene units)
+  uint32_t cvOffset = 0;  // first control vertex in FeatherCurves::cvs
   uint16_t cvCount = 0;
-  uint8_t vane = 0;      // 0 left (+y), 1 right (-y)
-  uint8_t part = 0;      // 0 main feather, 1 afterfeather
-  bool isKey = false;    // nearest barb to a key barb given in the parameters (LOD keeps these longest)
+  uint8_t vane = 0;          // 0 left (+y), 1 right (-y)
+  uint8_t part = 0;          // 0 main feather, 1 afterfeather
+  bool isKey = false;        // nearest barb to a key barb given in the parameters (LOD keeps these longest)
   bool isSplitEdge = false;  // borders a vane split
   bool splitAfter = false;   // no vane surface between this barb and the next one of the same vane/part
 };
 
 // One shaft (calamus + rachis) as a polyline with widths.
 struct ShaftCurve {
-  std::vector<glm::vec3> points;   // from the follicle (x = 0) to the rachis tip
-  std::vector<float> widths;       // diameter at each point (0 at the tip)
-  std::vector<float> rp;           // rachis position per point; < 0 on the calamus (-1 at the follicle)
-  glm::vec3 dorsal[2];             // dorsal direction at the umbilicus and at the tip
+  std::vector<glm::vec3> points;     // from the follicle (x = 0) to the rachis tip
+  std::vector<float> widths;         // diameter at each point (0 at the tip)
+  std::vector<float> rp;             // rachis position per point; < 0 on the calamus (-1 at the follicle)
+  glm::vec3 dorsal[2];               // dorsal direction at the umbilicus and at the tip
   std::vector<glm::vec3> rachisCvs;  // rachis as a cubic Bezier, feather-local
-  int calamusPoints = 0;           // points[0 .. calamusPoints) lie on the calamus
+  int calamusPoints = 0;             // points[0 .. calamusPoints) lie on the calamus
 };
 
 struct FeatherCurves {
@@ -63,14 +63,14 @@ struct FeatherCurves {
   std::vector<ShaftCurve> shafts;
   std::vector<uint32_t> barbBegin, barbEnd;
   std::vector<BarbCurve> barbs;
-  std::vector<glm::vec3> cvs;      // all barb control vertices, feather-local
+  std::vector<glm::vec3> cvs;  // all barb control vertices, feather-local
   size_t partCount() const { return shafts.size(); }
-  void clear();                    // keeps capacity
+  void clear();  // keeps capacity
 };
 
 struct GenerateOptions {
-  int shaftSegments = 16;          // rachis polyline segments (the calamus gets 2)
-  bool afterfeather = true;        // generate the afterfeather's curves when present
+  int shaftSegments = 16;    // rachis polyline segments (the calamus gets 2)
+  bool afterfeather = true;  // generate the afterfeather's curves when present
 };
 
 // Generates every barb of the feather (and its afterfeather). Throws Error for invalid parameters.

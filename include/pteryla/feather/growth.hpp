@@ -66,10 +66,10 @@ struct GrowthRamp {
 };
 
 struct GrowthSchedule {
-  std::vector<GrowthRamp> ramps;     // at most one per parameter
-  double wearMaxShortening = 0.3;    // fraction of barb length lost at full wear, [0, 1]
-  int wearMaxSplits = 6;             // extra splits per vane at full wear
-  double sheathBand = 0.05;          // width of the sheath edge along the shaft (fraction of length)
+  std::vector<GrowthRamp> ramps;   // at most one per parameter
+  double wearMaxShortening = 0.3;  // fraction of barb length lost at full wear, [0, 1]
+  int wearMaxSplits = 6;           // extra splits per vane at full wear
+  double sheathBand = 0.05;        // width of the sheath edge along the shaft (fraction of length)
   bool operator==(const GrowthSchedule& o) const {
     return ramps == o.ramps && wearMaxShortening == o.wearMaxShortening && wearMaxSplits == o.wearMaxSplits &&
            sheathBand == o.sheathBand;
@@ -95,7 +95,7 @@ struct GrowthState {
   std::array<double, kGrowthParamCount> w{};
   double operator[](GrowthParam p) const { return w[static_cast<size_t>(p)]; }
   double& operator[](GrowthParam p) { return w[static_cast<size_t>(p)]; }
-  bool grown() const;   // every growth weight is 1
+  bool grown() const;                          // every growth weight is 1
   bool mature(const GrowthSchedule& s) const;  // grown and wear has no effect
 };
 GrowthState growthStateAt(double age, const GrowthSchedule& s = defaultGrowthSchedule());

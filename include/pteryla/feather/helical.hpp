@@ -47,7 +47,7 @@ namespace pteryla::feather {
 // keys; constant beyond the first and last key. JSON form: [[x, y], ...].
 class Curve1D {
  public:
-  Curve1D() = default;  // empty: evaluates to 0
+  Curve1D() = default;                             // empty: evaluates to 0
   explicit Curve1D(std::vector<glm::dvec2> keys);  // throws Error for unsorted / non-finite keys
   static Curve1D constant(double y) { return Curve1D({{0.0, y}}); }
 
@@ -78,11 +78,9 @@ Curve1D curveFromJson(const Json& j, const std::string& file, const std::string&
 struct CollarShape {
   enum class Kind { Circle, Bezier };
   Kind kind = Kind::Circle;
-  double radius = 1.5;               // scene units (circle)
-  std::vector<glm::dvec2> points;    // Bezier control points, collar plane, scene units
-  bool operator==(const CollarShape& o) const {
-    return kind == o.kind && radius == o.radius && points == o.points;
-  }
+  double radius = 1.5;             // scene units (circle)
+  std::vector<glm::dvec2> points;  // Bezier control points, collar plane, scene units
+  bool operator==(const CollarShape& o) const { return kind == o.kind && radius == o.radius && points == o.points; }
 };
 
 // Arc-length parameterized collar: s is the fraction of the perimeter from C(0), wrapped into [0,1).
@@ -113,24 +111,24 @@ struct HelicalParams {
   // Loci on the collar, 0 < anteriorRight < posteriorRight < posteriorLeft < anteriorLeft < 1.
   double anteriorLeft = 0.99, anteriorRight = 0.01;
   double posteriorLeft = 0.51, posteriorRight = 0.49;
-  double frequency = 2.0;    // f: barbs per emitter per time unit
-  double growthSpeed = 0.1;  // v_grow: scene units per time unit
+  double frequency = 2.0;                          // f: barbs per emitter per time unit
+  double growthSpeed = 0.1;                        // v_grow: scene units per time unit
   Curve1D emitterSpeed = Curve1D::constant(0.05);  // V_e(s): locus units per time unit, > 0
   Curve1D barbSpeed = Curve1D::constant(0.05);     // V_b(s): locus units per time unit, > 0
   // Speed curves are defined over s in [0,1]; when true they are evaluated at a warped locus that maps
   // the posterior polar to 0.5 (Fig. 7: the curves' lowest point follows the polar).
   bool syncSpeedToPolar = true;
-  int barbCount = 120;       // N: completed barbs over both vanes
+  int barbCount = 120;  // N: completed barbs over both vanes
   SpawnMode spawnMode = SpawnMode::Time;
-  double sampleDt = 0.05;    // time between recorded barb points (Algorithm 1's time step)
-  double unfurlLeft = 1.0;   // w per vane, [0,1]
+  double sampleDt = 0.05;   // time between recorded barb points (Algorithm 1's time step)
+  double unfurlLeft = 1.0;  // w per vane, [0,1]
   double unfurlRight = 1.0;
   // Conversion to FeatherParams.
-  double length = 0;         // scale so the rachis is this long (scene units); 0: the feather file's
-                             // rachis.length (applyHelical) or the grown length v_grow t_end
-  int fitCvs = 4;            // control vertices per fitted barb Bezier, [2, 8]
+  double length = 0;               // scale so the rachis is this long (scene units); 0: the feather file's
+                                   // rachis.length (applyHelical) or the grown length v_grow t_end
+  int fitCvs = 4;                  // control vertices per fitted barb Bezier, [2, 8]
   double keyBarbTolerance = 0.01;  // key barbs are added until interpolation error < this (unit chord)
-  int maxKeyBarbs = 40;      // per vane, >= 2
+  int maxKeyBarbs = 40;            // per vane, >= 2
 
   double posteriorPolar() const { return 0.5 * (posteriorLeft + posteriorRight); }
   void setPosteriorPolar(double s, double halfWidth = 0.01) {
@@ -220,10 +218,10 @@ struct HelicalSnapshot {
   double time = 0;
   double emitterLocus[2] = {0, 0};
   glm::dvec3 emitterPoint[2];
-  std::vector<uint32_t> barb;           // index into HelicalGrowth::barbs()
-  std::vector<uint32_t> offset;         // barb k's points are points[offset[k] .. offset[k+1])
-  std::vector<uint8_t> complete;        // per barb
-  std::vector<glm::dvec3> points;       // follicle space, distal end first
+  std::vector<uint32_t> barb;      // index into HelicalGrowth::barbs()
+  std::vector<uint32_t> offset;    // barb k's points are points[offset[k] .. offset[k+1])
+  std::vector<uint8_t> complete;   // per barb
+  std::vector<glm::dvec3> points;  // follicle space, distal end first
 };
 HelicalSnapshot helicalSnapshot(const HelicalGrowth& g, double t);
 
@@ -234,7 +232,7 @@ class HelicalState {
  public:
   explicit HelicalState(const HelicalGrowth& g);  // g must outlive the state
   void reset();
-  void step(double dt);                 // advances min(dt, endTime - time); dt >= 0
+  void step(double dt);  // advances min(dt, endTime - time); dt >= 0
   double time() const { return t_; }
   bool finished() const { return t_ >= g_->endTime(); }
   size_t spawnedCount() const { return barbs_.size(); }
@@ -258,8 +256,8 @@ class HelicalState {
 // (the outside of the collar at the anterior polar).
 struct HelicalFeatherBarb {
   uint8_t vane = 0;
-  uint32_t growthIndex = 0;  // index into HelicalGrowth::barbs()
-  double attach = 0;         // height of the proximal end = x of the attachment on the rachis
+  uint32_t growthIndex = 0;       // index into HelicalGrowth::barbs()
+  double attach = 0;              // height of the proximal end = x of the attachment on the rachis
   uint32_t first = 0, count = 0;  // points[first .. first+count), proximal (I_A) to distal
 };
 struct HelicalFeather {
@@ -314,10 +312,10 @@ HelicalSpacingStats helicalSpacingStats(const HelicalGrowth& g);
 // linearly to the attachment gaps, rachis width = arc length of I_A, calamus = 10% of the rachis.
 struct HelicalConversion {
   FeatherParams feather;
-  double scale = 1;         // output units per growth unit
-  double maxFitError = 0;   // max polyline-to-Bezier distance over all barbs / grown length
+  double scale = 1;        // output units per growth unit
+  double maxFitError = 0;  // max polyline-to-Bezier distance over all barbs / grown length
   int keyBarbs[2] = {0, 0};
-  int barbs[2] = {0, 0};    // converted barbs per vane (degenerate zero-chord barbs skipped)
+  int barbs[2] = {0, 0};  // converted barbs per vane (degenerate zero-chord barbs skipped)
 };
 HelicalConversion convertHelical(const HelicalGrowth& g, const HelicalFeather& f, double rachisLength = 0);
 FeatherParams helicalToFeatherParams(const HelicalParams& p, const std::string& file = {});

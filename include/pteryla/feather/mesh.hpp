@@ -89,9 +89,9 @@ struct FeatherMeshInput {
                                              // growing: same barbs, stable LOD); null = computed per call
   FeatherPlacement placement;
   uint32_t featherId = 0;
-  double lod = 1;              // fraction of geometry, (0, 1]
-  double sheathShed = 1;       // GrowthState[GrowthParam::Sheath]; 1 = no sheath
-  double sheathBand = 0.05;    // GrowthSchedule::sheathBand
+  double lod = 1;            // fraction of geometry, (0, 1]
+  double sheathShed = 1;     // GrowthState[GrowthParam::Sheath]; 1 = no sheath
+  double sheathBand = 0.05;  // GrowthSchedule::sheathBand
   // Write positions, normals and tangents before placement (`placement` is ignored): placeFeatherVertices
   // places them later exactly as meshing with a placement would, so a coat can move a feather without
   // meshing it again. Every other attribute and the indices do not depend on the placement.
@@ -123,7 +123,6 @@ void placeFeatherVertices(const FeatherPlacement& placement, const glm::vec3* po
 // Single-feather convenience (CLI `pteryla feather`): the feather at `age` (growth.hpp) at level `lod`
 // in (0, 1], texture coordinates from the mature feather, in feather-local coordinates.
 TriMesh buildFeatherMesh(const FeatherParams& p, double age, double lod, const MeshOptions& opt = {},
-                         const GrowthSchedule& schedule = defaultGrowthSchedule(),
-                         FeatherMeshRanges* ranges = nullptr);
+                         const GrowthSchedule& schedule = defaultGrowthSchedule(), FeatherMeshRanges* ranges = nullptr);
 
 }  // namespace pteryla::feather

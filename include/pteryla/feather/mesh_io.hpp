@@ -15,7 +15,7 @@ enum class UvSet { Global, Barb, Growth };
 void writeObj(const std::string& path, const TriMesh& mesh, UvSet uv = UvSet::Global);
 
 struct PlyOptions {
-  bool binary = true;      // binary_little_endian (compact for coats); false = ascii
+  bool binary = true;        // binary_little_endian (compact for coats); false = ascii
   UvSet uv = UvSet::Global;  // which set becomes the standard u, v properties
 };
 void writePly(const std::string& path, const TriMesh& mesh, const PlyOptions& opt = {});

@@ -28,8 +28,8 @@ struct GrowthSchedule;  // growth.hpp
 inline constexpr double kPi = 3.14159265358979323846;
 
 struct KeyBarb {
-  double rp = 0;                  // attachment position along the rachis, [0,1] (0 base, 1 tip)
-  std::vector<glm::dvec3> cvs;    // >= 2 control vertices, barb-local unit frame
+  double rp = 0;                // attachment position along the rachis, [0,1] (0 base, 1 tip)
+  std::vector<glm::dvec3> cvs;  // >= 2 control vertices, barb-local unit frame
   bool operator==(const KeyBarb& o) const { return rp == o.rp && cvs == o.cvs; }
 };
 
@@ -60,11 +60,11 @@ struct Silhouette {
 
 // Wear splits in the vane (5.2.5). Locations are drawn from FeatherParams::seed, per vane.
 struct SplitParams {
-  int count = 0;              // splits per vane
-  double rpMin = 0.25;        // split locations are uniform in [rpMin, rpMax]
+  int count = 0;        // splits per vane
+  double rpMin = 0.25;  // split locations are uniform in [rpMin, rpMax]
   double rpMax = 0.95;
-  double openingAngle = 0.12; // radians; each split opens by a random angle in [0.5, 1] * this
-  int reach = 3;              // barbs on each side of a split that follow the edge barb's angle
+  double openingAngle = 0.12;  // radians; each split opens by a random angle in [0.5, 1] * this
+  int reach = 3;               // barbs on each side of a split that follow the edge barb's angle
   bool operator==(const SplitParams& o) const {
     return count == o.count && rpMin == o.rpMin && rpMax == o.rpMax && openingAngle == o.openingAngle &&
            reach == o.reach;
@@ -74,15 +74,17 @@ struct SplitParams {
 // Optional look information carried for the renderer; the feather model does not interpret it.
 // Texture paths are stored as written (resolve against FeatherParams::sourceFile).
 struct FeatherMaterial {
-  std::string texture;        // colour texture
-  std::string alphaTexture;   // alpha texture
-  std::string pattern;        // procedural pattern name
+  std::string texture;                  // colour texture
+  std::string alphaTexture;             // alpha texture
+  std::string pattern;                  // procedural pattern name
   std::optional<glm::dvec3> baseColor;  // linear RGB in [0,1]
   // Which texture mapping of Streit 2003, 7.1.1 addresses the colour texture: "global" (the whole vane:
   // u across, v base to tip; the default), "barb" (glued to each barb: u along it, v across) or
   // "growth" (the pin-feather cone: u around it, v along the shaft). docs/feather-format.md.
   std::string uv = "global";
-  bool empty() const { return texture.empty() && alphaTexture.empty() && pattern.empty() && !baseColor && uv == "global"; }
+  bool empty() const {
+    return texture.empty() && alphaTexture.empty() && pattern.empty() && !baseColor && uv == "global";
+  }
   bool operator==(const FeatherMaterial& o) const {
     return texture == o.texture && alphaTexture == o.alphaTexture && pattern == o.pattern && baseColor == o.baseColor &&
            uv == o.uv;
@@ -94,28 +96,28 @@ struct FeatherParams {
   // Which generator builds the barbs: "streit" (this module, 5.2.2) or one added through
   // registerFeatherGenerator() (generator.hpp). Generator-specific settings live in generatorParams.
   std::string generator = "streit";
-  nlohmann::json generatorParams;   // null for "streit"
+  nlohmann::json generatorParams;  // null for "streit"
 
   // Calamus (Table 5.1: c_l, c_wr). Width at the follicle = calamusWidthRatio * rachisWidth, so the
   // calamus meets the rachis without a discontinuity.
-  double calamusLength = 0.05;      // scene units
+  double calamusLength = 0.05;  // scene units
   double calamusWidthRatio = 0.8;
   // Rachis (r_l, r_w, r_lc, r_vdc). Width tapers linearly from rachisWidth at the umbilicus to a point.
-  double rachisLength = 1.0;        // scene units (arc length)
-  double rachisWidth = 0.02;        // scene units
+  double rachisLength = 1.0;  // scene units (arc length)
+  double rachisWidth = 0.02;  // scene units
   // Curvatures are the total turning angle of the rachis tangent from base to tip, radians (the
   // rachis is a circular arc, so the shape is scale independent). Lateral > 0 bends toward +y (the
   // left vane); ventral-dorsal > 0 bends the tip toward -z (toward the body).
   double rachisLateralCurvature = 0;
   double rachisVentralDorsalCurvature = 0;
 
-  double barbLength = 0.3;          // scene units, when silhouette is empty
-  Silhouette silhouette;            // optional barb length profiles (override barbLength per vane)
+  double barbLength = 0.3;  // scene units, when silhouette is empty
+  Silhouette silhouette;    // optional barb length profiles (override barbLength per vane)
   VaneParams left, right;
-  double spacingBase = 0.01;        // distance along the rachis between barbs at rp = 0, scene units
-  double spacingTip = 0.01;         // ... at rp = 1; linear in between; same on both vanes
+  double spacingBase = 0.01;  // distance along the rachis between barbs at rp = 0, scene units
+  double spacingTip = 0.01;   // ... at rp = 1; linear in between; same on both vanes
   SplitParams splits;
-  uint64_t seed = 1;                // default plumulaceous barb and split locations
+  uint64_t seed = 1;  // default plumulaceous barb and split locations
 
   FeatherMaterial material;
   // Afterfeather: secondary feather at the superior umbilicus (top of the calamus), same parameters.
@@ -124,7 +126,7 @@ struct FeatherParams {
   // the one a scene or tract gives its feathers; null = defaultGrowthSchedule(). Compared by value.
   std::shared_ptr<const GrowthSchedule> growth;
 
-  std::string sourceFile;           // set by loadFeather(); not serialized, ignored by ==
+  std::string sourceFile;  // set by loadFeather(); not serialized, ignored by ==
 
   const VaneParams& vane(int v) const { return v == 0 ? left : right; }
   VaneParams& vane(int v) { return v == 0 ? left : right; }

@@ -56,12 +56,12 @@ struct ScanVaneFit {
 };
 
 struct ScanResult {
-  FeatherParams feather;             // the feather, scene units (lengths = pixels / pixelsPerUnit)
-  bool rachisDetected = false;       // the rachis came from detectRachis()
-  std::vector<glm::dvec2> rachis;    // fitted rachis arc, 33 samples base to tip, pixels
+  FeatherParams feather;           // the feather, scene units (lengths = pixels / pixelsPerUnit)
+  bool rachisDetected = false;     // the rachis came from detectRachis()
+  std::vector<glm::dvec2> rachis;  // fitted rachis arc, 33 samples base to tip, pixels
   double rachisLengthPixels = 0;
-  double calamusLengthPixels = 0;    // 0 when no calamus was seen
-  double rachisWidthPixels = 0;      // 0 when not measured
+  double calamusLengthPixels = 0;                      // 0 when no calamus was seen
+  double rachisWidthPixels = 0;                        // 0 when not measured
   double spacingBasePixels = 0, spacingTipPixels = 0;  // fitted barb spacing along the rachis at rp 0, 1
   int spacingWindows = 0;            // autocorrelation windows agreeing with the fitted spacing (0: not measured)
   ScanVaneFit vanes[2];              // left, right

@@ -45,23 +45,23 @@ struct SilhouetteImageOptions {
   // umbilicus) to the tip; 2 points = a straight line. The left vane is on the viewer's left when the
   // tip points up (image shows the dorsal side).
   std::vector<glm::dvec2> rachis;
-  bool refineRachis = true;    // search the image for the rachis ridge near the marked line
-  double searchRadius = 6;     // pixels, for refineRachis
-  int samples = 33;            // rp samples per vane
-  double gapTolerance = 2;     // pixels of background tolerated inside a vane (gaps between barbs)
+  bool refineRachis = true;  // search the image for the rachis ridge near the marked line
+  double searchRadius = 6;   // pixels, for refineRachis
+  int samples = 33;          // rp samples per vane
+  double gapTolerance = 2;   // pixels of background tolerated inside a vane (gaps between barbs)
   // Barb angles used to cast rays; taken from `angles` of the feather being built.
   double leftBaseAngle = kPi / 2, leftTipAngle = kPi / 2, rightBaseAngle = kPi / 2, rightTipAngle = kPi / 2;
 };
 
 struct SilhouetteImageResult {
-  double threshold = 0;             // segmentation threshold on |pixel - background|
-  double background = 0;            // estimated background level
-  double rachisLengthPixels = 0;    // arc length of the (refined) rachis
-  double lateralCurvature = 0;      // turning angle, radians, > 0 bends toward the left vane
-  std::vector<glm::dvec2> rachis;   // refined rachis samples, pixels
+  double threshold = 0;            // segmentation threshold on |pixel - background|
+  double background = 0;           // estimated background level
+  double rachisLengthPixels = 0;   // arc length of the (refined) rachis
+  double lateralCurvature = 0;     // turning angle, radians, > 0 bends toward the left vane
+  std::vector<glm::dvec2> rachis;  // refined rachis samples, pixels
   // Barb lengths as fractions of the rachis length (multiply by rachisLength for scene units).
   Silhouette relative;
-  std::vector<uint8_t> mask;        // 1 = feather, width*height
+  std::vector<uint8_t> mask;  // 1 = feather, width*height
 };
 SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteImageOptions& opt);
 

@@ -30,18 +30,18 @@ namespace pteryla::moult {
 
 struct ControlSpec {
   std::string name;
-  glm::dvec3 at{0.0};          // placement in rest coordinates; the control sits at the closest skin point
-  double radius = 0;           // scene units: follicles within this distance (at rest) can bind (> 0)
-  double falloff = 0;          // [0, 1]: outer fraction of the radius over which the weight fades to 0
-  std::vector<std::string> tracts;  // bind only follicles of these tracts (empty = any tract)
-  uint64_t seed = 1;           // per-feather random twist multipliers
+  glm::dvec3 at{0.0};                      // placement in rest coordinates; the control sits at the closest skin point
+  double radius = 0;                       // scene units: follicles within this distance (at rest) can bind (> 0)
+  double falloff = 0;                      // [0, 1]: outer fraction of the radius over which the weight fades to 0
+  std::vector<std::string> tracts;         // bind only follicles of these tracts (empty = any tract)
+  uint64_t seed = 1;                       // per-feather random twist multipliers
   double twistAngle = 0.7853981633974483;  // radians: largest twist at random = 1
   double maxLift = 1.5707963267948966;     // radians: elevation reached at lift = 1 (<= pi/2)
-  double springFrequency = 1.5;  // cycles per time unit (natural frequency of the dynamic spring)
-  double springDamping = 0.4;    // damping ratio (0 undamped, 1 critical)
+  double springFrequency = 1.5;            // cycles per time unit (natural frequency of the dynamic spring)
+  double springDamping = 0.4;              // damping ratio (0 undamped, 1 critical)
   // Keyframed attributes (scalars in x); lift, aim, direction, random, dynamic in [0, 1].
   Track lift, aim, direction, random, dynamic;
-  Track offset;                // displacement of the control from its placement (world, scene units)
+  Track offset;  // displacement of the control from its placement (world, scene units)
 };
 
 struct ControlValues {
@@ -96,9 +96,9 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
 // called at most once, only when some bound feather rises from a free elevation;
 // ControlResult::naturalPacked then says so, but ControlResult::natural stays empty (the caller owns that
 // pack).
-using NaturalPackFn = std::function<const coat::PackResult&(const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
-                                                            const coat::PackOptions& options,
-                                                            const coat::PackConstraints& constraints)>;
+using NaturalPackFn =
+    std::function<const coat::PackResult&(const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
+                                          const coat::PackOptions& options, const coat::PackConstraints& constraints)>;
 ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const ControlBinding& binding,
                                const coat::SkinMesh& posed, const coat::Follicles& follicles, double t,
                                const coat::PackOptions& pack, const coat::PackConstraints& constraints,

@@ -29,15 +29,15 @@ struct TrackSegment {
 };
 
 struct Track {
-  std::vector<double> t;        // strictly increasing key times
-  std::vector<glm::dvec3> v;    // key values
+  std::vector<double> t;      // strictly increasing key times
+  std::vector<glm::dvec3> v;  // key values
   Interpolation interpolation = Interpolation::Linear;
 
   bool empty() const { return t.empty(); }
   // Adds a key; keys may come in any order, addKey keeps them sorted. Returns false when a key already
   // exists at exactly this time (the caller reports the duplicate).
   bool addKey(double time, const glm::dvec3& value);
-  glm::dvec3 at(double time) const;        // zero for an empty track
+  glm::dvec3 at(double time) const;  // zero for an empty track
   double scalarAt(double time) const { return at(time).x; }
   // Segments covering (-inf, +inf) in time order: a constant before the first key, one per key
   // interval, a constant after the last key. Empty track: one zero constant.

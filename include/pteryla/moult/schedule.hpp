@@ -34,8 +34,8 @@ enum class MoultSequence {
   DecreasingU,
   IncreasingV,
   DecreasingV,
-  Radial,       // Euclidean (u,v) distance from the centre: a circular wave
-  Random,       // a seeded random order
+  Radial,  // Euclidean (u,v) distance from the centre: a circular wave
+  Random,  // a seeded random order
 };
 const char* moultSequenceName(MoultSequence s);  // JSON names: "centre_out", "boundary_in", "centre_out_u", ...
 bool parseMoultSequence(const std::string& name, MoultSequence& out);  // also accepts "center_*"
@@ -47,16 +47,16 @@ enum class MoultPace { Order, Distance };
 
 struct MoultOptions {
   bool enabled = true;
-  double start = 0;          // time units: the leading edge of the window enters the order
-  double duration = 1;       // time units until the last feather is mature again (> 0)
-  double window = 0.2;       // (0, 1]: window width in units of the order (fraction of the tract)
+  double start = 0;     // time units: the leading edge of the window enters the order
+  double duration = 1;  // time units until the last feather is mature again (> 0)
+  double window = 0.2;  // (0, 1]: window width in units of the order (fraction of the tract)
   MoultSequence sequence = MoultSequence::CentreOut;
   MoultPace pace = MoultPace::Order;
-  double gap = 0.05;         // [0, 1): fraction of a feather's window with no feather (lost, not regrowing)
-  double random = 0;         // [0, 1]: jitter of the order (0 = strictly sequential)
-  uint64_t seed = 1;         // Random sequence and jitter
+  double gap = 0.05;                 // [0, 1): fraction of a feather's window with no feather (lost, not regrowing)
+  double random = 0;                 // [0, 1]: jitter of the order (0 = strictly sequential)
+  uint64_t seed = 1;                 // Random sequence and jitter
   std::optional<glm::dvec2> center;  // moult start in the tract's (u,v); default: centre of its (u,v) box
-  double sizeExponent = 0;   // w_i = window * (L_i / median L)^sizeExponent, L = feather length
+  double sizeExponent = 0;           // w_i = window * (L_i / median L)^sizeExponent, L = feather length
   double boundarySlowdown = 0;  // w_i *= 1 + boundarySlowdown * r_i, r_i in [0,1]: elliptic distance from the centre
   // Wear (Streit 2003, 5.2.5; growth ages above 1, docs/growth.md): the old plumage's age, in [1, 2]
   // (1 = as fresh as a new feather), and the time a renewed feather takes to wear from age 1 to 2
@@ -90,8 +90,8 @@ struct MoultPlan {
 
 // Plans one tract: uv[i], size[i] (feather length, scene units) and id[i] (stable follicle id, drives
 // the seeded randomness) for each of its feathers. Throws Error for invalid options.
-MoultPlan planMoult(const std::vector<glm::dvec2>& uv, const std::vector<double>& size,
-                    const std::vector<uint64_t>& id, const MoultOptions& options);
+MoultPlan planMoult(const std::vector<glm::dvec2>& uv, const std::vector<double>& size, const std::vector<uint64_t>& id,
+                    const MoultOptions& options);
 
 // Leading edge of the window at time t, in units of the order: < 0 before the moult, sweep after it.
 double moultFront(const MoultPlan& plan, double t);
@@ -99,7 +99,7 @@ MoultState moultStateAt(const MoultPlan& plan, size_t i, double t);
 
 // The whole coat: one plan per moulting tract.
 struct CoatMoultPlan {
-  std::vector<int32_t> tractPlan;               // per tract: index into plans, -1 = the tract does not moult
+  std::vector<int32_t> tractPlan;  // per tract: index into plans, -1 = the tract does not moult
   std::vector<MoultPlan> plans;
   std::vector<std::vector<uint32_t>> feathers;  // per plan: coat feather of each plan entry
 };

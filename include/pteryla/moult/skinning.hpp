@@ -25,8 +25,8 @@ namespace pteryla::moult {
 
 struct Skeleton {
   std::vector<std::string> names;
-  std::vector<int32_t> parent;           // -1 for the root (joint 0); parents come before children
-  std::vector<glm::dvec3> position;      // rest position of each joint, mesh coordinates
+  std::vector<int32_t> parent;       // -1 for the root (joint 0); parents come before children
+  std::vector<glm::dvec3> position;  // rest position of each joint, mesh coordinates
   // Skin weights per vertex, CSR: vertex v is influenced by weightJoint[weightOffset[v] .. [v+1]) with
   // weights (positive, normalised to sum 1). A vertex without entries in the file is bound to the root.
   std::vector<uint32_t> weightOffset;

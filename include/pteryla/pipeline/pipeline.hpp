@@ -3,7 +3,8 @@
 // go through it. Stages and what they depend on:
 //
 //   skin ──> tracts ──> distribute ──> interpolate ──> directions ──┐
-//                                                                   ├─> pose(t) ─> ages(t) ─> controls(t) ─> pack ─> mesh
+//                                                                   ├─> pose(t) ─> ages(t) ─> controls(t) ─> pack ─>
+//                                                                   mesh
 //   time ───────────────────────────────────────────────────────────┘
 //
 // Edits dirty only what is downstream (`invalidate`), so a packing change repacks without re-relaxing
@@ -22,7 +23,9 @@
 #include "pteryla/pipeline/scene.hpp"
 #include "pteryla/pipeline/stage.hpp"
 
-namespace pteryla::feather { struct FeatherParams; }
+namespace pteryla::feather {
+struct FeatherParams;
+}
 namespace pteryla::coat {
 struct SkinMesh;
 struct Tract;
@@ -35,23 +38,23 @@ namespace pteryla::pipeline {
 // What the renderer needs to draw one feather of the coat mesh (mirrors render::FeatherDrawRange
 // without depending on the render module).
 struct CoatDrawRange {
-  uint32_t feather = 0;         // index into Pipeline::feathers()
+  uint32_t feather = 0;  // index into Pipeline::feathers()
   uint32_t firstIndex = 0, indexCount = 0;
-  uint32_t material = 0;        // index into CoatMesh::materials
+  uint32_t material = 0;  // index into CoatMesh::materials
   glm::vec3 origin{0}, axisX{1, 0, 0}, axisY{0, 1, 0};
   uint32_t partCount[4] = {0, 0, 0, 0};  // shaft, left vane, right vane, afterfeather
 };
 
 struct CoatMaterial {
-  std::string name;             // feather definition name
+  std::string name;                            // feather definition name
   std::string texture, alphaTexture, pattern;  // absolute paths / pattern name ("" = none)
   glm::vec3 baseColor{0.8f, 0.7f, 0.55f};
-  std::string uv = "global";    // colour texture mapping: "global", "barb" or "growth" (feather material.uv)
+  std::string uv = "global";  // colour texture mapping: "global", "barb" or "growth" (feather material.uv)
 };
 
 struct CoatMesh {
-  TriMesh mesh;                        // all feathers, featherId per vertex
-  std::vector<CoatDrawRange> ranges;   // one per present feather, in layer order
+  TriMesh mesh;                       // all feathers, featherId per vertex
+  std::vector<CoatDrawRange> ranges;  // one per present feather, in layer order
   std::vector<CoatMaterial> materials;
 };
 
@@ -84,16 +87,16 @@ struct FrameReuse {
   bool naturalPacked = false;       // the controls packed the frame without its raises
   bool naturalIncremental = false;  // ... by repacking (or reusing) an earlier natural pack
   size_t naturalChanged = 0, naturalRecomputed = 0;
-  bool packIncremental = false;     // the frame's pack repacked (or reused) an earlier pack
-  size_t packChanged = 0;           // feathers whose packing input differed from the seed pack's
-  size_t packRecomputed = 0;        // feathers whose packing was computed (0: the earlier pack was reused)
+  bool packIncremental = false;  // the frame's pack repacked (or reused) an earlier pack
+  size_t packChanged = 0;        // feathers whose packing input differed from the seed pack's
+  size_t packRecomputed = 0;     // feathers whose packing was computed (0: the earlier pack was reused)
   // Moult frames: the pack* fields describe the mature coat's pack; the lost and growing feathers are
   // packed over it (coat::packOver).
   bool moult = false;
-  size_t moultChanged = 0;          // lost and growing feathers
-  size_t moultRecomputed = 0;       // feathers packed over the mature pack (0: the last one was reused)
-  size_t meshRegenerated = 0;       // present feathers whose barb curves the mesh stage generated
-  size_t meshReused = 0;            // present feathers whose triangles were copied from the last mesh
+  size_t moultChanged = 0;     // lost and growing feathers
+  size_t moultRecomputed = 0;  // feathers packed over the mature pack (0: the last one was reused)
+  size_t meshRegenerated = 0;  // present feathers whose barb curves the mesh stage generated
+  size_t meshReused = 0;       // present feathers whose triangles were copied from the last mesh
 };
 
 // Checks a posed skin given by a caller against the rest skin: one position per rest vertex, each
@@ -146,8 +149,8 @@ class Pipeline {
   const coat::SkinMesh& posedSkin();
   const std::vector<coat::Tract>& tracts();
   const coat::Follicles& follicles();
-  const coat::CoatFeathers& feathers();        // interpolated, framed, aged (at the current time)
-  const std::vector<double>& elevations();     // packed elevation per feather, radians
+  const coat::CoatFeathers& feathers();     // interpolated, framed, aged (at the current time)
+  const std::vector<double>& elevations();  // packed elevation per feather, radians
   const CoatMesh& coatMesh();
   TriMesh skinTriMesh();
 

@@ -15,7 +15,7 @@ namespace pteryla::pipeline {
 struct CameraSpec {
   bool autoFrame = true;  // frame the skin's bounds when eye/target are not given
   glm::dvec3 eye{0, 0, 5}, target{0, 0, 0}, up{0, 1, 0};
-  double fovDeg = 35;           // vertical field of view, degrees
+  double fovDeg = 35;                     // vertical field of view, degrees
   glm::dvec3 viewDir{-0.4, -0.35, -1.0};  // used by autoFrame: direction the camera looks along
 };
 
@@ -27,38 +27,38 @@ struct LightSpec {
 
 struct RenderSpec {
   int width = 960, height = 720;
-  double lod = 1.0;             // fraction of feather geometry in (0,1]
-  bool lodByScreenSize = false; // pick per-feather LOD from screen size (7.1.3)
-  std::string style = "shaded"; // shaded | scratchboard
+  double lod = 1.0;              // fraction of feather geometry in (0,1]
+  bool lodByScreenSize = false;  // pick per-feather LOD from screen size (7.1.3)
+  std::string style = "shaded";  // shaded | scratchboard
   glm::dvec3 background{0.82, 0.86, 0.9};
   glm::dvec3 skinColor{0.78, 0.62, 0.52};
   double brdfD = 1.0, brdfH = 0.0;  // Poulin-Fournier barbule spacing and floor height
   double ambient = 0.35;
-  bool shadows = true;          // the first light casts coat and skin shadows (render::RenderSettings::shadows)
-  double shadowStrength = 0.8;  // [0,1]: share of the key light removed in full shadow
-  int msaa = 4;                 // multisampling of rendered images: 0 (off), 2, 4 or 8 samples
-  double exposure = 0.0;        // stops, [-8, 8]: colours are scaled by 2^exposure before the tone curve
-  std::string tone = "linear";  // linear (clamp) | filmic (a smooth shoulder instead of clipping)
+  bool shadows = true;             // the first light casts coat and skin shadows (render::RenderSettings::shadows)
+  double shadowStrength = 0.8;     // [0,1]: share of the key light removed in full shadow
+  int msaa = 4;                    // multisampling of rendered images: 0 (off), 2, 4 or 8 samples
+  double exposure = 0.0;           // stops, [-8, 8]: colours are scaled by 2^exposure before the tone curve
+  std::string tone = "linear";     // linear (clamp) | filmic (a smooth shoulder instead of clipping)
   std::string lightRig = "scene";  // scene: `lights` | studio: key, fill and rim set from the camera
-  bool ground = false;          // a ground plane under the model that receives its shadow
+  bool ground = false;             // a ground plane under the model that receives its shadow
   glm::dvec3 groundColor{0.72, 0.72, 0.70};
 };
 
 struct Scene {
   int version = 1;
-  std::string file;        // absolute path of the scene file ("" for in-memory scenes)
+  std::string file;  // absolute path of the scene file ("" for in-memory scenes)
   std::string name;
   uint64_t seed = 1;
-  double time = 0.0;       // default evaluation time
-  std::string meshPath;    // absolute
+  double time = 0.0;     // default evaluation time
+  std::string meshPath;  // absolute
   bool meshRepair = false;
   bool fromBareMesh = false;
   // Module sections, kept as validated JSON so each module owns its schema (see docs/scene-format.md).
-  Json feathers = Json::object();   // name -> file path (absolute after load) or inline feather object
+  Json feathers = Json::object();  // name -> file path (absolute after load) or inline feather object
   Json tracts = Json::array();
   Json directions = Json::object();
   Json moult = Json::object();
-  Json growth = Json::object();     // growth and wear schedule of every feather (docs/growth.md); {} = default
+  Json growth = Json::object();  // growth and wear schedule of every feather (docs/growth.md); {} = default
   Json skeleton = Json::object();
   Json controls = Json::array();
   Json packing = Json::object();

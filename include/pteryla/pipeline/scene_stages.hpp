@@ -13,11 +13,11 @@
 namespace pteryla::pipeline {
 
 struct SectionStage {
-  const char* key;              // top-level key of the scene file
-  const char* subKey;           // "": the whole section (less the sub-keys of other rows); else this
-                                // key of each element of the section ("moult" of every tract)
-  std::optional<Stage> stage;   // the earliest stage that reads it; nullopt: no stage (view settings,
-                                // or the starting value of Pipeline::setTime / setLod)
+  const char* key;             // top-level key of the scene file
+  const char* subKey;          // "": the whole section (less the sub-keys of other rows); else this
+                               // key of each element of the section ("moult" of every tract)
+  std::optional<Stage> stage;  // the earliest stage that reads it; nullopt: no stage (view settings,
+                               // or the starting value of Pipeline::setTime / setLod)
 };
 
 // Every key a scene file may have, once each (and the sub-keys that are read by a later stage than

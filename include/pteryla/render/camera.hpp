@@ -15,9 +15,9 @@ struct Camera {
   float zNear = 0.01f;        // scene units
   float zFar = 100.0f;        // scene units
 
-  glm::mat4 view() const;                      // right-handed look-at
-  glm::mat4 projection(float aspect) const;    // OpenGL clip space, aspect = width / height
-  glm::vec3 forward() const;                   // unit, eye -> target
+  glm::mat4 view() const;                    // right-handed look-at
+  glm::mat4 projection(float aspect) const;  // OpenGL clip space, aspect = width / height
+  glm::vec3 forward() const;                 // unit, eye -> target
 
   // Aims at the centre of the box [lo, hi] and moves the eye back along the current viewing
   // direction until the box's bounding sphere fits the view (both fields of view), times `margin`.

@@ -67,7 +67,7 @@ struct DrawRun {
 struct DepthTiles {
   static constexpr int kTile = 8;  // pixels
   int tilesX = 0, tilesY = 0;
-  std::vector<float> nearest;   // per tile, row-major, bottom row first (GL window order)
+  std::vector<float> nearest;  // per tile, row-major, bottom row first (GL window order)
   std::vector<float> farthest;
   // From a width x height window depth buffer in [0, 1], bottom row first (glReadPixels order).
   void build(const float* depth, int width, int height);

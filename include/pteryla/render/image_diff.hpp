@@ -21,13 +21,13 @@ struct DiffTolerance {
 
 struct ImageDiff {
   bool sameSize = false;
-  int width = 0, height = 0;    // of the first image
-  double meanError = 0;         // mean absolute difference over every pixel and channel, in [0,1]
-  double maxError = 0;          // largest channel difference, in [0,1]
-  int maxX = -1, maxY = -1;     // where it is (-1 when the images are equal or differ in size)
-  size_t changedPixels = 0;     // pixels with a channel difference above the tolerance
-  double changedFraction = 0;   // changedPixels / pixels
-  bool matches = false;         // within every bar of the tolerance
+  int width = 0, height = 0;   // of the first image
+  double meanError = 0;        // mean absolute difference over every pixel and channel, in [0,1]
+  double maxError = 0;         // largest channel difference, in [0,1]
+  int maxX = -1, maxY = -1;    // where it is (-1 when the images are equal or differ in size)
+  size_t changedPixels = 0;    // pixels with a channel difference above the tolerance
+  double changedFraction = 0;  // changedPixels / pixels
+  bool matches = false;        // within every bar of the tolerance
 };
 
 // Compares `actual` with `expected`. Images of different sizes never match (sameSize = false, no other
@@ -37,6 +37,6 @@ PTERYLA_API ImageDiff diffImages(const Image& actual, const Image& expected, con
 // A picture of the difference for a person: |actual - expected| per RGB channel times `gain`, opaque, with
 // changed pixels (above tolerance.pixel) tinted so even a one-level change is visible. Sizes must match.
 PTERYLA_API Image differenceImage(const Image& actual, const Image& expected, const DiffTolerance& tolerance = {},
-                      double gain = 8.0);
+                                  double gain = 8.0);
 
 }  // namespace pteryla::render

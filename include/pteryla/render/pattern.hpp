@@ -24,14 +24,14 @@ enum class PatternKind { Plain, Barred, Scalloped, Spotted, Eyespot };
 
 struct PatternParams {
   PatternKind kind = PatternKind::Plain;
-  int width = 128;   // pixels across (u)
-  int height = 256;  // pixels along (v)
-  glm::vec3 baseColor{0.55f, 0.42f, 0.30f};   // linear [0,1]
-  glm::vec3 markColor{0.18f, 0.12f, 0.08f};   // bars, scallop edges, spots, eye-spot ring
-  glm::vec3 accentColor{0.85f, 0.70f, 0.25f}; // eye-spot centre and inner ring
-  float frequency = 6.0f;     // bars / scallop rows along v, spots per unit v
-  float markWidth = 0.35f;    // fraction of a period taken by the mark, in (0, 1)
-  float softness = 0.04f;     // edge blur in v units (or in spot radii for spots)
+  int width = 128;                             // pixels across (u)
+  int height = 256;                            // pixels along (v)
+  glm::vec3 baseColor{0.55f, 0.42f, 0.30f};    // linear [0,1]
+  glm::vec3 markColor{0.18f, 0.12f, 0.08f};    // bars, scallop edges, spots, eye-spot ring
+  glm::vec3 accentColor{0.85f, 0.70f, 0.25f};  // eye-spot centre and inner ring
+  float frequency = 6.0f;                      // bars / scallop rows along v, spots per unit v
+  float markWidth = 0.35f;                     // fraction of a period taken by the mark, in (0, 1)
+  float softness = 0.04f;                      // edge blur in v units (or in spot radii for spots)
   float shaftDarken = 0.15f;  // darkening of the rachis stripe at u = 0.5, factor 1 - shaftDarken (< 0 lightens)
   float tipDarken = 0.10f;    // darkening toward the tip, in [0,1]
   float noise = 0.05f;        // amplitude of seeded value noise on the tone
@@ -43,13 +43,13 @@ struct PatternParams {
 Image generatePattern(const PatternParams& params);
 
 struct BarbAlphaParams {
-  int width = 32;              // pixels across the barb (s)
-  int height = 128;            // pixels along the barb (t)
-  float barbWidth = 0.18f;     // opaque core (the barb ramus) as a fraction of s
-  float barbuleOpacity = 0.75f;// opacity of the barbule fringe next to the barb
-  float tipFalloff = 0.25f;    // fraction of t over which alpha falls quadratically to 0 at the tip
-  float edgeLead = 0.08f;      // the falloff starts this much earlier (in t) at the fringe edges (7.1.2)
-  float fluff = 0.0f;          // 0 pennaceous, 1 plumulaceous (down): sparse, noisy barbules
+  int width = 32;                // pixels across the barb (s)
+  int height = 128;              // pixels along the barb (t)
+  float barbWidth = 0.18f;       // opaque core (the barb ramus) as a fraction of s
+  float barbuleOpacity = 0.75f;  // opacity of the barbule fringe next to the barb
+  float tipFalloff = 0.25f;      // fraction of t over which alpha falls quadratically to 0 at the tip
+  float edgeLead = 0.08f;        // the falloff starts this much earlier (in t) at the fringe edges (7.1.2)
+  float fluff = 0.0f;            // 0 pennaceous, 1 plumulaceous (down): sparse, noisy barbules
   uint64_t seed = 1;
 };
 

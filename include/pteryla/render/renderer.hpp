@@ -50,34 +50,34 @@ enum class ColorUv { Global, Barb, Growth };  // which TriMesh uv set addresses 
 // OpenImageIO) or, when the path is empty, from `...Image` (in memory, e.g. generatePattern()).
 // Neither: the colour texture is white, the alpha mask is opaque.
 struct FeatherMaterial {
-  std::string name;                         // for error messages
-  glm::vec3 baseColor{1.0f};                // multiplies the colour texture, linear [0,1]
+  std::string name;           // for error messages
+  glm::vec3 baseColor{1.0f};  // multiplies the colour texture, linear [0,1]
   std::string colorTexture;
   Image colorImage;
   ColorUv colorUv = ColorUv::Global;
-  std::string alphaTexture;                 // barb alpha mask, red channel used
+  std::string alphaTexture;  // barb alpha mask, red channel used
   Image alphaImage;
-  bool useBrdf = true;                      // false: Lambertian vane
-  BarbuleParams barbules{1.0, 0.0, 0.2};    // Poulin-Fournier d, h, sigma
-  float barbuleAngle = 0.7f;                // radians between barb and its barbules (both sides)
-  float specular = 0.25f;                   // weight of the S channel
-  float coneSigma = 0.35f;                  // width of the glint cone exp(-(L.T+V.T)^2 / 2 s^2)
-  float translucency = 0.15f;               // light passed through a vane lit from behind
+  bool useBrdf = true;                    // false: Lambertian vane
+  BarbuleParams barbules{1.0, 0.0, 0.2};  // Poulin-Fournier d, h, sigma
+  float barbuleAngle = 0.7f;              // radians between barb and its barbules (both sides)
+  float specular = 0.25f;                 // weight of the S channel
+  float coneSigma = 0.35f;                // width of the glint cone exp(-(L.T+V.T)^2 / 2 s^2)
+  float translucency = 0.15f;             // light passed through a vane lit from behind
   glm::vec3 sheathColor{0.55f, 0.60f, 0.68f};
 };
 
 struct RenderSettings {
-  int width = 512;                          // pixels
+  int width = 512;  // pixels
   int height = 512;
   glm::vec4 background{1.0f, 1.0f, 1.0f, 1.0f};
-  glm::vec3 ambient{0.18f};                 // ambient light, linear
+  glm::vec3 ambient{0.18f};  // ambient light, linear
   glm::vec3 skinColor{0.62f, 0.50f, 0.45f};
   bool drawSkin = true;
   bool drawCoat = true;
-  bool useAlphaTexture = true;              // false: per-vertex alpha only (Fig. 7.2 b)
-  bool useBrdf = true;                      // global switch over FeatherMaterial::useBrdf
-  bool viewDependentOrder = true;           // false: every range drawn forward (for comparisons)
-  int msaaSamples = 0;                      // renderImage only; 0 for golden images
+  bool useAlphaTexture = true;     // false: per-vertex alpha only (Fig. 7.2 b)
+  bool useBrdf = true;             // global switch over FeatherMaterial::useBrdf
+  bool viewDependentOrder = true;  // false: every range drawn forward (for comparisons)
+  int msaaSamples = 0;             // renderImage only; 0 for golden images
   // Where the coat's lighting (BRDF look-ups included) is evaluated. false: per vertex, as the
   // thesis computes the projected angles per vertex (7.1.3); about twice as fast on llvmpipe and
   // indistinguishable at full geometry. true: per fragment, for close-ups of coarse LOD polygons.
@@ -103,12 +103,12 @@ struct RenderSettings {
   // light the coat scatters). The map is re-rendered only when the skin, coat, materials, key light
   // direction or these settings change. Scenes turn it on by default (render.shadows).
   bool shadows = false;
-  int shadowMapSize = 2048;       // [64, 8192]
-  float shadowStrength = 0.8f;    // [0, 1]
+  int shadowMapSize = 2048;     // [64, 8192]
+  float shadowStrength = 0.8f;  // [0, 1]
   // Tone: skin and feather colours are scaled by 2^exposure, then clamped (linear) or passed through a
   // filmic curve (Narkowicz's fit of the ACES reference: a toe, and a shoulder instead of clipping),
   // before blending. The background is drawn as given.
-  float exposure = 0.0f;          // stops
+  float exposure = 0.0f;  // stops
   bool filmic = false;
   // A ground plane (opaque, Lambert, groundColor) facing groundNormal and touching the lowest point of
   // the skin's and coat's bounding box along it, drawn around the model: it receives the key light's
@@ -119,15 +119,15 @@ struct RenderSettings {
 };
 
 struct RenderStats {
-  size_t drawCalls = 0;       // GL draw submissions (the coat: one per run of feathers of one material)
-  size_t drawRanges = 0;      // index ranges in those submissions
-  size_t triangles = 0;       // triangles submitted (skin + feathers not culled)
-  size_t backwardParts = 0;   // feather parts drawn in reverse order (view-dependent ordering at work)
-  size_t culledFeathers = 0;  // feathers outside the view frustum, skipped
-  size_t occludedFeathers = 0;  // feathers hidden behind the skin, skipped
-  size_t occludedTriangles = 0;  // triangles of drawn feathers skipped: behind the skin (runs of a few
-                                 // barbs, then single triangles) or outside the view
-  size_t subpixelTriangles = 0;  // triangles of drawn feathers skipped for covering no pixel centre
+  size_t drawCalls = 0;            // GL draw submissions (the coat: one per run of feathers of one material)
+  size_t drawRanges = 0;           // index ranges in those submissions
+  size_t triangles = 0;            // triangles submitted (skin + feathers not culled)
+  size_t backwardParts = 0;        // feather parts drawn in reverse order (view-dependent ordering at work)
+  size_t culledFeathers = 0;       // feathers outside the view frustum, skipped
+  size_t occludedFeathers = 0;     // feathers hidden behind the skin, skipped
+  size_t occludedTriangles = 0;    // triangles of drawn feathers skipped: behind the skin (runs of a few
+                                   // barbs, then single triangles) or outside the view
+  size_t subpixelTriangles = 0;    // triangles of drawn feathers skipped for covering no pixel centre
   bool shadowMapRendered = false;  // the shadow map was (re)drawn for this frame (false: reused or off)
 };
 

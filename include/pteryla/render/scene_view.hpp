@@ -11,7 +11,9 @@
 #include "pteryla/render/image.hpp"
 #include "pteryla/render/renderer.hpp"
 
-namespace pteryla::feather { struct FeatherParams; }
+namespace pteryla::feather {
+struct FeatherParams;
+}
 
 namespace pteryla::render {
 

@@ -21,16 +21,16 @@
 namespace pteryla::render {
 
 struct ScratchboardSettings {
-  int width = 512;              // pixels
+  int width = 512;  // pixels
   int height = 512;
-  float strokeSpacing = 4.0f;   // pixels between neighbouring strokes at full density
-  float strokeLength = 16.0f;   // pixels, total length of one stroke
-  float minWidth = 0.7f;        // pixels
-  float maxWidth = 3.0f;        // pixels
-  float coatAlbedo = 0.85f;     // [0,1]
-  float skinAlbedo = 0.45f;     // [0,1]
-  float ambient = 0.08f;        // added to the Lambert term
-  float skinStrokeAngle = 0.6f; // radians, screen direction of skin strokes
+  float strokeSpacing = 4.0f;    // pixels between neighbouring strokes at full density
+  float strokeLength = 16.0f;    // pixels, total length of one stroke
+  float minWidth = 0.7f;         // pixels
+  float maxWidth = 3.0f;         // pixels
+  float coatAlbedo = 0.85f;      // [0,1]
+  float skinAlbedo = 0.45f;      // [0,1]
+  float ambient = 0.08f;         // added to the Lambert term
+  float skinStrokeAngle = 0.6f;  // radians, screen direction of skin strokes
   bool drawSkin = true;
   uint64_t seed = 1;
 };
@@ -40,7 +40,7 @@ Image renderScratchboard(const TriMesh& coat, const TriMesh& skin, const Camera&
 
 // The tone the strokes reproduce, as a grey image (R = G = B = round(255 tone), black background):
 // for inspection and tests of tone preservation.
-Image scratchboardTone(const TriMesh& coat, const TriMesh& skin, const Camera& camera,
-                       const std::vector<Light>& lights, const ScratchboardSettings& settings);
+Image scratchboardTone(const TriMesh& coat, const TriMesh& skin, const Camera& camera, const std::vector<Light>& lights,
+                       const ScratchboardSettings& settings);
 
 }  // namespace pteryla::render

@@ -17,14 +17,14 @@ TriMesh makeUvSphere(float radius, int rings, int segments);
 TriMesh makeEllipsoid(const glm::vec3& radii, int rings, int segments);
 
 struct SyntheticFeatherParams {
-  float length = 1.0f;          // shaft length, scene units
-  float width = 0.25f;          // longest barb
-  int barbsPerVane = 22;        // at full detail
-  int segmentsPerBarb = 4;      // each segment is 4 triangles (barb centre line + two fringe edges)
-  float barbAngle = 0.85f;      // radians between shaft and barbs
-  float cupping = 0.08f;        // vane edge drop toward -z, fraction of width
-  float lodFraction = 1.0f;     // in (0,1]: keeps round(f * barbsPerVane) wider barbs per vane,
-                                // each standing for 1/f barbs (barbCount)
+  float length = 1.0f;       // shaft length, scene units
+  float width = 0.25f;       // longest barb
+  int barbsPerVane = 22;     // at full detail
+  int segmentsPerBarb = 4;   // each segment is 4 triangles (barb centre line + two fringe edges)
+  float barbAngle = 0.85f;   // radians between shaft and barbs
+  float cupping = 0.08f;     // vane edge drop toward -z, fraction of width
+  float lodFraction = 1.0f;  // in (0,1]: keeps round(f * barbsPerVane) wider barbs per vane,
+                             // each standing for 1/f barbs (barbCount)
   uint32_t featherId = 0;
 };
 
@@ -40,9 +40,9 @@ struct SyntheticCoatParams {
   glm::vec3 bodyRadii{1.0f, 0.55f, 0.6f};  // ellipsoid, head toward +x
   float featherLength = 0.32f;
   float featherWidth = 0.09f;
-  float elevation = 0.12f;                 // radians above the skin
-  SyntheticFeatherParams feather;          // length/width overridden per feather; lodFraction used
-  int materialCount = 1;                   // materials assigned by hashing follicle index
+  float elevation = 0.12f;         // radians above the skin
+  SyntheticFeatherParams feather;  // length/width overridden per feather; lodFraction used
+  int materialCount = 1;           // materials assigned by hashing follicle index
   uint64_t seed = 7;
 };
 

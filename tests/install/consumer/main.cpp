@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
     check(session.evaluate(), "evaluate() completes");
     const pteryla::Frame& rest = session.frame();
     check(rest.featherCount == 80, "80 feathers, got " + std::to_string(rest.featherCount));
-    check(rest.indices.size > 0 && rest.indices.size % 3 == 0, std::to_string(rest.indices.size / 3) + " coat triangles");
+    check(rest.indices.size > 0 && rest.indices.size % 3 == 0,
+          std::to_string(rest.indices.size / 3) + " coat triangles");
     check(finite(rest.positions) && finite(rest.vertexNormals), "coat vertices and normals are finite");
     const std::vector<float> before(rest.positions.begin(), rest.positions.end());
     const std::vector<uint64_t> keys(rest.follicleKeys.begin(), rest.follicleKeys.end());
@@ -66,7 +67,8 @@ int main(int argc, char** argv) {
     for (size_t i = 0; sameKeys && i < keys.size(); ++i) sameKeys = moved.follicleKeys[i] == keys[i];
     check(sameKeys, "the pose keeps every follicle");
     double shift = 0;
-    for (size_t k = 0; k + 2 < moved.positions.size && k < before.size(); k += 3) shift += moved.positions[k] - before[k];
+    for (size_t k = 0; k + 2 < moved.positions.size && k < before.size(); k += 3)
+      shift += moved.positions[k] - before[k];
     shift /= double(before.size() / 3);
     check(moved.positions.size == before.size() && std::abs(shift - 0.5) < 1e-3,
           "the coat moved with the skin (mean x shift " + std::to_string(shift) + ")");
