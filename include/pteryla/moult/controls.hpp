@@ -7,7 +7,7 @@
 //   direction  follow the control's displacement (its keyframed offset)
 //   random     turn each feather about its normal by a seeded per-feather multiplier (random twist)
 //   dynamic    the tip follows a damped spring driven by the control's motion; blended by weight
-// Raised feathers become fixed-angle feathers (PackOptions::fixedElevation; NaN = free) and the rest
+// Raised feathers become fixed-angle feathers (PackConstraints::fixedElevation; NaN = free) and the rest
 // of the coat packs against them, so raised crests and puffed chests stay free of interpenetration.
 // A raise starts from the feather's natural (packed) elevation, so lift 0 leaves the coat unchanged and
 // lift 1 stands the shafts up. The spring is solved in closed form for the piecewise-polynomial key
