@@ -1,6 +1,6 @@
 #pragma once
-// Shared by scan.cpp (measurement) and scan_texture.cpp (texture): image sampling and the fitted rachis
-// arc in scan pixels.
+// Shared by silhouette.cpp, scan.cpp (measurement) and scan_texture.cpp (texture): image sampling and the
+// fitted rachis arc in scan pixels.
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 

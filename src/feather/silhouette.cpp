@@ -13,6 +13,7 @@
 
 #include "pteryla/core/error.hpp"
 #include "pteryla/feather/barbs.hpp"
+#include "scan_internal.hpp"
 
 namespace pteryla::feather {
 
@@ -46,19 +47,8 @@ double rayHit(const std::vector<glm::dvec2>& poly, glm::dvec2 o, glm::dvec2 d, d
   return best;
 }
 
-// Left of a direction in image pixels (y down), as seen by the viewer with the direction pointing up.
-glm::dvec2 imageLeft(glm::dvec2 t) { return {t.y, -t.x}; }
-
-double bilinear(const std::vector<float>& img, int w, int h, double x, double y) {
-  x = std::clamp(x, 0.0, w - 1.0);
-  y = std::clamp(y, 0.0, h - 1.0);
-  const int x0 = std::min(static_cast<int>(x), w - 2 < 0 ? 0 : w - 2),
-            y0 = std::min(static_cast<int>(y), h - 2 < 0 ? 0 : h - 2);
-  const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
-  const double fx = x - x0, fy = y - y0;
-  const auto at = [&](int xx, int yy) { return static_cast<double>(img[static_cast<size_t>(yy) * w + xx]); };
-  return (at(x0, y0) * (1 - fx) + at(x1, y0) * fx) * (1 - fy) + (at(x0, y1) * (1 - fx) + at(x1, y1) * fx) * fy;
-}
+using scanning::imageLeft;
+using scanning::sample;  // bilinear, clamped to the border
 
 // Circular arc in the image through a start point: chord direction e, turning angle theta (> 0 turns to
 // the viewer's left), arc length len.
@@ -284,7 +274,7 @@ SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteIm
         window.clear();
         for (double o = -3 * opt.searchRadius; o <= 3 * opt.searchRadius; o += 0.5) {
           const glm::dvec2 q = guess[i] + o * n;
-          if (bilinear(dist, w, h, q.x, q.y) > res.threshold) window.push_back(bilinear(img.pixels, w, h, q.x, q.y));
+          if (sample(dist, w, h, q.x, q.y) > res.threshold) window.push_back(sample(img.pixels, w, h, q.x, q.y));
         }
         if (window.size() < 4) continue;
         std::nth_element(window.begin(), window.begin() + window.size() / 2, window.end());
@@ -292,7 +282,7 @@ SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteIm
         double best = 0, bestO = 0;
         for (double o = -opt.searchRadius; o <= opt.searchRadius; o += 0.25) {
           const glm::dvec2 q = guess[i] + o * n;
-          const double c = std::abs(bilinear(img.pixels, w, h, q.x, q.y) - vane);
+          const double c = std::abs(sample(img.pixels, w, h, q.x, q.y) - vane);
           if (c > best + 1e-9) {
             best = c;
             bestO = o;
@@ -330,12 +320,12 @@ SilhouetteImageResult extractSilhouette(const GrayImage& img, const SilhouetteIm
       arc.at(rp, p, t);
       const double ang = aBase * (1 - rp) + aTip * rp;
       const glm::dvec2 dir = std::cos(ang) * t + side * std::sin(ang) * imageLeft(t);
-      double lastInside = 0, prevVal = bilinear(dist, w, h, p.x, p.y), prevS = 0;
+      double lastInside = 0, prevVal = sample(dist, w, h, p.x, p.y), prevS = 0;
       double edge = 0;
       for (double s = step;; s += step) {
         const glm::dvec2 q = p + s * dir;
         if (q.x < 0 || q.y < 0 || q.x > w - 1 || q.y > h - 1) break;
-        const double val = bilinear(dist, w, h, q.x, q.y);
+        const double val = sample(dist, w, h, q.x, q.y);
         if (val > res.threshold) {
           lastInside = s;
         } else if (prevVal > res.threshold) {
