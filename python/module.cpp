@@ -718,7 +718,17 @@ set_pose, clear_pose, set_time, set_lod, check) raise pteryla.Error.)")
           "Renders the frame (evaluating first if needed) through Mesa's off-screen OpenGL, as `pteryla render` "
           "does, to a .png/.jpg/.tif/.exr written through a temporary file. width, height: pixels (0, 0: the "
           "scene's render.size). style: '' (the scene's), 'shaded' or "
-          "'scratchboard'. Raises pteryla.Error naming the setting or file; not for pose_mode 'follow' with a pose.")
+          "'scratchboard'. Raises pteryla.Error naming the setting or file; not for pose_mode 'follow' with a pose. "
+          "The session keeps its off-screen renderer (context and uploaded coat) for the next render; "
+          "release_renderer() frees it.")
+      .def(
+          "release_renderer",
+          [](PySession& s) {
+            s.requireMutable("release_renderer");
+            s.session->releaseRenderer();
+          },
+          "Frees the off-screen renderer render() keeps (its context and the uploaded skin and coat); the next "
+          "render() makes a new one.")
       .def(
           "export",
           [](PySession& s, py::object path, py::object times, double fps, const std::string& coatAs,

@@ -229,6 +229,13 @@ def test_render_matches_the_cli(tmp_path):
     assert d.returncode == 0, d.stdout + d.stderr
     s.render(tmp_path / "s.png", width=80, height=60, style="scratchboard")
     assert png_size(tmp_path / "s.png") == (80, 60)
+    # The kept renderer, released, is made again and draws the same image.
+    s.release_renderer()
+    again = tmp_path / "again.png"
+    s.render(again, width=160, height=120)
+    d = subprocess.run([os.environ["PTERYLA_CLI"], "diff", str(again), str(out), "--tolerance", "0"], capture_output=True,
+                       text=True)
+    assert d.returncode == 0, d.stdout + d.stderr
 
 
 def test_render_errors_name_the_setting(sphere, tmp_path):
