@@ -12,6 +12,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "pteryla/core/trimesh_reuse.hpp"
 #include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/io.hpp"
 #include "pteryla/feather/lod.hpp"
@@ -60,20 +61,6 @@ const Coat& coat() {
   return c;
 }
 
-void clearKeepCapacity(TriMesh& m) {
-  m.positions.clear();
-  m.normals.clear();
-  m.tangents.clear();
-  m.uvGlobal.clear();
-  m.uvBarb.clear();
-  m.uvGrowth.clear();
-  m.alpha.clear();
-  m.sheath.clear();
-  m.barbCount.clear();
-  m.featherId.clear();
-  m.indices.clear();
-}
-
 std::vector<FeatherMeshInput> inputs(double lod) {
   const Coat& c = coat();
   std::vector<FeatherMeshInput> in(c.curves.size());
@@ -95,7 +82,7 @@ void BM_CoatMesh(benchmark::State& state) {
   appendFeatherMeshes(in.data(), in.size(), MeshOptions{}, mesh, &ranges);  // warm: steady-state re-meshing
   size_t tris = 0;
   for (auto _ : state) {
-    clearKeepCapacity(mesh);
+    clearKeepingCapacity(mesh);
     appendFeatherMeshes(in.data(), in.size(), MeshOptions{}, mesh, &ranges);
     tris = mesh.triangleCount();
     benchmark::DoNotOptimize(mesh.positions.data());
@@ -121,7 +108,7 @@ void BM_CoatMeshSerial(benchmark::State& state) {
   TriMesh mesh;
   for (const auto& f : in) appendFeatherMesh(f, MeshOptions{}, mesh);  // warm
   for (auto _ : state) {
-    clearKeepCapacity(mesh);
+    clearKeepingCapacity(mesh);
     for (const auto& f : in) appendFeatherMesh(f, MeshOptions{}, mesh);
     benchmark::DoNotOptimize(mesh.positions.data());
   }

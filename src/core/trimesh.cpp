@@ -1,4 +1,5 @@
 #include "pteryla/core/trimesh.hpp"
+#include "pteryla/core/trimesh_reuse.hpp"
 
 #include <algorithm>
 #include <glm/common.hpp>
@@ -41,6 +42,20 @@ bool TriMesh::bounds(glm::vec3& lo, glm::vec3& hi) const {
     hi = glm::max(hi, p);
   }
   return true;
+}
+
+void clearKeepingCapacity(TriMesh& m) {
+  m.positions.clear();
+  m.normals.clear();
+  m.tangents.clear();
+  m.uvGlobal.clear();
+  m.uvBarb.clear();
+  m.uvGrowth.clear();
+  m.alpha.clear();
+  m.sheath.clear();
+  m.barbCount.clear();
+  m.featherId.clear();
+  m.indices.clear();
 }
 
 }  // namespace pteryla

@@ -10,6 +10,7 @@
 #include <cstring>
 
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/trimesh_reuse.hpp"
 
 namespace pteryla::pipeline {
 
@@ -18,21 +19,6 @@ bool packedAsGrown(double age, const feather::GrowthSchedule& schedule) {
 }
 
 namespace {
-
-// Empties every array of `m` keeping its capacity.
-void truncate(TriMesh& m) {
-  m.positions.clear();
-  m.normals.clear();
-  m.tangents.clear();
-  m.uvGlobal.clear();
-  m.uvBarb.clear();
-  m.uvGrowth.clear();
-  m.alpha.clear();
-  m.sheath.clear();
-  m.barbCount.clear();
-  m.featherId.clear();
-  m.indices.clear();
-}
 
 void resizeAll(TriMesh& m, size_t verts, size_t indices) {
   m.positions.resize(verts);
@@ -239,7 +225,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
   std::vector<Slice> next(count);
   if (reused * 10 < count) {
     // Little to reuse: mesh everything straight into the output.
-    truncate(out);
+    clearKeepingCapacity(out);
     feather::appendFeatherMeshes(inputs.data(), count, mo, out, &ranges);
     next = locate(inputs, ranges, out);
     std::swap(out.positions, localPos_);
@@ -254,7 +240,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
         changed.push_back(inputs[k]);
         changedAt.push_back(k);
       }
-    truncate(freshMesh_);
+    clearKeepingCapacity(freshMesh_);
     std::vector<feather::FeatherMeshRanges> freshRanges;
     feather::appendFeatherMeshes(changed.data(), changed.size(), mo, freshMesh_, &freshRanges);
     // Source slices: in the last mesh (reused) or in freshMesh_.

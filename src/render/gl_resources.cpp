@@ -233,20 +233,18 @@ void Renderer::Impl::ensureTarget(int w, int h, int samples) {
   auto makeFbo = [&](GLuint& fbo, GLuint& color, GLuint& depth, int s) {
     gl.GenFramebuffers(1, &fbo);
     gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
-    gl.GenRenderbuffers(1, &color);
-    gl.BindRenderbuffer(GL_RENDERBUFFER, color);
-    if (s > 0)
-      gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_RGBA8, w, h);
-    else
-      gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
-    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
-    gl.GenRenderbuffers(1, &depth);
-    gl.BindRenderbuffer(GL_RENDERBUFFER, depth);
-    if (s > 0)
-      gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, GL_DEPTH24_STENCIL8, w, h);
-    else
-      gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, w, h);
-    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
+    // One renderbuffer of `format` with `s` samples (0: single-sampled) at `attachment`.
+    auto attach = [&](GLuint& rb, GLenum format, GLenum attachment) {
+      gl.GenRenderbuffers(1, &rb);
+      gl.BindRenderbuffer(GL_RENDERBUFFER, rb);
+      if (s > 0)
+        gl.RenderbufferStorageMultisample(GL_RENDERBUFFER, s, format, w, h);
+      else
+        gl.RenderbufferStorage(GL_RENDERBUFFER, format, w, h);
+      gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, attachment, GL_RENDERBUFFER, rb);
+    };
+    attach(color, GL_RGBA8, GL_COLOR_ATTACHMENT0);
+    attach(depth, GL_DEPTH24_STENCIL8, GL_DEPTH_STENCIL_ATTACHMENT);
     if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw Error("cannot create an off-screen framebuffer of " + std::to_string(w) + "x" + std::to_string(h) +
                   (s > 0 ? " with " + std::to_string(s) + " samples" : std::string()));
