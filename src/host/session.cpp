@@ -194,9 +194,25 @@ struct Session::Impl {
     }
     return *view;
   }
-  render::Image draw(const std::array<int, 2>& size, const std::string& style) {
-    return reporting("the render",
-                     [&] { return renderer(size[0], size[1]).render(*pipeline, size[0], size[1], style); });
+  // render and renderImage: the frame drawn by the kept renderer. frame() stays valid if it was, also when
+  // the draw fails (the view may set per-feather levels of detail, render.lod_by_screen_size: the views
+  // are pointed at the frame as it is now). `path` is named when a Follow pose is refused.
+  render::Image drawFrame(const std::array<int, 2>& size, const std::string& style, const std::string& path) {
+    if (following())
+      throw Error("rendering a coat carried onto a Follow pose is not supported yet: use PoseMode::Repack", path,
+                  "poseMode");
+    const bool hadFrame = frameValid;
+    frameValid = false;
+    render::Image image;
+    try {
+      image = reporting("the render",
+                        [&] { return renderer(size[0], size[1]).render(*pipeline, size[0], size[1], style); });
+    } catch (...) {
+      if (hadFrame) fillFrame();
+      throw;
+    }
+    if (hadFrame) fillFrame();
+    return image;
   }
 
   // The frame's coat mesh as a TriMesh (exportMesh): the pipeline's, or carried onto a Follow pose.
@@ -512,48 +528,16 @@ ExportSummary Session::exportTo(const std::string& path, const ExportSettings& s
 }
 
 render::Image Session::renderImage(const RenderSettings& settings) {
-  Impl& m = *impl_;
-  if (m.following())
-    throw Error("rendering a coat carried onto a Follow pose is not supported yet: use PoseMode::Repack", "",
-                "poseMode");
-  const std::array<int, 2> size = renderSize(*m.pipeline, settings, "");
-  const bool hadFrame = m.frameValid;
-  m.frameValid = false;
-  render::Image image;
-  try {
-    image = m.draw(size, settings.style);
-  } catch (...) {
-    if (hadFrame) m.fillFrame();  // a failed context keeps the frame the host had
-    throw;
-  }
-  // The view may have set per-feather levels of detail (render.lod_by_screen_size): point the views at
-  // the frame as it is now.
-  if (hadFrame) m.fillFrame();
-  return image;
+  return impl_->drawFrame(renderSize(*impl_->pipeline, settings, ""), settings.style, "");
 }
 
 RenderSummary Session::render(const std::string& path, const RenderSettings& settings) {
   Impl& m = *impl_;
-  if (m.following())
-    throw Error("rendering a coat carried onto a Follow pose is not supported yet: use PoseMode::Repack", path,
-                "poseMode");
   const std::array<int, 2> size = renderSize(*m.pipeline, settings, path);
-  const bool hadFrame = m.frameValid;
-  m.frameValid = false;
-  RenderSummary summary;
-  try {
-    const render::Image image = m.draw(size, settings.style);
-    const pipeline::CoatMesh& drawn = m.pipeline->coatMesh();  // evaluated by the render: no work
-    summary = {size[0], size[1], drawn.ranges.size(), drawn.mesh.triangleCount()};
-    render::saveImage(path, image);
-  } catch (...) {
-    // A failed write (or context) keeps the frame the host had.
-    if (hadFrame) m.fillFrame();
-    throw;
-  }
-  // The view may have set per-feather levels of detail (render.lod_by_screen_size): point the views at
-  // the frame as it is now.
-  if (hadFrame) m.fillFrame();
+  const render::Image image = m.drawFrame(size, settings.style, path);
+  const pipeline::CoatMesh& drawn = m.pipeline->coatMesh();  // evaluated by the render: no work
+  const RenderSummary summary{size[0], size[1], drawn.ranges.size(), drawn.mesh.triangleCount()};
+  render::saveImage(path, image);  // a failed write keeps the frame the host had (drawFrame refilled it)
   return summary;
 }
 
