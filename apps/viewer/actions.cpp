@@ -4,6 +4,8 @@
 #include <cmath>
 #include <filesystem>
 
+#include <glm/geometric.hpp>
+
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/feather/io.hpp"
@@ -166,11 +168,27 @@ void removeKeyFeather(Document& d, size_t t, size_t k) {
   });
 }
 
-void addStylingVector(Document& d, const glm::dvec3& at, const glm::dvec3& dir) {
+double combRadius(const Scene& s) {
+  if (!s.directions.is_object() || !s.directions.contains("axis") || !s.directions["axis"].is_array()) return 0;
+  const Json& a = s.directions["axis"];
+  double length = 0;
+  for (size_t i = 1; i < a.size(); ++i) length += glm::length(jsonVec3(a[i]) - jsonVec3(a[i - 1]));
+  return 0.1 * length;
+}
+
+void addStylingVector(Document& d, const glm::dvec3& at, const glm::dvec3& dir, double radius) {
   if (!(glm::dvec3(dir) != glm::dvec3(0))) throw Error("a styling vector needs a non-zero direction", "", "direction");
+  if (!(radius >= 0) || !std::isfinite(radius))
+    throw Error("a styling vector's radius must be a finite number >= 0", "", "radius");
   d.edit("add styling vector", [&](Scene& s) {
-    s.directions.erase("axis");
-    s.directions["vectors"].push_back({{"at", vec3Json(at)}, {"direction", vec3Json(dir)}});
+    Json v = {{"at", vec3Json(at)}, {"direction", vec3Json(dir)}};
+    if (s.directions.contains("axis")) {
+      // Over the axis: a comb stroke with its own reach, unless the field's falloff gives one.
+      const double falloff = s.directions.value("falloff", 0.0);
+      const double r = radius > 0 ? radius : falloff > 0 ? 0.0 : combRadius(s);
+      if (r > 0) v["radius"] = r;
+    }
+    s.directions["vectors"].push_back(v);
   });
 }
 
@@ -197,7 +215,8 @@ void removeStylingVector(Document& d, size_t k) {
 void setBodyAxis(Document& d, const std::vector<glm::dvec3>& pts) {
   if (pts.size() < 2) throw Error("a body axis needs at least two points", "", "directions.axis");
   d.edit("body axis", [&](Scene& s) {
-    s.directions.erase("vectors");
+    // Comb strokes (vectors over the old axis) stay on the new one; a vectors-only field is replaced.
+    if (!s.directions.contains("axis")) s.directions.erase("vectors");
     Json a = Json::array();
     for (const auto& p : pts) a.push_back(vec3Json(p));
     s.directions["axis"] = a;

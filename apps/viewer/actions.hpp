@@ -36,8 +36,13 @@ void addKeyFeather(Document& d, size_t tract, const std::string& feather, uint64
 void addKeyFeatherAt(Document& d, size_t tract, const std::string& feather, const glm::dvec3& at);
 void removeKeyFeather(Document& d, size_t tract, size_t key);
 
-// Directions: styling vectors replace a body axis (the two are exclusive).
-void addStylingVector(Document& d, const glm::dvec3& at, const glm::dvec3& direction);
+// Directions: a styling vector over a body axis combs it locally (the axis is kept; coat/directions.hpp)
+// within `radius` (0: the field's falloff, else combRadius() of the axis); without an axis, styling
+// vectors are the whole field. A new axis keeps the comb strokes (the vectors over the old axis) and
+// replaces a vectors-only field.
+void addStylingVector(Document& d, const glm::dvec3& at, const glm::dvec3& direction, double radius = 0);
+// Default reach of a comb stroke: a tenth of the scene's body axis length (0 without an axis).
+double combRadius(const pipeline::Scene& s);
 void setStylingVector(Document& d, size_t k, const glm::dvec3& at, const glm::dvec3& direction);
 void removeStylingVector(Document& d, size_t k);
 void setBodyAxis(Document& d, const std::vector<glm::dvec3>& points);

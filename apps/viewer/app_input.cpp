@@ -155,7 +155,7 @@ bool App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
   const glm::dvec3 at(view_.dragAt), d(glm::normalize(dir));
   guarded(ctx, [&] {
     if (view_.tool == Tool::AddVector) {
-      actions::addStylingVector(doc_, at, d);
+      actions::addStylingVector(doc_, at, d, view_.combRadius);
       view_.selectedVector = int(doc_.scene().directions["vectors"].size()) - 1;
     } else if (view_.tool == Tool::AddBias) {
       actions::ensureTracts(doc_);

@@ -58,6 +58,7 @@ struct ViewState {
   float brushRadius = 0.1f;  // scene units (set from the skin size on load)
   float brushElevationDeg = 45.0f;
   float controlRadius = 0.2f;
+  float combRadius = 0.0f;  // reach of a new styling vector over a body axis, scene units (0 = a tenth of the axis)
   float biasSigma = 0.2f, biasStretch = 1.5f;
   // Timeline.
   bool playing = false;

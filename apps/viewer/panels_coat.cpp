@@ -289,8 +289,21 @@ void drawDirectionsPanel(PanelContext& ctx) {
   const Scene s = doc.scene();
   const Json& d = s.directions;
   const bool axis = d.contains("axis"), vectors = d.contains("vectors");
-  ImGui::Text("Field: %s", axis ? "body axis" : vectors ? "styling vectors" : "fallback only");
+  const size_t strokes = vectors && d["vectors"].is_array() ? d["vectors"].size() : 0;
+  if (axis && strokes > 0)
+    ImGui::Text("Field: body axis, combed by %zu styling vector%s", strokes, strokes == 1 ? "" : "s");
+  else
+    ImGui::Text("Field: %s", axis ? "body axis" : vectors ? "styling vectors" : "fallback only");
   toolToggle(ctx, Tool::AddVector, "Add styling vector", "press on the skin, drag the direction, release");
+  if (axis) {
+    ImGui::SliderFloat("Comb radius", &ctx.view.combRadius, 0.0f, 2.0f, ctx.view.combRadius > 0 ? "%.3f" : "auto",
+                       ImGuiSliderFlags_Logarithmic);
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip(
+          "Scene units. A new styling vector turns the feathers within about this distance\n"
+          "and keeps the body axis elsewhere. auto: a tenth of the axis (%.3f).",
+          actions::combRadius(s));
+  }
   ImGui::SameLine();
   toolToggle(ctx, Tool::EditVectors, "Drag vectors", "drag an arrow tip");
   if (ctx.view.tool == Tool::AddVector || ctx.view.tool == Tool::EditVectors) ctx.view.showVectors = true;
@@ -304,6 +317,13 @@ void drawDirectionsPanel(PanelContext& ctx) {
         ctx.view.selectedVector = int(k);
       bool ch = ImGui::DragFloat3("at", a, 0.005f);
       ch |= ImGui::DragFloat3("direction", di, 0.01f);
+      if (axis && v.contains("radius") && v["radius"].is_number()) {
+        float r = v["radius"].get<float>();
+        if (ImGui::DragFloat("radius", &r, 0.002f, 0.001f, 100.0f, "%.3f") && r > 0)
+          guarded(ctx, [&] {
+            doc.edit("styling vector radius", [&](Scene& sc) { sc.directions["vectors"][k]["radius"] = r; });
+          });
+      }
       if (ch && (di[0] != 0 || di[1] != 0 || di[2] != 0))
         guarded(ctx, [&] {
           actions::setStylingVector(doc, k, glm::dvec3(a[0], a[1], a[2]), glm::dvec3(di[0], di[1], di[2]));

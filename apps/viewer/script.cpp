@@ -185,8 +185,9 @@ void run(Document& doc, const ScriptCommand& c, const std::string& file, std::os
     needArgs(c, 5, 5, "key-at TRACT FEATHER X Y Z", file);
     for (size_t t : tracts(0)) actions::addKeyFeatherAt(doc, t, c.args[1], vec(c, 2, file));
   } else if (v == "vector") {
-    needArgs(c, 6, 6, "vector X Y Z DX DY DZ", file);
-    actions::addStylingVector(doc, vec(c, 0, file), vec(c, 3, file));
+    needArgs(c, 6, 7, "vector X Y Z DX DY DZ [RADIUS]", file);
+    actions::addStylingVector(doc, vec(c, 0, file), vec(c, 3, file),
+                              c.args.size() > 6 ? scriptNumber(c, 6, file) : 0.0);
   } else if (v == "axis") {
     if (c.args.size() < 6 || c.args.size() % 3 != 0) throw Error("usage: axis X1 Y1 Z1 X2 Y2 Z2 [...]", file, where(c));
     std::vector<glm::dvec3> pts;
@@ -258,7 +259,7 @@ const char* scriptHelp() {
   pin TRACT X Y Z                pinned follicle
   feather NAME PATH              add or replace a feather file in the library
   key TRACT FEATHER FOLLICLE_ID | key-at TRACT FEATHER X Y Z     key feathers
-  vector X Y Z DX DY DZ | axis X1 Y1 Z1 X2 Y2 Z2 ...             directions
+  vector X Y Z DX DY DZ [RADIUS] | axis X1 Y1 Z1 X2 Y2 Z2 ...    directions (over an axis, a vector combs it)
   brush X Y Z RADIUS ELEVATION_DEG   fixed-angle packing brush
   pack | wait                    wait for the evaluation (packing included)
   check                          print the checker's metrics as JSON

@@ -51,8 +51,6 @@ double vectorsEps2(const DirectionSpec& s) {
 }
 
 void validateSpec(const DirectionSpec& s, const std::string& where) {
-  if (!s.axis.empty() && !s.vectors.empty())
-    throw Error("give either a body axis or styling vectors, not both", {}, where);
   if (!s.axis.empty() && s.axis.size() < 2) throw Error("a body axis needs at least two points", {}, where + ".axis");
   for (size_t i = 0; i < s.axis.size(); ++i) {
     if (!finite3(s.axis[i])) throw Error("axis point is not finite", {}, where + ".axis[" + std::to_string(i) + "]");
@@ -64,6 +62,15 @@ void validateSpec(const DirectionSpec& s, const std::string& where) {
       throw Error("styling vector needs a finite position and a non-zero direction", {},
                   where + ".vectors[" + std::to_string(i) + "]");
   if (!(s.falloff >= 0) || !std::isfinite(s.falloff)) throw Error("falloff must be >= 0", {}, where + ".falloff");
+  for (size_t i = 0; i < s.vectors.size(); ++i) {
+    const std::string at = where + ".vectors[" + std::to_string(i) + "].radius";
+    const double r = s.vectors[i].radius;
+    if (!(r >= 0) || !std::isfinite(r)) throw Error("radius must be a finite number >= 0", {}, at);
+    if (s.axis.empty() && r > 0)
+      throw Error("a radius applies to styling vectors over a body axis (use falloff without one)", {}, at);
+    if (!s.axis.empty() && r == 0 && s.falloff == 0)
+      throw Error("a styling vector over a body axis needs a radius (or the field a falloff > 0)", {}, at);
+  }
   if (!finite3(s.fallback)) throw Error("fallback must be finite", {}, where + ".fallback");
 }
 
@@ -83,21 +90,42 @@ std::vector<glm::dvec3> readPoints(JsonReader& r, const std::string& key) {
 
 }  // namespace
 
-glm::dvec3 fieldDirection(const DirectionSpec& s, const glm::dvec3& p) {
-  if (s.axis.size() >= 2) {
-    double best = std::numeric_limits<double>::infinity();
-    glm::dvec3 dir(0.0);
-    for (size_t i = 0; i + 1 < s.axis.size(); ++i) {
-      const glm::dvec3 a = s.axis[i], d = s.axis[i + 1] - a;
-      const double len2 = glm::dot(d, d);
-      if (!(len2 > 0)) continue;
-      const double t = std::clamp(glm::dot(p - a, d) / len2, 0.0, 1.0);
-      const glm::dvec3 q = a + t * d - p;
-      const double d2 = glm::dot(q, q);
-      if (d2 < best) best = d2, dir = d / std::sqrt(len2);
-    }
-    return dir;
+namespace {
+glm::dvec3 axisDirection(const DirectionSpec& s, const glm::dvec3& p) {
+  double best = std::numeric_limits<double>::infinity();
+  glm::dvec3 dir(0.0);
+  for (size_t i = 0; i + 1 < s.axis.size(); ++i) {
+    const glm::dvec3 a = s.axis[i], d = s.axis[i + 1] - a;
+    const double len2 = glm::dot(d, d);
+    if (!(len2 > 0)) continue;
+    const double t = std::clamp(glm::dot(p - a, d) / len2, 0.0, 1.0);
+    const glm::dvec3 q = a + t * d - p;
+    const double d2 = glm::dot(q, q);
+    if (d2 < best) best = d2, dir = d / std::sqrt(len2);
   }
+  return dir;
+}
+
+// A combed axis: the axis blended toward the vectors by their coverage (directions.hpp).
+glm::dvec3 combedDirection(const DirectionSpec& s, const glm::dvec3& p) {
+  const glm::dvec3 a = axisDirection(s, p);
+  glm::dvec3 v(0.0);
+  double uncovered = 1.0;
+  for (const auto& sv : s.vectors) {
+    const double r = sv.radius > 0 ? sv.radius : s.falloff;
+    const double g = std::exp(-glm::dot(sv.at - p, sv.at - p) / (2.0 * r * r));
+    v += g * glm::normalize(sv.direction);
+    uncovered *= 1.0 - g;
+  }
+  const double lv = glm::length(v);
+  if (!(lv > 0)) return a;
+  const double w = 1.0 - uncovered;
+  return (1.0 - w) * a + w * (v / lv);
+}
+}  // namespace
+
+glm::dvec3 fieldDirection(const DirectionSpec& s, const glm::dvec3& p) {
+  if (s.axis.size() >= 2) return s.vectors.empty() ? axisDirection(s, p) : combedDirection(s, p);
   if (s.vectors.empty()) return glm::dvec3(0.0);
   glm::dvec3 sum(0.0);
   if (s.falloff > 0) {
@@ -191,7 +219,6 @@ void evaluateFrames(const SkinMesh& skin, const Follicles& follicles, const Surf
 
 DirectionSpec parseDirectionSpec(JsonReader& r) {
   DirectionSpec s;
-  if (r.has("axis") && r.has("vectors")) r.fail("vectors", "give either \"axis\" or \"vectors\", not both");
   if (r.has("axis")) {
     s.axis = readPoints(r, "axis");
     if (s.axis.size() < 2) r.fail("axis", "a body axis needs at least two points (head to tail)");
@@ -206,6 +233,7 @@ DirectionSpec parseDirectionSpec(JsonReader& r) {
       sv.at = v.vec3("at");
       sv.direction = v.vec3("direction");
       if (glm::length(sv.direction) == 0) v.fail("direction", "must be non-zero");
+      sv.radius = v.number("radius", 0.0, 0.0, std::numeric_limits<double>::max());
       v.finish();
       s.vectors.push_back(sv);
     }
@@ -214,6 +242,15 @@ DirectionSpec parseDirectionSpec(JsonReader& r) {
   s.falloff = r.number("falloff", 0.0, 0.0, std::numeric_limits<double>::max());
   s.fallback = r.vec3("fallback", s.fallback);
   if (glm::length(s.fallback) == 0) r.fail("fallback", "must be non-zero");
+  for (size_t i = 0; i < s.vectors.size(); ++i)
+    if (s.axis.empty() && s.vectors[i].radius > 0)
+      r.fail("vectors", "vector " + std::to_string(i) +
+                            " has a \"radius\", which applies only over a body axis (use \"falloff\" without one)");
+  if (!s.axis.empty() && s.falloff == 0)
+    for (size_t i = 0; i < s.vectors.size(); ++i)
+      if (s.vectors[i].radius == 0)
+        r.fail("vectors", "vector " + std::to_string(i) +
+                              " lies over a body axis and needs a \"radius\" (or the field a \"falloff\" > 0)");
   r.finish();
   return s;
 }

@@ -191,15 +191,68 @@ TEST(Coat2Directions, PerTractFieldsAndParsing) {
   two.tracts[0].first = "tail";
   EXPECT_THROW(computeSurfaceDirections(grid, tracts, fol, two), Error);
 
-  for (const char* bad : {R"({"axis": [[0,0,0]]})", R"({"axis": [[0,0,0],[0,0,0]]})",
-                          R"({"axis": [[0,0,0],[1,0,0]], "vectors": [{"at": [0,0,0], "direction": [1,0,0]}]})",
-                          R"({"vectors": [{"at": [0,0,0], "direction": [0,0,0]}]})",
-                          R"({"vectors": [{"at": [0,0,0], "direction": [1,0,0], "weight": 2}]})", R"({"axes": []})",
-                          R"({"tracts": {"wing": {"tracts": {}}}})", R"({"falloff": -1})"}) {
+  for (const char* bad :
+       {R"({"axis": [[0,0,0]]})", R"({"axis": [[0,0,0],[0,0,0]]})",
+        R"({"axis": [[0,0,0],[1,0,0]], "vectors": [{"at": [0,0,0], "direction": [1,0,0]}]})",
+        R"({"vectors": [{"at": [0,0,0], "direction": [0,0,0]}]})",
+        R"({"vectors": [{"at": [0,0,0], "direction": [1,0,0], "weight": 2}]})", R"({"axes": []})",
+        R"({"tracts": {"wing": {"tracts": {}}}})", R"({"falloff": -1})",
+        R"({"vectors": [{"at": [0,0,0], "direction": [1,0,0], "radius": 0.5}]})",
+        R"({"axis": [[0,0,0],[1,0,0]], "vectors": [{"at": [0,0,0], "direction": [1,0,0], "radius": -1}]})"}) {
     const Json b = Json::parse(bad);
     JsonReader br(b, "scene.json", "directions");
     EXPECT_THROW(parseDirections(br), Error) << bad;
   }
+}
+
+// A combed axis (the viewer's comb): styling vectors over a body axis turn the field near them and leave
+// the axis everywhere else.
+TEST(Coat2Directions, StylingVectorsCombAnAxisLocally) {
+  const Json j = Json::parse(R"({
+    "axis": [[0, 0, 0], [10, 0, 0]],
+    "vectors": [{"at": [5, 0, 0], "direction": [0, 2, 0], "radius": 0.5},
+                {"at": [9, 0, 0], "direction": [0, 0, 1]}],
+    "falloff": 0.8})");
+  JsonReader r(j, "scene.json", "directions");
+  const DirectionSpec s = parseDirections(r).field;
+  ASSERT_EQ(s.axis.size(), 2u);
+  ASSERT_EQ(s.vectors.size(), 2u);
+  EXPECT_EQ(s.vectors[0].radius, 0.5);
+  EXPECT_EQ(s.vectors[1].radius, 0.0);  // the field's falloff
+  auto dirAt = [&](glm::dvec3 p) { return glm::normalize(fieldDirection(s, p)); };
+  // At a vector: its direction (its coverage is 1), up to the other vector's tail (exp(-12.5) here).
+  EXPECT_NEAR(glm::length(dirAt({5, 0, 0}) - glm::dvec3(0, 1, 0)), 0.0, 1e-5);
+  EXPECT_NEAR(glm::length(dirAt({9, 0, 0}) - glm::dvec3(0, 0, 1)), 0.0, 1e-9);
+  // Far from both: the axis (the remaining weight is exp(-d^2 / 2r^2), below 1e-9 here).
+  EXPECT_NEAR(glm::length(dirAt({0.5, 0, 0}) - glm::dvec3(1, 0, 0)), 0.0, 1e-9);
+  // One radius from the first vector: weight exp(-1/2) on it (the second's tail is exp(-15.8)).
+  const double g = std::exp(-0.5);
+  const glm::dvec3 expect = glm::normalize((1 - g) * glm::dvec3(1, 0, 0) + g * glm::dvec3(0, 1, 0));
+  EXPECT_NEAR(glm::length(dirAt({4.5, 0, 0}) - expect), 0.0, 1e-6);
+  // The axis itself is unchanged without vectors.
+  DirectionSpec bare = s;
+  bare.vectors.clear();
+  EXPECT_EQ(fieldDirection(bare, {5, 0, 0}), glm::dvec3(1, 0, 0));
+  // Over an axis, every vector needs a reach: a radius, or the field's falloff.
+  const Json noReach =
+      Json::parse(R"({"axis": [[0,0,0],[1,0,0]], "vectors": [{"at": [0,0,0], "direction": [0,1,0]}]})");
+  JsonReader nr(noReach, "scene.json", "directions");
+  try {
+    parseDirections(nr);
+    ADD_FAILURE() << "a vector over an axis without a reach was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("radius"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("directions.vectors"), std::string::npos) << e.what();
+  }
+  DirectionSpec direct = s;
+  direct.falloff = 0;
+  direct.vectors[1].radius = 0;
+  const SkinMesh grid = makeGridPatch(4, 4);
+  const std::vector<Tract> tracts{wholeMeshTract(grid)};
+  const Follicles fol = scatterTracts(grid, tracts, 10);
+  DirectionOptions o;
+  o.field = direct;
+  EXPECT_THROW(computeSurfaceDirections(grid, tracts, fol, o), Error);
 }
 
 TEST(Coat2Ordering, TotalOrderDownstreamFirst) {

@@ -5,9 +5,12 @@
 #include <filesystem>
 #include <fstream>
 
+#include <glm/geometric.hpp>
+
 #include "actions.hpp"
 #include "document.hpp"
 #include "fixtures.hpp"
+#include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/feather/io.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
@@ -311,4 +314,57 @@ TEST(Document, FailedOpenKeepsTheCurrentScene) {
   EXPECT_EQ(js(d.scene()), before);
   EXPECT_TRUE(d.modified());
   EXPECT_TRUE(d.canUndo());
+}
+
+// #28: adding a styling vector used to delete directions.axis, so one stroke re-combed the whole bird.
+// Over an axis a vector now combs locally (coat/directions.hpp): the axis is kept, feathers near the
+// stroke turn to it, and feathers a few radii away keep their direction.
+TEST(Document, AStylingVectorCombsTheAxisInsteadOfReplacingIt) {
+  Document d;
+  d.reset(smallPatch(), "");
+  actions::setBodyAxis(d, {{-1.5, 0, 0}, {1.5, 0, 0}});  // replaces patch.json's vectors-only field
+  EXPECT_FALSE(d.scene().directions.contains("vectors"));
+  ASSERT_TRUE(d.waitIdle());
+  const std::vector<coat::FeatherFrame> before = d.idlePipeline()->feathers().frames;
+  const Json axis = d.scene().directions["axis"];
+
+  // The stroke starts at the follicle nearest the patch's centre.
+  glm::dvec3 at = before.at(0).origin;
+  for (const auto& f : before)
+    if (glm::length(f.origin) < glm::length(at)) at = f.origin;
+  actions::addStylingVector(d, at, {0, 0, 1});
+  const Json& dirs = d.scene().directions;
+  EXPECT_EQ(dirs["axis"], axis) << "the axis was dropped";
+  ASSERT_EQ(dirs["vectors"].size(), 1u);
+  EXPECT_DOUBLE_EQ(dirs["vectors"][0]["radius"].get<double>(), actions::combRadius(d.scene()));
+  EXPECT_NEAR(actions::combRadius(d.scene()), 0.3, 1e-12);  // by default a tenth of the axis
+  // A narrower stroke, as the panel's comb radius gives, in place of the default one.
+  ASSERT_TRUE(d.undo());
+  const double radius = 0.15;
+  actions::addStylingVector(d, at, {0, 0, 1}, radius);
+  EXPECT_EQ(d.scene().directions["vectors"][0]["radius"].get<double>(), radius);
+  ASSERT_TRUE(d.waitIdle());
+  const std::vector<coat::FeatherFrame> after = d.idlePipeline()->feathers().frames;
+  ASSERT_EQ(after.size(), before.size());
+  size_t near = 0, far = 0;
+  for (size_t i = 0; i < after.size(); ++i) {
+    const double dist = glm::length(after[i].origin - at);
+    if (dist < 1e-9) {
+      EXPECT_GT(after[i].tangent.z, 0.9) << "feather " << i << " at the stroke did not turn";
+      ++near;
+    } else if (dist > 5 * radius) {
+      EXPECT_NEAR(glm::length(after[i].tangent - before[i].tangent), 0.0, 1e-4) << "feather " << i << " moved";
+      ++far;
+    }
+  }
+  EXPECT_EQ(near, 1u);
+  EXPECT_GT(far, 0u);
+
+  // A new axis keeps the comb strokes; undo gives back the uncombed axis.
+  actions::setBodyAxis(d, {{-1.5, 0, 0.1}, {1.5, 0, 0.1}});
+  EXPECT_EQ(d.scene().directions["vectors"].size(), 1u);
+  ASSERT_TRUE(d.undo());
+  ASSERT_TRUE(d.undo());
+  EXPECT_FALSE(d.scene().directions.contains("vectors"));
+  EXPECT_EQ(d.scene().directions["axis"], axis);
 }

@@ -7,7 +7,12 @@
 //    with the Euclidean distance d from the follicle (Gaussian exp(-(d^2 - d_min^2) / (2 falloff^2)) when
 //    falloff > 0, else inverse-distance-squared 1 / (d^2 + eps^2), eps = 1e-3 times the extent of the
 //    vectors' positions) and the blend projected onto the tangent plane (thesis: "projecting an
-//    interpolated object-space direction vector onto the surface").
+//    interpolated object-space direction vector onto the surface"); or
+//  - both, a combed axis: the axis everywhere, and near each styling vector its direction, with a local
+//    Gaussian weight g_i = exp(-d_i^2 / (2 r_i^2)) (r_i = the vector's radius, else falloff). The vectors'
+//    coverage W = 1 - prod(1 - g_i) blends A (the unit axis direction) with V (the unit g-weighted sum of
+//    the vectors): (1 - W) A + W V. At a vector's position W = 1 (its direction exactly); far from every
+//    vector W -> 0 (the axis). This is what the viewer's comb paints.
 // Where that projection vanishes (the axis or the blend is parallel to the normal) the fallback vector
 // is projected instead, and where that vanishes too, the follicle face's first edge.
 //
@@ -34,9 +39,11 @@ namespace pteryla::coat {
 struct StylingVector {
   glm::dvec3 at{0.0};         // scene units
   glm::dvec3 direction{0.0};  // object space, non-zero (its length is ignored)
+  double radius = 0;          // scene units; over an axis, this vector's Gaussian reach (0 = the spec's falloff)
 };
 
-// One direction field. Exactly one of axis / vectors, or neither (then the fallback everywhere).
+// One direction field: an axis, styling vectors, both (a combed axis: then every vector needs a radius or
+// the spec a falloff), or neither (then the fallback everywhere).
 struct DirectionSpec {
   std::vector<glm::dvec3> axis;  // body-axis polyline, head to tail, >= 2 distinct points
   std::vector<StylingVector> vectors;
@@ -78,9 +85,9 @@ FeatherFrame follicleFrame(const SkinMesh& skin, uint32_t face, const glm::dvec3
 void evaluateFrames(const SkinMesh& skin, const Follicles& follicles, const SurfaceDirections& directions,
                     CoatFeathers& coat);
 
-// JSON (docs/coat.md): {"axis": [[x,y,z], ...]} or {"vectors": [{"at": [x,y,z], "direction": [x,y,z]}, ...]},
-// optional "falloff", "fallback", and "tracts": {"<tract name>": {same keys except "tracts"}}.
-// Calls r.finish().
+// JSON (docs/coat.md): {"axis": [[x,y,z], ...]} and/or {"vectors": [{"at": [x,y,z], "direction": [x,y,z],
+// "radius": r}, ...]} (radius optional), optional "falloff", "fallback", and "tracts": {"<tract name>": {same keys
+// except "tracts"}}. Calls r.finish().
 DirectionOptions parseDirections(JsonReader& r);
 DirectionSpec parseDirectionSpec(JsonReader& r);  // one field, no "tracts"; calls r.finish()
 
