@@ -168,6 +168,11 @@ void removeKeyFeather(Document& d, size_t t, size_t k) {
   });
 }
 
+void setRenderLod(Document& d, double f) {
+  if (!(f > 0 && f <= 1)) throw Error("render level of detail must be in (0, 1]", "", "render.lod");
+  d.edit("render LOD", [&](Scene& s) { s.render.lod = f; });
+}
+
 double combRadius(const Scene& s) {
   if (!s.directions.is_object() || !s.directions.contains("axis") || !s.directions["axis"].is_array()) return 0;
   const Json& a = s.directions["axis"];

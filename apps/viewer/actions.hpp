@@ -36,6 +36,10 @@ void addKeyFeather(Document& d, size_t tract, const std::string& feather, uint64
 void addKeyFeatherAt(Document& d, size_t tract, const std::string& feather, const glm::dvec3& at);
 void removeKeyFeather(Document& d, size_t tract, size_t key);
 
+// The scene's render.lod (renders, the CLI), as an undoable edit; the viewer's preview level of detail
+// (Document::setLod) is separate and never saved.
+void setRenderLod(Document& d, double fraction);
+
 // Directions: a styling vector over a body axis combs it locally (the axis is kept; coat/directions.hpp)
 // within `radius` (0: the field's falloff, else combRadius() of the axis); without an axis, styling
 // vectors are the whole field. A new axis keeps the comb strokes (the vectors over the old axis) and

@@ -141,14 +141,13 @@ bool Document::saveAs(const std::string& path, bool overwrite) {
   const std::string abs = std::filesystem::absolute(path).lexically_normal().string();
   const auto dir = std::filesystem::path(abs).parent_path();
   if (!dir.empty() && !std::filesystem::is_directory(dir)) throw Error("directory does not exist", abs);
+  // The preview level of detail (lod()) is the viewer's, not the scene's: render.lod is saved as edited.
   Scene s = scene_;
   s.time = time_;
-  s.render.lod = lod_;
   pipeline::saveScene(abs, s);
   // Saved paths are relative to the file: remember where it is so later saves resolve the same way.
   scene_.file = abs;
   scene_.time = time_;
-  scene_.render.lod = lod_;
   path_ = abs;
   modified_ = false;
   return true;

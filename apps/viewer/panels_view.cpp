@@ -82,8 +82,15 @@ void drawViewPanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
   ImGui::Text("%.1f fps", v.fps);
   float lod = static_cast<float>(doc.lod());
-  if (ImGui::SliderFloat("LOD", &lod, 0.02f, 1.0f, "%.2f")) guarded(ctx, [&] { doc.setLod(lod); });
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("fraction of feather geometry (thesis 7.1.3)");
+  if (ImGui::SliderFloat("Preview LOD", &lod, 0.02f, 1.0f, "%.2f")) guarded(ctx, [&] { doc.setLod(lod); });
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("fraction of feather geometry drawn here (thesis 7.1.3); not saved");
+  if (doc.hasScene()) {
+    float renderLod = static_cast<float>(doc.scene().render.lod);
+    if (ImGui::SliderFloat("Render LOD", &renderLod, 0.02f, 1.0f, "%.2f"))
+      guarded(ctx, [&] { actions::setRenderLod(doc, renderLod); });
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("the scene's render.lod: what renders, exports and the CLI use; saved with the scene");
+  }
   ImGui::Checkbox("Coat", &v.showCoat);
   ImGui::SameLine();
   ImGui::Checkbox("Skin", &v.showSkin);

@@ -72,9 +72,11 @@ std::string writeRecovery(const Document& doc) {
   const std::string path = recoveryPath(doc.path());
   pipeline::Scene s = doc.scene();
   s.time = doc.time();
-  s.render.lod = doc.lod();
-  const Json j = {
-      {"pteryla_recovery", kFormat}, {"scene_path", doc.path()}, {"saved_at", utcNow()}, {"scene", sceneJson(s)}};
+  const Json j = {{"pteryla_recovery", kFormat},
+                  {"scene_path", doc.path()},
+                  {"saved_at", utcNow()},
+                  {"view_lod", doc.lod()},
+                  {"scene", sceneJson(s)}};
   std::error_code ec;
   fs::create_directories(fs::path(path).parent_path(), ec);
   if (ec) throw Error("cannot create the recovery directory: " + ec.message(), fs::path(path).parent_path().string());
@@ -106,6 +108,10 @@ Recovery readRecovery(const std::string& file) {
   Recovery r;
   r.file = file;
   r.scenePath = j["scene_path"].get<std::string>();
+  if (j.contains("view_lod") && j["view_lod"].is_number()) {
+    const double f = j["view_lod"].get<double>();
+    if (f > 0 && f <= 1) r.viewLod = f;
+  }
   r.savedAt = j.value("saved_at", std::string());
   try {
     r.scene = pipeline::sceneFromJson(j["scene"], r.scenePath);
@@ -145,7 +151,7 @@ void restoreRecovery(Document& doc, const Recovery& r) {
     doc.edit("restore unsaved work", [&](pipeline::Scene& s) { s = recovered; });
     doc.endGesture();
     doc.setTime(r.scene.time);
-    doc.setLod(r.scene.render.lod);
+    doc.setLod(r.viewLod.value_or(r.scene.render.lod));
   } else {
     // The scene file is gone (or there never was one): the work comes back as an untitled scene.
     doc.reset(r.scene, "");

@@ -27,10 +27,11 @@ std::string recoveryDir();
 std::string recoveryPath(const std::string& scenePath);
 
 struct Recovery {
-  std::string file;       // the recovery file
-  std::string scenePath;  // the scene file the work belongs to ("" untitled)
-  std::string savedAt;    // UTC, ISO 8601
-  pipeline::Scene scene;  // time and level of detail included (scene.time, scene.render.lod)
+  std::string file;               // the recovery file
+  std::string scenePath;          // the scene file the work belongs to ("" untitled)
+  std::string savedAt;            // UTC, ISO 8601
+  pipeline::Scene scene;          // the time included (scene.time)
+  std::optional<double> viewLod;  // the viewer's preview level of detail (older files: none)
 };
 
 // Writes the document's scene to recoveryPath(doc.path()) (temporary file, then rename); returns the

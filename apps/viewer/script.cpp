@@ -153,6 +153,9 @@ void run(Document& doc, const ScriptCommand& c, const std::string& file, std::os
     const double f = scriptNumber(c, 0, file);
     if (!(f > 0 && f <= 1)) throw Error("lod must be in (0, 1]", file, where(c));
     doc.setLod(f);
+  } else if (v == "render-lod") {
+    needArgs(c, 1, 1, "render-lod FRACTION", file);
+    actions::setRenderLod(doc, scriptNumber(c, 0, file));
   } else if (v == "seed") {
     needArgs(c, 1, 1, "seed N", file);
     const size_t s = count(c, 0, file);
@@ -252,7 +255,8 @@ const char* scriptHelp() {
   load PATH                      open a scene (.json) or a bare mesh (.obj/.ply/.off/.stl)
   save PATH [overwrite]          write the scene; an existing file is only replaced with 'overwrite'
   undo | redo
-  time T | lod F | seed N        timeline time, level of detail (0,1], master seed
+  time T | lod F | seed N        timeline time, preview level of detail (0,1], master seed
+  render-lod F                   the scene's render.lod (0,1] (what is saved; lod is the viewer's)
   count TRACT N | density TRACT D    follicles of a tract (TRACT: index, name or *)
   relax N [TRACT]                Lloyd iterations (0 = scattered only)
   bias TRACT X Y Z DX DY DZ [SIGMA [STRETCH]]   relaxation bias vector

@@ -54,6 +54,8 @@ TEST(Recovery, WriteReadRestoreKeepsTheSceneFileAndOneUndoStep) {
   d.open(f.scene);
   d.edit("count", [](pipeline::Scene& s) { s.tracts[0]["count"] = 41; });
   d.setTime(0.75);
+  const double renderLod = d.scene().render.lod;
+  d.setLod(0.3);  // the viewer's preview level of detail: restored, but not as the scene's render.lod
   const std::string file = writeRecovery(d);
   EXPECT_EQ(file, recoveryPath(f.scene));
   EXPECT_EQ(std::filesystem::directory_iterator(recoveryDir())->path().string(), file) << "no temporary left";
@@ -64,6 +66,8 @@ TEST(Recovery, WriteReadRestoreKeepsTheSceneFileAndOneUndoStep) {
   EXPECT_FALSE(r.savedAt.empty());
   EXPECT_EQ(r.scene.tracts[0]["count"], 41);
   EXPECT_DOUBLE_EQ(r.scene.time, 0.75);
+  EXPECT_DOUBLE_EQ(r.scene.render.lod, renderLod);
+  EXPECT_EQ(r.viewLod, 0.3);
   ASSERT_EQ(findRecovery(f.scene), file);
   ASSERT_EQ(findRecovery(""), file);
 
@@ -73,6 +77,8 @@ TEST(Recovery, WriteReadRestoreKeepsTheSceneFileAndOneUndoStep) {
   EXPECT_TRUE(fresh.modified());
   EXPECT_EQ(fresh.scene().tracts[0]["count"], 41);
   EXPECT_DOUBLE_EQ(fresh.time(), 0.75);
+  EXPECT_DOUBLE_EQ(fresh.lod(), 0.3);
+  EXPECT_DOUBLE_EQ(fresh.scene().render.lod, renderLod);
   EXPECT_EQ(fresh.path(), d.path());
   EXPECT_EQ(f.fileText(f.scene), original) << "a restore does not write the scene file";
   ASSERT_TRUE(fresh.undo());

@@ -65,6 +65,7 @@ TEST(Script, SessionSavesASceneThatReloadsIdentically) {
                            "count 0 20\n"
                            "relax 2\n"
                            "lod 0.2\n"
+                           "render-lod 0.6\n"
                            "pack\n"
                            "time 0.5\n"
                            "control 0 0.05 0 0.6\n"
@@ -89,7 +90,9 @@ TEST(Script, SessionSavesASceneThatReloadsIdentically) {
   EXPECT_EQ(pipeline::sceneToJson(back, saved), readJsonFile(saved));
   EXPECT_EQ(back.tracts[0]["count"], 20);
   EXPECT_DOUBLE_EQ(back.time, 0.5);
-  EXPECT_DOUBLE_EQ(back.render.lod, 0.2);
+  // The preview level of detail stays the viewer's; the scene keeps its own render.lod (#28).
+  EXPECT_DOUBLE_EQ(d.lod(), 0.2);
+  EXPECT_DOUBLE_EQ(back.render.lod, 0.6);
   EXPECT_DOUBLE_EQ(back.render.brdfH, 0.1);
   EXPECT_EQ(back.controls[0]["keys"][0]["lift"], 0.8);
   EXPECT_EQ(back.moult["duration"], 4);
