@@ -152,7 +152,18 @@ int App::run() {
   try {
     if (!initWindow()) return 1;
     if (!options_.script.empty()) script_ = loadScript(options_.script);
-    if (!options_.scene.empty()) doc_.open(options_.scene);
+    if (!options_.scene.empty()) {
+      try {
+        doc_.open(options_.scene);
+        remember(options_.scene);
+      } catch (const Error& e) {
+        // Interactive: the window opens with the error, and File > Open starts at the file. A script,
+        // screenshot or benchmark has nobody to read it: exit 2 below.
+        if (scripted()) throw;
+        openPath_ = options_.scene;
+        showError(e.what());
+      }
+    }
     offerRecovery();
     fitTimeRange();
     if (options_.lod) doc_.setLod(*options_.lod);
@@ -294,6 +305,14 @@ void App::frame() {
     if (fakeMouseNext_ == fakeMouse_.size()) {
       fakeMouse_.clear();
       fakeMouseNext_ = 0;
+    }
+  }
+  if (fakeKeysNext_ < fakeKeys_.size()) {
+    const auto [key, down] = fakeKeys_[fakeKeysNext_++];
+    ImGui::GetIO().KeysDown[key] = down;
+    if (fakeKeysNext_ == fakeKeys_.size()) {
+      fakeKeys_.clear();
+      fakeKeysNext_ = 0;
     }
   }
   ImGui::NewFrame();

@@ -14,6 +14,7 @@
 
 #include "camera_controller.hpp"
 #include "document.hpp"
+#include "file_browser.hpp"
 #include "navigation.hpp"
 #include "panels.hpp"
 #include "recovery.hpp"
@@ -102,6 +103,11 @@ class App {
   void requestSave();
   void requestSaveAs();
   void afterSave();
+  // The Open and Save As dialogs (app_files.cpp): a file browser, recent files, Enter confirms.
+  void openDialog();
+  void saveAsDialog();
+  void saveAsNow(const std::string& path);
+  void remember(const std::string& path);  // adds to recent files (user actions only, not scripts)
   void sceneJsonWindow();
   void helpWindow();
   void scratchboardWindow();
@@ -159,6 +165,10 @@ class App {
   Pending pending_ = Pending::None;
   std::string pendingPath_;
   std::string openPath_, saveAsPath_;
+  FileBrowser openBrowser_{{".json", ".obj", ".ply", ".off", ".stl"}}, saveBrowser_{{".json"}};
+  std::string openName_, saveName_;  // the dialogs' file-name fields
+  bool focusName_ = false;           // put the keyboard in the file-name field when a dialog opens
+  RecentFiles recent_{RecentFiles::defaultFile()};
   bool quit_ = false;
 
   // Screenshots and scripted runs.
@@ -189,6 +199,9 @@ class App {
   };
   std::vector<FakeMouse> fakeMouse_;
   size_t fakeMouseNext_ = 0;
+  // Scripted keys (`key` command): (ImGui key index, down) per frame.
+  std::vector<std::pair<int, bool>> fakeKeys_;
+  size_t fakeKeysNext_ = 0;
   glm::vec2 scriptPoint(const ScriptCommand& c, size_t arg) const;
 
   // Drag state of the viewport.

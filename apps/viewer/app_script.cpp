@@ -1,6 +1,8 @@
 // --script sessions: one command per frame, each once the previous evaluation is complete, so the
 // window keeps drawing (and the result is the same however long a stage takes). Any error ends the
 // session with exit code 2.
+#include <imgui.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -27,6 +29,7 @@ glm::vec2 App::scriptPoint(const ScriptCommand& c, size_t arg) const {
 void App::scriptStep() {
   if (quit_) return;
   if (!fakeMouse_.empty()) return;  // a scripted click or drag is being played
+  if (!fakeKeys_.empty()) return;   // a scripted key is being pressed
   if (doc_.failed()) return;        // frame() reports the error and fails the script
   if (shotWanted_) return;          // a screenshot is waiting for its frame
   if (view_.ui.pending) {
@@ -112,6 +115,32 @@ void App::scriptStep() {
       else
         *flag = on;
       scriptWaitFrames_ = 1;
+    } else if (c.verb == "dialog") {
+      needArgs(c, 1, 2, "dialog open|save-as [PATH]", file);
+      const std::string path = c.args.size() > 1 ? c.args[1] : "";
+      if (c.args[0] == "open") {
+        if (!path.empty()) openPath_ = path;
+        popupToOpen_ = "Open scene";
+      } else if (c.args[0] == "save-as") {
+        if (!doc_.hasScene()) throw Error("dialog save-as: no scene is open", file, "line " + std::to_string(c.line));
+        requestSaveAs();
+        if (!path.empty()) saveAsPath_ = path;
+      } else {
+        throw Error("usage: dialog open|save-as [PATH]", file, "line " + std::to_string(c.line));
+      }
+      scriptWaitFrames_ = 2;
+    } else if (c.verb == "key") {
+      needArgs(c, 1, 1, "key enter|escape|tab", file);
+      const std::string& k = c.args[0];
+      const ImGuiKey key = k == "enter"    ? ImGuiKey_Enter
+                           : k == "escape" ? ImGuiKey_Escape
+                           : k == "tab"    ? ImGuiKey_Tab
+                                           : ImGuiKey_COUNT;
+      if (key == ImGuiKey_COUNT) throw Error("usage: key enter|escape|tab", file, "line " + std::to_string(c.line));
+      const int index = ImGui::GetKeyIndex(key);
+      fakeKeys_ = {{index, true}, {index, false}};
+      fakeKeysNext_ = 0;
+      scriptWaitFrames_ = 2;
     } else if (c.verb == "click" || c.verb == "drag") {
       // View pixels from the view's top-left corner, or percentages of the view ("50%").
       if (c.verb == "click")

@@ -73,9 +73,11 @@ void App::openNow(const std::string& path) {
   try {
     doc_.open(path);
   } catch (const std::exception& e) {
+    openPath_ = path;  // the Open dialog starts there, to fix the name or pick another file
     showError(e.what());
     return;
   }
+  remember(path);
   // Forget the previous scene's view.
   renderer_->setSkin(TriMesh{});
   renderer_->setCoat(TriMesh{}, {});
@@ -121,9 +123,8 @@ void App::requestSave() {
 
 void App::requestSaveAs() {
   if (!doc_.hasScene()) return;
-  if (saveAsPath_.empty())
-    saveAsPath_ =
-        doc_.path().empty() ? (std::filesystem::current_path() / (doc_.scene().name + ".json")).string() : doc_.path();
+  saveAsPath_ =
+      doc_.path().empty() ? (std::filesystem::current_path() / (doc_.scene().name + ".json")).string() : doc_.path();
   popupToOpen_ = "Save scene as";
 }
 
@@ -161,6 +162,7 @@ void App::buildUi() {
     }
     if (ctrl && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Y))) doc_.redo();
     if (ctrl && ImGui::IsKeyPressed('S')) requestSave();
+    if (ctrl && ImGui::IsKeyPressed('O')) popupToOpen_ = "Open scene";
     if (!ctrl && ImGui::IsKeyPressed('F')) frameAll();
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space))) view_.playing = !view_.playing;
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) view_.tool = Tool::Orbit;
@@ -173,7 +175,14 @@ void App::buildUi() {
 void App::menuBar() {
   if (!ImGui::BeginMainMenuBar()) return;
   if (ImGui::BeginMenu("File")) {
-    if (ImGui::MenuItem("Open...")) popupToOpen_ = "Open scene";
+    if (ImGui::MenuItem("Open...", "Ctrl+O")) popupToOpen_ = "Open scene";
+    if (ImGui::BeginMenu("Open Recent")) {
+      if (ImGui::IsWindowAppearing()) recent_.load();
+      if (recent_.list().empty()) ImGui::TextDisabled("no recent files");
+      for (const auto& r : recent_.list())
+        if (ImGui::MenuItem(r.c_str())) requestOpen(r);
+      ImGui::EndMenu();
+    }
     if (ImGui::MenuItem("Save", "Ctrl+S", false, doc_.hasScene())) requestSave();
     if (ImGui::MenuItem("Save As...", nullptr, false, doc_.hasScene())) requestSaveAs();
     ImGui::Separator();
@@ -217,9 +226,11 @@ void App::panelColumn() {
                    ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoBringToFrontOnFocus);
   if (!doc_.hasScene()) {
     ImGui::TextWrapped("No scene. Open a scene file (.json) or a bare mesh (.obj, .ply, .off, .stl).");
-    static std::string path;
-    ImGui::InputText("path", &path);
-    if (ImGui::Button("Open")) requestOpen(path);
+    if (ImGui::Button("Open...")) popupToOpen_ = "Open scene";
+    if (ImGui::IsWindowAppearing()) recent_.load();
+    if (!recent_.list().empty()) ImGui::TextDisabled("Recent:");
+    for (const auto& r : recent_.list())
+      if (ImGui::Selectable(r.c_str())) requestOpen(r);
     ImGui::End();
     return;
   }
@@ -314,42 +325,8 @@ void App::dialogs() {
     ImGui::EndPopup();
   }
 
-  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
-  if (ImGui::BeginPopupModal("Open scene", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
-    ImGui::SetNextItemWidth(520);
-    ImGui::InputText("scene or mesh", &openPath_);
-    if (ImGui::Button("Open")) {
-      ImGui::CloseCurrentPopup();
-      requestOpen(openPath_);
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
-    ImGui::EndPopup();
-  }
-
-  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
-  if (ImGui::BeginPopupModal("Save scene as", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
-    ImGui::SetNextItemWidth(520);
-    ImGui::InputText("file (.json)", &saveAsPath_);
-    if (ImGui::Button("Save")) {
-      ImGui::CloseCurrentPopup();
-      try {
-        if (doc_.saveAs(saveAsPath_, false))
-          afterSave();
-        else
-          popupToOpen_ = "Replace file?";
-      } catch (const std::exception& e) {
-        pending_ = Pending::None;
-        showError(e.what());
-      }
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Cancel")) {
-      pending_ = Pending::None;
-      ImGui::CloseCurrentPopup();
-    }
-    ImGui::EndPopup();
-  }
+  openDialog();
+  saveAsDialog();
 
   ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
   if (ImGui::BeginPopupModal("Replace file?", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
@@ -359,6 +336,7 @@ void App::dialogs() {
       ImGui::CloseCurrentPopup();
       try {
         doc_.saveAs(saveAsPath_, true);
+        remember(saveAsPath_);
         afterSave();
       } catch (const std::exception& e) {
         pending_ = Pending::None;
@@ -439,7 +417,7 @@ void App::helpWindow() {
   }
   ImGui::TextWrapped(
       "Mouse: left drag orbits, right or middle drag (or shift + left) pans, the wheel zooms. F frames all, "
-      "Ctrl+Z / Ctrl+Y undo and redo, Ctrl+S saves, Space plays the timeline, Esc ends a tool.\n"
+      "Ctrl+Z / Ctrl+Y undo and redo, Ctrl+S saves, Ctrl+O opens, Space plays the timeline, Esc ends a tool.\n"
       "Edits re-run only the stages after them, in the background; the status bar shows progress and "
       "Cancel. docs/viewer.md has the details.");
   ImGui::Separator();

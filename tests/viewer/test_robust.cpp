@@ -203,3 +203,59 @@ TEST(ViewerRobust, ForcedAutosaveIsRestoredOnAStartWithoutAScene) {
   ASSERT_EQ(r2.code, 0) << slurp(dir + "/stderr2.txt");
   EXPECT_EQ(pipeline::loadScene(recovered).tracts[0]["count"], 27);
 }
+
+// #28: a broken scene named on the command line of an interactive run opens the window with the error
+// (and File > Open at that file) instead of exiting before any window shows. A scripted run still exits 2.
+TEST(ViewerRobust, ABrokenSceneOnTheCommandLineOpensTheWindow) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_broken_arg");
+  const std::string broken = dir + "/broken.json";
+  std::ofstream(broken) << "{\"pteryla\": 1, \"mesh\": ";
+  // Interactive: still running (with its error dialog) when `timeout` ends it after 8 s.
+  const std::string status = dir + "/status";
+  const std::string cmd = "xvfb-run -a -s \"-screen 0 1024x768x24\" sh -c 'env " + stateEnv(dir) + " timeout 8 \"" +
+                          std::string(PTERYLA_VIEWER_EXE) + "\" \"" + broken + "\" 2>\"" + dir +
+                          "/stderr.txt\"; echo $? >\"" + status + "\"' >/dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_EQ(std::atoi(slurp(status).c_str()), 124) << "the viewer did not stay open: " << slurp(dir + "/stderr.txt");
+  // Scripted: nobody reads the dialog, so the run ends with exit 2 naming the file.
+  const std::string script = dir + "/s.txt";
+  std::ofstream(script) << "quit\n";
+  const ViewerRun r = runViewer("\"" + broken + "\" --script \"" + script + "\"", dir + "/stderr2.txt", stateEnv(dir));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(slurp(dir + "/stderr2.txt").find("broken.json"), std::string::npos);
+}
+
+// #28 "Files": the Save As and Open dialogs confirm with Enter; the path a dialog is given replaces the
+// old one (never appended to it); each reaches the disk or the document.
+TEST(ViewerRobust, FileDialogsConfirmWithEnter) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_dialogs");
+  const std::string first = dir + "/first.json", second = dir + "/second.json", script = dir + "/s.txt";
+  std::ofstream(script) << "dialog save-as " << first << "\n"
+                        << "key enter\n"
+                           "frames 3\n"
+                        << "screenshot-window " << dir << "/open_dialog.png\n"
+                        << "dialog open " << viewer_test::dataPath("scenes/sphere_small.json") << "\n"
+                        << "frames 2\n"
+                        << "screenshot-window " << dir << "/open_dialog.png\n"
+                        << "key enter\n"
+                           "wait\n"
+                           "frames 3\n"
+                        << "save " << second << "\n"
+                        << "quit\n";
+  const ViewerRun r =
+      runViewer("\"" + viewer_test::dataPath("scenes/patch.json") + "\" --lod 0.2 --script \"" + script + "\"",
+                dir + "/stderr.txt", stateEnv(dir));
+  const std::string err = slurp(dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << err;
+  EXPECT_FALSE(reportedError(err)) << err;
+  // Save As + Enter wrote the patch scene; Open + Enter opened the sphere, which `save` then wrote.
+  ASSERT_TRUE(std::filesystem::exists(first)) << err;
+  EXPECT_EQ(pipeline::loadScene(first).name, pipeline::loadScene(viewer_test::dataPath("scenes/patch.json")).name);
+  ASSERT_TRUE(std::filesystem::exists(second)) << err;
+  EXPECT_EQ(pipeline::loadScene(second).name,
+            pipeline::loadScene(viewer_test::dataPath("scenes/sphere_small.json")).name);
+  // Scripts leave the user's recent files alone.
+  EXPECT_FALSE(std::filesystem::exists(dir + "/state/pteryla/recent.json"));
+}
