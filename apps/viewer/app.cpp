@@ -40,6 +40,20 @@ void closeCallback(GLFWwindow* w) {
   if (auto* app = static_cast<App*>(glfwGetWindowUserPointer(w))) app->onCloseRequested();
 }
 
+// Input wakes the redraw (App::frame). Installed before ImGui's GLFW backend, which chains to them.
+void noteInput(GLFWwindow* w) {
+  if (auto* app = static_cast<App*>(glfwGetWindowUserPointer(w))) app->noteInput();
+}
+void cursorCallback(GLFWwindow* w, double, double) { noteInput(w); }
+void buttonCallback(GLFWwindow* w, int, int, int) { noteInput(w); }
+void scrollCallback(GLFWwindow* w, double, double) { noteInput(w); }
+void keyCallback(GLFWwindow* w, int, int, int, int) { noteInput(w); }
+void charCallback(GLFWwindow* w, unsigned int) { noteInput(w); }
+void sizeCallback(GLFWwindow* w, int, int) { noteInput(w); }
+void focusCallback(GLFWwindow* w, int) { noteInput(w); }
+void enterCallback(GLFWwindow* w, int) { noteInput(w); }
+void refreshCallback(GLFWwindow* w) { noteInput(w); }
+
 void glfwErrorCallback(int code, const char* what) {
   std::fprintf(stderr, "pteryla-viewer: GLFW error %d: %s\n", code, what);
 }
@@ -126,6 +140,15 @@ bool App::initWindow() {
   }
   glfwSetWindowUserPointer(window_, this);
   glfwSetWindowCloseCallback(window_, closeCallback);
+  glfwSetCursorPosCallback(window_, cursorCallback);
+  glfwSetMouseButtonCallback(window_, buttonCallback);
+  glfwSetScrollCallback(window_, scrollCallback);
+  glfwSetKeyCallback(window_, keyCallback);
+  glfwSetCharCallback(window_, charCallback);
+  glfwSetFramebufferSizeCallback(window_, sizeCallback);
+  glfwSetWindowFocusCallback(window_, focusCallback);
+  glfwSetCursorEnterCallback(window_, enterCallback);
+  glfwSetWindowRefreshCallback(window_, refreshCallback);
   glfwMakeContextCurrent(window_);
   pinLoadedLibrariesForLeakSanitizer();
   glfwSwapInterval(options_.vsync && !scripted() ? 1 : 0);
@@ -179,7 +202,7 @@ int App::run() {
     std::fprintf(stderr, "pteryla-viewer: %s\n", e.what());
     return 1;
   }
-  fpsStart_ = std::chrono::steady_clock::now();
+  fpsStart_ = started_ = std::chrono::steady_clock::now();
   while (!quit_) {
     try {
       frame();
@@ -199,6 +222,9 @@ int App::run() {
     }
     if (glfwWindowShouldClose(window_)) quit_ = true;
   }
+  if (options_.quitAfter > 0)
+    std::printf("{\"frames_drawn\": %d, \"frames_skipped\": %ld, \"seconds\": %.3f}\n", framesDrawn_, framesSkipped_,
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count());
   // Saved (or never changed): the recovery file is not needed any more. Unsaved work keeps it.
   autosave_.finish(doc_);
   return exitCode_;
@@ -266,11 +292,15 @@ void App::onCloseRequested() {
 }
 
 void App::frame() {
-  const bool active = doc_.busy() || view_.playing || scripted() || shotWanted_ || dragging_;
+  // cameraMoving(): a wheel zoom is drawn at low cost for 300 ms, then once more in full.
+  const bool active = doc_.busy() || view_.playing || scripted() || shotWanted_ || dragging_ || cameraMoving();
   if (active)
     glfwPollEvents();
   else
-    glfwWaitEventsTimeout(0.1);
+    glfwWaitEventsTimeout(settleFrames_ > 0 ? 0.02 : 0.5);  // 0.5 s: autosave and --quit-after still tick
+  const auto workStart = std::chrono::steady_clock::now();
+  if (options_.quitAfter > 0 && std::chrono::duration<double>(workStart - started_).count() >= options_.quitAfter)
+    quit_ = true;
 
   doc_.update();
   if (auto e = doc_.takeError()) {
@@ -283,6 +313,23 @@ void App::frame() {
   advancePlayback(*panels_);
   if (!script_.empty()) scriptStep();
   if (quit_) return;
+  // Nothing happened and the last frames settled: draw nothing (the window keeps its last image).
+  if (active || inputSeen_ || doc_.busy() || !popupToOpen_.empty()) settleFrames_ = kSettleFrames;
+  inputSeen_ = false;
+  if (settleFrames_ == 0) {
+    ++framesSkipped_;
+    if (!view_.idle) {
+      view_.idle = true;
+      fpsFrames_ = 0;
+      fpsWorkMs_ = 0;
+    }
+    return;
+  }
+  --settleFrames_;
+  if (view_.idle) {
+    view_.idle = false;
+    fpsStart_ = workStart;
+  }
 
   int w = 0, h = 0, fw = 0, fh = 0;
   glfwGetWindowSize(window_, &w, &h);
@@ -336,6 +383,7 @@ void App::frame() {
   }
   glfwSwapBuffers(window_);
   ++framesDrawn_;
+  fpsWorkMs_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - workStart).count();
   updateFps();
   // --screenshot: the capture above happened once the evaluation was complete; then quit.
   if (!options_.screenshot.empty() && !shotWanted_ && script_.empty()) quit_ = true;
@@ -347,7 +395,9 @@ void App::updateFps() {
   const double s = std::chrono::duration<double>(now - fpsStart_).count();
   if (s >= 0.5) {
     view_.fps = static_cast<float>(fpsFrames_ / s);
+    view_.frameMs = static_cast<float>(fpsWorkMs_ / fpsFrames_);
     fpsFrames_ = 0;
+    fpsWorkMs_ = 0;
     fpsStart_ = now;
   }
 }

@@ -48,6 +48,8 @@ struct ViewerOptions {
   bool vsync = true;
   double autosaveSeconds = 60.0;  // --autosave-seconds: recovery file interval (0 = off), recovery.hpp
   bool recover = false;           // --recover: restore the recovery file without asking
+  double quitAfter = 0;           // --quit-after S: an interactive run that ends after S seconds and prints
+                                  // its frame counts as JSON (the idle check, docs/viewer.md)
 };
 
 // Runs the viewer; returns the process exit code (0 ok, 1 internal/window error, 2 bad input or a
@@ -185,6 +187,19 @@ class App {
   // Measurement.
   std::chrono::steady_clock::time_point fpsStart_;
   int fpsFrames_ = 0;
+  double fpsWorkMs_ = 0;  // work (not waiting) of the frames counted since fpsStart_
+  // Redraw on demand: a frame is drawn while something happens (input, evaluation, playback, scripts,
+  // a dialog to show) and for kSettleFrames after it; otherwise the loop waits for events and draws
+  // nothing.
+ public:
+  void noteInput() { inputSeen_ = true; }
+
+ private:
+  static constexpr int kSettleFrames = 3;
+  bool inputSeen_ = true;
+  int settleFrames_ = kSettleFrames;
+  long framesSkipped_ = 0;
+  std::chrono::steady_clock::time_point started_;
   // Orbit benchmark passes: 0 what moving the camera draws (navigation coat when used, reduced
   // resolution), 1 the full coat at the reduced resolution, 2 the full coat at rest (full resolution).
   int benchFrame_ = -1, benchPass_ = 0;

@@ -31,6 +31,10 @@ int main(int argc, char** argv) {
   cli.add_option("--autosave-seconds", o.autosaveSeconds,
                  "Write unsaved changes to a recovery file every N seconds (default 60, 0 = off; docs/viewer.md)")
       ->check(CLI::Range(0.0, 1e9));
+  cli.add_option("--quit-after", o.quitAfter,
+                 "Interactive run that quits after S seconds and prints the frames drawn and skipped as JSON "
+                 "(checks that an idle viewer draws nothing)")
+      ->check(CLI::Range(0.0, 1e9));
   cli.add_flag("--recover", o.recover,
                "Restore the autosaved unsaved work of SCENE (or, without SCENE, the newest) without asking");
   try {

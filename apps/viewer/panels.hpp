@@ -78,7 +78,9 @@ struct ViewState {
   bool adaptiveNavigation = true;
   float fullCoatBudgetMs = 85.0f;
   // Measured frame rate (frames per second over the last half second).
-  float fps = 0.0f;
+  float fps = 0.0f;      // frames drawn per second while the view is active
+  float frameMs = 0.0f;  // work per drawn frame (without waiting for events), ms
+  bool idle = false;     // nothing to draw: the loop waits for input
   // The 3D view's rectangle in window coordinates (right of the panel column, between the menu bar
   // and the status bar); overlays and picking work in it.
   glm::vec2 viewOrigin{0.0f};

@@ -4,6 +4,7 @@
 #include <imgui_stdlib.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "actions.hpp"
@@ -80,7 +81,14 @@ bool uiRequestedNumber(PanelContext& ctx, const char* panel, const char* widget,
 void drawViewPanel(PanelContext& ctx) {
   ViewState& v = ctx.view;
   Document& doc = ctx.doc;
-  ImGui::Text("%.1f fps", v.fps);
+  if (v.idle)
+    ImGui::Text("idle (last: %.1f ms a frame)", v.frameMs);
+  else
+    ImGui::Text("%.1f fps, %.1f ms a frame", v.fps, v.frameMs);
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "fps: frames drawn per second while something moves; ms: the work of one frame.\n"
+        "With nothing to do the viewer draws nothing (idle).");
   float lod = static_cast<float>(doc.lod());
   if (ImGui::SliderFloat("Preview LOD", &lod, 0.02f, 1.0f, "%.2f")) guarded(ctx, [&] { doc.setLod(lod); });
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("fraction of feather geometry drawn here (thesis 7.1.3); not saved");
@@ -311,7 +319,12 @@ void drawStatusBar(PanelContext& ctx, float height) {
                ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
                    ImGuiWindowFlags_NoBringToFrontOnFocus);
   const Snapshot& s = doc.snapshot();
-  ImGui::Text("%5.1f fps | %zu feathers | %.2fM triangles | t = %.3f | LOD %.2f%s", ctx.view.fps, s.coatFeathers,
+  char rate[48];
+  if (ctx.view.idle)
+    std::snprintf(rate, sizeof rate, "idle");
+  else
+    std::snprintf(rate, sizeof rate, "%5.1f fps", ctx.view.fps);
+  ImGui::Text("%s | %zu feathers | %.2fM triangles | t = %.3f | preview LOD %.2f%s", rate, s.coatFeathers,
               double(s.coatTriangles) / 1e6, doc.time(), doc.lod(), doc.modified() ? " | modified" : "");
   if (doc.busy()) {
     const JobProgress p = doc.progress();

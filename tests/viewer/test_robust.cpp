@@ -259,3 +259,20 @@ TEST(ViewerRobust, FileDialogsConfirmWithEnter) {
   // Scripts leave the user's recent files alone.
   EXPECT_FALSE(std::filesystem::exists(dir + "/state/pteryla/recent.json"));
 }
+
+// #28: an idle viewer draws nothing (it used to redraw ten times a second, 16-20% of a core). An
+// interactive run with --quit-after prints how many frames it drew and skipped.
+TEST(ViewerRobust, AnIdleViewerDrawsNothing) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_idle");
+  const ViewerRun r = runViewer("\"" + viewer_test::dataPath("scenes/patch.json") + "\" --lod 0.2 --quit-after 8",
+                                dir + "/stderr.txt", stateEnv(dir));
+  ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
+  const size_t at = r.out.find('{');
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const Json j = Json::parse(r.out.substr(at, r.out.find('}', at) - at + 1));
+  // Evaluation and start-up take the first second or two; after that the loop waits for input (0.5 s
+  // per wait) and draws nothing.
+  EXPECT_GE(j.at("frames_skipped").get<int>(), 6) << r.out;
+  EXPECT_LT(j.at("frames_drawn").get<int>(), 200) << r.out;
+}
