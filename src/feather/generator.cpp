@@ -54,6 +54,14 @@ const FeatherGenerator* findFeatherGenerator(const std::string& name) {
   return it == reg.generators.end() ? nullptr : &it->second;
 }
 
+FeatherParams streitForm(const FeatherParams& p) {
+  FeatherParams r = p;
+  r.generator = "streit";
+  r.generatorParams = nlohmann::json();
+  if (p.afterfeather) r.afterfeather = std::make_shared<const FeatherParams>(streitForm(*p.afterfeather));
+  return r;
+}
+
 std::vector<std::string> featherGeneratorNames() {
   Registry& reg = registry();
   std::lock_guard<std::mutex> lock(reg.mutex);

@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include "pteryla/core/error.hpp"
+#include "pteryla/feather/generator.hpp"
 
 namespace pteryla::feather {
 
@@ -184,6 +185,11 @@ GrowthState growthStateAt(double age, const GrowthSchedule& s) {
 
 FeatherParams featherAtState(const FeatherParams& def, const GrowthState& st, const GrowthSchedule& s) {
   if (st.mature(s)) return def;
+  if (!st.grown() && def.generator != "streit") {
+    // A generator may grow its own way (helical: collar growth, then unfurling; helical.hpp).
+    const FeatherGenerator* g = findFeatherGenerator(def.generator);
+    if (g && g->grow) return g->grow(def, st, s);
+  }
   FeatherParams p = def;
   if (!st.grown()) {
     const double L = std::max(st[GrowthParam::ShaftLength], kMinGrowthScale);

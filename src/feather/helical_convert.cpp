@@ -191,12 +191,17 @@ std::vector<glm::dvec3> fitBezier(const glm::dvec3* ptsIn, size_t nIn, int cvCou
 }
 
 HelicalConversion convertHelical(const HelicalGrowth& g, const HelicalFeather& f, double rachisLength) {
+  if (!(f.length > 0)) throw Error("helical feather has zero length", {}, "helical");
+  const double target = g.params().length > 0 ? g.params().length : rachisLength;
+  return convertHelicalScaled(g, f, target > 0 ? target / f.length : 1.0);
+}
+
+HelicalConversion convertHelicalScaled(const HelicalGrowth& g, const HelicalFeather& f, double scale) {
   const HelicalParams& hp = g.params();
   HelicalConversion out;
   FeatherParams& p = out.feather;
-  if (!(f.length > 0)) throw Error("helical feather has zero length", {}, "helical");
-  const double target = hp.length > 0 ? hp.length : rachisLength;
-  const double scale = target > 0 ? target / f.length : 1.0;
+  if (!(f.length >= 0) || !(scale > 0) || !std::isfinite(scale))
+    throw Error("helical feather needs a length >= 0 and a positive scale", {}, "helical");
   out.scale = scale;
   p.generator = "streit";
   p.rachisLength = f.length * scale;
@@ -341,6 +346,7 @@ FeatherGenerator helicalFeatherGenerator() {
     p.sourceFile = saved;
   };
   gen.write = [](const FeatherParams& p, Json& j) { j["helical"] = p.generatorParams; };
+  gen.grow = growHelical;
   return gen;
 }
 

@@ -99,11 +99,18 @@ HelicalFeather helicalFeather(const HelicalGrowth& g) {
 }
 
 HelicalFeather helicalFeather(const HelicalGrowth& g, double unfurlLeft, double unfurlRight) {
+  return helicalFeatherAt(g, g.endTime(), unfurlLeft, unfurlRight);
+}
+
+HelicalFeather helicalFeatherAt(const HelicalGrowth& g, double time, double unfurlLeft, double unfurlRight) {
   if (!(unfurlLeft >= 0 && unfurlLeft <= 1 && unfurlRight >= 0 && unfurlRight <= 1))
     throw Error("unfurl weights must be in [0, 1]", {}, "helical.unfurl");
+  if (!(time >= 0 && time <= g.endTime())) throw Error("growth time must be in [0, endTime]", {}, "helical.time");
   const HelicalParams& p = g.params();
   const Collar& collar = g.collar();
-  const double tEnd = g.endTime(), v = p.growthSpeed, L = collar.length();
+  // tEnd: the time the feather is taken at (the end of growth for the grown feather); a barb belongs
+  // to it once it has fused with the rachial ridge by then.
+  const double tEnd = time, v = p.growthSpeed, L = collar.length();
   const glm::dvec2 A = collar.point(0.0), T0 = collar.tangent(0.0), N0 = collar.outwardNormal(0.0);
 
   HelicalFeather f;
@@ -117,7 +124,7 @@ HelicalFeather helicalFeather(const HelicalGrowth& g, double unfurlLeft, double 
   const auto& barbs = g.barbs();
   size_t total = 0;
   for (const HelicalBarb& b : barbs)
-    if (g.completed(b)) total += g.maxStampCount(b);
+    if (b.completionTime <= tEnd) total += g.maxStampCount(b);
   f.points.reserve(total);
   for (int vane = 0; vane < 2; ++vane) {
     const double w = vane == 0 ? unfurlLeft : unfurlRight;
@@ -125,7 +132,7 @@ HelicalFeather helicalFeather(const HelicalGrowth& g, double unfurlLeft, double 
     // Base to tip = latest completion first.
     for (size_t i = g.vaneBegin(vane + 1); i-- > g.vaneBegin(vane);) {
       const HelicalBarb& b = barbs[i];
-      if (!g.completed(b)) continue;
+      if (!(b.completionTime <= tEnd)) continue;
       g.barbStamps(b, tEnd, stamps);
       xy.clear();
       height.clear();

@@ -88,16 +88,22 @@ FeatherParams blendFeathers(const std::vector<const FeatherParams*>& feathersIn,
     }
   }
   if (fs.empty() || !(sum > 0)) throw Error("blendFeathers: weights must have a positive sum");
+  // Feathers of different generators (zero weights included, so every blend of the same key feathers
+  // agrees) blend in their Streit key-barb form: a helical feather as its converted key barbs.
+  bool mixed = false;
+  for (const auto* f : feathersIn) mixed = mixed || f->generator != feathersIn.front()->generator;
+  if (mixed) {
+    std::vector<FeatherParams> converted;
+    converted.reserve(fs.size());
+    for (const auto* f : fs) converted.push_back(streitForm(*f));
+    std::vector<const FeatherParams*> cs;
+    for (const auto& f : converted) cs.push_back(&f);
+    return blendFeathers(cs, w);
+  }
   if (fs.size() == 1) return *fs.front();
   for (double& x : w) x /= sum;
   const size_t nf = fs.size();
   const FeatherParams& top = *fs[heaviest(w)];
-
-  for (const auto* f : fs)
-    if (f->generator != fs.front()->generator)
-      throw Error(
-          "cannot blend feathers of different generators ('" + fs.front()->generator + "' and '" + f->generator + "')",
-          {}, "generator");
 
   FeatherParams r;
   r.name = top.name;

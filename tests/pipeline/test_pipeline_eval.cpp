@@ -1,11 +1,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/follicles.hpp"
 #include "pteryla/coat/skin.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/feather/generator.hpp"
+#include "pteryla/feather/io.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 
 using namespace pteryla;
@@ -172,6 +175,78 @@ TEST(PipelineEval, CoatOfHelicalFeathers) {
   EXPECT_EQ(m.ranges.size(), p.follicles().size());
   EXPECT_GT(m.mesh.triangleCount(), 100u * m.ranges.size());
   for (double e : p.elevations()) EXPECT_TRUE(std::isfinite(e));
+}
+
+// In a moult, growing helical feathers grow by the helical model (issue #30 item 4): while on the collar
+// they have only the barbs fused with the rachis so far, so they mesh with fewer triangles than the same
+// feathers grown as Streit feathers (whose barb count never changes); mature ones mesh identically.
+TEST(PipelineEval, MoultingHelicalFeathersGrowHelically) {
+  const std::string helical = std::string(PTERYLA_DATA_DIR) + "/feathers/helical-contour.json";
+  auto scene = [&](const Json& feather) {
+    Scene s = smallScene();
+    s.feathers = Json::object();
+    s.feathers["contour"] = feather;
+    s.moult = Json::parse(R"({"start": 0, "duration": 10, "window": 0.4, "gap": 0.3, "seed": 3})");
+    s.time = 5;
+    return s;
+  };
+  Pipeline h(scene(helical));
+  Pipeline st(scene(feather::featherToJson(feather::streitForm(feather::loadFeather(helical)), false)));
+  auto triangles = [](Pipeline& p) {
+    std::map<uint32_t, uint32_t> t;
+    for (const auto& r : p.coatMesh().ranges) t[r.feather] = r.indexCount / 3;
+    return t;
+  };
+  const auto th = triangles(h), ts = triangles(st);
+  const coat::CoatFeathers& coat = h.feathers();
+  ASSERT_EQ(coat.age, st.feathers().age);
+  size_t collar = 0, mature = 0;
+  for (const auto& [i, n] : th) {
+    ASSERT_TRUE(ts.count(i)) << i;
+    if (coat.age[i] > 0.1 && coat.age[i] < 0.45) {
+      EXPECT_LT(n, ts.at(i)) << "feather " << i << " at age " << coat.age[i];
+      ++collar;
+    } else if (coat.age[i] >= 1.0) {
+      EXPECT_EQ(n, ts.at(i)) << "feather " << i;
+      ++mature;
+    }
+  }
+  EXPECT_GE(collar, 3u);
+  EXPECT_GE(mature, 10u);
+  for (const auto& q : h.coatMesh().mesh.positions) ASSERT_TRUE(std::isfinite(q.x) && std::isfinite(q.y));
+}
+
+// A tract interpolating a helical and a Streit key feather blends them in the Streit key-barb form.
+TEST(PipelineEval, TractMixingHelicalAndStreitKeyFeathersEvaluates) {
+  Scene s = smallScene();
+  s.feathers["helical"] = std::string(PTERYLA_DATA_DIR) + "/feathers/helical-contour.json";
+  s.tracts[0]["key_feathers"] =
+      Json::parse(R"([{"feather": "helical", "at": [0, 1.5, 0]}, {"feather": "contour", "at": [0, -1.5, 0]}])");
+  Pipeline p(std::move(s));
+  const CoatMesh& m = p.coatMesh();
+  EXPECT_EQ(m.ranges.size(), p.follicles().size());
+  const coat::CoatFeathers& coat = p.feathers();
+  ASSERT_GT(coat.size(), 10u);
+  // Near a key the tract copies it (a helical feather stays helical); between the keys the feathers are
+  // blends of the helical key's converted key barbs and the Streit key's.
+  const feather::FeatherParams hk =
+      feather::loadFeather(std::string(PTERYLA_DATA_DIR) + "/feathers/helical-contour.json");
+  const feather::FeatherParams sk = feather::loadFeather(std::string(PTERYLA_DATA_DIR) + "/feathers/contour.json");
+  size_t helical = 0, blended = 0;
+  for (size_t i = 0; i < coat.size(); ++i) {
+    const feather::FeatherParams& f = coat.params[i];
+    if (f.generator == "helical") {
+      ++helical;
+      EXPECT_EQ(f.left.keyBarbs, hk.left.keyBarbs);
+    } else if (f.left.keyBarbs != hk.left.keyBarbs && f.left.keyBarbs != sk.left.keyBarbs) {
+      EXPECT_EQ(f.generator, "streit");
+      EXPECT_TRUE(f.generatorParams.is_null());
+      ++blended;
+    }
+  }
+  EXPECT_GT(helical, 0u);
+  EXPECT_GT(blended, 0u);
+  for (const auto& q : m.mesh.positions) ASSERT_TRUE(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z));
 }
 
 TEST(PipelineEval, PerFeatherLodsLowerOnlyTheirFeathers) {

@@ -11,6 +11,7 @@
 
 #include "pteryla/core/json.hpp"
 #include "pteryla/feather/barbs.hpp"
+#include "pteryla/feather/growth.hpp"
 #include "pteryla/feather/params.hpp"
 
 namespace pteryla::feather {
@@ -26,6 +27,10 @@ struct FeatherGenerator {
   // Blends generatorParams of feathers (same generator) with normalized weights; when empty the
   // generatorParams of the heaviest feather are kept.
   std::function<Json(const std::vector<const FeatherParams*>& fs, const std::vector<double>& w)> blend;
+  // Grows the feather `def` to a growing state (featherAtState calls it only when !st.grown(); the
+  // mature feather and wear stay the shared path). When empty, the derived Streit fields grow by the
+  // staggered schedule (growth.hpp). The result is any valid FeatherParams (usually the Streit form).
+  std::function<FeatherParams(const FeatherParams& def, const GrowthState& st, const GrowthSchedule& s)> grow;
 };
 
 // Adds or replaces a generator. "streit" is reserved.
@@ -33,5 +38,11 @@ void registerFeatherGenerator(const std::string& name, FeatherGenerator gen);
 // nullptr when unknown (and for "streit").
 const FeatherGenerator* findFeatherGenerator(const std::string& name);
 std::vector<std::string> featherGeneratorNames();  // includes "streit"
+
+// The feather in its Streit key-barb form: generator "streit", generatorParams dropped, every derived
+// field kept (a generator's read hook derives the Streit fields when the file is read, so they are
+// always current); the afterfeather likewise. A Streit feather is returned unchanged. blendFeathers
+// blends feathers of different generators in this form.
+FeatherParams streitForm(const FeatherParams& p);
 
 }  // namespace pteryla::feather

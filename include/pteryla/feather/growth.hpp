@@ -105,7 +105,9 @@ GrowthState growthStateAt(double age, const GrowthSchedule& s = defaultGrowthSch
 inline constexpr double kMinGrowthScale = 1e-6;
 
 // The feather of `def` at `age` (finite; clamped below at 0). age >= 1 without wear returns `def`
-// exactly. The afterfeather grows on the same schedule. Throws Error for a non-finite age.
+// exactly. The afterfeather grows on the same schedule. Throws Error for a non-finite age. A growing
+// (not grown) state of a feather whose generator has a grow hook (generator.hpp) is grown by it: a
+// helical feather by the helical model (helical.hpp, growHelical); wear is the shared path.
 FeatherParams featherAtAge(const FeatherParams& def, double age, const GrowthSchedule& s = defaultGrowthSchedule());
 FeatherParams featherAtState(const FeatherParams& def, const GrowthState& st, const GrowthSchedule& s);
 

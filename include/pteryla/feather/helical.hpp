@@ -37,6 +37,7 @@
 
 #include "pteryla/core/json.hpp"
 #include "pteryla/feather/generator.hpp"
+#include "pteryla/feather/growth.hpp"
 #include "pteryla/feather/params.hpp"
 
 namespace pteryla::feather {
@@ -270,6 +271,10 @@ struct HelicalFeather {
 // Unfurls with the given weights (default: the parameters' unfurlLeft/unfurlRight).
 HelicalFeather helicalFeather(const HelicalGrowth& g);
 HelicalFeather helicalFeather(const HelicalGrowth& g, double unfurlLeft, double unfurlRight);
+// The feather as it is at growth time `time` in [0, endTime] (throws Error otherwise): the barbs that
+// have fused with the rachial ridge by then, at heights v_grow (time - stamp); length v_grow time,
+// endTime = time. helicalFeather(g, wL, wR) == helicalFeatherAt(g, g.endTime(), wL, wR).
+HelicalFeather helicalFeatherAt(const HelicalGrowth& g, double time, double unfurlLeft, double unfurlRight);
 // Unfurls one barb trail in place. pts: collar-plane points (x, y) and heights, distal end first,
 // followed by the anchor at the anterior polar C(0); anchorDir the unit direction pointing distally from
 // the anchor along the collar. Horizontal turning angles are scaled by (1 - w).
@@ -318,6 +323,9 @@ struct HelicalConversion {
   int barbs[2] = {0, 0};  // converted barbs per vane (degenerate zero-chord barbs skipped)
 };
 HelicalConversion convertHelical(const HelicalGrowth& g, const HelicalFeather& f, double rachisLength = 0);
+// Same, with the output units per growth unit given (a growing feather keeps its mature feather's
+// scale, so its rachis is scale * v_grow * time). f may have zero length (time 0): a bare rachis.
+HelicalConversion convertHelicalScaled(const HelicalGrowth& g, const HelicalFeather& f, double scale);
 FeatherParams helicalToFeatherParams(const HelicalParams& p, const std::string& file = {});
 // Derives the barb fields of p from helical parameters: rachis length stays p.rachisLength unless
 // hp.length is set; barbs (silhouette, key barbs, angles, spacing) are replaced; calamus, rachis width
@@ -331,6 +339,25 @@ void applyHelical(FeatherParams& p, const HelicalParams& hp);
 // evenly spaced ones (end points kept); maxError (optional) receives the max distance from those
 // points to the curve.
 std::vector<glm::dvec3> fitBezier(const glm::dvec3* pts, size_t n, int cvCount, double* maxError = nullptr);
+
+// ---------------------------------------------------------------------------------------------------
+// A helical feather in a growing coat (docs/growth.md, "Helical feathers"): the schedule's stages are
+// mapped to the helical model. Collar growth plays over the shaft and barb windows, unfurling over the
+// opening window, and the open stage turns the unfurled barbs into the feather's own key barbs.
+struct HelicalGrowthStage {
+  double collar = 1;      // growth time / endTime = (shaft_length + barb_length) / 2
+  double unfurlLeft = 0;  // w per vane = the parameters' unfurl * opening
+  double unfurlRight = 0;
+  double open = 1;       // key_barbs: the grown helical form (0) -> the feather's own key barbs (1)
+  double curvature = 1;  // rachis_curvature: the rachis (and split openings) curve
+};
+HelicalGrowthStage helicalGrowthStage(const GrowthState& st, const HelicalParams& hp);
+// The helical generator's grow hook (featherAtState calls it for growing states): the feather grown by
+// the helical model at the stage's time and unfurl weights, converted at the mature feather's scale
+// (rachis = def.rachisLength * collar), with def's calamus, rachis width (times shaft_width), material
+// and afterfeather (grown by the schedule). Returns the Streit form (generator "streit"). Throws Error
+// naming def.sourceFile for unusable helical parameters.
+FeatherParams growHelical(const FeatherParams& def, const GrowthState& st, const GrowthSchedule& s);
 
 // The "helical" feather generator hooks (FeatherParams::generator == "helical", settings in a
 // "helical" object of the feather file): read parses and validates the object, stores it in

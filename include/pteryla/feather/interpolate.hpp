@@ -13,7 +13,11 @@ namespace pteryla::feather {
 // t = 0 gives a, t = 1 gives b (same barbs; key barbs appear with the defaults made explicit).
 FeatherParams interpolateFeathers(const FeatherParams& a, const FeatherParams& b, double t);
 // Barycentric blend; weights are normalized (must be >= 0 with a positive sum); zero-weight feathers are
-// ignored. Throws Error for mismatched generators without an interpolation hook or bad weights.
+// ignored. Feathers of one generator blend as that generator (its blend hook, else the heaviest
+// feather's generator settings). When the feathers (zero weights included) have different generators,
+// every one is blended in its Streit key-barb form (streitForm, generator.hpp): a helical feather as its
+// converted key barbs, so weights 1/0 give exactly streitForm of that feather. Throws Error for bad
+// weights.
 FeatherParams blendFeathers(const std::vector<const FeatherParams*>& feathers, const std::vector<double>& weights);
 
 // Inflates `keys` (sorted, as from effectiveKeyBarbs) to `count` key barbs by adding barbs between the
