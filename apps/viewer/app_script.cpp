@@ -190,6 +190,7 @@ void App::scriptStep() {
       if (!doc_.hasScene()) throw Error("no scene is open", file, "line " + std::to_string(c.line));
       view_.ui = UiRequest{c.args[0], c.args[1], c.args.size() > 2 ? c.args[2] : "", true, 0};
       view_.panelRequests[c.args[0]] = 1;
+      if (c.args[0] == "Feather designer") view_.showDesigner = true;  // a window, not a header
       view_.hidePanels = false;
     } else if (c.verb == "sleep") {
       needArgs(c, 1, 1, "sleep SECONDS", file);

@@ -1,7 +1,9 @@
 // Feather designer (Streit 2003, Ch.5): Table 5.1 parameters as sliders, key barbs edited by dragging
 // their Bezier control vertices in 2D canvases (barb-local top and side views, 5.2.2), a live preview of
 // every barb curve, interpolation toward a second feather type (5.2.4) and the growth/wear age (8.1).
-// The preview is local; "Apply to scene" writes the definition inline into the scene's feather library.
+// A helical feather (Zhang & Kanai) also shows its speed curves V_e(s), V_b(s) as editable curves.
+// The preview is local, with its own undo history (one step per edit or drag); "Apply to scene" writes
+// the definition inline into the scene's feather library, "Save feather file" writes a feather file.
 #include <imgui.h>
 #include <imgui_stdlib.h>
 
@@ -16,6 +18,7 @@
 #include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/bezier.hpp"
 #include "pteryla/feather/growth.hpp"
+#include "pteryla/feather/helical.hpp"
 #include "pteryla/feather/interpolate.hpp"
 #include "pteryla/feather/io.hpp"
 
@@ -27,6 +30,8 @@ using feather::KeyBarb;
 namespace {
 
 constexpr float kDeg = 57.29577951308232f;
+constexpr const char* kPanel = "Feather designer";  // scripted widgets: `ui "Feather designer" ...`
+constexpr size_t kMaxUndo = 200;
 
 FeatherParams featherFromScene(const pipeline::Scene& s, const std::string& name) {
   const Json& j = s.feathers.at(name);
@@ -82,11 +87,24 @@ struct FeatherDesigner::Impl {
   bool askOverwrite = false;
   int dragCv = -1, dragView = -1;
   std::vector<glm::vec3> line;
+  // Undo history of the design (the preview): `committed` is the design after the last edit; an edit
+  // pushes the design before it, a drag (mouse held) is one step.
+  std::vector<FeatherParams> undo, redo;
+  FeatherParams committed;
+  bool gestureOpen = false;
+  // Speed curve canvases (0 emitter, 1 barb): the dragged / selected key and the y range of a drag.
+  int dragCurve = -1, dragKey = -1;
+  double dragYMax = 1;
+  int curveKey[2] = {0, 0};
 
   void load(PanelContext& ctx, const std::string& n) {
     guarded(ctx, [&] {
       params = featherFromScene(ctx.doc.scene(), n);
       original = params;
+      committed = params;
+      undo.clear();
+      redo.clear();
+      gestureOpen = false;
       name = n;
       loaded = true;
       dirty = true;
@@ -213,6 +231,155 @@ struct FeatherDesigner::Impl {
     }
     return changed;
   }
+
+  // A helical speed curve (Curve1D, locus s in [0, 1] -> speed > 0): drag its keys in the canvas, type
+  // their speeds, add or remove keys. Scripted: `ui "Feather designer" "LABEL K" SPEED` sets key K.
+  bool drawSpeedCurve(PanelContext& ctx, const char* label, feather::Curve1D& curve, int id, const ImVec2& size) {
+    std::vector<glm::dvec2> keys = curve.keys();
+    bool changed = false;
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    const ImVec2 o = ImGui::GetCursorScreenPos();
+    ImGui::InvisibleButton(label, size);
+    const bool hovered = ImGui::IsItemHovered(), active = ImGui::IsItemActive();
+    dl->AddRectFilled(o, ImVec2(o.x + size.x, o.y + size.y), IM_COL32(24, 26, 32, 255));
+    double ymax = 0;
+    for (const auto& k : keys) ymax = std::max(ymax, k.y);
+    ymax = dragCurve == id ? dragYMax : std::max(1.3 * ymax, 1e-3);
+    const float pad = 10.0f, w = size.x - 2 * pad, h = size.y - 2 * pad;
+    auto to = [&](double x, double y) {
+      return ImVec2(o.x + pad + float(x) * w, o.y + pad + h - float(std::clamp(y / ymax, 0.0, 1.05)) * h);
+    };
+    dl->AddLine(to(0, 0), to(1, 0), IM_COL32(70, 70, 80, 255));
+    dl->AddLine(to(0.5, 0), to(0.5, ymax), IM_COL32(50, 50, 60, 255));  // the posterior polar (synced)
+    for (int i = 1; i <= 64; ++i)
+      dl->AddLine(to((i - 1) / 64.0, curve((i - 1) / 64.0)), to(i / 64.0, curve(i / 64.0)),
+                  IM_COL32(255, 210, 120, 255), 2.0f);
+    char text[96];
+    std::snprintf(text, sizeof text, "%s V(s), max %.3g", label, ymax / 1.3);
+    dl->AddText(ImVec2(o.x + 4, o.y + 2), IM_COL32(180, 180, 180, 200), text);
+    const ImVec2 mouse = ImGui::GetIO().MousePos;
+    int hot = -1;
+    float best = 81.0f;
+    for (size_t k = 0; k < keys.size(); ++k) {
+      const ImVec2 p = to(keys[k].x, keys[k].y);
+      const float d2 = (p.x - mouse.x) * (p.x - mouse.x) + (p.y - mouse.y) * (p.y - mouse.y);
+      if (d2 < best) {
+        best = d2;
+        hot = int(k);
+      }
+    }
+    if (hovered && ImGui::IsMouseClicked(ImGuiMouseButton_Left) && hot >= 0) {
+      dragCurve = id;
+      dragKey = hot;
+      dragYMax = ymax;
+      curveKey[id] = hot;
+    }
+    if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) dragCurve = -1;
+    if (active && dragCurve == id && dragKey >= 0 && size_t(dragKey) < keys.size()) {
+      const size_t k = size_t(dragKey);
+      const double lo = k > 0 ? keys[k - 1].x + 1e-3 : 0.0, hi = k + 1 < keys.size() ? keys[k + 1].x - 1e-3 : 1.0;
+      keys[k].x = std::clamp(double(mouse.x - o.x - pad) / w, lo, std::max(lo, hi));
+      keys[k].y = std::max(1e-4, double(o.y + pad + h - mouse.y) / h * ymax);
+      changed = true;
+    }
+    curveKey[id] = std::clamp(curveKey[id], 0, int(keys.size()) - 1);
+    for (size_t k = 0; k < keys.size(); ++k) {
+      const bool sel = int(k) == curveKey[id];
+      dl->AddCircleFilled(to(keys[k].x, keys[k].y), sel ? 6.0f : 4.5f,
+                          sel ? IM_COL32(255, 255, 255, 255) : IM_COL32(90, 200, 255, 255));
+    }
+    // Speeds typed (or set by a script), one field per key.
+    for (size_t k = 0; k < keys.size(); ++k) {
+      const std::string widget = std::string(label) + " " + std::to_string(k);
+      float y = float(keys[k].y);
+      ImGui::SetNextItemWidth(std::min(90.0f, size.x / float(keys.size()) - 8));
+      bool c = ImGui::DragFloat(("##" + widget).c_str(), &y, 0.0005f, 1e-4f, 100.0f, "%.4f");
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s at s = %.3f", label, keys[k].x);
+      if (ImGui::IsItemActivated()) curveKey[id] = int(k);
+      c |= uiRequestedNumber(ctx, kPanel, widget.c_str(), y);
+      if (c) {
+        keys[k].y = std::max(1e-4, double(y));
+        changed = true;
+      }
+      if (k + 1 < keys.size()) ImGui::SameLine();
+    }
+    const std::string add = std::string("add key##") + label, remove = std::string("remove key##") + label;
+    if (ImGui::SmallButton(add.c_str())) {
+      // In the widest gap (or beside a single key), on the curve: the curve does not change shape.
+      size_t at = keys.size();
+      double gap = keys.size() == 1 ? 0.0 : -1.0, x = keys.front().x < 0.5 ? 1.0 : 0.0;
+      for (size_t k = 0; k + 1 < keys.size(); ++k)
+        if (keys[k + 1].x - keys[k].x > gap) {
+          gap = keys[k + 1].x - keys[k].x;
+          at = k + 1;
+          x = 0.5 * (keys[k].x + keys[k + 1].x);
+        }
+      if (at == keys.size() && keys.size() == 1) at = x > keys.front().x ? 1 : 0;
+      keys.insert(keys.begin() + std::ptrdiff_t(at), glm::dvec2(x, curve(x)));
+      curveKey[id] = int(at);
+      changed = true;
+    }
+    ImGui::SameLine();
+    if (ImGui::SmallButton(remove.c_str()) && keys.size() > 1) {
+      keys.erase(keys.begin() + curveKey[id]);
+      curveKey[id] = 0;
+      changed = true;
+    }
+    if (changed) curve.setKeys(std::move(keys));
+    return changed;
+  }
+
+  // The helical feather's speed curves; an edit re-derives the feather (applyHelical).
+  bool drawHelical(PanelContext& ctx, FeatherParams& p) {
+    bool changed = false;
+    guarded(ctx, [&] {
+      JsonReader r(p.generatorParams, p.sourceFile, "helical");
+      feather::HelicalParams hp = feather::readHelical(r);
+      const float w = (ImGui::GetContentRegionAvail().x - 8) * 0.5f;
+      ImGui::BeginGroup();
+      bool c = drawSpeedCurve(ctx, "emitter speed", hp.emitterSpeed, 0, ImVec2(w, 150));
+      ImGui::EndGroup();
+      ImGui::SameLine();
+      ImGui::BeginGroup();
+      c |= drawSpeedCurve(ctx, "barb speed", hp.barbSpeed, 1, ImVec2(w, 150));
+      ImGui::EndGroup();
+      ImGui::TextDisabled("locus s on the collar (anterior polar 0 and 1%s); speeds in locus units per time unit",
+                          hp.syncSpeedToPolar ? ", posterior polar 0.5" : "");
+      if (!c) return;
+      FeatherParams q = p;
+      q.generatorParams = feather::helicalToJson(hp);
+      feather::applyHelical(q, hp);  // validates
+      p = std::move(q);
+      changed = true;
+    });
+    return changed;
+  }
+
+  void undoStep(FeatherParams& p, bool back) {
+    auto& from = back ? undo : redo;
+    auto& to = back ? redo : undo;
+    if (from.empty()) return;
+    to.push_back(p);
+    p = std::move(from.back());
+    from.pop_back();
+    committed = p;
+    gestureOpen = false;
+    dirty = true;
+  }
+
+  // After a frame's widgets: an edit (ch) is one undo step unless it continues a drag.
+  void record(bool ch, const FeatherParams& p) {
+    const bool held = ImGui::IsMouseDown(ImGuiMouseButton_Left) || ImGui::IsAnyItemActive();
+    if (ch) {
+      if (!gestureOpen) {
+        undo.push_back(committed);
+        if (undo.size() > kMaxUndo) undo.erase(undo.begin());
+        redo.clear();
+      }
+      committed = p;
+    }
+    gestureOpen = ch && held ? true : gestureOpen && held;
+  }
 };
 
 FeatherDesigner::FeatherDesigner() : impl_(std::make_unique<Impl>()) {}
@@ -331,6 +498,7 @@ void FeatherDesigner::draw(PanelContext& ctx, bool* open) {
           p = feather::interpolateFeathers(p, d.otherParams, d.blend);
           d.blend = 0;
           d.dirty = true;
+          ch = true;
         });
       }
     }
@@ -396,10 +564,25 @@ void FeatherDesigner::draw(PanelContext& ctx, bool* open) {
       ch = true;
     }
   }
+  if (p.generator == "helical") {
+    sectionTitle("Helical growth speeds (Zhang & Kanai; drag keys or type speeds)");
+    ch |= d.drawHelical(ctx, p);
+  }
   d.dirty |= ch;
 
   // ---- Apply / files ----
   sectionTitle("Apply");
+  d.record(ch, p);
+  ImGui::BeginDisabled(d.undo.empty());
+  const bool undoNow = ImGui::Button("Undo");
+  ImGui::EndDisabled();
+  if (undoNow || uiRequested(ctx, kPanel, "undo")) d.undoStep(p, true);
+  ImGui::SameLine();
+  ImGui::BeginDisabled(d.redo.empty());
+  const bool redoNow = ImGui::Button("Redo");
+  ImGui::EndDisabled();
+  if (redoNow || uiRequested(ctx, kPanel, "redo")) d.undoStep(p, false);
+  ImGui::SameLine();
   const bool changed = !(p == d.original);
   if (ImGui::Button("Apply to scene")) {
     guarded(ctx, [&] {
@@ -412,6 +595,7 @@ void FeatherDesigner::draw(PanelContext& ctx, bool* open) {
   if (ImGui::Button("Revert")) {
     p = d.original;
     d.dirty = true;
+    d.record(true, p);
   }
   ImGui::SameLine();
   ImGui::TextDisabled(changed ? "(unapplied changes)" : "");
@@ -425,6 +609,12 @@ void FeatherDesigner::draw(PanelContext& ctx, bool* open) {
     } else {
       guarded(ctx, [&] { feather::saveFeather(d.filePath, p); });
     }
+  }
+  std::string scripted;
+  if (uiRequestedText(ctx, kPanel, "save", scripted)) {
+    // `ui "Feather designer" save [PATH]`: writes (replacing) PATH, or the field's file.
+    if (!scripted.empty()) d.filePath = scripted;
+    guarded(ctx, [&] { feather::saveFeather(d.filePath, p); });
   }
   if (ImGui::BeginPopupModal("Overwrite feather file?", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
     ImGui::Text("%s exists. Replace it?", d.filePath.c_str());

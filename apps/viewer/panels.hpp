@@ -127,6 +127,8 @@ bool uiRequested(PanelContext& ctx, const char* panel, const char* widget);
 bool uiRequested(PanelContext& ctx, const char* panel, const char* widget, const std::string& value);
 // A slider or field: sets `v` to the script's number.
 bool uiRequestedNumber(PanelContext& ctx, const char* panel, const char* widget, float& v);
+// A text field or a button with an argument: sets `value` to the script's VALUE (possibly empty).
+bool uiRequestedText(PanelContext& ctx, const char* panel, const char* widget, std::string& value);
 
 // panels_view.cpp
 void drawViewPanel(PanelContext& ctx);

@@ -61,6 +61,14 @@ bool uiRequested(PanelContext& ctx, const char* panel, const char* widget, const
   return true;
 }
 
+bool uiRequestedText(PanelContext& ctx, const char* panel, const char* widget, std::string& value) {
+  UiRequest* r = uiFor(ctx, panel);
+  if (!r || r->widget != widget) return false;
+  r->pending = false;
+  value = r->value;
+  return true;
+}
+
 bool uiRequestedNumber(PanelContext& ctx, const char* panel, const char* widget, float& v) {
   UiRequest* r = uiFor(ctx, panel);
   if (!r || r->widget != widget) return false;

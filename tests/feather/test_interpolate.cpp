@@ -5,6 +5,7 @@
 #include "feather_fixtures.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/feather/barbs.hpp"
+#include "pteryla/feather/generator.hpp"
 #include "pteryla/feather/interpolate.hpp"
 
 using namespace pteryla;
@@ -133,8 +134,16 @@ TEST(Interpolate, SilhouetteJumpsSurviveBlending) {
   EXPECT_NEAR(m.barbLengthAt(0, 0.2000001), 0.5 * b.barbLength, 1e-5);
 }
 
-TEST(Interpolate, DifferentGeneratorsAreRejected) {
+TEST(Interpolate, DifferentGeneratorsBlendInTheirStreitForm) {
+  // Each feather enters as its derived Streit fields (tests/feather/test_helical_grow.cpp for helical).
   FeatherParams a = contourParams(), b = contourParams();
   b.generator = "something_else";
-  EXPECT_THROW(interpolateFeathers(a, b, 0.5), Error);
+  b.generatorParams = {{"x", 1}};
+  b.rachisLength *= 2;
+  const FeatherParams m = interpolateFeathers(a, b, 0.5);
+  EXPECT_EQ(m.generator, "streit");
+  EXPECT_TRUE(m.generatorParams.is_null());
+  EXPECT_TRUE(m == interpolateFeathers(a, streitForm(b), 0.5));
+  EXPECT_DOUBLE_EQ(m.rachisLength, 1.5 * a.rachisLength);
+  EXPECT_TRUE(interpolateFeathers(a, b, 1.0) == streitForm(b));
 }

@@ -15,6 +15,7 @@
 #include "fixtures.hpp"
 #include "viewer_run.hpp"
 #include "pteryla/core/json.hpp"
+#include "pteryla/feather/io.hpp"
 #include "pteryla/pipeline/scene.hpp"
 #include "pteryla/render/image.hpp"
 
@@ -140,4 +141,49 @@ TEST(ViewerSmoke, BadScriptExitsWithTwoAndNamesTheLine) {
   const std::string err = slurp(dir + "/stderr.txt");
   EXPECT_EQ(r.code, 2) << err;
   EXPECT_NE(err.find("line 2"), std::string::npos) << err;
+}
+
+// Issue #30 item 4: the designer edits a helical feather's speed curves (V_e, V_b) as undoable edits and
+// saves them to the feather file. The saved file must hold the edits that survived undo/redo, and the
+// feather it loads to must be the one grown with them.
+TEST(ViewerSmoke, DesignerEditsHelicalSpeedCurvesAndSavesThem) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("designer_helical");
+  const std::string featherFile = dir + "/helical.json", sceneFile = dir + "/scene.json";
+  const std::string saved = dir + "/edited.json", script = dir + "/session.txt";
+  std::remove(saved.c_str());
+  const Json original = readJsonFile(viewer_test::dataPath("feathers/helical-contour.json"));
+  std::ofstream(featherFile) << original.dump(1);
+  std::ofstream(sceneFile) << Json{{"pteryla", 1},
+                                   {"mesh", viewer_test::dataPath("meshes/patch.obj")},
+                                   {"feathers", {{"h", featherFile}}},
+                                   {"tracts", Json::array({{{"name", "all"}, {"count", 12}}})}}
+                                  .dump(1);
+  std::ofstream(script) << "load " << sceneFile << "\n"
+                        << "ui \"Feather designer\" \"emitter speed 1\" 0.02\n"  // kept
+                           "ui \"Feather designer\" \"barb speed 0\" 0.09\n"     // undone, redone: kept
+                           "ui \"Feather designer\" undo\n"
+                           "ui \"Feather designer\" redo\n"
+                           "ui \"Feather designer\" \"barb speed 2\" 0.03\n"  // undone: not kept
+                           "ui \"Feather designer\" undo\n"
+                           "frames 2\n"
+                        << "ui \"Feather designer\" save " << saved << "\n"
+                        << "frames 2\n"
+                           "quit\n";
+  const ViewerRun r = runViewer("--size 1100x800 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+
+  const Json& before = original["helical"];
+  const Json after = readJsonFile(saved).at("helical");
+  ASSERT_EQ(after["emitterSpeed"].size(), before["emitterSpeed"].size());
+  EXPECT_NEAR(after["emitterSpeed"][1][1].get<double>(), 0.02, 1e-6);
+  EXPECT_NEAR(after["barbSpeed"][0][1].get<double>(), 0.09, 1e-6);
+  EXPECT_EQ(after["barbSpeed"][2], before["barbSpeed"][2]);
+  EXPECT_EQ(after["emitterSpeed"][0], before["emitterSpeed"][0]);
+  // The saved derived fields are those of the edited curves (loading regrows them: same feather).
+  const feather::FeatherParams edited = feather::loadFeather(saved);
+  EXPECT_NE(edited.silhouette.left.points, feather::loadFeather(featherFile).silhouette.left.points);
+  const Json savedJson = readJsonFile(saved);
+  Json reloaded = feather::featherToJson(edited);
+  EXPECT_EQ(reloaded["left_vane"], savedJson["left_vane"]);
 }
