@@ -11,11 +11,17 @@
 
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/trimesh_reuse.hpp"
+#include "pteryla/feather/generator.hpp"
 
 namespace pteryla::pipeline {
 
-bool packedAsGrown(double age, const feather::GrowthSchedule& schedule) {
-  return age < 1.0 && feather::growthStateAt(age, schedule)[feather::GrowthParam::ShaftLength] >= 1.0;
+bool packedAsGrown(double age, const feather::GrowthSchedule& schedule, const feather::FeatherParams& p) {
+  if (!(age < 1.0)) return false;
+  if (p.generator != "streit") {
+    const feather::FeatherGenerator* g = feather::findFeatherGenerator(p.generator);
+    if (g && g->grow) return true;
+  }
+  return feather::growthStateAt(age, schedule)[feather::GrowthParam::ShaftLength] >= 1.0;
 }
 
 namespace {
@@ -119,7 +125,7 @@ void CoatMesher::updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& gro
       // The packed parameters are rebuilt from the pack's flat key barbs only when they differ from the
       // cached ones (coat::packedParamsEqual compares without building them).
       const bool havePacked = !packed.packedKeys.keyOffset.empty();
-      const bool asGrown = growing && havePacked && packedAsGrown(age, schedule);
+      const bool asGrown = growing && havePacked && packedAsGrown(age, schedule, coat.params[i]);
       const bool meshUnpacked = asGrown || !havePacked;  // mesh params = coat.params[i], else the packed ones
       const bool same =
           matureValid_[i] && (meshUnpacked ? meshParams_[i] == coat.params[i]

@@ -21,8 +21,10 @@
 namespace pteryla::pipeline {
 
 // A growing feather whose shaft is full grown is packed (and meshed) as grown at its age; any other
-// growing feather is packed mature and grown from its packed parameters when meshed.
-bool packedAsGrown(double age, const feather::GrowthSchedule& schedule);
+// growing feather is packed mature and grown from its packed parameters when meshed. A feather whose
+// generator grows it its own way (a helical feather: barbs rolled on the collar, reaching below the
+// rachis) is packed as grown at every growing age, so the packer sees those barbs.
+bool packedAsGrown(double age, const feather::GrowthSchedule& schedule, const feather::FeatherParams& p);
 
 // One past the last index of a feather's ranges (its parts are contiguous, shaft first).
 uint32_t indexEnd(const feather::FeatherMeshRanges& r);

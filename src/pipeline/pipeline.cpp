@@ -157,7 +157,7 @@ void Pipeline::Impl::computePack() {
       for (size_t i = range.begin(); i < range.end(); ++i)
         if (packCoat.present[i] && packCoat.age[i] < 1.0) {
           const feather::GrowthSchedule& schedule = feather::growthScheduleOf(coatNow.params[i]);
-          if (packedAsGrown(packCoat.age[i], schedule)) {
+          if (packedAsGrown(packCoat.age[i], schedule, coatNow.params[i])) {
             packCoat.params[i] = feather::featherAtAge(coatNow.params[i], coatNow.age[i], schedule);
             packGrownAge[i] = coatNow.age[i];
           }
