@@ -44,6 +44,17 @@ SECTIONS = [
      "Right: the order is jittered (`random` 0.4) and the window is wider (0.45), so the wave is ragged, "
      "but every feather still goes through the same loss and regrowth.",
      "moult_radial.json", [("moult_radial_t3", 3, "t = 3"), ("moult_radial_t6", 6, "t = 6")], [3, 6], 3),
+    ("moult_helical", "Helical feathers regrowing in a moult (Zhang & Kanai)",
+     "`moult_helical.json`: 60 helical contour feathers (`helical-contour.json`, docs/helical.md) moulting "
+     "sequentially. A regrowing helical feather is the helical model at the growth time its age maps to "
+     "(docs/growth.md, \"Helical feathers\"): its barbs grow rolled on the follicle collar, a tube with "
+     "barbs added at the base as they fuse with the rachis (the small sheathed pins), then unfurl while the "
+     "sheath sheds (the half-rolled tubes), then open into the feather's own vanes as the rachis curves. "
+     "Frames at t = 2, 3 and 4: the wave of regrowth moves across the patch. Growing helical feathers are "
+     "packed as grown at every age (their rolled barbs hang below the rachis), so the packer presses the "
+     "youngest pins flat against the skin: they read as flattened pillows rather than round cones.",
+     "moult_helical.json", [("moult_helical_t2", 2, "t = 2"), ("moult_helical_t3", 3, "t = 3"),
+                            ("moult_helical_t4", 4, "t = 4")], [3], None),
     ("crest", "Crest: expressive lift control (AnimFur)",
      "`crest.json`: `head.obj` with 1,300 head and neck feathers and 110 longer, red crest feathers. One control on "
      "the crown binds the crest tract; its keyframed `lift` (max 75 degrees) and `random` twist raise the "

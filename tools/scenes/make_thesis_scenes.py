@@ -8,6 +8,7 @@ Scenes (all but bird.json, which tools/scenes/make_bird_scene.py writes):
   wing.json                 210 feathers in two tracts on wing.obj, skeleton bends down and up (Figs 8.6, 9.19)
   moult.json                three patches moulting sequentially, radially and randomly (Figs 8.3-8.5)
   moult_radial.json         radial moult, strictly sequential and with random jitter (Fig 8.5)
+  moult_helical.json        a sequential moult of helical (Zhang & Kanai) feathers growing on the collar
   crest.json                head.obj with a crest lifted by an expressive control (AnimFur)
   patch.json                ~60 feathers, two key feathers, relaxed (Lloyd) follicles
   patch_grid.json, patch_hex.json, patch_stretched.json
@@ -236,6 +237,22 @@ def moult_radial_scene():
     return scene
 
 
+def moult_helical_scene():
+    """A sequential moult of helical (Zhang & Kanai) contour feathers: the regrowing feathers grow on the
+    follicle collar, unfurl and open (docs/growth.md, "Helical feathers")."""
+    scene = moult_scene()
+    scene.update({
+        "name": "moult_helical",
+        "time": 5,
+        "feathers": {"contour": "../feathers/helical-contour.json"},
+        "moult": {"start": 0, "duration": 10, "window": 0.45, "gap": 0.2, "seed": 3, "old_age": 1.0},
+        "tracts": [dict(name="sequential", count=60, feather_scale="auto", feather_spacings=2.6,
+                        relax={"iterations": 40}, moult={"sequence": "increasing_v"})],
+        "camera": {"eye": [0, 2.4, 1.6], "target": [0, 0, 0.2], "up": [0, 1, 0], "fov": 37},
+    })
+    return scene
+
+
 # ---------------------------------------------------------------- crest (expressive controls, AnimFur)
 
 HEAD_AXIS = [[0.62, 0.02, 0], [0.3, 0.08, 0], [0.0, 0.1, 0], [-0.3, 0.02, 0], [-0.3, -0.4, 0], [-0.25, -1.1, 0]]
@@ -399,6 +416,7 @@ def main():
     write("wing.json", wing_scene())
     write("moult.json", moult_scene())
     write("moult_radial.json", moult_radial_scene())
+    write("moult_helical.json", moult_helical_scene())
     write("crest.json", crest_scene())
     for scene, _ in list(patch_scenes()) + list(sphere_scenes()):
         write(scene["name"] + ".json", scene)
