@@ -14,6 +14,7 @@
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/frame.hpp"
 #include "pteryla/core/rng.hpp"
+#include "spring_internal.hpp"
 
 namespace pteryla::moult {
 
@@ -23,27 +24,8 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kHalfPi = 0.5 * kPi;
 constexpr uint64_t kTwistSalt = 0x7477697374ull;
 
-// Homogeneous solution of h'' + 2a h' + w^2 h = 0 over time s as a 2x2 map of (h0, h0').
-struct SpringMap {
-  double a, b, c, d;  // h = a h0 + b h0', h' = c h0 + d h0'
-};
-
-SpringMap springMap(double w, double zeta, double s) {
-  const double a = zeta * w;
-  const double e = std::exp(-a * s);
-  if (std::abs(zeta - 1.0) < 1e-9) {
-    return {e * (1 + a * s), e * s, -e * a * a * s, e * (1 - a * s)};
-  }
-  if (zeta < 1.0) {
-    const double wd = w * std::sqrt(1 - zeta * zeta);
-    const double cs = std::cos(wd * s), sn = std::sin(wd * s);
-    return {e * (cs + a / wd * sn), e * sn / wd, -e * (w * w / wd) * sn, e * (cs - a / wd * sn)};
-  }
-  const double q = w * std::sqrt(zeta * zeta - 1);
-  const double r1 = -a + q, r2 = -a - q;
-  const double e1 = std::exp(r1 * s), e2 = std::exp(r2 * s), k = 1.0 / (r1 - r2);
-  return {k * (-r2 * e1 + r1 * e2), k * (e1 - e2), k * r1 * r2 * (e2 - e1), k * (r1 * e1 - r2 * e2)};
-}
+using spring::SpringMap;
+using spring::springMap;
 
 glm::dvec3 poly(const std::array<glm::dvec3, 4>& c, double s) { return c[0] + s * (c[1] + s * (c[2] + s * c[3])); }
 glm::dvec3 polyD(const std::array<glm::dvec3, 4>& c, double s) { return c[1] + s * (2.0 * c[2] + s * 3.0 * c[3]); }
@@ -313,6 +295,7 @@ ControlSpec readControl(JsonReader& r) {
     JsonReader s = r.object("spring");
     c.springFrequency = s.number("frequency", c.springFrequency, 1e-6, 1e6);
     c.springDamping = s.number("damping", c.springDamping, 0.0, 100.0);
+    c.chainSegments = static_cast<int>(s.integer("segments", c.chainSegments, 1, kMaxChainSegments));
     s.finish();
   } else {
     r.allow("spring");

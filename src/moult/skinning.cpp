@@ -133,6 +133,14 @@ void skinPoints(const Skeleton& s, const std::vector<RigidTransform>& joints, co
   }
 }
 
+glm::dvec3 skinPoint(const Skeleton& s, const std::vector<RigidTransform>& joints, const glm::dvec3& p, size_t v) {
+  PTERYLA_CHECK(v < s.vertexCount(), "skinPoint: vertex out of range");
+  glm::dvec3 d(0.0);
+  for (uint32_t k = s.weightOffset[v]; k < s.weightOffset[v + 1]; ++k)
+    d += s.weight[k] * (joints[s.weightJoint[k]].apply(p) - p);
+  return p + d;
+}
+
 bool poseSkinMesh(const Skeleton& s, const SkeletonPose& pose, const coat::SkinMesh& rest, coat::SkinMesh& posed) {
   if (s.vertexCount() != rest.vertexCount())
     throw Error("the skeleton has weights for " + std::to_string(s.vertexCount()) + " vertices, the mesh has " +

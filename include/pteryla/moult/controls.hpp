@@ -24,6 +24,7 @@
 #include "pteryla/coat/pack.hpp"
 #include "pteryla/coat/skin.hpp"
 #include "pteryla/core/json.hpp"
+#include "pteryla/moult/chain.hpp"
 #include "pteryla/moult/keyframes.hpp"
 
 namespace pteryla::moult {
@@ -39,6 +40,7 @@ struct ControlSpec {
   double maxLift = 1.5707963267948966;     // radians: elevation reached at lift = 1 (<= pi/2)
   double springFrequency = 1.5;            // cycles per time unit (natural frequency of the dynamic spring)
   double springDamping = 0.4;              // damping ratio (0 undamped, 1 critical)
+  int chainSegments = kDefaultChainSegments;  // segments of the dynamic chain along the shaft (chain.hpp)
   // Keyframed attributes (scalars in x); lift, aim, direction, random, dynamic in [0, 1].
   Track lift, aim, direction, random, dynamic;
   Track offset;  // displacement of the control from its placement (world, scene units)

@@ -61,6 +61,8 @@ std::vector<RigidTransform> jointTransforms(const Skeleton& s, const SkeletonPos
 // Linear blend skinning of `rest` (one point per skeleton vertex) into `out`.
 void skinPoints(const Skeleton& s, const std::vector<RigidTransform>& joints, const std::vector<glm::dvec3>& rest,
                 std::vector<glm::dvec3>& out);
+// One vertex of skinPoints (the same arithmetic): vertex v at rest position p.
+glm::dvec3 skinPoint(const Skeleton& s, const std::vector<RigidTransform>& joints, const glm::dvec3& p, size_t v);
 // Deforms posed.positions from rest.positions and recomputes normals and areas (coat::recomputeGeometry).
 // `posed` must have rest's connectivity (a copy of it). Returns false and leaves `posed` untouched when
 // the pose moves no vertex (an identity pose), so a rest pose keeps the rest normals bit for bit.
