@@ -1,7 +1,8 @@
 // Expressive lift controls: AnimFur (Grier 2019, 3.2 "Design for Hair Rig", 4.3 "The Hair Rig": controls
 // bound to their nearest hairs; lift, aim, direction, random twist and dynamic blend behaviours) applied
 // through Streit 2003, 8.3 fixed feather angles (lifted feathers keep their angle, the rest is packed
-// against them). The dynamic blend's spring is solved in closed form so time can be scrubbed freely.
+// against them). The dynamic blend bends the shaft as a spring chain (chain.cpp); springLag is its rigid
+// one-segment case in closed form.
 #include "pteryla/moult/controls.hpp"
 
 #include <glm/geometric.hpp>
@@ -12,7 +13,6 @@
 #include <utility>
 
 #include "pteryla/core/error.hpp"
-#include "pteryla/core/frame.hpp"
 #include "pteryla/core/rng.hpp"
 #include "spring_internal.hpp"
 
@@ -182,7 +182,7 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
   }
   auto present = [&](size_t i) { return coat.present.empty() || coat.present[i] != 0; };
 
-  // Pass 1: turns about the normal (direction, aim, dynamic tip, random twist), and whether any feather
+  // Pass 1: turns about the normal (direction, aim, random twist), and whether any feather
   // wants to rise (which needs its natural elevation).
   std::vector<uint8_t> wantsRaise(n, 0);
   bool needNatural = false;
@@ -198,12 +198,10 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
     coat::FeatherFrame& F = coat.frames[i];
     const glm::dvec3 N = F.normal;
     glm::dvec3 T = F.tangent;
-    const double len = coat.params[i].totalLength();
     const glm::dvec3 toControl = position[static_cast<size_t>(c)] - F.origin;
     bool turned = false;
     turned |= turnToward(T, N, v.offset, v.direction * w);
     turned |= turnToward(T, N, toControl, v.aim * w);
-    turned |= turnToward(T, N, T * len + v.lag, v.dynamic * w);
     if (v.random > 0) {
       const uint64_t id = f < follicles.id.size() ? follicles.id[f] : f;
       const double ang = v.random * w * cs.twistAngle * (2.0 * hashUniform(cs.seed ^ kTwistSalt, id) - 1.0);
@@ -217,8 +215,10 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
       F.binormal = glm::normalize(glm::cross(N, T));
       ++res.turned;
     }
-    const bool rise = (v.lift > 0) || (v.direction > 0 && glm::dot(v.offset, N) > 0) ||
-                      (v.aim > 0 && glm::dot(toControl, N) > 0) || (v.dynamic > 0 && glm::length(v.lag) > 0);
+    // `dynamic` neither turns nor raises: it bends the shaft at meshing time (chain.hpp), the root
+    // following the packed frame.
+    const bool rise =
+        (v.lift > 0) || (v.direction > 0 && glm::dot(v.offset, N) > 0) || (v.aim > 0 && glm::dot(toControl, N) > 0);
     if (rise) {
       wantsRaise[i] = 1;
       if (std::isnan(fixedElevation[i])) needNatural = true;
@@ -254,11 +254,6 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
     };
     raise(elevationOf(v.offset, N), v.direction * w);
     raise(elevationOf(position[c] - F.origin, N), v.aim * w);
-    if (v.dynamic > 0) {
-      const double len = coat.params[i].totalLength();
-      const glm::dvec3 shaft = elevatedAxes(F.tangent, F.binormal, N, e).x;
-      raise(elevationOf(shaft * len + v.lag, N), v.dynamic * w);
-    }
     raise(cs.maxLift, v.lift * w);
     e = std::min(e, kHalfPi);
     if (e > base) {

@@ -199,7 +199,9 @@ void CoatMesher::update(const CoatMeshInput& in, TriMesh& out) {
   // Not the mesh of the last update (or a first one): nothing can be copied from it.
   if (out.featherId.size() != localPos_.size())
     for (auto& sl : slices_) sl.valid = false;
+  bends_ = in.bends && in.bends->size() == n ? in.bends : nullptr;
   assemble(inputs, shed, out);
+  bends_ = nullptr;
 }
 
 // Meshes the present feathers (inputs, in layer order) into `out`. Feathers are meshed unplaced
@@ -307,9 +309,15 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
   tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t k = range.begin(); k < range.end(); ++k) {
       const Slice& sl = next[k];
-      feather::placeFeatherVertices(placed[k].placement, localPos_.data() + sl.v0, localNrm_.data() + sl.v0,
-                                    localTan_.data() + sl.v0, sl.vn, out.positions.data() + sl.v0,
-                                    out.normals.data() + sl.v0, out.tangents.data() + sl.v0);
+      if (bends_ && !(*bends_)[which[k]].rigid())
+        feather::placeBentFeatherVertices(placed[k].placement, (*bends_)[which[k]], localPos_.data() + sl.v0,
+                                          localNrm_.data() + sl.v0, localTan_.data() + sl.v0, sl.vn,
+                                          out.positions.data() + sl.v0, out.normals.data() + sl.v0,
+                                          out.tangents.data() + sl.v0);
+      else
+        feather::placeFeatherVertices(placed[k].placement, localPos_.data() + sl.v0, localNrm_.data() + sl.v0,
+                                      localTan_.data() + sl.v0, sl.vn, out.positions.data() + sl.v0,
+                                      out.normals.data() + sl.v0, out.tangents.data() + sl.v0);
     }
   });
   // Remember what each slice of the new mesh was made from.

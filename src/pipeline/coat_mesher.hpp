@@ -14,6 +14,7 @@
 #include "pteryla/coat/pack.hpp"
 #include "pteryla/core/trimesh.hpp"
 #include "pteryla/feather/barbs.hpp"
+#include "pteryla/feather/bend.hpp"
 #include "pteryla/feather/growth.hpp"
 #include "pteryla/feather/lod.hpp"
 #include "pteryla/feather/mesh.hpp"
@@ -37,6 +38,9 @@ struct CoatMeshInput {
   double lod = 1;                                  // (0,1]
   // Per feather, multiplies lod; ignored unless it has one entry per feather.
   const std::vector<double>* featherLods = nullptr;
+  // Per feather, the shaft bend of the dynamic chain (feather/bend.hpp); ignored unless it has one entry
+  // per feather; rigid entries are placed as without.
+  const std::vector<feather::ShaftBend>* bends = nullptr;
 };
 
 class CoatMesher {
@@ -91,6 +95,7 @@ class CoatMesher {
   std::vector<uint32_t> keptIndices_;
   std::vector<uint32_t> which_;
   std::vector<feather::FeatherMeshRanges> ranges_;
+  const std::vector<feather::ShaftBend>* bends_ = nullptr;  // of the current update (null: none)
   size_t regenerated_ = 0, reused_ = 0;
 };
 

@@ -82,6 +82,7 @@ void Pipeline::Impl::computePose() {
     coat::recomputeGeometry(posed);
     timeState.rest = &rest;
     timeState.posedMoved = true;
+    timeState.drivingRig = nullptr;
     posedGeneration = 0;
   } else {
     // poseSkin wants `posed` as a copy of `rest` and touches it only when the pose moves the skin.
@@ -197,6 +198,7 @@ void Pipeline::Impl::computeMesh() {
   in.packed = packed;
   in.lod = lod;
   in.featherLods = &featherLods;
+  in.bends = &timeState.bends;
   mesher.update(in, mesh.mesh);
   drape = coat::DrapeResult{};
   if (packOptions.method == coat::PackMethod::Drape) {

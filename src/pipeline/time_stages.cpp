@@ -201,6 +201,7 @@ void poseSkin(const Scene& scene, double t, const coat::SkinMesh& rest, coat::Sk
   state.rest = &rest;
   state.posedMoved = false;
   parseRig(scene, rest, state);
+  state.drivingRig = state.rig ? &*state.rig : nullptr;
   if (!state.rig) return;
   const moult::SkeletonPose pose = moult::poseAt(state.rig->animation, t);
   state.posedMoved = moult::poseSkinMesh(state.rig->skeleton, pose, rest, posed);
@@ -232,6 +233,7 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
                    std::vector<double>& fixedElevation) {
   state.controlResult = moult::ControlResult{};
   state.packReport = PackReport{};
+  state.bends.clear();
   if (scene.controls.empty()) return;
   parseControls(scene, state);
   if (state.controls.empty()) return;
@@ -251,6 +253,7 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
   };
   state.controlResult = moult::evaluateControls(state.controls, binding, posed, follicles, t, state.packing.options,
                                                 constraints, coat, fixedElevation, natural);
+  applyChains(scene, t, follicles, binding, state, coat);
 }
 
 const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,

@@ -3,6 +3,7 @@
 // and expressive controls. Each is a pure function of (scene, t) and the rest-state results, so any
 // time can be evaluated in any order. The work is done by src/moult; these hooks parse the scene's
 // sections (strictly: unknown keys are errors with their key path) and cache what they parsed.
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,6 +13,8 @@
 #include "pteryla/coat/pack.hpp"
 #include "pteryla/coat/parameterize.hpp"
 #include "pteryla/coat/skin.hpp"
+#include "pteryla/feather/bend.hpp"
+#include "pteryla/moult/chain.hpp"
 #include "pteryla/moult/controls.hpp"
 #include "pteryla/moult/schedule.hpp"
 #include "pteryla/moult/skinning.hpp"
@@ -71,9 +74,10 @@ struct TimeState {
   const coat::SkinMesh* rest = nullptr;
 
   // Skeleton ("skeleton" section).
-  Json rigKey;                        // {file, section, vertex count} the rig was read for
-  std::optional<moult::SkinRig> rig;  // empty: no skeleton
-  bool posedMoved = false;            // the last pose moved the skin
+  Json rigKey;                                 // {file, section, vertex count} the rig was read for
+  std::optional<moult::SkinRig> rig;           // empty: no skeleton
+  bool posedMoved = false;                     // the last pose moved the skin
+  const moult::SkinRig* drivingRig = nullptr;  // the skeleton posing the skin this frame (null: none)
 
   // Moult ("moult" section and per-tract "moult" overrides).
   Json moultKey;
@@ -91,6 +95,16 @@ struct TimeState {
   std::vector<std::vector<uint32_t>> controlTracts;  // per control: tract indices (empty = any)
   coat::PackingSettings packing;
   moult::ControlResult controlResult;  // of the last evaluation (its natural pack lives in `natural`)
+
+  // Dynamic chains (moult/chain.hpp): one simulator per control with a dynamic behaviour, over the
+  // follicles bound to it, kept with its checkpoints while `chainsKey` (controls, skeleton, rest state)
+  // is unchanged. Their lags at the frame's time bend the bound feathers (`bends`, per feather; empty:
+  // rigid), which the mesh stage applies.
+  Json chainsKey;
+  std::vector<std::unique_ptr<moult::ChainSim>> chains;  // per control (null: not dynamic)
+  std::vector<std::vector<uint32_t>> chainFollicles;     // per control: the simulated follicles
+  std::vector<feather::ShaftBend> bends;
+  size_t chainSteps = 0, chainCount = 0;  // of the last evaluation: grid steps integrated, chains simulated
 
   // Packs remembered across frames (see PackMemo): the controls' natural pack and the frame's pack.
   uint64_t generation = 0;  // set by the pipeline: changes whenever the rest state changes
@@ -113,11 +127,18 @@ void poseSkin(const Scene& scene, double t, const coat::SkinMesh& rest, coat::Sk
 // Sets coat.age / coat.present from the scene's moult settings at time t (all mature without).
 void featherAges(const Scene& scene, double t, const std::vector<coat::TractParameterization>& params,
                  const coat::Follicles& follicles, TimeState& state, coat::CoatFeathers& coat);
-// Expressive controls at time t: lifted feathers get fixed elevations (NaN = free) and directions.
+// Expressive controls at time t: lifted feathers get fixed elevations (NaN = free) and directions;
+// feathers under a dynamic control get state.bends.
 // `constraints`: the styling's (its fixedElevation is ignored: `fixedElevation` stands for it).
 void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, const coat::Follicles& follicles,
                    TimeState& state, coat::CoatFeathers& coat, const coat::PackConstraints& constraints,
                    std::vector<double>& fixedElevation);
+
+// The dynamic controls' chains at time t (called by applyControls with its binding): state.bends, per
+// feather of `coat`, the shaft bend of every present feather bound to a dynamic control (scaled by the
+// control's dynamic value times the binding weight); empty elsewhere.
+void applyChains(const Scene& scene, double t, const coat::Follicles& follicles, const moult::ControlBinding& binding,
+                 TimeState& state, const coat::CoatFeathers& coat);
 
 // The frame's pack (state.frame.result): an incremental repack (bit-identical to a full pack,
 // coat/pack.hpp) from whichever remembered pack differs in fewer feathers, the previous frame's pack or

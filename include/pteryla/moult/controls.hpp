@@ -6,12 +6,13 @@
 //   aim        point at the control's position
 //   direction  follow the control's displacement (its keyframed offset)
 //   random     turn each feather about its normal by a seeded per-feather multiplier (random twist)
-//   dynamic    the tip follows a damped spring driven by the control's motion; blended by weight
+//   dynamic    the shaft bends as a spring chain (chain.hpp) driven by the skin's and the control's
+//              motion: the root follows the skin, the tip lags; blended by weight
 // Raised feathers become fixed-angle feathers (PackConstraints::fixedElevation; NaN = free) and the rest
 // of the coat packs against them, so raised crests and puffed chests stay free of interpenetration.
 // A raise starts from the feather's natural (packed) elevation, so lift 0 leaves the coat unchanged and
-// lift 1 stands the shafts up. The spring is solved in closed form for the piecewise-polynomial key
-// motion, so every evaluation is a pure function of t. docs/controls.md has the details and the JSON.
+// lift 1 stands the shafts up. The chain is integrated with a fixed step from the clip start, so every
+// evaluation is a pure function of t. docs/controls.md has the details and the JSON.
 #include <glm/vec3.hpp>
 
 #include <cstdint>
@@ -49,7 +50,9 @@ struct ControlSpec {
 struct ControlValues {
   double lift = 0, aim = 0, direction = 0, random = 0, dynamic = 0;
   glm::dvec3 offset{0.0};
-  glm::dvec3 lag{0.0};  // spring position minus control position (the tip's lag behind the motion)
+  // Rigid (one-segment) spring lag behind the offset alone, in closed form (springLag): what a one-segment
+  // chain on a still skin gives; the pipeline bends the shaft with the chain (chain.hpp) instead.
+  glm::dvec3 lag{0.0};
 };
 ControlValues controlValuesAt(const ControlSpec& c, double t);
 
