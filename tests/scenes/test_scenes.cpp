@@ -68,9 +68,10 @@ double meanElevation(pipeline::Pipeline& p, uint32_t tract) {
 
 TEST(Scenes, TheThesisScenesAreBundled) {
   const auto names = bundledScenes();
-  for (const char* n : {"bird.json", "wing.json", "moult.json", "moult_radial.json", "crest.json", "patch.json",
-                        "patch_grid.json", "patch_hex.json", "patch_stretched.json", "sphere.json", "sphere_small.json",
-                        "sphere_large.json", "sphere_250_small.json", "sphere_250.json", "sphere_250_large.json"})
+  for (const char* n :
+       {"bird.json", "wing.json", "wing_flap.json", "moult.json", "moult_radial.json", "crest.json", "patch.json",
+        "patch_grid.json", "patch_hex.json", "patch_stretched.json", "sphere.json", "sphere_small.json",
+        "sphere_large.json", "sphere_250_small.json", "sphere_250.json", "sphere_250_large.json"})
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
 

@@ -6,6 +6,8 @@
 
 Scenes (all but bird.json, which tools/scenes/make_bird_scene.py writes):
   wing.json                 210 feathers in two tracts on wing.obj, skeleton bends down and up (Figs 8.6, 9.19)
+  wing_flap.json            the wing with one quick downstroke; its primaries bend behind the motion and
+                            spring back (a dynamic control: docs/controls.md, "Dynamic blend")
   moult.json                three patches moulting sequentially, radially and randomly (Figs 8.3-8.5)
   moult_radial.json         radial moult, strictly sequential and with random jitter (Fig 8.5)
   moult_helical.json        a sequential moult of helical (Zhang & Kanai) feathers growing on the collar
@@ -171,6 +173,31 @@ def wing_scene():
         "camera": {"eye": [1.25, 2.0, 2.0], "target": [0.95, 0.12, 0.2], "up": [0, 1, 0], "fov": 38},
         "render": {"size": [640, 360], "lod": 0.8},
     }
+
+
+FLAP_KEYS = [
+    # (t, elbow degrees, wrist degrees): held up, one quick downstroke, held down.
+    (0, 25, 20),
+    (0.25, 25, 20),
+    (0.5, -20, -20),
+]
+
+
+def wing_flap_scene():
+    """The wing with a quick downstroke; a dynamic control over the outer wing bends the primaries."""
+    scene = wing_scene()
+    scene["name"] = "wing_flap"
+    scene["time"] = 0.45
+    scene["skeleton"]["keys"] = [k for t, e, w in FLAP_KEYS for k in (
+        {"joint": "elbow", "t": t, "rotation": [0, 0, 1, e]},
+        {"joint": "wrist", "t": t, "rotation": [0, 0, 1, w]})]
+    scene["controls"] = [
+        {"name": "primaries", "at": [1.6, 0.0, 0.2], "radius": 0.75, "falloff": 0.4, "tracts": ["remiges"],
+         "dynamic": 1, "spring": {"frequency": 1.2, "damping": 0.3, "segments": 6}},
+    ]
+    # Seen from beyond the wingtip and behind, level with the wing: the bend is out of the wing's plane.
+    scene["camera"] = {"eye": [3.2, 0.0, 1.6], "target": [1.4, -0.1, 0.4], "up": [0, 1, 0], "fov": 40}
+    return scene
 
 
 # ---------------------------------------------------------------- moult (Figs 8.3-8.5)
@@ -414,6 +441,7 @@ def sphere_scenes():
 
 def main():
     write("wing.json", wing_scene())
+    write("wing_flap.json", wing_flap_scene())
     write("moult.json", moult_scene())
     write("moult_radial.json", moult_radial_scene())
     write("moult_helical.json", moult_helical_scene())
