@@ -438,6 +438,19 @@ void App::frameAll() {
   camera_.frame(lo, hi, float(view_.viewSize.x) / float(view_.viewSize.y));
 }
 
+void App::frameSelection() {
+  const Snapshot& s = doc_.snapshot();
+  const int f = view_.selectedFeather;
+  if (f < 0 || size_t(f) >= s.featherOrigin.size()) {
+    frameAll();
+    return;
+  }
+  const float r = size_t(f) < s.featherLength.size() ? std::max(s.featherLength[size_t(f)], 1e-4f) : 0.1f;
+  const glm::vec3 c = s.featherOrigin[size_t(f)] + 0.5f * r * s.featherTangent[size_t(f)];
+  camera_.frame(c - glm::vec3(r), c + glm::vec3(r), float(view_.viewSize.x) / float(view_.viewSize.y));
+  cameraMoved_ = true;
+}
+
 // Results to the renderer: the skin as soon as a job publishes it (progressive display), the coat and
 // its materials once the evaluation is complete.
 void App::syncView() {
@@ -468,7 +481,8 @@ void App::uploadResults() {
     if (meshEvals != meshEvals_) {
       const pipeline::CoatMesh& coat = p->coatMesh();
       context_->makeCurrent();
-      renderer_->setCoat(coat.mesh, render::drawRanges(coat));
+      updateColouring();
+      renderer_->setCoat(coat.mesh, drawRangesFor(coat.ranges));
       meshEvals_ = meshEvals;
       materialsStale_ = true;
       ++uploadVersion_;
@@ -480,20 +494,29 @@ void App::uploadResults() {
     view_.navigationChanged = false;
     navNeeded_ = true;
   }
+  // A new colour mode (or a check finishing under "problems"): the same coat with other ranges.
+  if (p && doc_.upToDate() && doc_.resultVersion() == syncedResult_ && updateColouring()) {
+    context_->makeCurrent();
+    renderer_->setCoat(p->coatMesh().mesh, drawRangesFor(p->coatMesh().ranges));
+    materialsStale_ = true;
+    navNeeded_ = true;
+    ++uploadVersion_;
+  }
   if (navNeeded_ && p && doc_.upToDate() && doc_.resultVersion() == syncedResult_) {
     navNeeded_ = false;
     buildNavigationCoat(p->coatMesh());
   }
   if (snap.haveCoat && (materialsStale_ || lastBrdfD_ != scene.render.brdfD || lastBrdfH_ != scene.render.brdfH ||
-                        lastMaterialCount_ != snap.materials.size())) {
+                        lastMaterialCount_ != snap.materials.size() + colouring_.legend.size())) {
     pipeline::CoatMesh materialsOnly;
     materialsOnly.materials = snap.materials;
-    const auto materials = render::sceneMaterials(scene, materialsOnly);
+    const auto materials =
+        view_.colourBy == ColourBy::Material ? render::sceneMaterials(scene, materialsOnly) : paletteMaterials();
     renderer_->setMaterials(materials);
     if (navRenderer_) navRenderer_->setMaterials(materials);
     lastBrdfD_ = scene.render.brdfD;
     lastBrdfH_ = scene.render.brdfH;
-    lastMaterialCount_ = snap.materials.size();
+    lastMaterialCount_ = snap.materials.size() + colouring_.legend.size();
     materialsStale_ = false;
     ++uploadVersion_;
   }
@@ -510,9 +533,7 @@ void App::buildNavigationCoat(const pipeline::CoatMesh& coat) {
   const bool fresh = !navRenderer_;
   if (fresh) navRenderer_ = std::make_unique<render::Renderer>(*context_);
   if (fresh || uploadedSkin_ != 0) navRenderer_->setSkin(doc_.snapshot().skin);
-  pipeline::CoatMesh rangesOnly;
-  rangesOnly.ranges = nav.ranges;
-  navRenderer_->setCoat(nav.mesh, render::drawRanges(rangesOnly));
+  navRenderer_->setCoat(nav.mesh, drawRangesFor(nav.ranges));
   materialsStale_ = true;  // both renderers get the materials on the next upload
   navTriangles_ = nav.mesh.triangleCount();
   navStride_ = nav.stride;

@@ -24,10 +24,7 @@ struct GLFWwindow;
 
 #include "pteryla/render/image.hpp"
 #include "pteryla/render/image_texture.hpp"
-
-namespace pteryla::render {
-class Renderer;
-}  // namespace pteryla::render
+#include "pteryla/render/renderer.hpp"
 
 namespace pteryla::viewer {
 
@@ -76,11 +73,19 @@ class App {
   void syncView();
   void uploadResults();
   void buildNavigationCoat(const pipeline::CoatMesh& coat);
+  // Colour-by modes (app_colour.cpp): the draw ranges of `ranges` with each feather's material replaced
+  // by its colour entry when a mode is on; the palette as render materials.
+  std::vector<render::FeatherDrawRange> drawRangesFor(const std::vector<pipeline::CoatDrawRange>& ranges) const;
+  std::vector<render::FeatherMaterial> paletteMaterials() const;
+  bool updateColouring();
+  void legendWindow();  // the colour mode's legend, bottom left of the 3D view  // recomputes colouring_ when the mode,
+                        // the result or the check changed
   bool cameraMoving() const;
   void renderView();
   std::vector<float> viewKey() const;
   void initCamera();
   void frameAll();
+  void frameSelection();  // F: the selected feather, else everything
   void captureScreenshot(int fbw, int fbh, bool afterUi);
   void updateFps();
   void benchmarkStep();
@@ -150,6 +155,8 @@ class App {
   float movingFullKey_[3] = {-1.0f, -1.0f, -1.0f};  // upload version, view width, height
   bool cameraReady_ = false, cameraFramedCoat_ = false, cameraMoved_ = false;
   bool materialsStale_ = true;
+  FeatherColouring colouring_;  // of view_.colourBy, for the uploaded coat
+  std::vector<uint64_t> colourKey_;
   double lastBrdfD_ = -1, lastBrdfH_ = -1;
   size_t lastMaterialCount_ = 0;
   glm::ivec2 windowSize_{0}, fbSize_{0};
@@ -221,6 +228,10 @@ class App {
 
   // Drag state of the viewport.
   bool dragging_ = false, toolDrag_ = false;
+  glm::vec2 clickStart_{0.0f};
+  bool clickPending_ = false;  // a left press that may still become a click (selection)
+  glm::vec2 hoverAt_{-1.0f};   // where the hovered feather was last picked
+  uint64_t hoverResult_ = 0;
   glm::vec3 dragNormal_{0, 0, 1};
 
   // Scratchboard preview (CPU renderer) as a GL texture.

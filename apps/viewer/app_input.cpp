@@ -47,6 +47,34 @@ void App::handleInput() {
                                  ImGui::IsMouseReleased(ImGuiMouseButton_Left), mouse);
     if (used) return;
   }
+  // Hover readout and click selection of feathers (orbit tool): the feather whose follicle projects
+  // nearest the mouse, facing the camera. A click is a press and release that did not orbit.
+  const Snapshot& snap = doc_.snapshot();
+  // The coat triangle under the mouse (not hidden by the skin), else the follicle nearest on screen.
+  auto featherAt = [&](const glm::vec2& px) {
+    int f = -1;
+    pipeline::Pipeline* p = doc_.idlePipeline();
+    if (p && doc_.upToDate())
+      f = pickFeather(p->coatMesh().mesh, snap.skin, pixelRay(camera_.camera(), px, view_.viewSize));
+    if (f < 0) f = pickPoint(snap.featherOrigin, snap.featherNormal, camera_.camera(), view_.viewSize, px, 10.0f);
+    if (f >= 0 && (size_t(f) >= snap.featherPresent.size() || !snap.featherPresent[size_t(f)])) f = -1;
+    return f;
+  };
+  if (overUi || dragging_ || toolActive || !snap.haveCoat) {
+    view_.hoveredFeather = -1;
+    hoverAt_ = glm::vec2(-1.0f);
+  } else if (mouse != hoverAt_ || hoverResult_ != doc_.resultVersion()) {
+    hoverAt_ = mouse;  // the ray is cast again only when the mouse or the coat moved
+    hoverResult_ = doc_.resultVersion();
+    view_.hoveredFeather = featherAt(mouse);
+  }
+  if (leftPressed && !toolActive) clickStart_ = mouse, clickPending_ = true;
+  if (clickPending_ && ImGui::IsMouseDown(ImGuiMouseButton_Left) && glm::length(mouse - clickStart_) > 3.0f)
+    clickPending_ = false;  // it became an orbit
+  if (clickPending_ && ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
+    clickPending_ = false;
+    view_.selectedFeather = snap.haveCoat ? featherAt(mouse) : -1;
+  }
   const bool anyDown = ImGui::IsMouseDown(ImGuiMouseButton_Left) || ImGui::IsMouseDown(ImGuiMouseButton_Right) ||
                        ImGui::IsMouseDown(ImGuiMouseButton_Middle);
   if (!anyDown) dragging_ = false;

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "app.hpp"
+#include "overlays.hpp"
 #include "pteryla/core/error.hpp"
 
 namespace pteryla::viewer {
@@ -207,6 +208,18 @@ void App::scriptStep() {
       needArgs(c, 0, 0, "crash", file);
       std::fflush(nullptr);
       std::_Exit(70);
+    } else if (c.verb == "selection") {
+      needArgs(c, 0, 0, "selection", file);
+      const FeatherReadout r = featherReadout(doc_.snapshot(), view_.selectedFeather);
+      const Json j = r.feather < 0 ? Json{{"feather", nullptr}}
+                                   : Json{{"feather", r.feather},
+                                          {"tract", r.tract},
+                                          {"type", r.type},
+                                          {"follicle_id", r.follicleId},
+                                          {"elevation_deg", r.elevationDeg},
+                                          {"age", r.age},
+                                          {"present", r.present}};
+      std::cout << j.dump() << std::endl;
     } else if (c.verb == "frame") {
       needArgs(c, 0, 0, "frame", file);
       frameAll();

@@ -11,6 +11,7 @@
 #include "app.hpp"
 #include "glfw_context.hpp"
 #include "json_widgets.hpp"
+#include "overlays.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/render/renderer.hpp"
@@ -149,6 +150,12 @@ void App::buildUi() {
   if (view_.showHelp) guardedUi("Help", [&] { helpWindow(); });
   if (doc_.hasScene() && doc_.scene().render.style == "scratchboard")
     guardedUi("Scratchboard preview", [&] { scratchboardWindow(); });
+  if (doc_.hasScene() && view_.colourBy != ColourBy::Material) guardedUi("legend", [&] { legendWindow(); });
+  if (doc_.hasScene() && view_.hoveredFeather >= 0 && !ImGui::GetIO().WantCaptureMouse) {
+    ImGui::BeginTooltip();
+    ImGui::TextUnformatted(readoutText(featherReadout(doc_.snapshot(), view_.hoveredFeather)).c_str());
+    ImGui::EndTooltip();
+  }
   guardedUi("dialog", [&] { dialogs(); });
   // Keyboard shortcuts (when no text field has the keyboard).
   ImGuiIO& io = ImGui::GetIO();
@@ -163,9 +170,13 @@ void App::buildUi() {
     if (ctrl && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Y))) doc_.redo();
     if (ctrl && ImGui::IsKeyPressed('S')) requestSave();
     if (ctrl && ImGui::IsKeyPressed('O')) popupToOpen_ = "Open scene";
-    if (!ctrl && ImGui::IsKeyPressed('F')) frameAll();
+    if (!ctrl && ImGui::IsKeyPressed('F')) frameSelection();
+    if (!ctrl && ImGui::IsKeyPressed('A')) frameAll();
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space))) view_.playing = !view_.playing;
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) view_.tool = Tool::Orbit;
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
+      if (view_.tool == Tool::Orbit) view_.selectedFeather = -1;  // Esc: end the tool, then the selection
+      view_.tool = Tool::Orbit;
+    }
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Tab))) view_.hidePanels = !view_.hidePanels;
   }
   // Releasing the mouse ends a gesture: the next slider drag is a new undo step.

@@ -330,6 +330,14 @@ void Document::startJob(bool check) {
       }
       work.featherFollicle = cf.follicle;
       work.featherPresent = cf.present;
+      work.featherTract = cf.tract;
+      work.featherAge.assign(cf.age.begin(), cf.age.end());
+      work.featherLayerOrder = cf.layerOrder;
+      work.featherMaterial.assign(n, UINT32_MAX);
+      for (const auto& r : cm.ranges)
+        if (r.feather < n) work.featherMaterial[r.feather] = r.material;
+      work.featherLength.resize(n);
+      for (size_t i = 0; i < n; ++i) work.featherLength[i] = float(cf.params[i].rachisLength);
       work.materials = cm.materials;
       work.coatTriangles = cm.mesh.triangleCount();
       work.coatFeathers = cm.ranges.size();

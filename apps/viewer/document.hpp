@@ -52,6 +52,11 @@ struct Snapshot {
   std::vector<float> featherElevation;    // radians
   std::vector<uint32_t> featherFollicle;  // index into follicle arrays
   std::vector<uint8_t> featherPresent;
+  std::vector<uint32_t> featherTract;       // tract index per feather
+  std::vector<float> featherAge;            // growth and wear age (growth.md)
+  std::vector<uint32_t> featherLayerOrder;  // feather indices, bottom layer first
+  std::vector<uint32_t> featherMaterial;    // index into `materials` (UINT32_MAX: not drawn)
+  std::vector<float> featherLength;         // rachis length, scene units (to frame a selection)
   std::vector<pipeline::CoatMaterial> materials;
   size_t coatTriangles = 0, coatFeathers = 0;
   glm::vec3 coatLo{0}, coatHi{0};

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <unordered_map>
 
 #include <glm/geometric.hpp>
@@ -60,6 +61,32 @@ float screenRadius(const Projector& proj, const glm::vec3& c, float r) {
 
 }  // namespace
 
+FeatherReadout featherReadout(const Snapshot& s, int i) {
+  FeatherReadout r;
+  if (i < 0 || size_t(i) >= s.featherOrigin.size()) return r;
+  const size_t f = size_t(i);
+  r.feather = i;
+  if (f < s.featherTract.size())
+    r.tract = s.featherTract[f] < s.tractNames.size() ? s.tractNames[s.featherTract[f]]
+                                                      : "tract " + std::to_string(s.featherTract[f]);
+  if (f < s.featherMaterial.size() && s.featherMaterial[f] < s.materials.size())
+    r.type = s.materials[s.featherMaterial[f]].name;
+  if (f < s.featherFollicle.size() && s.featherFollicle[f] < s.follicleId.size())
+    r.follicleId = s.follicleId[s.featherFollicle[f]];
+  if (f < s.featherElevation.size()) r.elevationDeg = double(s.featherElevation[f]) * 180.0 / 3.14159265358979323846;
+  if (f < s.featherAge.size()) r.age = s.featherAge[f];
+  if (f < s.featherPresent.size()) r.present = s.featherPresent[f] != 0;
+  return r;
+}
+
+std::string readoutText(const FeatherReadout& r) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "feather %d%s\ntract: %s\ntype: %s\nfollicle id: %llu\nelevation: %.1f deg\nage: %.2f",
+                r.feather, r.present ? "" : " (moulted out)", r.tract.c_str(), r.type.empty() ? "-" : r.type.c_str(),
+                static_cast<unsigned long long>(r.follicleId), r.elevationDeg, r.age);
+  return buf;
+}
+
 float overlayArrowLength(const Snapshot& s) {
   const float diag = glm::length(s.skinHi - s.skinLo);
   return diag > 0 ? diag * 0.06f : 0.1f;
@@ -109,6 +136,18 @@ void drawOverlays(ImDrawList* dl, PanelContext& ctx) {
       if (proj(snap.featherOrigin[i], a) && proj(tip, b)) dl->AddLine(a, b, IM_COL32(250, 230, 80, 220), 1.0f);
     }
   }
+
+  // The selected feather (cyan) and the one under the mouse (white): a ring at the follicle and the shaft.
+  auto ringAndShaft = [&](int i, ImU32 col, float thick) {
+    if (i < 0 || size_t(i) >= snap.featherOrigin.size()) return;
+    ImVec2 a, b;
+    if (!proj(snap.featherOrigin[size_t(i)], a)) return;
+    dl->AddCircle(a, 7.0f, col, 16, thick);
+    const float len = size_t(i) < snap.featherLength.size() ? snap.featherLength[size_t(i)] : arrowLen;
+    if (proj(snap.featherOrigin[size_t(i)] + snap.featherTangent[size_t(i)] * len, b)) dl->AddLine(a, b, col, thick);
+  };
+  ringAndShaft(v.hoveredFeather, IM_COL32(255, 255, 255, 200), 1.5f);
+  ringAndShaft(v.selectedFeather, IM_COL32(40, 230, 255, 255), 2.5f);
 
   // The last check's offending feathers (the metrics are dropped on every edit, so they are this coat's):
   // a red shaft for a feather crossing another, a magenta ring for one under the skin.

@@ -19,6 +19,7 @@
 #include <glm/vec3.hpp>
 
 #include "camera_controller.hpp"
+#include "colour_by.hpp"
 #include "document.hpp"
 
 namespace pteryla::viewer {
@@ -48,11 +49,15 @@ struct ViewState {
   bool showCoat = true, showSkin = true, wireframe = false;
   bool showFollicles = false, showDirections = false, showTract = false, showKeys = true;
   bool showVectors = true, showBrushes = true, showControls = true;
-  bool showProblems = true;  // after a check: the feathers it found crossing another or under the skin
+  bool showProblems = true;
+  ColourBy colourBy = ColourBy::Material;  // coat colours: materials, or a view mode with a legend  // after a check:
+                                           // the feathers it found crossing another or under the skin
   int selectedTract = 0;
   int selectedFollicle = -1;
   int selectedControl = -1;
   int selectedVector = -1;
+  int selectedFeather = -1;  // index into the coat's feathers (click in the view with the orbit tool)
+  int hoveredFeather = -1;   // under the mouse (readout)
   Tool tool = Tool::Orbit;
   std::string toolFeather;   // PlaceKey
   float brushRadius = 0.1f;  // scene units (set from the skin size on load)

@@ -121,6 +121,24 @@ void drawViewPanel(PanelContext& ctx) {
   ImGui::Checkbox("Problems", &v.showProblems);
   if (ImGui::IsItemHovered())
     ImGui::SetTooltip("after Check: feathers crossing another feather (red) or with a vertex under the skin (magenta)");
+  {
+    int mode = 0;
+    const auto& modes = allColourModes();
+    for (size_t i = 0; i < modes.size(); ++i)
+      if (modes[i] == v.colourBy) mode = int(i);
+    std::string items;
+    for (ColourBy m : modes) items += std::string(colourByName(m)) + '\0';
+    if (ImGui::Combo("Colour by", &mode, items.c_str())) v.colourBy = modes[size_t(mode)];
+    if (uiRequested(ctx, "View", "colour by")) {
+      const auto m = colourByFromName(ctx.view.ui.value);
+      if (!m) throw Error("unknown colour mode '" + ctx.view.ui.value + "'", "", "colour by");
+      v.colourBy = *m;
+    }
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip(
+          "material: the feathers' look; problems: the last check (crossing, under the skin);\n"
+          "elevation (degrees), layer order, tract, age: flat colours with a legend in the view");
+  }
   ImGui::Checkbox("Keys", &v.showKeys);
   ImGui::SameLine();
   ImGui::Checkbox("Vectors", &v.showVectors);
@@ -144,7 +162,7 @@ void drawViewPanel(PanelContext& ctx) {
   ImGui::SetNextItemWidth(60);
   ImGui::SliderInt("1/res", &v.navigationScale, 1, 4);
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("while the camera moves, render the view at 1/N of its resolution");
-  if (ImGui::Button("Frame all (F)")) ctx.app.frameAll();
+  if (ImGui::Button("Frame all (A)")) ctx.app.frameAll();
   ImGui::SameLine();
   static std::string shot = "screenshot.png";
   if (ImGui::Button("Screenshot")) ctx.app.screenshot(shot);

@@ -61,4 +61,13 @@ int pickPoint(const std::vector<glm::vec3>& points, const std::vector<glm::vec3>
   return best;
 }
 
+int pickFeather(const TriMesh& coat, const TriMesh& skin, const Ray& ray) {
+  if (coat.featherId.size() != coat.positions.size()) return -1;
+  const auto hit = raycast(coat, ray);
+  if (!hit) return -1;
+  const auto body = raycast(skin, ray);
+  if (body && body->distance < hit->distance) return -1;
+  return static_cast<int>(coat.featherId[coat.indices[3 * size_t(hit->triangle)]]);
+}
+
 }  // namespace pteryla::viewer

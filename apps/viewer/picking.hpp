@@ -23,6 +23,10 @@ struct SurfaceHit {
 // Nearest intersection of the ray with the mesh's triangles (Moller-Trumbore, both sides).
 std::optional<SurfaceHit> raycast(const TriMesh& mesh, const Ray& ray);
 
+// The feather a ray meets first: the coat triangle it hits (its featherId), unless the skin is hit
+// nearer (the feather is behind the body). -1 when it hits no feather or the coat has no feather ids.
+int pickFeather(const TriMesh& coat, const TriMesh& skin, const Ray& ray);
+
 // Index of the point whose projection is nearest `pixel`, within `maxPixels`; points facing away from
 // the eye (dot(normal, eye - p) < 0, when normals are given) are skipped. -1 when none.
 int pickPoint(const std::vector<glm::vec3>& points, const std::vector<glm::vec3>& normals, const render::Camera& camera,

@@ -92,7 +92,7 @@ std::vector<ScriptCommand> loadScript(const std::string& path) {
 bool isViewCommand(const std::string& v) {
   return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "click" || v == "drag" ||
          v == "ui" || v == "autosave" || v == "crash" || v == "sleep" || v == "tool" || v == "orbit" || v == "zoom" ||
-         v == "frame" || v == "frames" || v == "quit" || v == "dialog" || v == "key";
+         v == "frame" || v == "frames" || v == "quit" || v == "dialog" || v == "key" || v == "selection";
 }
 
 double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file) {
@@ -281,6 +281,7 @@ const char* scriptHelp() {
   ui PANEL WIDGET [VALUE]        use a panel's widget as a user would (docs/viewer.md lists them)
   dialog open|save-as [PATH]     open the Open / Save As dialog (at PATH: its directory and file name)
   key enter|escape|tab           press a key (Enter confirms a dialog's file name)
+  selection                      print the selected feather (click one in the view) as JSON
   autosave                       write the recovery file now (the scene must have unsaved changes)
   crash                          end the process at once, without clean-up (tests recovery)
   show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin|navigation|problems on|off

@@ -93,4 +93,20 @@ TEST(Picking, RayThroughAPixelHitsWhatProjectsThere) {
   EXPECT_EQ(pickPoint(pts, nrm, c, vp, px, 10.0f), 1);
   EXPECT_EQ(pickPoint(pts, {}, c, vp, px, 10.0f), 0);
   EXPECT_EQ(pickPoint(pts, nrm, c, vp, {5, 5}, 10.0f), -1);
+
+  // Feathers: the nearest coat triangle's feather id, unless the skin is in front of it.
+  TriMesh coat;
+  coat.positions = {{-1, -1, 0.2f}, {1, -1, 0.2f}, {0, 1, 0.2f}, {-1, -1, 0.4f}, {1, -1, 0.4f}, {0, 1, 0.4f}};
+  coat.indices = {0, 1, 2, 3, 4, 5};
+  coat.featherId = {7, 7, 7, 9, 9, 9};
+  const Ray ray = pixelRay(c, px, vp);
+  const bool eyeAbove = c.eye.z > 0.4f;
+  ASSERT_TRUE(eyeAbove) << "the test camera looks down the z axis from above";
+  EXPECT_EQ(pickFeather(coat, TriMesh{}, ray), 9);  // the upper card is nearer the eye
+  TriMesh lid = m;
+  for (auto& p : lid.positions) p.z = 0.6f;  // skin in front of both
+  EXPECT_EQ(pickFeather(coat, lid, ray), -1);
+  EXPECT_EQ(pickFeather(coat, m, ray), 9);  // skin behind
+  coat.featherId.clear();
+  EXPECT_EQ(pickFeather(coat, m, ray), -1);
 }

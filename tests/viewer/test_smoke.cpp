@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <set>
+#include <sstream>
 
 #include "fixtures.hpp"
 #include "viewer_run.hpp"
@@ -18,6 +19,7 @@
 #include "pteryla/feather/io.hpp"
 #include "pteryla/pipeline/scene.hpp"
 #include "pteryla/render/image.hpp"
+#include "pteryla/render/image_diff.hpp"
 
 using namespace pteryla;
 
@@ -186,4 +188,57 @@ TEST(ViewerSmoke, DesignerEditsHelicalSpeedCurvesAndSavesThem) {
   const Json savedJson = readJsonFile(saved);
   Json reloaded = feather::featherToJson(edited);
   EXPECT_EQ(reloaded["left_vane"], savedJson["left_vane"]);
+}
+
+// #28 "see the problems": each colour mode reaches the 3D view (the coat changes colour), with a
+// legend; problems after a check.
+TEST(ViewerSmoke, ColourModesRecolourTheCoat) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("smoke_colour");
+  const std::string script = dir + "/s.txt";
+  std::ofstream s(script);
+  s << "count 0 30\nwait\nscreenshot " << dir << "/material.png\n";
+  for (const char* m : {"elevation", "layer", "tract", "age"})
+    s << "ui View \"colour by\" " << m << "\nframes 3\nscreenshot " << dir << "/" << m << ".png\n";
+  s << "check\nui View \"colour by\" problems\nframes 3\nscreenshot-window " << dir << "/problems.png\n"
+    << "ui View \"colour by\" material\nframes 3\nscreenshot " << dir << "/material_again.png\nquit\n";
+  s.close();
+  const ViewerRun r = runViewer(
+      "\"" + viewer_test::dataPath("scenes/patch.json") + "\" --lod 0.3 --size 1000x700 --script \"" + script + "\"",
+      dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
+  const render::Image material = render::loadImage(dir + "/material.png");
+  for (const char* m : {"elevation", "layer", "tract", "age"}) {
+    const render::ImageDiff d = render::diffImages(render::loadImage(dir + "/" + m + ".png"), material);
+    ASSERT_TRUE(d.sameSize) << m;
+    EXPECT_GT(d.changedFraction, 0.05) << m << ": the coat did not change colour";
+  }
+  // Back to materials: the first image again.
+  EXPECT_TRUE(render::diffImages(render::loadImage(dir + "/material_again.png"), material).matches);
+}
+
+// #28 "viewport selection": a click on a feather selects it (the readout names it), F frames it, a
+// click on empty background clears the selection.
+TEST(ViewerSmoke, AClickSelectsTheFeatherUnderTheMouse) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("smoke_select");
+  const std::string script = dir + "/s.txt";
+  std::ofstream(script) << "count 0 30\nwait\nselection\nclick 50% 50%\nframes 2\nselection\n"
+                        << "screenshot-window " << dir << "/selected.png\n"
+                        << "click 2% 2%\nframes 2\nselection\nquit\n";
+  const ViewerRun r = runViewer(
+      "\"" + viewer_test::dataPath("scenes/patch.json") + "\" --lod 0.3 --size 1000x700 --script \"" + script + "\"",
+      dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
+  std::vector<Json> lines;
+  std::istringstream in(r.out);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty() && line[0] == '{') lines.push_back(Json::parse(line));
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  EXPECT_TRUE(lines[0]["feather"].is_null());
+  ASSERT_TRUE(lines[1]["feather"].is_number()) << "the click at the centre of the patch selected nothing";
+  EXPECT_EQ(lines[1]["tract"], "patch");
+  EXPECT_FALSE(lines[1]["type"].get<std::string>().empty());
+  EXPECT_GE(lines[1]["elevation_deg"].get<double>(), 0.0);
+  EXPECT_TRUE(lines[2]["feather"].is_null()) << "a click on the background keeps a selection";
 }
