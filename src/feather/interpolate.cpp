@@ -144,6 +144,15 @@ FeatherParams blendFeathers(const std::vector<const FeatherParams*>& feathersIn,
     for (size_t i = 0; i < nf; ++i) c += w[i] * *fs[i]->material.baseColor;
     r.material.baseColor = c;
   }
+  // Barbule parameters likewise, each when every feather sets it (else the heaviest's, or none).
+  for (std::optional<double> FeatherMaterial::*field : {&FeatherMaterial::brdfD, &FeatherMaterial::brdfH}) {
+    bool all = true;
+    for (const auto* f : fs) all = all && (f->material.*field).has_value();
+    if (!all) continue;
+    double acc = 0;
+    for (size_t i = 0; i < nf; ++i) acc += w[i] * *(fs[i]->material.*field);
+    r.material.*field = acc;
+  }
 
   // Silhouettes: feathers without one contribute their constant barb length.
   bool anySil = false;

@@ -112,6 +112,21 @@ FeatherMaterial readMaterial(JsonReader r) {
   } else {
     markKnown(r, "base_color");
   }
+  if (r.json().contains("brdf")) {
+    // Poulin-Fournier barbule parameters, the ranges of the scene's render.brdf (docs/scene-format.md).
+    JsonReader b = r.object("brdf");
+    if (b.has("d"))
+      m.brdfD = b.number("d", 1e-3, 20.0);
+    else
+      b.allow("d");
+    if (b.has("h"))
+      m.brdfH = b.number("h", 0.0, 0.999);
+    else
+      b.allow("h");
+    b.finish();
+  } else {
+    r.allow("brdf");
+  }
   r.finish();
   return m;
 }
@@ -300,6 +315,12 @@ Json featherToJson(const FeatherParams& p, bool withVersion) {
     if (p.material.baseColor)
       m["base_color"] = {p.material.baseColor->x, p.material.baseColor->y, p.material.baseColor->z};
     if (p.material.uv != "global") m["uv"] = p.material.uv;
+    if (p.material.brdfD || p.material.brdfH) {
+      Json b = Json::object();
+      if (p.material.brdfD) b["d"] = *p.material.brdfD;
+      if (p.material.brdfH) b["h"] = *p.material.brdfH;
+      m["brdf"] = b;
+    }
     j["material"] = m;
   }
   if (p.growth) j["growth"] = growthScheduleToJson(*p.growth);

@@ -147,3 +147,19 @@ TEST(Interpolate, DifferentGeneratorsBlendInTheirStreitForm) {
   EXPECT_DOUBLE_EQ(m.rachisLength, 1.5 * a.rachisLength);
   EXPECT_TRUE(interpolateFeathers(a, b, 1.0) == streitForm(b));
 }
+
+TEST(Interpolate, MaterialColourAndBrdfBlendWhenEveryFeatherSetsThem) {
+  FeatherParams a = feather::testing::contourParams(), b = a;
+  a.material.baseColor = glm::dvec3(1.0, 0.0, 0.5);
+  b.material.baseColor = glm::dvec3(0.0, 1.0, 0.5);
+  a.material.brdfD = 1.0;
+  b.material.brdfD = 3.0;
+  a.material.brdfH = 0.2;  // b leaves h to the scene: not blended
+  const FeatherParams m = interpolateFeathers(a, b, 0.25);
+  EXPECT_DOUBLE_EQ(m.material.baseColor->x, 0.75);
+  EXPECT_DOUBLE_EQ(m.material.baseColor->y, 0.25);
+  EXPECT_DOUBLE_EQ(*m.material.brdfD, 1.5);
+  EXPECT_EQ(m.material.brdfH, a.material.brdfH);  // the heaviest's
+  EXPECT_EQ(interpolateFeathers(a, b, 0.0).material, a.material);
+  EXPECT_EQ(interpolateFeathers(a, b, 1.0).material, b.material);
+}

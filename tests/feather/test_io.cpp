@@ -93,6 +93,14 @@ TEST(FeatherFile, MalformedFilesNameTheField) {
       {"material colour", [](Json& j) { j["material"] = Json::parse(R"({"base_color": [1, 2, 0]})"); },
        "material.base_color"},
       {"material unknown key", [](Json& j) { j["material"] = Json::parse(R"({"colour": "red"})"); }, "material.colour"},
+      {"brdf spacing 0", [](Json& j) { j["material"] = Json::parse(R"({"brdf": {"d": 0}})"); }, "material.brdf.d"},
+      {"brdf spacing huge", [](Json& j) { j["material"] = Json::parse(R"({"brdf": {"d": 21}})"); }, "material.brdf.d"},
+      {"brdf floor 1", [](Json& j) { j["material"] = Json::parse(R"({"brdf": {"d": 1, "h": 1}})"); },
+       "material.brdf.h"},
+      {"brdf floor text", [](Json& j) { j["material"] = Json::parse(R"({"brdf": {"h": "low"}})"); }, "material.brdf.h"},
+      {"brdf unknown key", [](Json& j) { j["material"] = Json::parse(R"({"brdf": {"sigma": 0.2}})"); },
+       "material.brdf.sigma"},
+      {"brdf not an object", [](Json& j) { j["material"] = Json::parse(R"({"brdf": 1.5})"); }, "material.brdf"},
       {"splits range", [](Json& j) { j["splits"] = Json::parse(R"({"count": 2, "rp_min": 0.9, "rp_max": 0.1})"); },
        "splits.rp_min"},
       {"afterfeather field",
@@ -129,6 +137,8 @@ TEST(FeatherFile, RoundTripIsExact) {
   p.material.texture = "textures/contour.png";
   p.material.baseColor = glm::dvec3(0.1, 0.2, 0.30000000000000004);
   p.material.pattern = "bars";
+  p.material.brdfD = 1.7000000000000002;
+  p.material.brdfH = 0.123456789;
   p.seed = 0xFFFFFFFFFFFFFFFFull;
   FeatherParams after = feather::testing::contourParams();
   after.rachisLength = 0.3;
@@ -141,6 +151,28 @@ TEST(FeatherFile, RoundTripIsExact) {
   const FeatherParams m = interpolateFeathers(p, feather::testing::contourParams(), 0.37);
   saveFeather(path, m);
   EXPECT_EQ(loadFeather(path), m);
+}
+
+TEST(FeatherFile, MaterialBrdfIsOptionalPerParameterAndComparedByValue) {
+  FeatherParams p = feather::testing::contourParams();
+  const std::string path = tmpPath("brdf.json");
+  p.material.brdfD = 2.5;  // h left to the scene
+  saveFeather(path, p);
+  std::ifstream in(path);
+  const Json j = Json::parse(in);
+  EXPECT_EQ(j["material"]["brdf"], Json::parse(R"({"d": 2.5})"));
+  FeatherParams q = loadFeather(path);
+  EXPECT_EQ(q.material.brdfD, 2.5);
+  EXPECT_FALSE(q.material.brdfH.has_value());
+  EXPECT_EQ(q, p);
+  q.material.brdfH = 0.0;  // set to the default value is still set: not equal
+  EXPECT_NE(q, p);
+  EXPECT_FALSE(q.material.empty());
+  p.material.brdfD.reset();
+  EXPECT_TRUE(p.material.empty());
+  saveFeather(path, p);
+  std::ifstream again(path);
+  EXPECT_FALSE(Json::parse(again).contains("material"));
 }
 
 TEST(FeatherFile, EmbeddedDefinitionCarriesItsPath) {

@@ -82,12 +82,16 @@ struct FeatherMaterial {
   // u across, v base to tip; the default), "barb" (glued to each barb: u along it, v across) or
   // "growth" (the pin-feather cone: u around it, v along the shaft). docs/feather-format.md.
   std::string uv = "global";
+  // "brdf": this feather's Poulin-Fournier barbule spacing d and floor height h (Streit 2003, 7.1.3);
+  // unset = the scene's render.brdf. docs/feather-format.md.
+  std::optional<double> brdfD, brdfH;
   bool empty() const {
-    return texture.empty() && alphaTexture.empty() && pattern.empty() && !baseColor && uv == "global";
+    return texture.empty() && alphaTexture.empty() && pattern.empty() && !baseColor && uv == "global" && !brdfD &&
+           !brdfH;
   }
   bool operator==(const FeatherMaterial& o) const {
     return texture == o.texture && alphaTexture == o.alphaTexture && pattern == o.pattern && baseColor == o.baseColor &&
-           uv == o.uv;
+           uv == o.uv && brdfD == o.brdfD && brdfH == o.brdfH;
   }
 };
 
