@@ -304,6 +304,15 @@ InterpolateStats interpolateCoatFeathers(const Follicles& follicles, const std::
   coat.age.assign(n, 1.0);
   coat.present.assign(n, 1);
   coat.layerOrder.clear();
+  // Key blends name feather definitions through one table for the whole coat.
+  std::vector<std::vector<uint32_t>> keyName(tracts.size());
+  for (size_t t = 0; t < tracts.size(); ++t)
+    for (const auto& k : tracts[t].keys) {
+      const auto it = std::find(coat.keyNames.begin(), coat.keyNames.end(), k.feather);
+      keyName[t].push_back(static_cast<uint32_t>(it - coat.keyNames.begin()));
+      if (it == coat.keyNames.end()) coat.keyNames.push_back(k.feather);
+    }
+  coat.keyBlend.assign(n, KeyBlend{});
 
   std::vector<uint8_t> kind(n, 0);  // 1 copied, 2 blended
   std::vector<uint8_t> outside(n, 0);
@@ -323,6 +332,19 @@ InterpolateStats interpolateCoatFeathers(const Follicles& follicles, const std::
       const glm::dvec3 other = std::abs(fr.normal.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
       fr.tangent = glm::normalize(glm::cross(other, fr.normal));
       fr.binormal = glm::cross(fr.normal, fr.tangent);
+      // The weights blendFeathers uses: the positive ones, normalised.
+      KeyBlend& kb = coat.keyBlend[i];
+      kb.count = 0;
+      double sum = 0;
+      for (int j = 0; j < w.count; ++j)
+        sum += w.weight[static_cast<size_t>(j)] > 0 ? w.weight[static_cast<size_t>(j)] : 0;
+      for (int j = 0; j < w.count; ++j) {
+        const size_t sj = static_cast<size_t>(j);
+        if (!(w.weight[sj] > 0) && w.count > 1) continue;
+        kb.key[kb.count] = keyName[s.tract][w.key[sj]];
+        kb.weight[kb.count] = w.count == 1 ? 1.0 : w.weight[sj] / sum;
+        ++kb.count;
+      }
       if (w.count == 1) {
         coat.params[i] = *kp[w.key[0]];
         kind[i] = 1;

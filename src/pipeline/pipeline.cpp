@@ -214,8 +214,7 @@ void Pipeline::Impl::computeMesh() {
   const std::vector<feather::FeatherMeshRanges>& ranges = mesher.ranges();
   mesh.ranges.clear();
   mesh.ranges.reserve(ranges.size());
-  std::map<std::string, uint32_t> matIndex;
-  for (size_t k = 0; k < materialNames.size(); ++k) matIndex[materialNames[k]] = static_cast<uint32_t>(k);
+  const std::vector<uint32_t>& featherMaterial = restMaterials.featherMaterial;
   for (size_t k = 0; k < ranges.size(); ++k) {
     const uint32_t i = which[k];
     const auto& r = ranges[k];
@@ -227,8 +226,7 @@ void Pipeline::Impl::computeMesh() {
     d.partCount[1] = r.leftCount;
     d.partCount[2] = r.rightCount;
     d.partCount[3] = r.afterCount;
-    const auto it = matIndex.find(coatNow.params[i].name);
-    d.material = it == matIndex.end() ? 0 : it->second;
+    d.material = i < featherMaterial.size() ? featherMaterial[i] : 0;
     const coat::FeatherFrame& fr = coatNow.frames[i];
     const auto pl = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, packed->elevation[i]);
     d.origin = glm::vec3(fr.origin);
@@ -236,19 +234,8 @@ void Pipeline::Impl::computeMesh() {
     d.axisY = glm::vec3(pl.y);
     mesh.ranges.push_back(d);
   }
-  mesh.materials.clear();
-  for (const auto& name : materialNames) {
-    const feather::FeatherParams& p = library.at(name);
-    CoatMaterial m;
-    m.name = name;
-    auto resolve = [&](const std::string& t) { return t.empty() ? t : resolveRelative(p.sourceFile, t); };
-    m.texture = resolve(p.material.texture);
-    m.alphaTexture = resolve(p.material.alphaTexture);
-    m.pattern = p.material.pattern;
-    if (p.material.baseColor) m.baseColor = glm::vec3(*p.material.baseColor);
-    m.uv = p.material.uv;
-    mesh.materials.push_back(m);
-  }
+  // Materials depend on the rest coat only: a timeline keeps one list (renderers set it once).
+  if (mesh.materials != restMaterials.materials) mesh.materials = restMaterials.materials;
   report(progress, "mesh", 1);
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "coat_materials.hpp"
 #include "coat_mesher.hpp"
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/directions.hpp"
@@ -67,6 +68,7 @@ struct Pipeline::Impl {
   std::vector<coat::RelaxResult> relaxResults;
   std::vector<coat::TractParameterization> params;
   coat::CoatFeathers coatRest;  // interpolated + rest frames + order
+  CoatMaterials restMaterials;  // the coat's materials, per feather of coatRest (blends of key feathers' looks)
   coat::SurfaceDirections directions;
   coat::DirectionOptions directionOptions;
   coat::OrderOptions orderOptions;

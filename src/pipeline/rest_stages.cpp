@@ -333,6 +333,7 @@ void Pipeline::Impl::computeInterpolate() {
   coat::InterpolateOptions io;
   io.seed = scene.seed;
   coat::interpolateCoatFeathers(follicles, keys, library, io, coatRest);
+  restMaterials = coatMaterials(materialNames, library, coatRest);
   // Tract-level feather scale (explicit, or automatic from the follicle spacing).
   for (size_t i = 0; i < tractSettings.size(); ++i) {
     const TractSettings& t = tractSettings[i];

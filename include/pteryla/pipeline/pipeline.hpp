@@ -45,12 +45,38 @@ struct CoatDrawRange {
   uint32_t partCount[4] = {0, 0, 0, 0};  // shaft, left vane, right vane, afterfeather
 };
 
+// Materials blend between key feathers in steps of 1 / kMaterialWeightSteps of weight (issue #30 item 2;
+// docs/feather-format.md, "Material blending").
+inline constexpr int kMaterialWeightSteps = 8;
+
+struct MaterialWeight {
+  uint32_t material = 0;  // index into CoatMesh::materials: a feather definition's own material
+  double weight = 0;      // a multiple of 1 / kMaterialWeightSteps in (0, 1)
+  bool operator==(const MaterialWeight& o) const { return material == o.material && weight == o.weight; }
+};
+
 struct CoatMaterial {
-  std::string name;                            // feather definition name
+  std::string name;                            // feather definition name (a blend: "a 3/8 + b 5/8")
   std::string texture, alphaTexture, pattern;  // absolute paths / pattern name ("" = none)
   glm::vec3 baseColor{0.8f, 0.7f, 0.55f};
-  std::string uv = "global";  // colour texture mapping: "global", "barb" or "growth" (feather material.uv)
+  std::string uv = "global";           // colour texture mapping: "global", "barb" or "growth" (feather material.uv)
+  std::optional<double> brdfD, brdfH;  // feather material.brdf (unset: the scene's render.brdf)
+  // Non-empty: this material is the blend of these feather definitions' materials (at least two
+  // different looks, ascending indices, weights summing to 1), the look of a feather interpolated from
+  // key feathers. The fields above then hold the heaviest part's texture, pattern, uv and brdf and the
+  // blended base colour, for consumers that do not blend (exporters, hosts).
+  std::vector<MaterialWeight> blend;
+  bool operator==(const CoatMaterial& o) const {
+    return name == o.name && texture == o.texture && alphaTexture == o.alphaTexture && pattern == o.pattern &&
+           baseColor == o.baseColor && uv == o.uv && brdfD == o.brdfD && brdfH == o.brdfH && blend == o.blend;
+  }
 };
+
+// Whether a feather definition's name marks it as down: its barb alpha mask is then the sparse, fluffy
+// one when its material has no alpha texture (render::sceneMaterials).
+bool isDownName(const std::string& name);
+// Whether two materials look the same: every field but the name, and the name's isDownName.
+bool sameLook(const CoatMaterial& a, const CoatMaterial& b);
 
 struct CoatMesh {
   TriMesh mesh;                       // all feathers, featherId per vertex
