@@ -507,7 +507,7 @@ void App::uploadResults() {
     buildNavigationCoat(p->coatMesh());
   }
   if (snap.haveCoat && (materialsStale_ || lastBrdfD_ != scene.render.brdfD || lastBrdfH_ != scene.render.brdfH ||
-                        lastMaterialCount_ != snap.materials.size() + colouring_.legend.size())) {
+                        lastMaterials_ != snap.materials)) {
     pipeline::CoatMesh materialsOnly;
     materialsOnly.materials = snap.materials;
     const auto materials =
@@ -516,7 +516,7 @@ void App::uploadResults() {
     if (navRenderer_) navRenderer_->setMaterials(materials);
     lastBrdfD_ = scene.render.brdfD;
     lastBrdfH_ = scene.render.brdfH;
-    lastMaterialCount_ = snap.materials.size() + colouring_.legend.size();
+    lastMaterials_ = snap.materials;
     materialsStale_ = false;
     ++uploadVersion_;
   }

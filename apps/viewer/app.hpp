@@ -158,7 +158,7 @@ class App {
   FeatherColouring colouring_;  // of view_.colourBy, for the uploaded coat
   std::vector<uint64_t> colourKey_;
   double lastBrdfD_ = -1, lastBrdfH_ = -1;
-  size_t lastMaterialCount_ = 0;
+  std::vector<pipeline::CoatMaterial> lastMaterials_;  // the materials last set (blends follow the rest coat)
   glm::ivec2 windowSize_{0}, fbSize_{0};
   glm::ivec2 viewPixels_{0};  // the 3D view in framebuffer pixels
   float menuHeight_ = 19.0f;

@@ -10,6 +10,8 @@
 #include "pteryla/core/paths.hpp"
 #include "pteryla/feather/mesh.hpp"
 #include "pteryla/feather/params.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/render/material_blend.hpp"
 #include "pteryla/render/pattern.hpp"
 #include "pteryla/render/scratchboard.hpp"
 
@@ -107,45 +109,82 @@ RenderSettings sceneSettings(const pipeline::Scene& scene, int width, int height
   return s;
 }
 
-std::vector<FeatherMaterial> sceneMaterials(const pipeline::Scene& scene, const pipeline::CoatMesh& coat) {
+namespace {
+
+// One feather definition's look.
+FeatherMaterial definitionMaterial(const pipeline::Scene& scene, const pipeline::CoatMaterial& m) {
   static const std::map<std::string, PatternKind> kinds = {{"plain", PatternKind::Plain},
                                                            {"barred", PatternKind::Barred},
                                                            {"scalloped", PatternKind::Scalloped},
                                                            {"spotted", PatternKind::Spotted},
                                                            {"eyespot", PatternKind::Eyespot}};
-  std::vector<FeatherMaterial> out;
-  for (const auto& m : coat.materials) {
-    FeatherMaterial f;
-    f.name = m.name;
-    f.baseColor = m.baseColor;
-    f.barbules.d = scene.render.brdfD;
-    f.barbules.h = scene.render.brdfH;
-    f.colorUv = m.uv == "barb" ? ColorUv::Barb : m.uv == "growth" ? ColorUv::Growth : ColorUv::Global;
-    if (!m.texture.empty()) {
-      f.colorTexture = m.texture;
-      f.baseColor = glm::vec3(1.0f);
-    } else if (!m.pattern.empty()) {
-      const std::string file = textureDir() + "/" + m.pattern + ".png";
-      if (fileExists(file)) {
-        f.colorTexture = file;
-      } else {
-        PatternParams pp;
-        auto it = kinds.find(m.pattern);
-        pp.kind = it == kinds.end() ? PatternKind::Barred : it->second;
-        pp.baseColor = m.baseColor;
-        pp.markColor = m.baseColor * 0.35f;
-        f.colorImage = generatePattern(pp);
-        f.baseColor = glm::vec3(1.0f);
-      }
-    }
-    if (!m.alphaTexture.empty()) {
-      f.alphaTexture = m.alphaTexture;
+  FeatherMaterial f;
+  f.name = m.name;
+  f.baseColor = m.baseColor;
+  f.barbules.d = m.brdfD.value_or(scene.render.brdfD);
+  f.barbules.h = m.brdfH.value_or(scene.render.brdfH);
+  f.colorUv = m.uv == "barb" ? ColorUv::Barb : m.uv == "growth" ? ColorUv::Growth : ColorUv::Global;
+  if (!m.texture.empty()) {
+    f.colorTexture = m.texture;
+    f.baseColor = glm::vec3(1.0f);
+  } else if (!m.pattern.empty()) {
+    const std::string file = textureDir() + "/" + m.pattern + ".png";
+    if (fileExists(file)) {
+      f.colorTexture = file;
     } else {
-      BarbAlphaParams ap;
-      if (m.name.find("down") != std::string::npos) ap.fluff = 1.0f;
-      f.alphaImage = generateBarbAlpha(ap);
+      PatternParams pp;
+      auto it = kinds.find(m.pattern);
+      pp.kind = it == kinds.end() ? PatternKind::Barred : it->second;
+      pp.baseColor = m.baseColor;
+      pp.markColor = m.baseColor * 0.35f;
+      f.colorImage = generatePattern(pp);
+      f.baseColor = glm::vec3(1.0f);
     }
-    out.push_back(std::move(f));
+  }
+  if (!m.alphaTexture.empty()) {
+    f.alphaTexture = m.alphaTexture;
+  } else {
+    BarbAlphaParams ap;
+    if (pipeline::isDownName(m.name)) ap.fluff = 1.0f;
+    f.alphaImage = generateBarbAlpha(ap);
+  }
+  return f;
+}
+
+}  // namespace
+
+std::vector<FeatherMaterial> sceneMaterials(const pipeline::Scene& scene, const pipeline::CoatMesh& coat) {
+  std::vector<FeatherMaterial> out;
+  out.reserve(coat.materials.size());
+  for (const auto& m : coat.materials)
+    out.push_back(m.blend.empty() ? definitionMaterial(scene, m) : FeatherMaterial{});
+  // Blends of key feathers' looks (issue #30 item 2): their parts are definitions' materials, made above.
+  std::map<std::string, Image> files;
+  const ImageLoader load = [&](const std::string& path) -> const Image& {
+    auto it = files.find(path);
+    if (it == files.end()) it = files.emplace(path, loadImage(path)).first;
+    return it->second;
+  };
+  std::vector<FeatherMaterial> parts;
+  std::vector<double> weights;
+  for (size_t k = 0; k < coat.materials.size(); ++k) {
+    const pipeline::CoatMaterial& m = coat.materials[k];
+    if (m.blend.empty()) continue;
+    parts.clear();
+    weights.clear();
+    for (const pipeline::MaterialWeight& w : m.blend) {
+      if (w.material >= coat.materials.size() || !coat.materials[w.material].blend.empty())
+        throw Error("material blend part " + std::to_string(w.material) + " is not a feather definition's material", {},
+                    "materials[" + std::to_string(k) + "].blend");
+      parts.push_back(out[w.material]);
+      weights.push_back(w.weight);
+    }
+    try {
+      out[k] = blendFeatherMaterials(parts, weights, m.name, load);
+    } catch (const Error& e) {
+      throw Error("cannot blend material '" + m.name + "': " + e.detail(), e.file(),
+                  "materials[" + std::to_string(k) + "]" + (e.element().empty() ? "" : "." + e.element()));
+    }
   }
   return out;
 }
@@ -198,6 +237,8 @@ Image renderFeatherImage(RenderContext& context, const feather::FeatherParams& p
   if (!p.material.texture.empty()) m.texture = resolveRelative(p.sourceFile, p.material.texture);
   if (!p.material.alphaTexture.empty()) m.alphaTexture = resolveRelative(p.sourceFile, p.material.alphaTexture);
   if (p.material.baseColor) m.baseColor = glm::vec3(*p.material.baseColor);
+  m.brdfD = p.material.brdfD;
+  m.brdfH = p.material.brdfH;
   coat.materials.push_back(m);
   pipeline::Scene scene;
   scene.render.background = {0.92, 0.92, 0.9};
@@ -225,6 +266,7 @@ struct SceneView::Impl {
   const void* lastCoat = nullptr;
   uint64_t lastSkinEval = ~0ull, lastMeshEval = ~0ull;
   bool materialsSet = false;
+  std::vector<pipeline::CoatMaterial> lastMaterials;  // the coat's materials when last set
   TriMesh skin;
 
   void sync(pipeline::Pipeline& p) {
@@ -236,8 +278,10 @@ struct SceneView::Impl {
       lastSkinEval = p.evaluations(Stage::Pose);
     }
     if (p.evaluations(Stage::Mesh) != lastMeshEval) {
-      if (!materialsSet) {
+      // Materials follow the rest coat (blends of key feathers' looks), so re-set them when it changes.
+      if (!materialsSet || coat.materials != lastMaterials) {
         renderer.setMaterials(sceneMaterials(p.scene(), coat));
+        lastMaterials = coat.materials;
         materialsSet = true;
       }
       renderer.setCoat(coat.mesh, drawRanges(coat));
