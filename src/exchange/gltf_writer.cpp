@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <ostream>
 #include <sstream>
 #include <streambuf>
@@ -220,6 +221,9 @@ size_t writeGltf(const ExportScene& s, const std::string& path, bool binary) {
   sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
   sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
   sampler.wrapS = sampler.wrapT = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+  // Materials that use the same picture (blends of key feathers carry their heaviest part's) share one
+  // image and texture.
+  std::map<std::vector<unsigned char>, int> textureOf;
   for (const pipeline::CoatMaterial& cm : s.materials) {
     tinygltf::Material m;
     m.name = cm.name;
@@ -229,7 +233,10 @@ size_t writeGltf(const ExportScene& s, const std::string& path, bool binary) {
     m.pbrMetallicRoughness.roughnessFactor = 0.6;
     std::vector<unsigned char> bytes;
     std::string mime;
-    if (materialImage(cm, bytes, mime)) {
+    if (materialImage(cm, bytes, mime) && textureOf.count(bytes)) {
+      m.pbrMetallicRoughness.baseColorTexture.index = textureOf.at(bytes);
+      m.pbrMetallicRoughness.baseColorFactor = {1.0, 1.0, 1.0, 1.0};
+    } else if (!bytes.empty()) {
       if (model.samplers.empty()) model.samplers.push_back(sampler);
       tinygltf::Image img;
       img.name = cm.name;
@@ -242,6 +249,7 @@ size_t writeGltf(const ExportScene& s, const std::string& path, bool binary) {
       model.textures.push_back(tex);
       m.pbrMetallicRoughness.baseColorTexture.index = int(model.textures.size() - 1);
       m.pbrMetallicRoughness.baseColorFactor = {1.0, 1.0, 1.0, 1.0};
+      textureOf.emplace(std::move(bytes), m.pbrMetallicRoughness.baseColorTexture.index);
     } else {
       m.pbrMetallicRoughness.baseColorFactor = {cm.baseColor.x, cm.baseColor.y, cm.baseColor.z, 1.0};
     }
