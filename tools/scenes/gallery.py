@@ -208,6 +208,10 @@ def write_markdown(results):
     scan = os.path.join(ROOT, "docs", "gallery", "scan.md")
     if os.path.exists(scan):
         lines += open(scan).read().rstrip("\n").split("\n") + [""]
+    # Materials blending between key feathers (issue #30): hand-kept (docs/gallery/blend.md gives its command).
+    blend = os.path.join(ROOT, "docs", "gallery", "blend.md")
+    if os.path.exists(blend):
+        lines += open(blend).read().rstrip("\n").split("\n") + [""]
     # The bird first on the page (it is processed last: it is the slowest and changes most).
     for key, title, text, scene, images, _, _ in sorted(SECTIONS, key=lambda s: s[0] != "bird"):
         r = results.get(key)

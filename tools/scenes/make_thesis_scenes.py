@@ -12,6 +12,8 @@ Scenes (all but bird.json, which tools/scenes/make_bird_scene.py writes):
   moult_radial.json         radial moult, strictly sequential and with random jitter (Fig 8.5)
   moult_helical.json        a sequential moult of helical (Zhang & Kanai) feathers growing on the collar
   crest.json                head.obj with a crest lifted by an expressive control (AnimFur)
+  blend.json                ~140 feathers between three key feathers of one shape and three looks
+                            (material blending, issue #30 item 2)
   patch.json                ~60 feathers, two key feathers, relaxed (Lloyd) follicles
   patch_grid.json, patch_hex.json, patch_stretched.json
                             the same patch with pinned grid / hexagonal / stretched follicles (Fig 9.11)
@@ -373,6 +375,20 @@ def patch_scene(name, tract_extra, note):
     }, note
 
 
+def blend_scene():
+    """Material blending (issue #30 item 2): three key feathers with one geometry and three looks (barred,
+    slate blue with glossier barbules, spotted with matte ones) at the corners of a triangle on the patch;
+    every feather between them blends their colours, patterns and barbule parameters by its weights."""
+    scene, _ = patch_scene("blend", {"count": 80, "relax": {"iterations": 40}}, "material blending")
+    scene["feathers"] = {k: f"../feathers/blend/{k}.json" for k in ("barred", "slate", "spotted")}
+    scene["tracts"][0]["key_feathers"] = [{"feather": "barred", "at": [-0.8, 0.05, -0.6]},
+                                          {"feather": "slate", "at": [0.8, 0.05, -0.6]},
+                                          {"feather": "spotted", "at": [0.0, 0.05, 0.8]}]
+    scene["seed"] = 11
+    scene["camera"] = {"view_direction": [-0.2, -0.85, -0.5], "fov": 27}
+    return scene
+
+
 def grid_points(nx, nz, half_x, half_z, shift_odd_rows=False):
     pts = []
     for j in range(nz):
@@ -446,6 +462,7 @@ def main():
     write("moult_radial.json", moult_radial_scene())
     write("moult_helical.json", moult_helical_scene())
     write("crest.json", crest_scene())
+    write("blend.json", blend_scene())
     for scene, _ in list(patch_scenes()) + list(sphere_scenes()):
         write(scene["name"] + ".json", scene)
 
