@@ -7,6 +7,7 @@
 #include "coat2_fixtures.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/rng.hpp"
+#include "pteryla/feather/interpolate.hpp"
 
 using namespace coat2test;
 
@@ -138,6 +139,51 @@ TEST(Coat2Keys, FollicleAtAKeyGetsExactlyThatFeather) {
   }
   EXPECT_EQ(coat.age, std::vector<double>(200, 1.0));
   EXPECT_EQ(coat.present, std::vector<uint8_t>(200, 1));
+}
+
+// The key blend each feather records (what its material blends by, issue #30 item 2) is the one its
+// geometry was blended with: blending the named keys by the recorded weights gives the feather again.
+TEST(Coat2Keys, RecordedKeyBlendReproducesEveryFeather) {
+  GridCoat g;
+  const FeatherLibrary lib = testLibrary();
+  std::vector<KeyFeatherSpec> specs(4);
+  const char* names[] = {"short", "long", "mid", "short"};  // one feather on two keys
+  const glm::dvec3 at[] = {{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {0.2, 0.9, 0}};
+  for (int i = 0; i < 4; ++i) specs[i].feather = names[i], specs[i].at = at[i];
+  std::vector<TractKeys> tk(1);
+  tk[0].param = &g.param;
+  tk[0].keys = resolveKeyFeathers(g.follicles, g.param, specs, lib, "all");
+  CoatFeathers coat;
+  interpolateCoatFeathers(g.follicles, tk, lib, {}, coat);
+  ASSERT_EQ(coat.keyBlend.size(), coat.size());
+  EXPECT_EQ(coat.keyNames, (std::vector<std::string>{"short", "long", "mid"}));
+  size_t blended = 0;
+  for (size_t i = 0; i < coat.size(); ++i) {
+    const KeyBlend& kb = coat.keyBlend[i];
+    ASSERT_GE(kb.count, 1);
+    ASSERT_LE(kb.count, 3);
+    std::vector<const feather::FeatherParams*> fs;
+    std::vector<double> ws;
+    double sum = 0;
+    for (size_t k = 0; k < kb.count; ++k) {
+      ASSERT_LT(kb.key[k], coat.keyNames.size());
+      EXPECT_GT(kb.weight[k], 0.0);
+      fs.push_back(&lib.at(coat.keyNames[kb.key[k]]));
+      ws.push_back(kb.weight[k]);
+      sum += kb.weight[k];
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-12);
+    // Equal up to rounding (blendFeathers normalises the recorded weights once more).
+    const feather::FeatherParams again = feather::blendFeathers(fs, ws);
+    const feather::FeatherParams& p = coat.params[i];
+    EXPECT_EQ(again.name, p.name) << "feather " << i;  // the heaviest key
+    EXPECT_NEAR(again.rachisLength, p.rachisLength, 1e-12) << "feather " << i;
+    EXPECT_NEAR(again.rachisLateralCurvature, p.rachisLateralCurvature, 1e-12) << "feather " << i;
+    EXPECT_NEAR(again.barbLength, p.barbLength, 1e-12) << "feather " << i;
+    EXPECT_NEAR(again.left.baseAngle, p.left.baseAngle, 1e-12) << "feather " << i;
+    blended += kb.count > 1;
+  }
+  EXPECT_GT(blended, 150u);
 }
 
 TEST(Coat2Keys, OneAndTwoKeyTracts) {
