@@ -259,6 +259,7 @@ void App::panelColumn() {
     if (header(name, defaultOpen)) guardedUi(name, [&] { draw(ctx); });
   };
   panel("View", true, drawViewPanel);
+  panel("Scene", false, drawScenePanel);
   if (header("Feather designer", false)) ImGui::Checkbox("Show the designer window", &view_.showDesigner);
   panel("Tracts", false, drawTractsPanel);
   panel("Follicles", false, drawFolliclesPanel);

@@ -189,7 +189,8 @@ void Document::cancel() {
 void Document::resume() { halted_ = false; }
 
 bool Document::upToDate() const {
-  return hasScene() && !running_ && !failed_ && !needEval_ && !pending_ && !timeDirty_ && !lodDirty_ && !checkWanted_;
+  return hasScene() && !running_ && !failed_ && !needEval_ && !pending_ && !timeDirty_ && !lodDirty_ && !checkWanted_ &&
+         !exportWanted_;
 }
 
 JobProgress Document::progress() const {
@@ -204,6 +205,12 @@ std::optional<std::string> Document::takeError() {
 }
 
 const Snapshot& Document::snapshot() const { return *snapshot_; }
+
+void Document::requestExport(ExportRequest request) {
+  if (request.path.empty()) throw Error("no file name given", "", "export");
+  exchange::formatOf(request.path);  // refuses an unknown extension now, naming the file
+  exportWanted_ = std::move(request);
+}
 
 void Document::requestCheck() {
   checkWanted_ = true;
@@ -225,7 +232,7 @@ void Document::update() {
   // Anything that left a stage dirty behind the Document's back is evaluated too (the GL view must
   // never pull a dirty pipeline on the UI thread).
   if (!needEval_ && !pending_ && pipeline_->dirty(Stage::Mesh)) needEval_ = true;
-  if (!(needEval_ || pending_ || timeDirty_ || lodDirty_ || checkWanted_)) return;
+  if (!(needEval_ || pending_ || timeDirty_ || lodDirty_ || checkWanted_ || exportWanted_)) return;
   // Hand edits to the pipeline (the worker is idle).
   try {
     if (pending_) pipeline_->editScene(*pending_, [&](Scene& s) { s = scene_; });
@@ -243,6 +250,8 @@ void Document::update() {
   const bool check = checkWanted_;
   checkWanted_ = false;
   needEval_ = false;
+  jobExport_ = std::move(exportWanted_);
+  exportWanted_.reset();
   startJob(check);
 }
 
@@ -253,6 +262,7 @@ void Document::startJob(bool check) {
   jobOk_ = false;
   jobError_.reset();
   jobMetrics_.reset();
+  jobExportOutcome_.reset();
   {
     std::lock_guard<std::mutex> lock(mutex_);
     progress_ = {"start", 0.0};
@@ -359,6 +369,20 @@ void Document::startJob(bool check) {
         std::lock_guard<std::mutex> lock(mutex_);
         jobMetrics_ = m;
       }
+      if (jobExport_) {
+        ExportOutcome out;
+        out.path = jobExport_->path;
+        try {
+          out.result = exchange::exportCoat(p, jobExport_->path, jobExport_->options);
+        } catch (const Cancelled&) {
+          out.error = "cancelled (nothing was written)";
+        } catch (const std::exception& e) {
+          out.error = e.what();
+        }
+        p.coatMesh();  // a frame range moved the time; evaluate the viewer's frame again
+        std::lock_guard<std::mutex> lock(mutex_);
+        jobExportOutcome_ = std::move(out);
+      }
       jobOk_ = true;
     } catch (const Cancelled&) {
       // The edit that cancelled the job starts a new one.
@@ -383,6 +407,9 @@ void Document::finishJob() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (workerSnapshot_) snapshot_ = std::move(workerSnapshot_);
   progress_ = {};
+  if (jobExportOutcome_) lastExport_ = std::move(jobExportOutcome_);
+  jobExportOutcome_.reset();
+  jobExport_.reset();
   if (jobError_) {
     error_ = *jobError_;
     failed_ = true;

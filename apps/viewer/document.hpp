@@ -30,6 +30,7 @@
 #include <glm/vec3.hpp>
 
 #include "pteryla/core/trimesh.hpp"
+#include "pteryla/exchange/coat_export.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
 
@@ -141,6 +142,21 @@ class Document {
   void requestCheck();
   const std::optional<pipeline::QualityMetrics>& metrics() const { return metrics_; }
 
+  // Exports the coat (exchange::exportCoat: glTF, USD, OBJ, PLY; docs/export.md) in the background once
+  // the evaluation is complete; progress() reports its frames, cancel() stops it (nothing is left
+  // behind). lastExport() says how the last one ended.
+  struct ExportRequest {
+    std::string path;
+    exchange::ExportOptions options;
+  };
+  struct ExportOutcome {
+    std::string path;
+    std::optional<exchange::ExportResult> result;  // empty: it failed or was cancelled
+    std::string error;
+  };
+  void requestExport(ExportRequest request);
+  const std::optional<ExportOutcome>& lastExport() const { return lastExport_; }
+
  private:
   struct Entry {
     std::string label;
@@ -174,6 +190,8 @@ class Document {
   std::shared_ptr<Snapshot> snapshot_, workerSnapshot_;
   std::optional<std::string> jobError_, error_;
   std::optional<pipeline::QualityMetrics> jobMetrics_;
+  std::optional<ExportRequest> exportWanted_, jobExport_;
+  std::optional<ExportOutcome> lastExport_, jobExportOutcome_;
   bool jobOk_ = false;
   uint64_t resultVersion_ = 0;
 };

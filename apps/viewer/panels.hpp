@@ -135,6 +135,9 @@ bool uiRequestedNumber(PanelContext& ctx, const char* panel, const char* widget,
 // A text field or a button with an argument: sets `value` to the script's VALUE (possibly empty).
 bool uiRequestedText(PanelContext& ctx, const char* panel, const char* widget, std::string& value);
 
+// panels_scene.cpp: master seed, layer ordering, export
+void drawScenePanel(PanelContext& ctx);
+
 // panels_view.cpp
 void drawViewPanel(PanelContext& ctx);
 void drawRenderPanel(PanelContext& ctx);

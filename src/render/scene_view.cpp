@@ -176,7 +176,19 @@ std::vector<FeatherMaterial> sceneMaterials(const pipeline::Scene& scene, const 
       if (w.material >= coat.materials.size() || !coat.materials[w.material].blend.empty())
         throw Error("material blend part " + std::to_string(w.material) + " is not a feather definition's material", {},
                     "materials[" + std::to_string(k) + "].blend");
-      parts.push_back(out[w.material]);
+      // A part's texture that cannot be read is named as the renderer names it (materials[i].colorTexture).
+      const FeatherMaterial& part = out[w.material];
+      for (const auto& [path, key] :
+           {std::pair{&part.colorTexture, "colorTexture"}, {&part.alphaTexture, "alphaTexture"}}) {
+        if (path->empty()) continue;
+        try {
+          load(*path);
+        } catch (const Error& e) {
+          throw Error(e.detail(), e.file().empty() ? *path : e.file(),
+                      "materials[" + std::to_string(w.material) + "]." + key);
+        }
+      }
+      parts.push_back(part);
       weights.push_back(w.weight);
     }
     try {

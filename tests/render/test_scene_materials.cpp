@@ -75,7 +75,8 @@ TEST(SceneMaterials, BadBlendsAreRefusedNamingTheMaterial) {
     sceneMaterials(scene, coat);
     FAIL() << "accepted";
   } catch (const Error& e) {
-    EXPECT_EQ(e.element(), "materials[2]");
+    // Named as the renderer names an unreadable texture: the key's material, not the blend.
+    EXPECT_EQ(e.element(), "materials[0].colorTexture");
     EXPECT_EQ(e.file(), "/nonexistent/texture.png");
   }
 }

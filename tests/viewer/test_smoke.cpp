@@ -242,3 +242,27 @@ TEST(ViewerSmoke, AClickSelectsTheFeatherUnderTheMouse) {
   EXPECT_GE(lines[1]["elevation_deg"].get<double>(), 0.0);
   EXPECT_TRUE(lines[2]["feather"].is_null()) << "a click on the background keeps a selection";
 }
+
+// #28 "the missing stages": the Scene panel's master seed and layer order reach the saved scene, and
+// its Export writes the coat.
+TEST(ViewerSmoke, ScenePanelSeedOrderingAndExport) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("smoke_scene_panel");
+  const std::string script = dir + "/s.txt", saved = dir + "/saved.json", glb = dir + "/coat.glb";
+  std::ofstream(script) << "count 0 20\nwait\n"
+                        << "ui Scene seed 4242\nwait\n"
+                        << "ui Scene ordering flow\nwait\n"
+                        << "ui Scene export " << glb << "\nwait\nframes 3\n"
+                        << "screenshot-window " << dir << "/scene_panel.png\n"
+                        << "save " << saved << "\nquit\n";
+  const ViewerRun r = runViewer(
+      "\"" + viewer_test::dataPath("scenes/patch.json") + "\" --lod 0.3 --size 1000x700 --script \"" + script + "\"",
+      dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
+  const pipeline::Scene s = pipeline::loadScene(saved);
+  EXPECT_EQ(s.seed, 4242u);
+  EXPECT_EQ(s.ordering.value("method", std::string()), "flow");
+  const std::string bytes = slurp(glb);
+  ASSERT_GT(bytes.size(), 1000u) << "the export wrote nothing";
+  EXPECT_EQ(bytes.substr(0, 4), "glTF");
+}
