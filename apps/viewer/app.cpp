@@ -403,7 +403,7 @@ void App::updateFps() {
 }
 
 void App::layoutViewport() {
-  const float panel = view_.hidePanels ? 0.0f : std::min(kPanelWidth, 0.45f * float(windowSize_.x));
+  const float panel = view_.hidePanels ? 0.0f : std::clamp(view_.panelWidth, 260.0f, 0.7f * float(windowSize_.x));
   view_.viewOrigin = {panel, menuHeight_};
   view_.viewSize = {std::max(1, int(float(windowSize_.x) - panel)),
                     std::max(1, int(float(windowSize_.y) - menuHeight_ - kStatusHeight))};

@@ -32,7 +32,6 @@ class GlfwContext;
 
 // Layout of the window: menu bar, panel column on the left, status bar, the 3D view in the rest.
 inline constexpr float kStatusHeight = 30.0f;
-inline constexpr float kPanelWidth = 420.0f;
 
 struct ViewerOptions {
   std::string scene;       // scene file or bare mesh to open ("" = none)

@@ -232,9 +232,12 @@ void App::panelColumn() {
   const ImGuiViewport* vp = ImGui::GetMainViewport();
   ImGui::SetNextWindowPos(vp->WorkPos, ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(view_.viewOrigin.x, vp->WorkSize.y - kStatusHeight), ImGuiCond_Always);
+  // Resizable from its right edge: the width it ends the frame with lays out the next frame.
+  ImGui::SetNextWindowSizeConstraints(ImVec2(260.0f, 0.0f), ImVec2(0.7f * vp->WorkSize.x, FLT_MAX));
   ImGui::Begin("Panels", nullptr,
-               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
-                   ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoBringToFrontOnFocus);
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar |
+                   ImGuiWindowFlags_NoBringToFrontOnFocus);
+  if (!view_.hidePanels) view_.panelWidth = ImGui::GetWindowWidth();
   if (!doc_.hasScene()) {
     ImGui::TextWrapped("No scene. Open a scene file (.json) or a bare mesh (.obj, .ply, .off, .stl).");
     if (ImGui::Button("Open...")) popupToOpen_ = "Open scene";

@@ -91,6 +91,7 @@ struct ViewState {
   glm::vec2 viewOrigin{0.0f};
   glm::ivec2 viewSize{1, 1};
   bool hidePanels = false;
+  float panelWidth = 420.0f;  // the panel column, pixels (drag its right edge)
   // Panel headers to open (1) or close (0) on the next frame, by name ("*" = all): set by scripts.
   std::map<std::string, int> panelRequests;
   UiRequest ui;

@@ -266,3 +266,26 @@ TEST(ViewerSmoke, ScenePanelSeedOrderingAndExport) {
   ASSERT_GT(bytes.size(), 1000u) << "the export wrote nothing";
   EXPECT_EQ(bytes.substr(0, 4), "glTF");
 }
+
+// #28 "readable": the panel column is resizable from its right edge (the 3D view gives way).
+TEST(ViewerSmoke, ThePanelColumnResizesFromItsEdge) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("smoke_panel_width");
+  const std::string script = dir + "/s.txt";
+  std::ofstream(script) << "frames 3\nscreenshot-window " << dir << "/before.png\n"
+                        << "drag -2 300 200 300 left 12\nframes 3\nscreenshot-window " << dir << "/after.png\nquit\n";
+  const ViewerRun r = runViewer("\"" + viewer_test::dataPath("scenes/patch.json") +
+                                    "\" --lod 0.2 --size 1000x700 --script \"" + script + "\"",
+                                dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
+  // A point just right of the old edge, low in the window: the light view background before, the dark
+  // panel after.
+  auto luminance = [](const render::Image& im, int x, int y) {
+    const uint8_t* p = im.pixel(x, y);
+    return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+  };
+  const render::Image before = render::loadImage(dir + "/before.png"), after = render::loadImage(dir + "/after.png");
+  ASSERT_EQ(before.width, 1000);
+  EXPECT_GT(luminance(before, 480, 640), 150.0);
+  EXPECT_LT(luminance(after, 480, 640), 80.0) << "the panel column did not widen";
+}
