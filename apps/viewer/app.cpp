@@ -659,8 +659,11 @@ void App::captureScreenshot(int fbw, int fbh, bool afterUi) {
     return;
   }
   if (framesDrawn_ + 1 < options_.frames && !options_.screenshot.empty() && script_.empty()) return;
-  // A view drawn while the camera moved has a reduced resolution: wait for the full one.
-  if (!afterUi && viewImage_.width != viewPixels_.x && doc_.scene().render.style != "scratchboard") return;
+  // A view drawn while the camera moved has a reduced resolution: wait for the full one (unless the
+  // navigation view is forced on, which never stops "moving": capture what it shows).
+  if (!afterUi && viewImage_.width != viewPixels_.x && doc_.scene().render.style != "scratchboard" &&
+      !view_.forceNavigation)
+    return;
   shotWanted_ = false;
   try {
     render::Image img;

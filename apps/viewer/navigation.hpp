@@ -1,10 +1,12 @@
 #pragma once
-// Navigation coat: while the camera moves, the viewer may draw a subset of the coat's feathers so
-// orbiting stays fluid on software GL (llvmpipe draws roughly a million feather triangles a second on
-// two cores); the full coat is drawn again as soon as the camera stops. The subset keeps the longest
-// feathers first (flight and tail feathers make the silhouette: those in the top tenth by length, within
-// half the budget), then every k-th of the others in layer order (k chosen so the subset fits the
-// budget), so it is spread evenly over the body; layer order is kept.
+// Navigation coat: while the camera moves, the viewer may draw a light stand-in for the coat so orbiting
+// stays fluid on software GL (llvmpipe draws roughly a million feather triangles a second on two cores);
+// the full coat is drawn again as soon as the camera stops. The longest feathers are kept whole (flight
+// and tail feathers make the silhouette: those in the top tenth by length, within half the budget); every
+// other feather becomes a card, a strip along its shaft through its outermost vertices on either side,
+// so the body stays covered (#28: dropping all but every 27th feather left the bird bald while
+// orbiting). Only when even two-triangle cards exceed the budget is every k-th card kept. Layer order is
+// kept.
 #include <cstddef>
 #include <vector>
 
@@ -13,11 +15,15 @@
 
 namespace pteryla::viewer {
 
+inline constexpr size_t kMaxCardBins = 6;
+
 struct NavigationCoat {
   TriMesh mesh;                                 // vertices and triangles of the kept feathers only
   std::vector<pipeline::CoatDrawRange> ranges;  // their draw ranges, re-based onto `mesh`
-  size_t stride = 1;                            // every stride-th of the shorter feathers kept
+  size_t stride = 1;                            // every stride-th card kept (1: every feather)
   size_t longKept = 0;                          // long feathers kept whole
+  size_t cards = 0;                             // feathers drawn as cards
+  int cardBins = 0;                             // rows of a card (2 (cardBins - 1) triangles)
 };
 
 // Empty (stride 1, no mesh) when the coat already fits the budget. Feathers whose triangles index a
