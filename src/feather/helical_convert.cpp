@@ -315,10 +315,7 @@ FeatherParams helicalToFeatherParams(const HelicalParams& p, const std::string& 
   return fp;
 }
 
-void applyHelical(FeatherParams& p, const HelicalParams& hp) {
-  const HelicalGrowth g(hp, p.sourceFile);
-  const HelicalFeather f = helicalFeather(g);
-  HelicalConversion c = convertHelical(g, f, p.rachisLength);
+void adoptConvertedBarbs(FeatherParams& p, HelicalConversion&& c) {
   p.rachisLength = c.feather.rachisLength;
   p.barbLength = 0;
   p.silhouette = std::move(c.feather.silhouette);
@@ -326,6 +323,12 @@ void applyHelical(FeatherParams& p, const HelicalParams& hp) {
   p.right = std::move(c.feather.right);
   p.spacingBase = c.feather.spacingBase;
   p.spacingTip = c.feather.spacingTip;
+}
+
+void applyHelical(FeatherParams& p, const HelicalParams& hp) {
+  const HelicalGrowth g(hp, p.sourceFile);
+  const HelicalFeather f = helicalFeather(g);
+  adoptConvertedBarbs(p, convertHelical(g, f, p.rachisLength));
 }
 
 void applyHelical(FeatherParams& p) {

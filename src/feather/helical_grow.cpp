@@ -71,15 +71,9 @@ FeatherParams growHelical(const FeatherParams& def, const GrowthState& st, const
 
   FeatherParams p = streitForm(def);
   p.afterfeather = nullptr;
-  p.rachisLength = c.feather.rachisLength;
+  adoptConvertedBarbs(p, std::move(c));
   p.calamusLength = def.calamusLength * collar;
   p.rachisWidth = def.rachisWidth * st[GrowthParam::ShaftWidth];
-  p.barbLength = 0;
-  p.silhouette = std::move(c.feather.silhouette);
-  p.left = std::move(c.feather.left);
-  p.right = std::move(c.feather.right);
-  p.spacingBase = c.feather.spacingBase;
-  p.spacingTip = c.feather.spacingTip;
   // The rachis is straight while the feather grows (8.3: a pin feather is stiff) and curves in the open
   // stage, as a Streit feather's does.
   p.rachisLateralCurvature *= stage.curvature;

@@ -54,23 +54,36 @@ bool sameAlphaSource(const FeatherMaterial& a, const FeatherMaterial& b) {
   return sameImage(a.alphaImage, b.alphaImage);
 }
 
-// Base colour x texture of every part, blended with the texture alpha as weight.
-Image bakeColor(const std::vector<FeatherMaterial>& parts, const std::vector<double>& w, const ImageLoader& load) {
-  std::vector<const Image*> src(parts.size());
+// Every part's image (by `source`; null for a part without one), resampled to the largest size among them.
+struct SizedSources {
+  std::vector<const Image*> src;
+  std::vector<Image> sized;  // the resampled copies src points into
   int width = 1, height = 1;
+};
+template <class Source>
+void sizeSources(const std::vector<FeatherMaterial>& parts, const ImageLoader& load, Source source, SizedSources& s) {
+  s.src.assign(parts.size(), nullptr);
+  s.sized.assign(parts.size(), Image());
   for (size_t k = 0; k < parts.size(); ++k) {
-    src[k] = colorSource(parts[k], load);
-    if (src[k]) {
-      width = std::max(width, src[k]->width);
-      height = std::max(height, src[k]->height);
+    s.src[k] = source(parts[k], load);
+    if (s.src[k]) {
+      s.width = std::max(s.width, s.src[k]->width);
+      s.height = std::max(s.height, s.src[k]->height);
     }
   }
-  std::vector<Image> sized(parts.size());
   for (size_t k = 0; k < parts.size(); ++k)
-    if (src[k] && (src[k]->width != width || src[k]->height != height)) {
-      sized[k] = resampleImage(*src[k], width, height);
-      src[k] = &sized[k];
+    if (s.src[k] && (s.src[k]->width != s.width || s.src[k]->height != s.height)) {
+      s.sized[k] = resampleImage(*s.src[k], s.width, s.height);
+      s.src[k] = &s.sized[k];
     }
+}
+
+// Base colour x texture of every part, blended with the texture alpha as weight.
+Image bakeColor(const std::vector<FeatherMaterial>& parts, const std::vector<double>& w, const ImageLoader& load) {
+  SizedSources s;
+  sizeSources(parts, load, colorSource, s);
+  const std::vector<const Image*>& src = s.src;
+  const int width = s.width, height = s.height;
   Image out(width, height);
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
@@ -99,21 +112,10 @@ Image bakeColor(const std::vector<FeatherMaterial>& parts, const std::vector<dou
 
 // The parts' barb alpha masks (red channel; a part without one is opaque) blended, in all four channels.
 Image bakeAlpha(const std::vector<FeatherMaterial>& parts, const std::vector<double>& w, const ImageLoader& load) {
-  std::vector<const Image*> src(parts.size());
-  int width = 1, height = 1;
-  for (size_t k = 0; k < parts.size(); ++k) {
-    src[k] = alphaSource(parts[k], load);
-    if (src[k]) {
-      width = std::max(width, src[k]->width);
-      height = std::max(height, src[k]->height);
-    }
-  }
-  std::vector<Image> sized(parts.size());
-  for (size_t k = 0; k < parts.size(); ++k)
-    if (src[k] && (src[k]->width != width || src[k]->height != height)) {
-      sized[k] = resampleImage(*src[k], width, height);
-      src[k] = &sized[k];
-    }
+  SizedSources s;
+  sizeSources(parts, load, alphaSource, s);
+  const std::vector<const Image*>& src = s.src;
+  const int width = s.width, height = s.height;
   Image out(width, height);
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {

@@ -327,6 +327,9 @@ HelicalConversion convertHelical(const HelicalGrowth& g, const HelicalFeather& f
 // scale, so its rachis is scale * v_grow * time). f may have zero length (time 0): a bare rachis.
 HelicalConversion convertHelicalScaled(const HelicalGrowth& g, const HelicalFeather& f, double scale);
 FeatherParams helicalToFeatherParams(const HelicalParams& p, const std::string& file = {});
+// Moves a conversion's barbs into p: rachis length, silhouette, both vanes and spacing (barbLength 0);
+// the rest of p is kept.
+void adoptConvertedBarbs(FeatherParams& p, HelicalConversion&& c);
 // Derives the barb fields of p from helical parameters: rachis length stays p.rachisLength unless
 // hp.length is set; barbs (silhouette, key barbs, angles, spacing) are replaced; calamus, rachis width
 // and curvature, splits, material, seed and afterfeather are kept. The one-argument form reads hp from
