@@ -55,15 +55,15 @@ bool sameAlphaSource(const FeatherMaterial& a, const FeatherMaterial& b) {
 }
 
 // Every part's image (by `source`; null for a part without one), resampled to the largest size among them.
+// (Sized at construction: vector::assign of Images instantiates a fill that libpteryla.so would export.)
 struct SizedSources {
+  explicit SizedSources(size_t n) : src(n), sized(n) {}
   std::vector<const Image*> src;
   std::vector<Image> sized;  // the resampled copies src points into
   int width = 1, height = 1;
 };
 template <class Source>
 void sizeSources(const std::vector<FeatherMaterial>& parts, const ImageLoader& load, Source source, SizedSources& s) {
-  s.src.assign(parts.size(), nullptr);
-  s.sized.assign(parts.size(), Image());
   for (size_t k = 0; k < parts.size(); ++k) {
     s.src[k] = source(parts[k], load);
     if (s.src[k]) {
@@ -80,7 +80,7 @@ void sizeSources(const std::vector<FeatherMaterial>& parts, const ImageLoader& l
 
 // Base colour x texture of every part, blended with the texture alpha as weight.
 Image bakeColor(const std::vector<FeatherMaterial>& parts, const std::vector<double>& w, const ImageLoader& load) {
-  SizedSources s;
+  SizedSources s(parts.size());
   sizeSources(parts, load, colorSource, s);
   const std::vector<const Image*>& src = s.src;
   const int width = s.width, height = s.height;
@@ -112,7 +112,7 @@ Image bakeColor(const std::vector<FeatherMaterial>& parts, const std::vector<dou
 
 // The parts' barb alpha masks (red channel; a part without one is opaque) blended, in all four channels.
 Image bakeAlpha(const std::vector<FeatherMaterial>& parts, const std::vector<double>& w, const ImageLoader& load) {
-  SizedSources s;
+  SizedSources s(parts.size());
   sizeSources(parts, load, alphaSource, s);
   const std::vector<const Image*>& src = s.src;
   const int width = s.width, height = s.height;
