@@ -228,11 +228,14 @@ void setBodyAxis(Document& d, const std::vector<glm::dvec3>& pts) {
   });
 }
 
-void addBrush(Document& d, const glm::dvec3& c, double radius, double elevationDeg) {
+void addBrush(Document& d, const glm::dvec3& c, double radius, double elevationDeg, bool lift) {
   if (!(radius > 0)) throw Error("a brush needs a positive radius", "", "radius");
-  d.edit("brush", [&](Scene& s) {
-    s.packing["styling"].push_back(
-        {{"select", "sphere"}, {"center", vec3Json(c)}, {"radius", radius}, {"elevation_deg", elevationDeg}});
+  if (!std::isfinite(elevationDeg)) throw Error("a brush needs a finite elevation", "", "elevation_deg");
+  d.edit(lift ? "lift brush" : "brush", [&](Scene& s) {
+    s.packing["styling"].push_back({{"select", "sphere"},
+                                    {"center", vec3Json(c)},
+                                    {"radius", radius},
+                                    {lift ? "min_elevation_deg" : "elevation_deg", elevationDeg}});
   });
 }
 

@@ -52,7 +52,9 @@ void removeStylingVector(Document& d, size_t k);
 void setBodyAxis(Document& d, const std::vector<glm::dvec3>& points);
 
 // Packing: a fixed-angle brush (packing.styling sphere selection).
-void addBrush(Document& d, const glm::dvec3& center, double radius, double elevationDeg);
+// `lift`: the feathers under it stand at least elevationDeg (min_elevation_deg: a lift brush); else they
+// are set to it (elevation_deg: raised or flattened to that angle).
+void addBrush(Document& d, const glm::dvec3& center, double radius, double elevationDeg, bool lift = false);
 void removeBrush(Document& d, size_t k);
 void setPackingValue(Document& d, const std::string& key, const Json& value);
 

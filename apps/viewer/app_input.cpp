@@ -151,7 +151,7 @@ bool App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
         toolDrag_ = true;
         break;
       case Tool::Brush:
-        guarded(ctx, [&] { actions::addBrush(doc_, at, view_.brushRadius, view_.brushElevationDeg); });
+        guarded(ctx, [&] { actions::addBrush(doc_, at, view_.brushRadius, view_.brushElevationDeg, view_.brushLift); });
         break;
       case Tool::AddControl:
         guarded(ctx, [&] { view_.selectedControl = int(actions::addControl(doc_, at, view_.controlRadius)); });

@@ -62,6 +62,7 @@ struct ViewState {
   std::string toolFeather;   // PlaceKey
   float brushRadius = 0.1f;  // scene units (set from the skin size on load)
   float brushElevationDeg = 45.0f;
+  bool brushLift = false;  // lift brush (at least the angle) instead of a fixed angle
   float controlRadius = 0.2f;
   float combRadius = 0.0f;  // reach of a new styling vector over a body axis, scene units (0 = a tenth of the axis)
   float biasSigma = 0.2f, biasStretch = 1.5f;

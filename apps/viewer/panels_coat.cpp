@@ -378,9 +378,16 @@ void drawPackingPanel(PanelContext& ctx) {
         "Off: lost and growing feathers are packed over the mature coat (fast scrubbing).\n"
         "On: every feather is repacked (tighter, a full pack per frame; for final renders).");
 
-  sectionTitle("Fixed-angle brush (8.3)");
+  sectionTitle("Brush: fixed angle or lift (8.3)");
   ImGui::SliderFloat("Radius", &ctx.view.brushRadius, 0.001f, 2.0f, "%.3f", ImGuiSliderFlags_Logarithmic);
   ImGui::SliderFloat("Elevation (deg)", &ctx.view.brushElevationDeg, -10.0f, 90.0f);
+  if (ImGui::RadioButton("fixed angle", !ctx.view.brushLift)) ctx.view.brushLift = false;
+  ImGui::SameLine();
+  if (ImGui::RadioButton("lift (at least)", ctx.view.brushLift)) ctx.view.brushLift = true;
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "fixed angle: the feathers under the brush are set to the elevation (a low one flattens);\n"
+        "lift: they stand at least that high and pack over what is under them");
   toolToggle(ctx, Tool::Brush, "Brush", "click on the skin");
   if (p.contains("styling") && p["styling"].is_array()) {
     for (size_t k = 0; k < p["styling"].size(); ++k) {

@@ -197,8 +197,11 @@ void run(Document& doc, const ScriptCommand& c, const std::string& file, std::os
     for (size_t i = 0; i < c.args.size(); i += 3) pts.push_back(vec(c, i, file));
     actions::setBodyAxis(doc, pts);
   } else if (v == "brush") {
-    needArgs(c, 5, 5, "brush X Y Z RADIUS ELEVATION_DEG", file);
-    actions::addBrush(doc, vec(c, 0, file), scriptNumber(c, 3, file), scriptNumber(c, 4, file));
+    needArgs(c, 5, 6, "brush X Y Z RADIUS ELEVATION_DEG [fixed|lift]", file);
+    if (c.args.size() > 5 && c.args[5] != "fixed" && c.args[5] != "lift")
+      throw Error("usage: brush X Y Z RADIUS ELEVATION_DEG [fixed|lift]", file, where(c));
+    actions::addBrush(doc, vec(c, 0, file), scriptNumber(c, 3, file), scriptNumber(c, 4, file),
+                      c.args.size() > 5 && c.args[5] == "lift");
   } else if (v == "pack" || v == "wait") {
     needArgs(c, 0, 0, v, file);  // the runner waits for the evaluation before the next command
   } else if (v == "check") {
@@ -264,7 +267,7 @@ const char* scriptHelp() {
   feather NAME PATH              add or replace a feather file in the library
   key TRACT FEATHER FOLLICLE_ID | key-at TRACT FEATHER X Y Z     key feathers
   vector X Y Z DX DY DZ [RADIUS] | axis X1 Y1 Z1 X2 Y2 Z2 ...    directions (over an axis, a vector combs it)
-  brush X Y Z RADIUS ELEVATION_DEG   fixed-angle packing brush
+  brush X Y Z RADIUS ELEVATION_DEG [fixed|lift]   packing brush: set the angle, or lift to at least it
   pack | wait                    wait for the evaluation (packing included)
   check                          print the checker's metrics as JSON
   control X Y Z RADIUS           add an expressive control

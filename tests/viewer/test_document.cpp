@@ -368,3 +368,45 @@ TEST(Document, AStylingVectorCombsTheAxisInsteadOfReplacingIt) {
   EXPECT_FALSE(d.scene().directions.contains("vectors"));
   EXPECT_EQ(d.scene().directions["axis"], axis);
 }
+
+// #28: the lift brush gives the feathers under it a lower bound on their elevation (min_elevation_deg),
+// the fixed brush an exact angle (elevation_deg); each saves to the scene's packing.styling.
+TEST(Document, LiftAndFixedBrushesReachTheCoat) {
+  Document d;
+  d.reset(smallPatch(), "");
+  ASSERT_TRUE(d.waitIdle());
+  const double deg = 3.14159265358979323846 / 180.0;
+  const glm::dvec3 at(0, 0.05, 0);
+  const double radius = 0.6;
+  auto under = [&](const pipeline::Pipeline& p, size_t i) {
+    (void)p;
+    return glm::length(d.idlePipeline()->feathers().frames[i].origin - at) < 0.5 * radius;
+  };
+  actions::addBrush(d, at, radius, 40.0, true);
+  const Json& lift = d.scene().packing["styling"].back();
+  EXPECT_EQ(lift["min_elevation_deg"], 40.0);
+  EXPECT_FALSE(lift.contains("elevation_deg"));
+  ASSERT_TRUE(d.waitIdle());
+  size_t lifted = 0;
+  {
+    pipeline::Pipeline& p = *d.idlePipeline();
+    const std::vector<double> e = p.elevations();
+    for (size_t i = 0; i < e.size(); ++i)
+      if (under(p, i) && p.feathers().present[i]) {
+        EXPECT_GE(e[i], 40.0 * deg - 1e-9) << "feather " << i;
+        ++lifted;
+      }
+  }
+  EXPECT_GT(lifted, 0u);
+  ASSERT_TRUE(d.undo());
+  actions::addBrush(d, at, radius, 12.0, false);
+  EXPECT_EQ(d.scene().packing["styling"].back()["elevation_deg"], 12.0);
+  ASSERT_TRUE(d.waitIdle());
+  pipeline::Pipeline& p = *d.idlePipeline();
+  const std::vector<double> e = p.elevations();
+  for (size_t i = 0; i < e.size(); ++i) {
+    if (under(p, i) && p.feathers().present[i]) {
+      EXPECT_NEAR(e[i], 12.0 * deg, 1e-9) << "feather " << i;
+    }
+  }
+}
