@@ -15,6 +15,7 @@
 #include "pteryla/core/error.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
+#include "wing_scene.hpp"
 
 using namespace pteryla;
 using pipeline::Pipeline;
@@ -23,24 +24,13 @@ namespace {
 
 const std::string kSceneFile = std::string(PTERYLA_DATA_DIR) + "/scenes/chain_test_in_memory.json";
 
+// The moult tests' wing with an elbow that snaps from 0 to 25 degrees at t = 1.
 Json wing() {
-  return Json::parse(R"({
-    "pteryla": 1,
-    "seed": 5,
-    "mesh": "../meshes/wing.obj",
-    "feathers": {"contour": "../feathers/contour.json"},
-    "tracts": [
-      {"name": "coverts", "groups": ["coverts"], "count": 90, "feather_scale": "auto",
-       "feather_spacings": 1.5, "relax": {"iterations": 5}},
-      {"name": "remiges", "groups": ["remiges_base"], "count": 40, "feather_scale": "auto",
-       "feather_spacings": 1.5, "relax": {"iterations": 5}}
-    ],
-    "directions": {"axis": [[0, 0, -0.2], [2, 0, 0.4]]},
-    "packing": {"method": "height_field"},
-    "skeleton": {"file": "../meshes/wing.skeleton.json", "interpolation": "step", "keys": [
+  Json j = moult_test::wingScene();
+  j["skeleton"] = Json::parse(R"({"file": "../meshes/wing.skeleton.json", "interpolation": "step", "keys": [
       {"joint": "elbow", "t": 0, "rotation": [0, 0, 1, 0]},
-      {"joint": "elbow", "t": 1, "rotation": [0, 0, 1, 25]}]}
-  })");
+      {"joint": "elbow", "t": 1, "rotation": [0, 0, 1, 25]}]})");
+  return j;
 }
 
 // A control over the outer wing, its offset moving from t = 1.5 to 2; `dynamic` as a constant, or null

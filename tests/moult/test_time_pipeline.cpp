@@ -16,6 +16,7 @@
 #include "pteryla/core/error.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
+#include "wing_scene.hpp"
 
 using namespace pteryla;
 using pipeline::Pipeline;
@@ -24,23 +25,7 @@ namespace {
 
 const std::string kSceneFile = std::string(PTERYLA_DATA_DIR) + "/scenes/moult_test_in_memory.json";
 
-// Wing (thesis Fig. 8.6): coverts on top, remiges along the trailing edge, the bundled skeleton.
-Json wingScene() {
-  return Json::parse(R"({
-    "pteryla": 1,
-    "seed": 5,
-    "mesh": "../meshes/wing.obj",
-    "feathers": {"contour": "../feathers/contour.json"},
-    "tracts": [
-      {"name": "coverts", "groups": ["coverts"], "count": 90, "feather_scale": "auto",
-       "feather_spacings": 1.5, "relax": {"iterations": 5}},
-      {"name": "remiges", "groups": ["remiges_base"], "count": 40, "feather_scale": "auto",
-       "feather_spacings": 1.5, "relax": {"iterations": 5}}
-    ],
-    "directions": {"axis": [[0, 0, -0.2], [2, 0, 0.4]]},
-    "packing": {"method": "height_field"}
-  })");
-}
+using moult_test::wingScene;
 
 // A gently curved open patch (normals +Y), feathers pointing +X, lying flat-ish.
 Json patchScene() {
