@@ -59,78 +59,7 @@ glm::dvec3 placePoint(const FeatherFrame& f, double e, const glm::dvec3& p) {
   return f.origin + placeDirection(f, e, p);
 }
 
-namespace packing {
-// Runs task(i) for every feather of `items` (in layer order) after those of its dependencies that are
-// items too (`member[j]` != 0; null = every feather is); deterministic results because each task reads
-// only its dependencies' outputs.
-template <class Task>
-void schedule(const Context& ctx, const std::vector<uint32_t>& items, const uint8_t* member, int threads, Task&& task) {
-  if (threads == 1 || items.size() < 64) {
-    for (uint32_t i : items) task(i);
-    return;
-  }
-  const size_t n = ctx.coat.size();
-  auto in = [&](uint32_t j) { return member == nullptr || member[j] != 0; };
-  // Successors (CSR) and pending dependency counts within the items.
-  std::vector<uint32_t> succOff(n + 1, 0);
-  std::vector<std::atomic<uint32_t>> pending(n);
-  std::vector<uint32_t> ready;
-  for (uint32_t i : items) {
-    uint32_t c = 0;
-    for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k)
-      if (in(ctx.deps[k])) {
-        ++c;
-        ++succOff[ctx.deps[k] + 1];
-      }
-    pending[i].store(c, std::memory_order_relaxed);
-    if (c == 0) ready.push_back(i);
-  }
-  for (size_t i = 0; i < n; ++i) succOff[i + 1] += succOff[i];
-  std::vector<uint32_t, UninitializedAllocator<uint32_t>> succ(succOff[n]);  // every slot is filled below
-  std::vector<uint32_t> fill(succOff.begin(), succOff.end() - 1);
-  for (uint32_t i : items)
-    for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1]; ++k)
-      if (in(ctx.deps[k])) succ[fill[ctx.deps[k]]++] = i;
-  auto body = [&](uint32_t i, tbb::feeder<uint32_t>& feeder) {
-    task(i);
-    for (uint32_t k = succOff[i]; k < succOff[i + 1]; ++k)
-      if (pending[succ[k]].fetch_sub(1, std::memory_order_acq_rel) == 1) feeder.add(succ[k]);
-  };
-  tbb::parallel_for_each(ready.begin(), ready.end(), body);
-}
-}  // namespace packing
-
 using namespace packing;
-
-namespace {
-
-// What one pack's feathers share while they are packed: per-thread scratch and the output's views with the
-// chunk spheres above the groups.
-struct Run {
-  explicit Run(PackResult& res)
-      : chunkOffset(chunkOffsets(res.groupOffset)),
-        chunkBounds(chunkOffset.back()),
-        out{res.elevation,   res.packedKeys, res.barbsChanged, res.pointOffset, res.points, res.bounds,
-            res.groupOffset, res.groupPoint, res.groupBounds,  chunkOffset,     chunkBounds} {}
-  tbb::enumerable_thread_specific<Scratch> scratch;
-  const std::vector<uint32_t> chunkOffset;
-  ChunkBounds chunkBounds;
-  Output out;
-
-  void packOne(const Context& ctx, PackResult& res, uint32_t i) {
-    packFeather(ctx, i, scratch.local(), out);
-    res.recomputed[i] = 1;
-  }
-};
-
-// Every feather in ctx.order is packed from its local data (pack and repack; absent ones have none).
-std::vector<Source> localSources(const Context& ctx) {
-  std::vector<Source> s(ctx.coat.size());
-  for (size_t i = 0; i < s.size(); ++i) s[i] = ctx.local[i].packable ? Source::Local : Source::None;
-  return s;
-}
-
-}  // namespace
 
 PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options,
                 const PackConstraints& constraints) {

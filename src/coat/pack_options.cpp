@@ -42,6 +42,7 @@ PackingSettings parsePackingSettings(JsonReader& r) {
   o.skinSampleSpacing = r.number("skin_sample_spacing", 0.0, 0.0, 1e6);
   o.threads = static_cast<int>(r.integer("threads", 0, 0, 1024));
   settings.moultOver = r.oneOf("moult_pack", "over", {"over", "full"}) == "over";
+  settings.poseTolerance = r.number("pose_tolerance", settings.poseTolerance, 0.0, 1.0);
   for (JsonReader& s : r.objects("styling")) settings.styling.push_back(parseStyleSelection(s));
   r.finish();
   return settings;
@@ -75,6 +76,7 @@ Json packingSettingsToJson(const PackingSettings& settings) {
   if (o.skinSampleSpacing != d.skinSampleSpacing) j["skin_sample_spacing"] = o.skinSampleSpacing;
   if (o.threads != d.threads) j["threads"] = o.threads;
   if (settings.moultOver != PackingSettings().moultOver) j["moult_pack"] = settings.moultOver ? "over" : "full";
+  if (settings.poseTolerance != PackingSettings().poseTolerance) j["pose_tolerance"] = settings.poseTolerance;
   if (!settings.styling.empty()) {
     Json a = Json::array();
     for (const auto& s : settings.styling) a.push_back(styleSelectionToJson(s));

@@ -134,6 +134,21 @@ void Pipeline::Impl::computeControls() {
     for (size_t i = 0; i < coatNow.size(); ++i)
       if (auto it = hostElevations.find(follicles.id[coatNow.follicle[i]]); it != hostElevations.end())
         fixedElevation[i] = it->second;
+  // Posed frames pack from the rest pose's pack (packDeformed): the frames the coat has at rest, styled.
+  PoseReference& pr = timeState.poseRef;
+  pr.tolerance = packing.poseTolerance;
+  if (timeState.posedMoved && pr.tolerance > 0 &&
+      (!pr.valid || pr.generation != restGeneration() || pr.packing != scene.packing)) {
+    coat::CoatFeathers c = coatRest;
+    coat::evaluateFrames(rest, follicles, directions, c);
+    if (!packing.styling.empty()) coat::applyStyling(c, packing.styling, {});
+    pr.frames = std::move(c.frames);
+    pr.generation = restGeneration();
+    pr.packing = scene.packing;
+    pr.natural.clear();
+    pr.frame.clear();
+    pr.valid = true;
+  }
   applyControls(scene, time, posed, posedFollicles, timeState, coatNow, constraints, fixedElevation);
   constraints.fixedElevation = fixedElevation;
 }
@@ -513,6 +528,9 @@ FrameReuse Pipeline::frameReuse() const {
   r.moult = p.moult;
   r.moultChanged = p.moultChanged;
   r.moultRecomputed = p.moultRecomputed;
+  r.deformedPacks = p.deformedPacks;
+  r.poseMoved = p.poseMoved;
+  r.poseRepacked = p.poseRepacked;
   r.meshRegenerated = impl_->mesher.regenerated();
   r.meshReused = impl_->mesher.reused();
   return r;

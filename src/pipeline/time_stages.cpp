@@ -115,18 +115,57 @@ uint8_t unopenedAt(const coat::CoatFeathers& c, size_t i, const coat::PackOption
 
 uint8_t presentAt(const coat::CoatFeathers& c, size_t i) { return c.present.empty() ? 1 : c.present[i]; }
 
+// A posed frame's skin: the rest skin moved by the pose (PoseReference).
+struct Posed {
+  const coat::SkinMesh* rest = nullptr;
+  PoseReference* ref = nullptr;
+  PackMemo* refMemo = nullptr;  // the reference pack's memo (ref->natural or ref->frame)
+  PackReport* report = nullptr;
+};
+
+bool posedSkin(const Posed* p, const coat::SkinMesh& skin, const coat::CoatFeathers& coat) {
+  if (!p || !p->rest || !p->ref || !p->ref->valid || !(p->ref->tolerance > 0) || p->ref->frames.size() != coat.size())
+    return false;
+  const auto& a = skin.positions;
+  const auto& b = p->rest->positions;
+  return a.size() == b.size() && !sameBits(a.data(), b.data(), a.size() * sizeof(glm::dvec3));
+}
+
+// `coat` with the reference frames (into ref.coat, reusing its storage).
+const coat::CoatFeathers& referenceCoat(const coat::CoatFeathers& coat, PoseReference& ref) {
+  coat::CoatFeathers& c = ref.coat;
+  c.follicle = coat.follicle;
+  c.tract = coat.tract;
+  c.params = coat.params;
+  c.frames = ref.frames;
+  c.age = coat.age;
+  c.present = coat.present;
+  c.layerOrder = coat.layerOrder;
+  return c;
+}
+
 // Packs `coat` through `memo`: reuses the memo's result when no feather's input changed, repacks
 // incrementally from the memo (or from `alternative` when that differs in fewer feathers), else packs
-// fully. The memo then holds this pack.
+// fully. The memo then holds this pack. On a posed skin (`posed`), the pack is packDeformed's from the
+// reference pack (itself through the reference memo, on the rest skin), or a repack from `alternative`
+// (this frame's natural pack); the memo seeds nothing then, so the result never depends on history.
 const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative, const coat::SkinMesh& skin,
                                      const coat::CoatFeathers& coat, const coat::PackOptions& options,
                                      const coat::PackConstraints& constraints, uint64_t generation, const Json& packing,
                                      bool& incremental, size_t& changedCount, size_t& recomputed,
-                                     const std::vector<double>& grownAge = {}) {
+                                     const std::vector<double>& grownAge = {}, const Posed* posed = nullptr) {
   std::optional<std::vector<uint32_t>> changed =
       memo.changes(skin, coat, options, constraints, generation, packing, grownAge);
+  if (changed && changed->empty()) {
+    incremental = true;
+    changedCount = 0;
+    recomputed = 0;
+    return memo.result;  // same inputs, same pack
+  }
+  const bool deformed = posedSkin(posed, skin, coat);
+  if (!memo.exact || deformed) changed.reset();
   const PackMemo* seed = changed ? &memo : nullptr;
-  if (alternative && alternative != &memo) {
+  if (alternative && alternative != &memo && (alternative->exact || deformed)) {
     std::optional<std::vector<uint32_t>> alt =
         alternative->changes(skin, coat, options, constraints, generation, packing, grownAge);
     if (alt && (!changed || alt->size() < changed->size())) {
@@ -136,15 +175,31 @@ const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative
   }
   incremental = seed != nullptr;
   changedCount = changed ? changed->size() : coat.size();
-  if (seed == &memo && changed->empty()) {
-    recomputed = 0;
-    return memo.result;  // same inputs, same pack
+  coat::PackResult result;
+  bool exact = true;
+  if (seed) {
+    result = changed->empty() ? seed->result : coat::repack(skin, coat, seed->result, *changed, options, constraints);
+    exact = seed->exact;
+  } else if (deformed) {
+    PoseReference& ref = *posed->ref;
+    bool refIncremental = false;
+    size_t refChanged = 0, refRecomputed = 0;
+    const coat::PackResult& base =
+        packWithMemo(*posed->refMemo, nullptr, *posed->rest, referenceCoat(coat, ref), options, constraints,
+                     generation, packing, refIncremental, refChanged, refRecomputed, grownAge);
+    coat::DeformedPackStats ds;
+    result = coat::packDeformed(skin, coat, *posed->rest, ref.frames, base, ref.tolerance, options, constraints, &ds);
+    exact = false;
+    if (posed->report) {
+      ++posed->report->deformedPacks;
+      posed->report->poseMoved += ds.moved;
+      posed->report->poseRepacked += ds.repacked;
+    }
+  } else {
+    result = coat::pack(skin, coat, options, constraints);
   }
-  coat::PackResult result =
-      seed ? (changed->empty() ? seed->result : coat::repack(skin, coat, seed->result, *changed, options, constraints))
-           : coat::pack(skin, coat, options, constraints);
   recomputed = result.stats.recomputed;
-  memo.remember(skin, coat, options, constraints, generation, packing, std::move(result), grownAge);
+  memo.remember(skin, coat, options, constraints, generation, packing, std::move(result), grownAge, exact);
   return memo.result;
 }
 
@@ -176,9 +231,10 @@ std::optional<std::vector<uint32_t>> PackMemo::changes(const coat::SkinMesh& ski
 
 void PackMemo::remember(const coat::SkinMesh& skinNow, const coat::CoatFeathers& coat, const coat::PackOptions& options,
                         const coat::PackConstraints& constraints, uint64_t gen, const Json& packingNow,
-                        coat::PackResult&& r, const std::vector<double>& grownAgeNow) {
+                        coat::PackResult&& r, const std::vector<double>& grownAgeNow, bool isExact) {
   const size_t n = coat.size();
   valid = true;
+  exact = isExact;
   generation = gen;
   packing = packingNow;
   skin = skinNow.positions;
@@ -247,9 +303,10 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
                                            const coat::PackOptions& o,
                                            const coat::PackConstraints& k) -> const coat::PackResult& {
     const coat::CoatFeathers& input = state.packing.moultOver && moulting(c) ? matureCoat(c, state) : c;
+    const Posed posed{state.rest, &state.poseRef, &state.poseRef.natural, &state.packReport};
     return packWithMemo(state.natural, {}, skin, input, o, k, state.generation, scene.packing,
                         state.packReport.naturalIncremental, state.packReport.naturalChanged,
-                        state.packReport.naturalRecomputed);
+                        state.packReport.naturalRecomputed, {}, &posed);
   };
   state.controlResult = moult::evaluateControls(state.controls, binding, posed, follicles, t, state.packing.options,
                                                 constraints, coat, fixedElevation, natural);
@@ -263,8 +320,9 @@ const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& pose
   // Controls that ran a natural pack this frame make it a candidate seed: it differs from this frame's
   // pack in the raised feathers only.
   const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
+  const Posed p{state.rest, &state.poseRef, &state.poseRef.frame, &r};
   return packWithMemo(state.frame, alternative, posed, coat, options, constraints, state.generation, scene.packing,
-                      r.finalIncremental, r.finalChanged, r.finalRecomputed, grownAge);
+                      r.finalIncremental, r.finalChanged, r.finalRecomputed, grownAge, &p);
 }
 
 bool moulting(const coat::CoatFeathers& coat) {
@@ -291,9 +349,10 @@ const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh&
   PackReport& r = state.packReport;
   r.moult = true;
   const PackMemo* alternative = state.controlResult.naturalPacked ? &state.natural : nullptr;
+  const Posed p{state.rest, &state.poseRef, &state.poseRef.frame, &r};
   const coat::PackResult& base =
       packWithMemo(state.frame, alternative, posed, mature, options, constraints, state.generation, scene.packing,
-                   r.finalIncremental, r.finalChanged, r.finalRecomputed);
+                   r.finalIncremental, r.finalChanged, r.finalRecomputed, {}, &p);
   // What differs from the mature coat: lost feathers, and growing ones (grown packing parameters, or the
   // packer's unopened class).
   std::vector<uint32_t> changed;

@@ -40,6 +40,10 @@ struct PackMemo {
   std::vector<double> grownAge;
   coat::PackResult result;
   uint64_t version = 0;  // changes whenever `result` is replaced (remember)
+  // The result is the full pack of its inputs (pack() or repack() from one), so it can seed a repack. A
+  // posed frame's pack (packDeformed, or a repack seeded by one) is not: it is reused only for the very
+  // same inputs, so that no frame's result depends on the frames evaluated before it.
+  bool exact = true;
 
   void clear() { *this = PackMemo{}; }
   // Feathers whose packing input differs from the memo's, or nullopt when the memo cannot seed a repack
@@ -53,7 +57,21 @@ struct PackMemo {
   // Stores `result` with the inputs it was packed from.
   void remember(const coat::SkinMesh& skin, const coat::CoatFeathers& coat, const coat::PackOptions& options,
                 const coat::PackConstraints& constraints, uint64_t generation, const Json& packing,
-                coat::PackResult&& result, const std::vector<double>& grownAge = {});
+                coat::PackResult&& result, const std::vector<double>& grownAge = {}, bool exact = true);
+};
+
+// Posed frames (a skeleton moving the skin) pack with coat::packDeformed from a reference pack: the same
+// coat on the rest skin, with the frames it would have at rest (evaluated on the rest skin, styled as the
+// scene styles them; expressive controls' turns are left out and so count as motion). Kept while the
+// rest state and the "packing" section are unchanged.
+struct PoseReference {
+  bool valid = false;
+  uint64_t generation = 0;
+  Json packing;
+  double tolerance = 0;                     // PackingSettings::poseTolerance (0: posed frames pack in full)
+  std::vector<coat::FeatherFrame> frames;  // per feather, at rest
+  coat::CoatFeathers coat;                 // scratch: the coat being packed, with `frames`
+  PackMemo natural, frame;                 // the reference packs (exact) of the natural and the frame pack
 };
 
 // How the last frame's packs were made (diagnostics for tests and benchmarks).
@@ -65,6 +83,8 @@ struct PackReport {
   // growing feathers packed over it.
   bool moult = false;
   size_t moultChanged = 0, moultRecomputed = 0;
+  // Posed frames: packs made by packDeformed this frame, with what they moved and repacked (summed).
+  size_t deformedPacks = 0, poseMoved = 0, poseRepacked = 0;
 };
 
 // Parsed time settings, cached across frames. Each cache remembers the JSON it was parsed from and is
@@ -118,6 +138,7 @@ struct TimeState {
   coat::CoatFeathers mature;
   uint64_t matureGeneration = 0;
   bool naturalThisFrame = false;  // `natural` holds the pack of the current frame without raises
+  PoseReference poseRef;          // set up by the pipeline for posed frames
   PackReport packReport;
 };
 

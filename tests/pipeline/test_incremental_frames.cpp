@@ -12,6 +12,7 @@
 
 #include "frames.hpp"
 #include "pteryla/coat/coat_feathers.hpp"
+#include "pteryla/coat/skin.hpp"
 #include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/growth.hpp"
 #include "pteryla/feather/io.hpp"
@@ -288,4 +289,63 @@ TEST(IncrementalFrames, UnplacedMeshPlacedLaterEqualsPlacedMesh) {
       EXPECT_TRUE(sameBytes(unplacedMesh.sheath, placedMesh.sheath));
       EXPECT_TRUE(sameBytes(unplacedMesh.indices, placedMesh.indices));
     }
+}
+
+// Posed frames pack from the rest pose's pack (coat::packDeformed): a host's pose that lifts one end of
+// the patch carries the coat elsewhere and packs only around the lift. Whatever was evaluated before, a
+// frame (pose, time) is the same bits as a fresh evaluation of it, with lift controls and a moult too.
+TEST(IncrementalFrames, PosedFramesEqualFreshEvaluationWhateverCameBefore) {
+  Json j = patchScene();
+  j["controls"] = Json::parse(R"([{"name": "crest", "at": [0.1, 0.2, 0.0], "radius": 0.3, "falloff": 0.4,
+                                   "keys": [{"t": 0, "lift": 0}, {"t": 4, "lift": 1}]}])");
+  j["moult"] = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "sequence": "centre_out", "gap": 0,
+                               "seed": 3})");
+  const pipeline::Scene scene = pipeline::sceneFromJson(j, kSceneFile);
+  Pipeline scrub(scene);
+  scrub.setLod(0.2);
+  const coat::SkinMesh rest = scrub.restSkin();
+  double xMin = 1e30, xMax = -1e30;
+  for (const auto& p : rest.positions) {
+    xMin = std::min(xMin, p.x);
+    xMax = std::max(xMax, p.x);
+  }
+  // The last fifth of the patch (in x) bends up by `h` x (its span), smoothly.
+  auto pose = [&](double h) {
+    std::vector<glm::dvec3> out = rest.positions;
+    const double x0 = xMax - 0.2 * (xMax - xMin);
+    for (auto& p : out)
+      if (p.x > x0) {
+        const double u = (p.x - x0) / (xMax - x0);
+        p.y += h * (xMax - xMin) * u * u;
+      }
+    return out;
+  };
+  auto freshPosed = [&](double h, double t) {
+    Pipeline p(scene);
+    p.setLod(0.2);
+    p.setSkinPose(pose(h));
+    p.setTime(t);
+    return grab(p);
+  };
+  const std::pair<double, double> frames[] = {{0.05, 4.0}, {0.1, 4.0}, {0.1, 4.1}, {0.05, 4.0}, {0.0, 4.0},
+                                              {0.1, 2.0}, {0.1, 1.0}, {0.1, 3.0}, {0.05, 4.0}};
+  size_t deformed = 0, partial = 0;
+  for (const auto& [h, t] : frames) {
+    scrub.setSkinPose(pose(h));
+    scrub.setTime(t);
+    const Frame f = grab(scrub);
+    const pipeline::FrameReuse r = scrub.frameReuse();
+    if (h > 0) {
+      deformed += r.deformedPacks > 0 ? 1 : 0;
+      partial += r.deformedPacks > 0 && r.poseRepacked < scrub.feathers().size() ? 1 : 0;
+      if (r.deformedPacks > 0) {
+        EXPECT_GT(r.poseMoved, 0u) << h << " " << t;
+      }
+    } else {
+      EXPECT_EQ(r.deformedPacks, 0u);  // the rest pose packs as a frame without a pose does
+    }
+    expectIdentical(f, freshPosed(h, t), t);
+  }
+  EXPECT_GE(deformed, 3u);  // (a frame whose pose and mature coat were packed before reuses that pack)
+  EXPECT_GE(partial, 3u);
 }

@@ -103,6 +103,9 @@ struct PackingSettings {
   // Moult frames (docs/moult.md): true = the lost and growing feathers over the mature coat (packOver,
   // fast), false = a full repack of every feather (tighter).
   bool moultOver = true;
+  // Posed frames (a skeleton moving the skin): packDeformed from the rest-pose pack with this tolerance, a
+  // fraction of the clearance; 0 = pack every posed frame in full (docs/packing.md, "pose_tolerance").
+  double poseTolerance = 0.25;
 };
 
 // One binned height field along an axis: h[b] is the largest height seen in [origin + b cell,
@@ -254,6 +257,30 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
 PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& base,
                     const std::vector<uint32_t>& changed, const PackOptions& options = {},
                     const PackConstraints& constraints = {});
+
+// What packDeformed did: feathers whose surroundings moved relative to them by more than the tolerance,
+// feathers packed (those and what packs over a changed one; the rest were carried from the reference),
+// and the tolerance in scene units.
+struct DeformedPackStats {
+  size_t moved = 0, repacked = 0;
+  double toleranceUnits = 0;
+};
+
+// The coat packed on a deformed skin (a posed frame, Streit 2003 8.3) from a reference pack `ref`: the pack
+// (pack() or repack()) of the same coat, options and constraints with the feathers' frames `refFrames` on
+// `refSkin` (the rest skin, same topology as `skin`). Each feather's motion is the rigid motion taking its
+// reference frame to coat.frames[i]. A feather whose skin (the reference skin within its reach) and whose
+// feathers under it (reference or posed dependencies) all moved with its own motion to within
+// `tolerance` x the pack's clearance keeps its reference packing (elevation and key barbs, follicle-frame
+// values) with its points carried by that motion. The others are packed again on `skin`, in layer order,
+// with every feather that packs against one whose points moved more than the tolerance from the carried
+// reference. The result is a function of its arguments only (not of any earlier frame). tolerance 0, a
+// reference that does not fit the coat, or options.captureFields: a full pack(). Error for a tolerance
+// that is negative or not finite, or frames or skins that do not match the coat.
+PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const SkinMesh& refSkin,
+                        const std::vector<FeatherFrame>& refFrames, const PackResult& ref, double tolerance,
+                        const PackOptions& options = {}, const PackConstraints& constraints = {},
+                        DeformedPackStats* stats = nullptr);
 
 // Feathers whose packing input differs between two coats of equal size (frame, params, age, presence),
 // plus those whose fixed elevation differs between two constraint sets.

@@ -123,6 +123,10 @@ struct FrameReuse {
   size_t moultRecomputed = 0;  // feathers packed over the mature pack (0: the last one was reused)
   size_t meshRegenerated = 0;  // present feathers whose barb curves the mesh stage generated
   size_t meshReused = 0;       // present feathers whose triangles were copied from the last mesh
+  // Posed frames (coat::packDeformed from the rest pose's pack; packing.pose_tolerance): packs made that
+  // way this frame, and over them the feathers whose surroundings moved (relative to them) beyond the
+  // tolerance and the feathers packed again (those and what packs over a changed one).
+  size_t deformedPacks = 0, poseMoved = 0, poseRepacked = 0;
 };
 
 // Checks a posed skin given by a caller against the rest skin: one position per rest vertex, each
