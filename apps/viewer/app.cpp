@@ -310,7 +310,7 @@ void App::frame() {
       showError(*e);
   }
   autosaveTick();
-  advancePlayback(*panels_);
+  advancePlayback();
   if (!script_.empty()) scriptStep();
   if (quit_) return;
   // Nothing happened and the last frames settled: draw nothing (the window keeps its last image).
@@ -595,6 +595,9 @@ std::vector<float> App::viewKey() const {
 void App::renderView() {
   if (!doc_.hasScene() || !cameraReady_) return;
   const bool moving = cameraMoving();
+  // A time drawn before whose coat is not evaluated yet: its flipbook frame (app_timeline.cpp).
+  if (!moving && showFlipbookFrame()) return;
+  flipbookShown_ = false;
   // A new coat or view size invalidates the measured full-coat time (adaptive navigation).
   const float fullKey[3] = {float(uploadVersion_), float(viewPixels_.x), float(viewPixels_.y)};
   if (!std::equal(fullKey, fullKey + 3, movingFullKey_)) {
@@ -642,6 +645,7 @@ void App::renderView() {
     }
     if (count > 0) navSkinColor_ = glm::clamp(glm::vec3(sum / (255.0 * double(count))) * 1.15f, 0.0f, 1.0f);
   }
+  if (!nav && !moving && scale == 1) storeFlipbookFrame();
   lastViewKey_ = std::move(key);
 }
 

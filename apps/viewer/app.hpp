@@ -5,6 +5,7 @@
 //   app_ui.cpp      menu bar, the panel column, dialogs (open, save as, overwrite, unsaved changes, errors)
 //   app_input.cpp   camera navigation and the viewport tools (picking on the skin)
 //   app_script.cpp  --script sessions
+//   app_timeline.cpp playback at the frame rate (frames dropped, not lagging), the flipbook of drawn frames
 #include <chrono>
 #include <functional>
 #include <memory>
@@ -17,6 +18,7 @@
 #include "file_browser.hpp"
 #include "navigation.hpp"
 #include "panels.hpp"
+#include "playback.hpp"
 #include "recovery.hpp"
 #include "script.hpp"
 
@@ -123,6 +125,14 @@ class App {
   bool handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse);
   // app_script.cpp
   void scriptStep();
+  // app_timeline.cpp
+  void advancePlayback();
+  // The flipbook's key of the 3D view at a level of detail: what the image depends on besides the time.
+  std::vector<float> flipbookKey(double lod) const;
+  // Shows a flipbook frame instead of rendering (a time whose coat is not evaluated yet); false: none.
+  bool showFlipbookFrame();
+  void storeFlipbookFrame();  // the view just rendered, complete and at rest, for its time
+  void finishPlayReport();    // `play S`: prints what the playback showed
 
   ViewerOptions options_;
   GLFWwindow* window_ = nullptr;
@@ -186,6 +196,29 @@ class App {
   std::vector<ScriptCommand> script_;
   size_t scriptNext_ = 0;
   int scriptWaitFrames_ = 0;
+  // Playback (app_timeline.cpp): the clock, what it showed, and the flipbook.
+  PlaybackClock playClock_;
+  Flipbook flipbook_;
+  double displayTime_ = 0;    // the time on screen while playing (a flipbook frame may run ahead)
+  bool flipbookShown_ = false;  // the view texture holds a flipbook frame (of flipbookShownTime_)
+  double flipbookShownTime_ = 0;
+  uint64_t flipbookChanges_ = 0;  // the document's change count the flipbook's frames belong to
+  // Filling the flipbook over the timeline range (Timeline panel "Cache range", script `cache-range`):
+  // the next frame to draw, and the time to return to.
+  struct CacheFill {
+    bool active = false;
+    int64_t next = 0;
+    double returnTo = 0;
+    size_t drawn = 0;
+  } fill_;
+  void advanceCacheFill();
+  struct PlayStats {
+    double startWall = 0, until = 0;  // until > 0: a scripted `play S` ends then
+    double seconds = 0;               // `play S`: S (until is set when the clock starts)
+    int64_t lastDue = -1, firstDue = -1;
+    size_t due = 0, shown = 0, fromCache = 0, evaluated = 0;
+    bool awaitingResult = false;
+  } play_;
   std::chrono::steady_clock::time_point scriptSleepUntil_{};  // `sleep S`: keep drawing until then
   bool awaitingMetrics_ = false;
   int exitCode_ = 0;

@@ -43,6 +43,8 @@ void App::scriptStep() {
     return;
   }
   if (std::chrono::steady_clock::now() < scriptSleepUntil_) return;
+  if (view_.playing && play_.until > 0) return;  // `play S` runs
+  if (view_.cacheRangeRequested || fill_.active) return;  // `cache-range` runs
   if (scriptWaitFrames_ > 0) {
     --scriptWaitFrames_;
     return;
@@ -199,6 +201,40 @@ void App::scriptStep() {
       if (!(secs >= 0 && secs <= 3600))
         throw Error("sleep: seconds must be in [0, 3600]", file, "line " + std::to_string(c.line));
       scriptSleepUntil_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(long(secs * 1000.0));
+    } else if (c.verb == "play") {
+      needArgs(c, 1, 2, "play SECONDS [FPS]", file);
+      const double secs = scriptNumber(c, 0, file);
+      if (!(secs > 0 && secs <= 3600))
+        throw Error("play: seconds must be in (0, 3600]", file, "line " + std::to_string(c.line));
+      if (c.args.size() > 1) {
+        const double fps = scriptNumber(c, 1, file);
+        if (!(fps >= 0.1 && fps <= 240))
+          throw Error("play: fps must be in [0.1, 240]", file, "line " + std::to_string(c.line));
+        view_.playFps = float(fps);
+      }
+      if (!doc_.hasScene()) throw Error("play: no scene is open", file, "line " + std::to_string(c.line));
+      view_.playing = true;
+      playClock_.stop();
+      play_.seconds = secs;
+      play_.until = 1;  // (set to the end when the clock starts)
+    } else if (c.verb == "range") {
+      needArgs(c, 2, 4, "range T0 T1 [STEP [loop|once]]", file);
+      const double t0 = scriptNumber(c, 0, file), t1 = scriptNumber(c, 1, file);
+      const double step = c.args.size() > 2 ? scriptNumber(c, 2, file) : double(view_.timeStep);
+      if (!(t1 > t0) || !(step >= 1e-4) || (t1 - t0) / step > 1e6)
+        throw Error("range: needs T0 < T1 and a step of at least 1e-4 (at most a million frames)", file,
+                    "line " + std::to_string(c.line));
+      if (c.args.size() > 3 && c.args[3] != "loop" && c.args[3] != "once")
+        throw Error("range: the fourth value is loop or once", file, "line " + std::to_string(c.line));
+      view_.timeStart = float(t0);
+      view_.timeEnd = float(t1);
+      view_.timeStep = float(step);
+      if (c.args.size() > 3) view_.loop = c.args[3] == "loop";
+    } else if (c.verb == "cache-range") {
+      needArgs(c, 0, 0, "cache-range", file);
+      if (!doc_.hasScene()) throw Error("cache-range: no scene is open", file, "line " + std::to_string(c.line));
+      view_.cacheRangeRequested = true;
+      scriptWaitFrames_ = 2;
     } else if (c.verb == "autosave") {
       needArgs(c, 0, 0, "autosave", file);
       const std::string written = autosave_.saveNow(doc_);

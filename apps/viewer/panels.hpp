@@ -70,6 +70,21 @@ struct ViewState {
   bool playing = false;
   float timeStart = 0.0f, timeEnd = 10.0f, timeStep = 1.0f / 24.0f;
   bool loop = true;
+  // Playback runs at playFps frames a second of wall time: a frame that is not ready when the next is
+  // due is dropped (app_timeline.cpp). Frames drawn before are shown from the flipbook at once.
+  float playFps = 24.0f;
+  int flipbookMB = 512;  // memory for the flipbook of drawn frames
+  // While the time slider is dragged the coat is evaluated at scrubLod (when lower than the preview
+  // LOD), and at the preview LOD again on release.
+  bool scrubLowLod = true;
+  float scrubLod = 0.05f;
+  double scrubSavedLod = 0;  // the preview LOD during a drag (0: not dragging)
+  // What the timeline shows: flipbook frames and memory, and the last playback's rates.
+  size_t flipbookFrames = 0, flipbookBytes = 0;
+  bool cacheRangeRequested = false;  // fill the flipbook over the range (the app takes the request)
+  bool caching = false;              // ... is being filled
+  float cacheProgress = 0.0f;
+  std::string playReadout;
   // Fast navigation: while the camera moves, draw every k-th feather so at most this many coat
   // triangles are drawn (navigation.hpp); the full coat as soon as it stops.
   bool fastNavigation = true;
@@ -153,7 +168,6 @@ void drawPackingPanel(PanelContext& ctx);
 // panels_time.cpp
 void drawTimelinePanel(PanelContext& ctx);
 void drawControlsPanel(PanelContext& ctx);
-void advancePlayback(PanelContext& ctx);  // once per frame: steps time while playing
 
 // panel_feather.cpp: the feather designer window.
 class FeatherDesigner {

@@ -74,26 +74,6 @@ bool moultEditor(const char* id, Json& m) {
 
 }  // namespace
 
-void advancePlayback(PanelContext& ctx) {
-  ViewState& v = ctx.view;
-  if (!v.playing || !ctx.doc.hasScene()) return;
-  // Step only once the current time is on screen: playback shows every frame, as fast as the
-  // pipeline evaluates them, and the window keeps drawing meanwhile.
-  if (!ctx.doc.upToDate()) {
-    if (ctx.doc.failed()) v.playing = false;
-    return;
-  }
-  double t = ctx.doc.time() + v.timeStep;
-  if (t > v.timeEnd + 1e-9) {
-    if (!v.loop) {
-      v.playing = false;
-      return;
-    }
-    t = v.timeStart;
-  }
-  guarded(ctx, [&] { ctx.doc.setTime(t); });
-}
-
 void drawTimelinePanel(PanelContext& ctx) {
   Document& doc = ctx.doc;
   ViewState& v = ctx.view;
@@ -109,11 +89,46 @@ void drawTimelinePanel(PanelContext& ctx) {
   float t = static_cast<float>(doc.time());
   ImGui::SetNextItemWidth(-FLT_MIN);
   if (ImGui::SliderFloat("##time", &t, v.timeStart, v.timeEnd, "t = %.3f")) guarded(ctx, [&] { doc.setTime(t); });
+  // Scrubbing: a low level of detail while the slider is held, the preview's again on release.
+  if (ImGui::IsItemActivated() && v.scrubLowLod && doc.lod() > double(v.scrubLod) + 1e-9) {
+    v.scrubSavedLod = doc.lod();
+    guarded(ctx, [&] { doc.setLod(double(v.scrubLod)); });
+  }
+  if (ImGui::IsItemDeactivated() && v.scrubSavedLod > 0) {
+    const double lod = v.scrubSavedLod;
+    v.scrubSavedLod = 0;
+    guarded(ctx, [&] { doc.setLod(lod); });
+  }
   ImGui::SetNextItemWidth(200);
   ImGui::DragFloatRange2("Range", &v.timeStart, &v.timeEnd, 0.1f, -1000.0f, 1000.0f, "%.2f");
   ImGui::SetNextItemWidth(120);
   ImGui::InputFloat("Frame step", &v.timeStep, 0.0f, 0.0f, "%.4f");
   v.timeStep = std::max(v.timeStep, 1e-4f);
+  ImGui::SetNextItemWidth(120);
+  ImGui::InputFloat("Play fps", &v.playFps, 0.0f, 0.0f, "%.1f");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("frames a second of wall time; a frame not ready in time is dropped, not waited for");
+  v.playFps = std::clamp(v.playFps, 0.1f, 240.0f);
+  ImGui::Checkbox("Low detail while scrubbing", &v.scrubLowLod);
+  if (v.scrubLowLod) {
+    ImGui::SameLine();
+    ImGui::SetNextItemWidth(80);
+    ImGui::SliderFloat("##scrublod", &v.scrubLod, 0.01f, 1.0f, "%.2f");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("level of detail while the time slider is held (fraction)");
+  }
+  ImGui::SetNextItemWidth(120);
+  ImGui::InputInt("Flipbook MB", &v.flipbookMB);
+  v.flipbookMB = std::clamp(v.flipbookMB, 0, 65536);
+  ImGui::TextDisabled("flipbook: %zu frames, %.0f MB (drawn frames show at once when scrubbed or played)",
+                      v.flipbookFrames, double(v.flipbookBytes) / (1 << 20));
+  if (v.caching) {
+    ImGui::ProgressBar(v.cacheProgress, ImVec2(200, 0), "caching");
+  } else if (ImGui::Button("Cache range") || uiRequested(ctx, "Timeline", "cache range")) {
+    v.cacheRangeRequested = true;
+  }
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("evaluate and draw every frame of the range into the flipbook, so it plays at the frame rate");
+  if (!v.playReadout.empty()) ImGui::TextDisabled("%s", v.playReadout.c_str());
 
   sectionTitle("Moult (scene)");
   ImGui::TextDisabled("defaults for every tract (docs/moult.md)");

@@ -278,6 +278,11 @@ const char* scriptHelp() {
   echo TEXT
   screenshot PATH | screenshot-window PATH (with the panels)
   orbit YAW_DEG PITCH_DEG | zoom FACTOR | frame | frames N | sleep SECONDS | quit
+  play SECONDS [FPS]             play the timeline (range, step, loop as set) for SECONDS at FPS (default
+                                 24), then print what it showed as JSON (frames due, shown, evaluated,
+                                 from the flipbook)
+  range T0 T1 [STEP [loop|once]] the timeline's range, frame step and looping (as the Timeline panel sets them)
+  cache-range                    draw every frame of the timeline range into the flipbook (then play shows them)
   panel NAME|* open|closed       open or close panel headers (names as shown)
   tool orbit|key|vector|edit-vectors|bias|brush|control|pin [FEATHER]   viewport tool
   click X Y | drag X1 Y1 X2 Y2 [left|right|middle [STEPS]]   mouse in the 3D view (pixels or N%)

@@ -303,3 +303,37 @@ TEST(ViewerSmoke, AScreenshotOfTheForcedNavigationViewFinishes) {
   ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
   EXPECT_FALSE(render::loadImage(dir + "/nav.png").empty());
 }
+
+// #26: playback follows the wall clock (frames not ready in time are dropped, never waited for), and
+// after `cache-range` every frame of the range plays from the flipbook without evaluating anything.
+TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("smoke_play");
+  const std::string script = dir + "/s.txt";
+  // The moult scene, thinned: every frame of the range is another coat.
+  std::ofstream(script) << "count 0 25\ncount 1 25\ncount 2 25\n"
+                        << "wait\nrange 3 4 0.01 once\nplay 5 240\nrange 3 4 0.25 loop\ncache-range\nplay 2 10\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer(
+      "\"" + viewer_test::dataPath("scenes/moult.json") + "\" --lod 0.2 --size 800x600 --script \"" + script + "\"",
+      dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
+  std::vector<Json> lines;
+  std::istringstream in(r.out);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty() && line[0] == '{') lines.push_back(Json::parse(line));
+  ASSERT_EQ(lines.size(), 2u) << r.out;
+  const Json& live = lines[0];
+  const Json& cached = lines[1];
+  // 101 frames at 240 a second, once: the clock passes the last frame after 0.42 s and playback ends
+  // there, having shown only the frames that were ready (a playback that waited for each frame would
+  // evaluate all 101 and take many seconds).
+  EXPECT_LT(live["play_seconds"].get<double>(), 2.0) << "playback waited for frames: " << r.out;
+  EXPECT_GE(live["frames_shown"].get<int>(), 1);
+  EXPECT_LT(live["frames_shown"].get<int>(), 50) << r.out;
+  // Cached: the range's 5 frames, looped at 10 fps, all from the flipbook.
+  EXPECT_GE(cached["flipbook_frames"].get<int>(), 5);
+  EXPECT_EQ(cached["frames_evaluated"].get<int>(), 0) << r.out;
+  EXPECT_GE(cached["frames_from_flipbook"].get<int>(), 10) << r.out;
+  EXPECT_GE(cached["fps_shown"].get<double>(), 5.0) << r.out;
+}

@@ -1,0 +1,193 @@
+// Timeline playback in the viewer (issue #26, item 3): playback at the timeline's frame rate in wall time
+// (a frame not ready when the next is due is dropped, so playback never lags behind the clock), and the
+// flipbook of drawn frames (playback.hpp): a time drawn before, with the same view and scene, shows at
+// once when it is played or scrubbed to again, while its coat is evaluated behind it.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include "app.hpp"
+#include "glfw_context.hpp"
+
+namespace pteryla::viewer {
+
+namespace {
+double wallSeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace
+
+std::vector<float> App::flipbookKey(double lod) const {
+  std::vector<float> k = viewKey();
+  if (k.size() > 14) k.erase(k.begin() + 14);  // the upload counter: the time and the scene stand for it
+  k.push_back(float(lod));
+  k.push_back(float(doc_.changeCount()));
+  k.push_back(float(static_cast<int>(view_.colourBy)));
+  return k;
+}
+
+void App::advancePlayback() {
+  if (!doc_.hasScene()) return;
+  // An edit (or undo) makes every frame drawn before stale.
+  if (doc_.changeCount() != flipbookChanges_) {
+    flipbook_.clear();
+    flipbookChanges_ = doc_.changeCount();
+  }
+  flipbook_.setBudget(size_t(std::max(0, view_.flipbookMB)) << 20);
+  view_.flipbookFrames = flipbook_.size();
+  view_.flipbookBytes = flipbook_.bytes();
+  const double now = wallSeconds();
+  if (view_.cacheRangeRequested) {
+    view_.cacheRangeRequested = false;
+    if (!fill_.active && !view_.playing) {
+      fill_ = CacheFill{};
+      fill_.active = true;
+      fill_.returnTo = doc_.time();
+    }
+  }
+  if (fill_.active) {
+    view_.playing = false;
+    advanceCacheFill();
+  }
+  view_.caching = fill_.active;
+  if (!view_.playing) {
+    if (playClock_.running()) {
+      playClock_.stop();
+      finishPlayReport();
+    }
+    displayTime_ = doc_.time();
+    return;
+  }
+  const FrameGrid grid{view_.timeStart, view_.timeEnd, view_.timeStep};
+  if (!playClock_.running()) {
+    const double seconds = play_.seconds;
+    play_ = PlayStats{};
+    play_.seconds = seconds;
+    play_.until = seconds > 0 ? now + seconds : 0;
+    play_.startWall = now;
+    playClock_.start(grid, doc_.time(), now);
+  }
+  // The frame asked for last has been evaluated: it is what the view shows now.
+  if (play_.awaitingResult && doc_.upToDate() && doc_.time() == displayTime_) {
+    play_.awaitingResult = false;
+    ++play_.shown;
+    ++play_.evaluated;
+  }
+  auto stop = [&] {
+    view_.playing = false;
+    playClock_.stop();
+    finishPlayReport();
+  };
+  if (play_.until > 0 && now >= play_.until) return stop();
+  const std::optional<int64_t> due = playClock_.due(now, view_.playFps, view_.loop);
+  if (!due) return stop();
+  if (*due == play_.lastDue) return;
+  if (doc_.failed()) return stop();
+  const double t = grid.time(*due);
+  if (flipbook_.contains(t, flipbookKey(doc_.lod()))) {
+    play_.lastDue = *due;
+    displayTime_ = t;
+    play_.awaitingResult = false;  // an evaluation still running is overtaken
+    ++play_.shown;
+    ++play_.fromCache;
+    return;
+  }
+  // Still evaluating the frame asked for last: it shows when ready, and the frames due meanwhile are
+  // dropped (the next one asked for is the one due then).
+  if (!doc_.upToDate()) return;
+  play_.lastDue = *due;
+  displayTime_ = t;
+  play_.awaitingResult = true;
+  doc_.setTime(t);
+}
+
+// One step of filling the flipbook: once the frame asked for is evaluated and drawn (renderView stores
+// it), ask for the next frame of the range that is not in the flipbook; at the end, go back.
+void App::advanceCacheFill() {
+  const FrameGrid grid{view_.timeStart, view_.timeEnd, view_.timeStep};
+  const int64_t n = grid.last() + 1;
+  if (doc_.failed() || view_.flipbookMB <= 0) {
+    fill_.active = false;
+    return;
+  }
+  if (!doc_.upToDate() || doc_.resultVersion() != syncedResult_) return;  // evaluating or not drawn yet
+  const std::vector<float> key = flipbookKey(doc_.lod());
+  if (doc_.time() != grid.time(fill_.next) || !flipbook_.contains(doc_.time(), key)) {
+    // The frame asked for is evaluated but not drawn yet (renderView stores it this frame), unless it
+    // is not the one asked for: ask.
+    if (doc_.time() != grid.time(fill_.next) && fill_.next < n && !flipbook_.contains(grid.time(fill_.next), key)) {
+      doc_.setTime(grid.time(fill_.next));
+      return;
+    }
+    if (doc_.time() == grid.time(fill_.next) && !flipbook_.contains(doc_.time(), key)) return;
+  }
+  if (doc_.time() == grid.time(fill_.next)) ++fill_.drawn;
+  while (fill_.next < n && flipbook_.contains(grid.time(fill_.next), key)) ++fill_.next;
+  view_.cacheProgress = float(double(fill_.next) / double(n));
+  if (fill_.next >= n) {
+    fill_.active = false;
+    doc_.setTime(fill_.returnTo);
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "flipbook: drew %zu frames of %lld (%zu kept)", fill_.drawn, (long long)n,
+                  flipbook_.size());
+    view_.playReadout = buf;
+    return;
+  }
+  doc_.setTime(grid.time(fill_.next));
+}
+
+bool App::showFlipbookFrame() {
+  const double shown = view_.playing ? displayTime_ : doc_.time();
+  const bool live = doc_.upToDate() && doc_.resultVersion() == syncedResult_ && shown == doc_.time();
+  if (live) return false;
+  const double lod = view_.scrubSavedLod > 0 ? view_.scrubSavedLod : doc_.lod();
+  const render::Image* img = flipbook_.find(shown, flipbookKey(lod));
+  if (!img && lod != doc_.lod()) img = flipbook_.find(shown, flipbookKey(doc_.lod()));
+  if (!img) return false;
+  if (!flipbookShown_ || flipbookShownTime_ != shown || viewImage_.width != img->width ||
+      viewImage_.height != img->height) {
+    if (!viewTexture_) viewTexture_ = std::make_unique<render::ImageTexture>(*context_);
+    viewImage_ = *img;
+    viewTexture_->upload(viewImage_);
+    flipbookShown_ = true;
+    flipbookShownTime_ = shown;
+    lastViewKey_.clear();  // the live view is rendered again when the evaluation catches up
+  }
+  return true;
+}
+
+void App::storeFlipbookFrame() {
+  if (view_.flipbookMB <= 0 || viewImage_.empty()) return;
+  if (!doc_.upToDate() || doc_.resultVersion() != syncedResult_) return;
+  flipbook_.store(doc_.time(), flipbookKey(doc_.lod()), viewImage_);
+  view_.flipbookFrames = flipbook_.size();
+  view_.flipbookBytes = flipbook_.bytes();
+}
+
+void App::finishPlayReport() {
+  const double seconds = std::max(1e-9, wallSeconds() - play_.startWall);
+  // Frames the clock passed: every one of them was due once; those not shown were dropped.
+  const size_t due = size_t(std::floor(seconds * double(view_.playFps))) + 1;
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "last play: %.1f s, %.1f of %.1f fps shown (%zu frames: %zu evaluated, %zu from the flipbook; "
+                "%zu dropped)",
+                seconds, double(play_.shown) / seconds, double(view_.playFps), play_.shown, play_.evaluated,
+                play_.fromCache, due > play_.shown ? due - play_.shown : 0);
+  view_.playReadout = buf;
+  if (play_.until > 0) {
+    std::snprintf(buf, sizeof buf,
+                  "{\"play_seconds\": %.3f, \"fps_target\": %.2f, \"frames_due\": %zu, \"frames_shown\": %zu, "
+                  "\"frames_evaluated\": %zu, \"frames_from_flipbook\": %zu, \"fps_shown\": %.2f, "
+                  "\"flipbook_frames\": %zu, \"flipbook_mb\": %.1f}",
+                  seconds, double(view_.playFps), due, play_.shown, play_.evaluated, play_.fromCache,
+                  double(play_.shown) / seconds, flipbook_.size(), double(flipbook_.bytes()) / (1 << 20));
+    std::cout << buf << std::endl;
+    play_.until = 0;
+    play_.seconds = 0;
+  }
+}
+
+}  // namespace pteryla::viewer
