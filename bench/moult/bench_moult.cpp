@@ -61,7 +61,7 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   const double times[] = {3.0, 5.5, 4.25, 6.0, 2.5, 7.75, 5.0, 3.5};
   size_t k = 0;
   double packChanged = 0, packRecomputed = 0, naturalRecomputed = 0, meshRegenerated = 0, meshReused = 0,
-         incremental = 0, moultChanged = 0, moultRecomputed = 0;
+         incremental = 0, moultChanged = 0, moultRecomputed = 0, poseMoved = 0, poseRepacked = 0;
   p->resetTimings();
   for (auto _ : state) {
     p->setTime(consecutive ? 4.0 + double(++k) / 24.0 : times[k++ % 8]);
@@ -75,6 +75,8 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
     incremental += r.packIncremental ? 1 : 0;
     moultChanged += double(r.moultChanged);
     moultRecomputed += double(r.moultRecomputed);
+    poseMoved += double(r.poseMoved);
+    poseRepacked += double(r.poseRepacked);
   }
   const auto& c = p->feathers();
   size_t absent = 0, growing = 0;
@@ -105,6 +107,9 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   // Moult frames: lost and growing feathers, and those packed over the mature coat's pack.
   state.counters["moult_changed"] = moultChanged / n;
   state.counters["moult_recomputed"] = moultRecomputed / n;
+  // Posed frames: feathers whose surroundings moved beyond the pose tolerance, and those packed again.
+  state.counters["pose_moved"] = poseMoved / n;
+  state.counters["pose_repacked"] = poseRepacked / n;
 }
 
 void BM_FrameBirdScene(benchmark::State& state) {
@@ -129,6 +134,30 @@ void BM_FrameBirdScene(benchmark::State& state) {
 BENCHMARK(BM_FrameBirdScene)
     ->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})
     ->ArgNames({"skeleton", "controls", "scrub"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
+
+// The bird packed with height fields (the thesis' packing) with its wings bending, without a moult:
+// posed frames from the rest pose's pack (packing.pose_tolerance 0.25) against a full pack of every
+// posed frame (0), in one run.
+void BM_FrameBirdPacked(benchmark::State& state) {
+  const std::string path = kData + "/scenes/bird.json";
+  if (!fileExists(path)) {
+    state.SkipWithError("data/scenes/bird.json not found");
+    return;
+  }
+  pipeline::Scene s = pipeline::loadScene(path);
+  s.skeleton = birdWings();
+  if (!s.packing.is_object()) s.packing = Json::object();
+  s.packing["method"] = "height_field";
+  s.packing["pose_tolerance"] = state.range(0) ? 0.25 : 0.0;
+  runFrames(state, std::move(s), true);
+}
+BENCHMARK(BM_FrameBirdPacked)
+    ->Arg(0)
+    ->Arg(1)
+    ->ArgName("reuse")
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MeasureProcessCPUTime();

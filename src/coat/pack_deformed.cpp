@@ -127,14 +127,23 @@ PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const Sk
     for (uint32_t i : order) motion[i] = Motion::between(refFrames[i], coat.frames[i]);
 
     // Feathers whose reference points could touch i's reference footprint: the reference's dependencies
-    // (the posed ones are ctx.deps). A grid over the reference spheres' centres.
-    double maxR = 0, cell = 0;
-    std::vector<glm::dvec3> centres(order.size());
+    // (the posed ones are ctx.deps). A grid over the centres of the reference spheres up to twice the
+    // median radius; the few larger ones (flight feathers) are tested one by one.
+    std::vector<double> radii;
+    for (uint32_t j : order) radii.push_back(ref.bounds[j].w);
+    const double smallR = 2 * median(radii);
+    std::vector<glm::dvec3> centres;
+    std::vector<uint32_t> smallAt, large;  // positions in order
     for (size_t k = 0; k < order.size(); ++k) {
-      centres[k] = dvec3(ref.bounds[order[k]]);
-      maxR = std::max(maxR, ref.bounds[order[k]].w);
+      const glm::dvec4& b = ref.bounds[order[k]];
+      if (b.w <= smallR) {
+        centres.push_back(dvec3(b));
+        smallAt.push_back(static_cast<uint32_t>(k));
+      } else {
+        large.push_back(static_cast<uint32_t>(k));
+      }
     }
-    cell = std::max(1e-9, ctx.medianReach);
+    const double cell = std::max(1e-9, ctx.medianReach);
     detail::PointGrid refGrid;
     refGrid.build(centres, cell);
     // Skin vertices at rest, for how the skin under a feather moved; a face reaching into the footprint
@@ -145,9 +154,21 @@ PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const Sk
       for (int e = 0; e < 3; ++e)
         maxEdge = std::max(maxEdge, glm::length(refSkin.positions[t[e]] - refSkin.positions[t[(e + 1) % 3]]));
     }
-    detail::PointGrid skinGrid;
+    // Skin vertices at rest, all of them and those the pose moved: a feather that did not move itself
+    // only needs to look at the moved ones.
+    detail::PointGrid skinGrid, movedGrid;
+    std::vector<glm::dvec3> movedAt;
+    std::vector<uint32_t> movedVertex;
     const bool skinMatters = options.skin && !skin.faces.empty();
-    if (skinMatters) skinGrid.build(refSkin.positions, cell);
+    if (skinMatters) {
+      skinGrid.build(refSkin.positions, cell);
+      for (uint32_t v = 0; v < refSkin.positions.size(); ++v)
+        if (std::memcmp(&refSkin.positions[v], &skin.positions[v], sizeof(dvec3)) != 0) {
+          movedAt.push_back(refSkin.positions[v]);
+          movedVertex.push_back(v);
+        }
+      movedGrid.build(movedAt, cell);
+    }
 
     // moved[i]: i's surroundings moved relative to it by more than tol.
     std::vector<std::vector<uint32_t>> extra(n);
@@ -166,6 +187,7 @@ PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const Sk
         // the two motions at the sphere's centre plus the rotation gap times its radius).
         auto differs = [&](uint32_t j) {
           const Motion& mj = motion[j];
+          if (mi.identity && mj.identity) return false;  // neither moved
           const double gap = Motion::rotationGap(mi, mj);
           for (uint32_t g = ref.groupOffset[j]; g < ref.groupOffset[j + 1]; ++g) {
             const glm::vec4& sg = ref.groupBounds[g];
@@ -179,20 +201,24 @@ PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const Sk
         };
         for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !m; ++k) m = differs(ctx.deps[k]);
         std::vector<uint32_t>& ex = extra[i];
-        const double q = L.reach + maxR;
-        refGrid.query(gi - dvec3(q), gi + dvec3(q), [&](uint32_t kj) {
+        auto consider = [&](uint32_t kj) {
           if (kj >= ki) return;
           const uint32_t j = order[kj];
           const glm::dvec4& b = ref.bounds[j];
           if (glm::length(dvec3(b) - gi) > L.reach + b.w) return;
           ex.push_back(j);
-        });
+        };
+        const double q = L.reach + smallR;
+        refGrid.query(gi - dvec3(q), gi + dvec3(q), [&](uint32_t item) { consider(smallAt[item]); });
+        for (uint32_t kj : large) consider(kj);
         std::sort(ex.begin(), ex.end());
         for (size_t k = 0; k < ex.size() && !m; ++k) m = differs(ex[k]);
         // The skin under it.
         if (!m && skinMatters) {
           const double s = L.reach + maxEdge;
-          skinGrid.query(gi - dvec3(s), gi + dvec3(s), [&](uint32_t v) {
+          const bool still = mi.identity;
+          (still ? movedGrid : skinGrid).query(gi - dvec3(s), gi + dvec3(s), [&](uint32_t item) {
+            const uint32_t v = still ? movedVertex[item] : item;
             if (m) return;
             const dvec3& p0 = refSkin.positions[v];
             if (!inFootprint(L, refFrames[i], p0, maxEdge) && !inFootprint(L, coat.frames[i], skin.positions[v], maxEdge))
