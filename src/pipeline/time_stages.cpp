@@ -302,6 +302,12 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
   const moult::NaturalPackFn natural = [&](const coat::SkinMesh& skin, const coat::CoatFeathers& c,
                                            const coat::PackOptions& o,
                                            const coat::PackConstraints& k) -> const coat::PackResult& {
+    // A draped coat lies along the skin whatever its elevations (the drape reads none): raises start
+    // from 0, and no height-field pack is made for them.
+    if (o.method == coat::PackMethod::Drape) {
+      state.flatNatural.elevation.assign(c.size(), 0.0);
+      return state.flatNatural;
+    }
     const coat::CoatFeathers& input = state.packing.moultOver && moulting(c) ? matureCoat(c, state) : c;
     const Posed posed{state.rest, &state.poseRef, &state.poseRef.natural, &state.packReport};
     return packWithMemo(state.natural, {}, skin, input, o, k, state.generation, scene.packing,

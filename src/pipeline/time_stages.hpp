@@ -139,6 +139,7 @@ struct TimeState {
   uint64_t matureGeneration = 0;
   bool naturalThisFrame = false;  // `natural` holds the pack of the current frame without raises
   PoseReference poseRef;          // set up by the pipeline for posed frames
+  coat::PackResult flatNatural;   // a draped coat's "natural pack": every elevation 0 (no pack is made)
   PackReport packReport;
 };
 
