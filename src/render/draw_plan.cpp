@@ -22,17 +22,19 @@ namespace {
 
 constexpr int kTile = DepthTiles::kTile;
 
-// False only when the window-space triangle abc (bounds x0..y1) certainly covers no pixel centre
-// (x + 0.5, y + 0.5): no centre in its bounds, or none of the few centres in its bounds inside all
-// three edges. Everything is widened by kSubpixelSlack pixels, far more than the rounding between
-// this projection and the rasterizer's (fixed point, 1/256 px), so a dropped triangle never had a
-// fragment. Larger triangles (more than 16 centres in their bounds) are kept untested.
+// False only when the window-space triangle abc (bounds x0..y1) certainly covers no sample point
+// (x + s.x, y + s.y) of any pixel (x, y), for each of the rasterizer's sample positions s within a pixel
+// (one sample at the centre (0.5, 0.5) without multisampling): no such point in its bounds, or none of
+// the few in its bounds inside all three edges. Everything is widened by kSubpixelSlack pixels, far more
+// than the rounding between this projection and the rasterizer's (fixed point, 1/256 px), so a dropped
+// triangle never had a fragment (nor, with multisampling, a covered sample). Larger triangles (more than
+// 16 points of one sample position in their bounds) are kept untested.
 constexpr float kSubpixelSlack = 0.05f;
-bool mayCoverPixelCentre(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, float x0, float y0, float x1,
-                         float y1) {
+bool mayCoverSample(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, float x0, float y0, float x1, float y1,
+                    const glm::vec2& s) {
   const float e = kSubpixelSlack;
-  const float cx0 = std::ceil(x0 - 0.5f - e), cx1 = std::floor(x1 - 0.5f + e);
-  const float cy0 = std::ceil(y0 - 0.5f - e), cy1 = std::floor(y1 - 0.5f + e);
+  const float cx0 = std::ceil(x0 - s.x - e), cx1 = std::floor(x1 - s.x + e);
+  const float cy0 = std::ceil(y0 - s.y - e), cy1 = std::floor(y1 - s.y + e);
   if (cx0 > cx1 || cy0 > cy1) return false;
   if ((cx1 - cx0 + 1.0f) * (cy1 - cy0 + 1.0f) > 16.0f) return true;
   const float area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
@@ -41,8 +43,8 @@ bool mayCoverPixelCentre(const glm::vec3& a, const glm::vec3& b, const glm::vec3
   const glm::vec2 v[3] = {{a.x, a.y}, {b.x, b.y}, {c.x, c.y}};
   float len[3];
   for (int k = 0; k < 3; ++k) len[k] = glm::length(v[(k + 1) % 3] - v[k]);
-  for (float py = cy0 + 0.5f; py <= cy1 + 0.5f; py += 1.0f)
-    for (float px = cx0 + 0.5f; px <= cx1 + 0.5f; px += 1.0f) {
+  for (float py = cy0 + s.y; py <= cy1 + s.y; py += 1.0f)
+    for (float px = cx0 + s.x; px <= cx1 + s.x; px += 1.0f) {
       bool inside = true;
       for (int k = 0; k < 3 && inside; ++k) {
         const glm::vec2& p0 = v[k];
@@ -279,9 +281,17 @@ uint32_t DrawPlan::emitChunk(const Chunk& ch, bool backward, const DepthTiles* t
           const float nearest = std::min({a.z, b.z, c.z});
           keep = !(nearest > 0.0f) || !hiddenRect(*test, x0, y0, x1, y1, nearest);
         }
-        if (keep && subpixel && !mayCoverPixelCentre(a, b, c, x0, y0, x1, y1)) {
-          keep = false;
-          ++tiny;
+        if (keep && subpixel) {
+          bool covers = false;
+          for (const glm::vec2& sp : samples_)
+            if (mayCoverSample(a, b, c, x0, y0, x1, y1, sp)) {
+              covers = true;
+              break;
+            }
+          if (!covers) {
+            keep = false;
+            ++tiny;
+          }
         }
       }
     }
@@ -318,6 +328,8 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
   // `scratch_` (same offsets as the coat's indices).
   const bool ordered = options.viewDependentOrder;
   const bool subpixel = options.subpixelCulling;
+  samples_ = options.samplePositions;
+  if (samples_.empty()) samples_.push_back(glm::vec2(0.5f));
   feathers_.resize(ranges_.size());
   scratch_.resize(coatIndices_.size());
   kept_.resize(chunks_.size());

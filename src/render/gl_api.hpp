@@ -21,6 +21,7 @@
   X(PFNGLDEPTHFUNCPROC, DepthFunc)                                           \
   X(PFNGLCOLORMASKPROC, ColorMask)                                           \
   X(PFNGLFINISHPROC, Finish)                                                 \
+  X(PFNGLFLUSHPROC, Flush)                                                   \
   X(PFNGLREADPIXELSPROC, ReadPixels)                                         \
   X(PFNGLPIXELSTOREIPROC, PixelStorei)                                       \
   X(PFNGLREADBUFFERPROC, ReadBuffer)                                         \
@@ -84,7 +85,10 @@
   X(PFNGLRENDERBUFFERSTORAGEMULTISAMPLEPROC, RenderbufferStorageMultisample) \
   X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer)                               \
   X(PFNGLDRAWELEMENTSPROC, DrawElements)                                     \
-  X(PFNGLMULTIDRAWELEMENTSPROC, MultiDrawElements)
+  X(PFNGLDRAWARRAYSPROC, DrawArrays)                                         \
+  X(PFNGLMULTIDRAWELEMENTSPROC, MultiDrawElements)                           \
+  X(PFNGLGETMULTISAMPLEFVPROC, GetMultisamplefv)                             \
+  X(PFNGLTEXIMAGE2DMULTISAMPLEPROC, TexImage2DMultisample)
 
 namespace pteryla::render {
 

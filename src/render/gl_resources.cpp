@@ -134,9 +134,10 @@ void Renderer::Impl::releaseTarget() {
   Target& t = target;
   if (t.fbo) gl.DeleteFramebuffers(1, &t.fbo);
   if (t.msFbo) gl.DeleteFramebuffers(1, &t.msFbo);
-  GLuint rbs[4] = {t.color, t.depth, t.msColor, t.msDepth};
+  GLuint rbs[3] = {t.color, t.depth, t.msColor};
   for (GLuint rb : rbs)
     if (rb) gl.DeleteRenderbuffers(1, &rb);
+  if (t.msDepthTex) gl.DeleteTextures(1, &t.msDepthTex);
   t = Target();
 }
 
@@ -230,7 +231,9 @@ void Renderer::Impl::ensureTarget(int w, int h, int samples) {
   t.width = w;
   t.height = h;
   t.samples = samples;
-  auto makeFbo = [&](GLuint& fbo, GLuint& color, GLuint& depth, int s) {
+  // `depthTex`: the multisampled depth as a texture (the occlusion pass reads its samples), else a
+  // renderbuffer.
+  auto makeFbo = [&](GLuint& fbo, GLuint& color, GLuint* depth, GLuint* depthTex, int s) {
     gl.GenFramebuffers(1, &fbo);
     gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
     // One renderbuffer of `format` with `s` samples (0: single-sampled) at `attachment`.
@@ -244,13 +247,21 @@ void Renderer::Impl::ensureTarget(int w, int h, int samples) {
       gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, attachment, GL_RENDERBUFFER, rb);
     };
     attach(color, GL_RGBA8, GL_COLOR_ATTACHMENT0);
-    attach(depth, GL_DEPTH24_STENCIL8, GL_DEPTH_STENCIL_ATTACHMENT);
+    if (depthTex) {
+      gl.GenTextures(1, depthTex);
+      gl.BindTexture(GL_TEXTURE_2D_MULTISAMPLE, *depthTex);
+      gl.TexImage2DMultisample(GL_TEXTURE_2D_MULTISAMPLE, s, GL_DEPTH24_STENCIL8, w, h, GL_TRUE);
+      gl.BindTexture(GL_TEXTURE_2D_MULTISAMPLE, 0);
+      gl.FramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D_MULTISAMPLE, *depthTex, 0);
+    } else {
+      attach(*depth, GL_DEPTH24_STENCIL8, GL_DEPTH_STENCIL_ATTACHMENT);
+    }
     if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw Error("cannot create an off-screen framebuffer of " + std::to_string(w) + "x" + std::to_string(h) +
                   (s > 0 ? " with " + std::to_string(s) + " samples" : std::string()));
   };
-  makeFbo(t.fbo, t.color, t.depth, 0);
-  if (samples > 0) makeFbo(t.msFbo, t.msColor, t.msDepth, samples);
+  makeFbo(t.fbo, t.color, &t.depth, nullptr, 0);
+  if (samples > 0) makeFbo(t.msFbo, t.msColor, nullptr, &t.msDepthTex, samples);
 }
 
 }  // namespace pteryla::render

@@ -22,6 +22,10 @@
 namespace pteryla::render {
 using namespace detail;
 
+namespace {
+constexpr size_t kFlushIndices = 3 * (size_t(1) << 19);  // coat indices drawn between waits
+}  // namespace
+
 Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(context)) {
   Impl& r = *impl_;
   context.makeCurrent();
@@ -43,6 +47,8 @@ Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(contex
              r.compile(GL_FRAGMENT_SHADER, {perFragment, kCoatShading, kShadowLookup, kFeatherAlpha, kCoatFragment}));
   r.depthProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kMeshAttributes, kDepthVertex}),
                        r.compile(GL_FRAGMENT_SHADER, {perVertex, kFeatherAlpha, kDepthFragment}));
+  r.resolveProg = r.link(r.compile(GL_VERTEX_SHADER, {perVertex, kResolveVertex}),
+                         r.compile(GL_FRAGMENT_SHADER, {perVertex, kResolveFragment}));
   r.white = r.makeTexture(Image(1, 1, 255, 255, 255, 255), false, GL_REPEAT, GL_REPEAT);
   setMaterials({});
 }
@@ -63,6 +69,7 @@ Renderer::~Renderer() {
   r.releaseTarget();
   r.releaseShadow();
   r.gl.DeleteProgram(r.depthProg.id);
+  r.gl.DeleteProgram(r.resolveProg.id);
   r.gl.DeleteProgram(r.skinProg.id);
   r.gl.DeleteProgram(r.coatVertexProg.id);
   r.gl.DeleteProgram(r.coatFragmentProg.id);
@@ -294,18 +301,51 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   // body skip rasterisation (conservative: a feather is dropped only if its bounding sphere's nearest
   // point lies behind the farthest skin depth over its screen rectangle).
   bool occlusion = false;
-  GLint sampleBuffers = 0;
+  GLint sampleBuffers = 0, drawFbo = 0;
   gl.GetIntegerv(GL_SAMPLE_BUFFERS, &sampleBuffers);
-  // Sub-pixel culling relies on single-sample rasterization (fragments only at pixel centres).
-  const bool subpixel = s.subpixelCulling && !s.wireframe && sampleBuffers == 0;
-  if (s.occlusionCulling && s.drawSkin && r.skin.indexCount > 0 && s.drawCoat) {
-    if (sampleBuffers == 0) {
-      r.depth.resize(static_cast<size_t>(s.width) * s.height);
-      gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
-      gl.ReadPixels(0, 0, s.width, s.height, GL_DEPTH_COMPONENT, GL_FLOAT, r.depth.data());
-      r.occluders.build(r.depth.data(), s.width, s.height);
-      occlusion = true;
+  gl.GetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &drawFbo);
+  // Sub-pixel culling tests the points where the rasterizer samples coverage: the pixel centres, or with
+  // multisampling the implementation's sample positions.
+  const bool subpixel = s.subpixelCulling && !s.wireframe;
+  std::vector<glm::vec2> samplePositions;
+  if (sampleBuffers != 0) {
+    GLint samples = 0;
+    gl.GetIntegerv(GL_SAMPLES, &samples);
+    for (GLint i = 0; i < samples; ++i) {
+      GLfloat v[2] = {0.5f, 0.5f};
+      gl.GetMultisamplefv(GL_SAMPLE_POSITION, static_cast<GLuint>(i), v);
+      samplePositions.emplace_back(v[0], v[1]);
     }
+  }
+  // The occluders' depth: read back as is without multisampling; with it (renderImage's own target),
+  // the farthest of each pixel's samples, resolved by a shader into the single-sample target first.
+  const bool msTarget =
+      sampleBuffers != 0 && r.target.msDepthTex != 0 && drawFbo == GLint(r.target.msFbo) && !s.wireframe;
+  if (s.occlusionCulling && s.drawSkin && r.skin.indexCount > 0 && s.drawCoat && (sampleBuffers == 0 || msTarget)) {
+    r.depth.resize(static_cast<size_t>(s.width) * s.height);
+    gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
+    if (msTarget) {
+      gl.BindFramebuffer(GL_FRAMEBUFFER, r.target.fbo);
+      gl.UseProgram(r.resolveProg.id);
+      gl.ActiveTexture(GL_TEXTURE4);
+      gl.BindTexture(GL_TEXTURE_2D_MULTISAMPLE, r.target.msDepthTex);
+      gl.Uniform1i(r.resolveProg.u.depthMS, 4);
+      gl.Uniform1i(r.resolveProg.u.samples, static_cast<GLint>(samplePositions.size()));
+      gl.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+      gl.DepthFunc(GL_ALWAYS);
+      gl.BindVertexArray(r.skin.vao);
+      gl.DrawArrays(GL_TRIANGLES, 0, 3);
+      gl.ReadPixels(0, 0, s.width, s.height, GL_DEPTH_COMPONENT, GL_FLOAT, r.depth.data());
+      gl.BindTexture(GL_TEXTURE_2D_MULTISAMPLE, 0);
+      gl.ActiveTexture(GL_TEXTURE0);
+      gl.DepthFunc(GL_LEQUAL);
+      gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+      gl.BindFramebuffer(GL_FRAMEBUFFER, r.target.msFbo);
+    } else {
+      gl.ReadPixels(0, 0, s.width, s.height, GL_DEPTH_COMPONENT, GL_FLOAT, r.depth.data());
+    }
+    r.occluders.build(r.depth.data(), s.width, s.height);
+    occlusion = true;
   }
 
   // Feathers: depth test on, depth writes off, blended in layer order (7.2).
@@ -332,6 +372,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     DrawOptions options;
     options.viewDependentOrder = s.viewDependentOrder;
     options.subpixelCulling = subpixel;
+    options.samplePositions = samplePositions;
     r.plan.build(camera, s.width, s.height, options, occlusion ? &r.occluders : nullptr);
     const DrawCounts& counts = r.plan.counts();
     stats_.triangles += counts.triangles;
@@ -343,6 +384,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
 
     // The plan's indices uploaded once, one draw call per material run.
     r.streamIndices(r.coat, r.plan.indices(), GL_STREAM_DRAW);
+    size_t sinceFlush = 0;
     for (const DrawRun& run : r.plan.runs()) {
       const GpuMaterial& mat = r.materials[run.material];
       const FeatherMaterial& d = mat.desc;
@@ -356,7 +398,20 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       const float cone = std::max(d.coneSigma, 1e-3f);
       gl.Uniform1f(p.u.coneInv2s2, 1.0f / (2.0f * cone * cone));
       gl.Uniform1f(p.u.translucency, d.translucency);
-      r.drawIndices(run.first, run.count);
+      // In pieces, waiting for each: llvmpipe keeps every binned triangle (about 400 bytes each with 4x
+      // multisampling) until the rasterizer is done with the frame (a flush alone frees none), so a coat
+      // of millions of triangles held gigabytes. A wait per half million triangles bounds that at about
+      // 200 MB.
+      for (size_t first = run.first, end = run.first + run.count; first < end;) {
+        const size_t n = std::min(kFlushIndices - sinceFlush, end - first);
+        r.drawIndices(first, n);
+        first += n;
+        sinceFlush += n;
+        if (sinceFlush == kFlushIndices) {
+          gl.Finish();
+          sinceFlush = 0;
+        }
+      }
       ++stats_.drawCalls;
       ++stats_.drawRanges;
     }

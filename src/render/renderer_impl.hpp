@@ -54,7 +54,9 @@ enum Attr : GLuint { kPos, kNormal, kTangent, kUvGlobal, kUvBarb, kUvGrowth, kAl
   X(specular, "uSpecular")                     \
   X(coneInv2s2, "uConeInv2s2")                 \
   X(translucency, "uTranslucency")             \
-  X(alphaCut, "uAlphaCut")
+  X(alphaCut, "uAlphaCut")                     \
+  X(depthMS, "uDepthMS")                       \
+  X(samples, "uSamples")
 struct Uniforms {
 #define PTERYLA_UNIFORM_MEMBER(member, name) GLint member = -1;
   PTERYLA_UNIFORMS(PTERYLA_UNIFORM_MEMBER)
@@ -83,7 +85,8 @@ struct GpuMaterial {
 
 struct Target {
   GLuint fbo = 0, color = 0, depth = 0;
-  GLuint msFbo = 0, msColor = 0, msDepth = 0;
+  GLuint msFbo = 0, msColor = 0;
+  GLuint msDepthTex = 0;  // multisampled depth as a texture (the occlusion pass reads its samples)
   int width = 0, height = 0, samples = 0;
 };
 
@@ -98,7 +101,7 @@ struct Renderer::Impl {
 
   RenderContext& ctx;
   GlApi gl;
-  Program skinProg, coatVertexProg, coatFragmentProg, depthProg;
+  Program skinProg, coatVertexProg, coatFragmentProg, depthProg, resolveProg;
   GpuMesh skin, coat, ground;
   std::vector<float> groundKey;  // what the ground quad was built from
   // The key light's shadow map (RenderSettings::shadows) and what it was drawn from: it is drawn again

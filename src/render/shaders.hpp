@@ -290,4 +290,24 @@ void main() {
 }
 )GLSL";
 
+// Occlusion culling under multisampling: the farthest depth over each pixel's samples of the
+// multisampled depth texture, written as the pixel's depth of a single-sample target and read back, so
+// a coat triangle is dropped only where it lies behind the skin at every sample (draw_plan.hpp).
+inline constexpr const char* kResolveVertex = R"GLSL(
+void main() {
+  vec2 p = vec2((gl_VertexID == 1) ? 3.0 : -1.0, (gl_VertexID == 2) ? 3.0 : -1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
+}
+)GLSL";
+inline constexpr const char* kResolveFragment = R"GLSL(
+uniform sampler2DMS uDepthMS;
+uniform int uSamples;
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  float d = 0.0;
+  for (int i = 0; i < uSamples; ++i) d = max(d, texelFetch(uDepthMS, p, i).r);
+  gl_FragDepth = d;
+}
+)GLSL";
+
 }  // namespace pteryla::render::shaders

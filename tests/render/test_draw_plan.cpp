@@ -251,6 +251,31 @@ TEST(DrawPlan, SubpixelCullingDropsTrianglesBetweenPixelCentres) {
   EXPECT_EQ(drawnTriangles(plan), (std::vector<uint32_t>{0, 1}));
 }
 
+// With multisampling, coverage is sampled at the pixel's sample positions instead of its centre: a
+// triangle between the centres that holds a sample position is kept, one that holds none is dropped.
+TEST(DrawPlan, SubpixelCullingTestsTheSamplePositionsWhenMultisampling) {
+  const float pixel = 2.0f * 5.0f * std::tan(glm::radians(20.0f)) / kSize;
+  // The origin falls a quarter pixel up and right of a pixel corner (0.25, 0.25 within its pixel): no
+  // centre near it, but a sample position there.
+  const Camera cam = cameraAt({-0.25f * pixel, -0.25f * pixel, 5}, {-0.25f * pixel, -0.25f * pixel, 0});
+  Coat coat;
+  coat.triangle({0, 0, 0}, 0.1f * pixel);  // around (0.25, 0.25) of its pixel
+  coat.ranges.push_back({0, 3});
+  DrawPlan plan = coat.plan();
+  DrawOptions o;
+  o.subpixelCulling = true;
+  plan.build(cam, kSize, kSize, o);
+  EXPECT_EQ(plan.counts().triangles, 0u);  // no pixel centre: dropped
+  EXPECT_EQ(plan.counts().subpixelTriangles, 1u);
+  o.samplePositions = {{0.25f, 0.25f}, {0.75f, 0.75f}};
+  plan.build(cam, kSize, kSize, o);
+  EXPECT_EQ(plan.counts().triangles, 1u);  // holds a sample position: kept
+  EXPECT_EQ(plan.counts().subpixelTriangles, 0u);
+  o.samplePositions = {{0.75f, 0.25f}, {0.25f, 0.75f}};
+  plan.build(cam, kSize, kSize, o);
+  EXPECT_EQ(plan.counts().triangles, 0u);  // holds neither: dropped
+}
+
 TEST(DrawPlan, MaterialRunsAreMaximal) {
   Coat coat;
   const uint32_t materials[] = {0, 0, 1, 1, 1, 0, 2, 2};

@@ -583,6 +583,33 @@ TEST(Renderer, SubpixelCullingDropsTrianglesThatCoverNoPixelCentreWithoutChangin
   }
 }
 
+// With multisampling (renderImage's target), both cullings still run: occlusion against the farthest
+// depth of each pixel's samples, sub-pixel culling at the rasterizer's sample positions. The image is
+// the one drawn with neither.
+TEST(Renderer, MultisampledCullingLeavesTheImageUnchanged) {
+  Renderer r(context());
+  SyntheticCoatParams cp;
+  cp.featherCount = 300;
+  cp.featherLength = 0.4f;
+  cp.featherWidth = 0.12f;
+  const Camera cam = gltest::showCoat(r, makeSyntheticCoat(cp));
+  for (const int size : {96, 200}) {
+    RenderSettings s;
+    s.width = s.height = size;
+    s.msaaSamples = 4;
+    const Image culled = r.renderImage(cam, {Light{}}, s);
+    const RenderStats on = r.lastStats();
+    s.subpixelCulling = false;
+    s.occlusionCulling = false;
+    const Image all = r.renderImage(cam, {Light{}}, s);
+    const RenderStats off = r.lastStats();
+    EXPECT_GT(on.occludedFeathers + on.occludedTriangles, 0u) << size << " px";
+    EXPECT_GT(on.subpixelTriangles, 0u) << size << " px";
+    EXPECT_LT(on.triangles, off.triangles) << size << " px";
+    EXPECT_EQ(meanAbsoluteError(culled, all), 0.0) << size << " px";
+  }
+}
+
 // ------------------------------------------------------------------ key light shadows (#29)
 namespace {
 

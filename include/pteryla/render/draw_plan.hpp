@@ -22,6 +22,7 @@
 #include <vector>
 
 #include <glm/mat4x4.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
@@ -75,9 +76,13 @@ struct DepthTiles {
 
 struct DrawOptions {
   bool viewDependentOrder = true;  // false: every part forward, in stored order
-  // Drop triangles that cover no pixel centre (within 0.05 px). Exact only for single-sample
-  // rasterization; the renderer turns it off with multisampling.
+  // Drop triangles that cover no sample point (within 0.05 px): no pixel centre, or with multisampling
+  // none of the pixels' sample positions (samplePositions). Exact when samplePositions are the
+  // rasterizer's; the renderer queries them (GL_SAMPLE_POSITION) for a multisampled target.
   bool subpixelCulling = false;
+  // Where the rasterizer samples coverage within a pixel, each in [0,1)^2 from the pixel's lower-left
+  // corner; empty: the pixel centre (0.5, 0.5), single-sample rasterization.
+  std::vector<glm::vec2> samplePositions;
 };
 
 // Triangles and feathers of one colour-pass plan (RenderStats takes them over).
@@ -143,6 +148,7 @@ class DrawPlan {
                      int w, int h, uint32_t* out, std::vector<glm::vec3>& projected, uint32_t& tiny) const;
 
   std::vector<FeatherDrawRange> ranges_;
+  std::vector<glm::vec2> samples_;  // of the last build: where coverage is sampled within a pixel
   std::vector<glm::vec4> spheres_;  // per range: bounding sphere (centre, radius), frustum culling
   std::vector<glm::vec3> boxes_;    // per range: lo, hi (2 entries), occlusion culling
   // The chunks of part k of range i are chunks_[partChunks_[5 i + k], partChunks_[5 i + k + 1]).

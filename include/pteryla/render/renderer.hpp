@@ -83,12 +83,12 @@ struct RenderSettings {
   // indistinguishable at full geometry. true: per fragment, for close-ups of coarse LOD polygons.
   bool brdfPerFragment = false;
   // Skip feathers, runs of barbs and triangles that lie entirely behind the skin (the skin's depth is
-  // read back once per frame) or outside the view. Exact for opaque skin; turn off to measure raw
-  // throughput.
+  // read back once per frame; with renderImage's multisampling, the farthest depth of each pixel's
+  // samples) or outside the view. Exact for opaque skin; turn off to measure raw throughput.
   bool occlusionCulling = true;
-  // Skip feather triangles that cover no pixel centre (within 0.05 px): without multisampling they
-  // produce no fragment, but llvmpipe still shades their vertices and sets them up. The image is
-  // unchanged; off automatically with multisampling and in wireframe.
+  // Skip feather triangles that cover no sample point (within 0.05 px): the pixel centres, or with
+  // multisampling the rasterizer's sample positions (GL_SAMPLE_POSITION). They produce no fragment, but
+  // llvmpipe still shades their vertices and sets them up. The image is unchanged; off in wireframe.
   bool subpixelCulling = true;
   // Draw the triangles' edges only (a modelling view); shadows and sub-pixel culling are off with it (the
   // map would be drawn in lines too; an edge shows even where its triangle covers no pixel centre).
@@ -127,7 +127,7 @@ struct RenderStats {
   size_t occludedFeathers = 0;     // feathers hidden behind the skin, skipped
   size_t occludedTriangles = 0;    // triangles of drawn feathers skipped: behind the skin (runs of a few
                                    // barbs, then single triangles) or outside the view
-  size_t subpixelTriangles = 0;    // triangles of drawn feathers skipped for covering no pixel centre
+  size_t subpixelTriangles = 0;    // triangles of drawn feathers skipped for covering no sample point
   bool shadowMapRendered = false;  // the shadow map was (re)drawn for this frame (false: reused or off)
 };
 
