@@ -224,6 +224,19 @@ void Renderer::Impl::drawIndices(size_t first, size_t count) {
                   reinterpret_cast<const void*>(first * sizeof(uint32_t)));
 }
 
+void Renderer::Impl::drawIndicesBounded(size_t first, size_t count, size_t& since) {
+  for (const size_t end = first + count; first < end;) {
+    const size_t n = std::min(kWaitIndices - since, end - first);
+    drawIndices(first, n);
+    first += n;
+    since += n;
+    if (since == kWaitIndices) {
+      gl.Finish();
+      since = 0;
+    }
+  }
+}
+
 void Renderer::Impl::ensureTarget(int w, int h, int samples) {
   Target& t = target;
   if (t.fbo && t.width == w && t.height == h && t.samples == samples) return;

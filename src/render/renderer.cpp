@@ -22,10 +22,6 @@
 namespace pteryla::render {
 using namespace detail;
 
-namespace {
-constexpr size_t kFlushIndices = 3 * (size_t(1) << 19);  // coat indices drawn between waits
-}  // namespace
-
 Renderer::Renderer(RenderContext& context) : impl_(std::make_unique<Impl>(context)) {
   Impl& r = *impl_;
   context.makeCurrent();
@@ -109,15 +105,6 @@ void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>&
   r.ctx.makeCurrent();
   r.upload(r.coat, coat, nullptr, false);
   r.shadow.valid = false;
-  if (!r.shadow.ebo) r.gl.GenBuffers(1, &r.shadow.ebo);
-  {
-    // The shadow pass draws every triangle from its own static index buffer. Bound with the coat's VAO
-    // unbound, so the VAO keeps its own element buffer.
-    r.gl.BindVertexArray(0);
-    r.gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, r.shadow.ebo);
-    r.gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(n * sizeof(uint32_t)),
-                    n ? coat.indices.data() : nullptr, GL_STATIC_DRAW);
-  }
   r.plan.setCoat(coat.positions, coat.indices, ranges);
 }
 
@@ -384,7 +371,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
 
     // The plan's indices uploaded once, one draw call per material run.
     r.streamIndices(r.coat, r.plan.indices(), GL_STREAM_DRAW);
-    size_t sinceFlush = 0;
+    size_t sinceWait = 0;
     for (const DrawRun& run : r.plan.runs()) {
       const GpuMaterial& mat = r.materials[run.material];
       const FeatherMaterial& d = mat.desc;
@@ -398,20 +385,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
       const float cone = std::max(d.coneSigma, 1e-3f);
       gl.Uniform1f(p.u.coneInv2s2, 1.0f / (2.0f * cone * cone));
       gl.Uniform1f(p.u.translucency, d.translucency);
-      // In pieces, waiting for each: llvmpipe keeps every binned triangle (about 400 bytes each with 4x
-      // multisampling) until the rasterizer is done with the frame (a flush alone frees none), so a coat
-      // of millions of triangles held gigabytes. A wait per half million triangles bounds that at about
-      // 200 MB.
-      for (size_t first = run.first, end = run.first + run.count; first < end;) {
-        const size_t n = std::min(kFlushIndices - sinceFlush, end - first);
-        r.drawIndices(first, n);
-        first += n;
-        sinceFlush += n;
-        if (sinceFlush == kFlushIndices) {
-          gl.Finish();
-          sinceFlush = 0;
-        }
-      }
+      r.drawIndicesBounded(run.first, run.count, sinceWait);
       ++stats_.drawCalls;
       ++stats_.drawRanges;
     }

@@ -105,10 +105,10 @@ struct Renderer::Impl {
   GpuMesh skin, coat, ground;
   std::vector<float> groundKey;  // what the ground quad was built from
   // The key light's shadow map (RenderSettings::shadows) and what it was drawn from: it is drawn again
-  // only when one of these changes. shadowEbo holds every coat index (the coat's own EBO is rewritten
-  // each frame with the camera's surviving triangles).
+  // only when one of these changes. It draws every coat index, streamed into the coat's element buffer
+  // (which each frame then rewrites with the camera's surviving triangles).
   struct Shadow {
-    GLuint fbo = 0, depthTex = 0, ebo = 0;
+    GLuint fbo = 0, depthTex = 0;
     int size = 0;
     bool valid = false;  // the map matches skin, coat and materials (cleared when they change)
     glm::vec3 lightDir{0.0f};
@@ -153,6 +153,13 @@ struct Renderer::Impl {
   void applyDefaults(const GpuMesh& m);
   void upload(GpuMesh& m, const TriMesh& mesh, const std::vector<glm::vec3>* normalsOverride, bool staticIndices);
   void streamIndices(GpuMesh& m, const std::vector<uint32_t>& indices, GLenum usage);
+  // drawIndices in pieces, waiting for llvmpipe after every kWaitIndices indices (`since` counts the
+  // indices drawn since the last wait, across calls): llvmpipe keeps each binned triangle (about 400
+  // bytes with 4x multisampling) until the rasterizer is done with it, and a flush alone frees none, so
+  // a coat of millions of triangles held gigabytes. A wait per half million triangles bounds that at
+  // about 200 MB.
+  static constexpr size_t kWaitIndices = 3 * (size_t(1) << 19);
+  void drawIndicesBounded(size_t first, size_t count, size_t& since);
   void drawIndices(size_t first, size_t count);
   void ensureTarget(int w, int h, int samples);
 

@@ -18,7 +18,6 @@ using namespace detail;
 void Renderer::Impl::releaseShadow() {
   if (shadow.fbo) gl.DeleteFramebuffers(1, &shadow.fbo);
   if (shadow.depthTex) gl.DeleteTextures(1, &shadow.depthTex);
-  if (shadow.ebo) gl.DeleteBuffers(1, &shadow.ebo);
   shadow = Shadow();
 }
 
@@ -101,13 +100,15 @@ bool Renderer::Impl::updateShadowMap(const glm::vec3& toLight, const RenderSetti
     gl.Uniform1f(p.u.alphaCut, 0.5f);
     gl.BindVertexArray(coat.vao);
     applyDefaults(coat);
-    gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, shadow.ebo);
+    // Every coat triangle, from the coat's own index list (the colour pass streams its own after this).
+    streamIndices(coat, plan.coatIndices(), GL_STREAM_DRAW);
+    size_t sinceWait = 0;
     for (const DrawRun& run : plan.shadowRuns()) {
       if (run.material >= materials.size()) continue;
       const GpuMaterial& m = materials[run.material];
       bindTextures({m.colorTex, m.alphaTex});
       gl.Uniform1i(p.u.colorUv, static_cast<int>(m.desc.colorUv));
-      drawIndices(run.first, run.count);
+      drawIndicesBounded(run.first, run.count, sinceWait);
     }
   }
   gl.Disable(GL_POLYGON_OFFSET_FILL);

@@ -125,6 +125,7 @@ class DrawPlan {
   const DrawCounts& counts() const { return counts_; }
   // The shadow pass over the coat's own index list (set by setCoat).
   const std::vector<DrawRun>& shadowRuns() const { return shadowRuns_; }
+  const std::vector<uint32_t>& coatIndices() const { return coatIndices_; }
 
  private:
   // A run of at most kChunkTriangles consecutive triangles of one part, with its box.
