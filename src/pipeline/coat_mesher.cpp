@@ -240,7 +240,8 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     std::swap(out.normals, localNrm_);
     std::swap(out.tangents, localTan_);
   } else {
-    // Mesh the changed feathers into freshMesh_, then copy every slice into the spare buffers in order.
+    // Mesh the changed feathers into freshMesh_, then copy them into the mesh: in place when the layout is
+    // unchanged, else into a new mesh with the reused slices.
     std::vector<feather::FeatherMeshInput> changed;
     std::vector<size_t> changedAt;
     for (size_t k = 0; k < count; ++k)
@@ -268,37 +269,73 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
       iTotal += src[k].in;
     }
     PTERYLA_CHECK(vTotal <= UINT32_MAX, "mesh exceeds 32-bit vertex indices");
-    resizeAll(spareMesh_, vTotal, iTotal);  // every element is overwritten (positions etc. when placed)
-    spareLocalPos_.resize(vTotal);
-    spareLocalNrm_.resize(vTotal);
-    spareLocalTan_.resize(vTotal);
-    const TriMesh& last = out;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t k = range.begin(); k < range.end(); ++k) {
-        const bool old = reuse[k] != 0;
-        const TriMesh& from = old ? last : freshMesh_;
-        const Slice& a = src[k];
-        const Slice& b = next[k];
-        copySlice(old ? localPos_ : freshMesh_.positions, a.v0, spareLocalPos_, b.v0, a.vn);
-        copySlice(old ? localNrm_ : freshMesh_.normals, a.v0, spareLocalNrm_, b.v0, a.vn);
-        copySlice(old ? localTan_ : freshMesh_.tangents, a.v0, spareLocalTan_, b.v0, a.vn);
-        copySlice(from.uvGlobal, a.v0, spareMesh_.uvGlobal, b.v0, a.vn);
-        copySlice(from.uvBarb, a.v0, spareMesh_.uvBarb, b.v0, a.vn);
-        copySlice(from.uvGrowth, a.v0, spareMesh_.uvGrowth, b.v0, a.vn);
-        copySlice(from.alpha, a.v0, spareMesh_.alpha, b.v0, a.vn);
-        copySlice(from.sheath, a.v0, spareMesh_.sheath, b.v0, a.vn);
-        copySlice(from.barbCount, a.v0, spareMesh_.barbCount, b.v0, a.vn);
-        copySlice(from.featherId, a.v0, spareMesh_.featherId, b.v0, a.vn);
-        const uint32_t shift = b.v0 - a.v0;  // modular: vertex indices move by the slice's shift
-        const uint32_t* fi = from.indices.data() + a.i0;
-        uint32_t* ti = spareMesh_.indices.data() + b.i0;
-        for (uint32_t q = 0; q < a.in; ++q) ti[q] = fi[q] + shift;
-      }
-    });
-    std::swap(out, spareMesh_);
-    std::swap(localPos_, spareLocalPos_);
-    std::swap(localNrm_, spareLocalNrm_);
-    std::swap(localTan_, spareLocalTan_);
+    // Every feather where it was, with as many vertices and indices (a feather regrown, re-shed or
+    // repacked at the same level of detail): the changed slices are written over their old places in the
+    // mesh itself, and nothing else moves.
+    bool inPlace = vTotal == localPos_.size() && vTotal == out.featherId.size() && iTotal == out.indices.size();
+    for (size_t k = 0; k < count && inPlace; ++k) {
+      const Slice& old = slices_[which[k]];
+      inPlace =
+          old.valid && old.v0 == next[k].v0 && old.vn == next[k].vn && old.i0 == next[k].i0 && old.in == next[k].in;
+    }
+    if (inPlace) {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, changed.size(), 16),
+                        [&](const tbb::blocked_range<size_t>& range) {
+                          for (size_t c = range.begin(); c < range.end(); ++c) {
+                            const size_t k = changedAt[c];
+                            const Slice& a = src[k];
+                            const Slice& b = next[k];
+                            copySlice(freshMesh_.positions, a.v0, localPos_, b.v0, a.vn);
+                            copySlice(freshMesh_.normals, a.v0, localNrm_, b.v0, a.vn);
+                            copySlice(freshMesh_.tangents, a.v0, localTan_, b.v0, a.vn);
+                            copySlice(freshMesh_.uvGlobal, a.v0, out.uvGlobal, b.v0, a.vn);
+                            copySlice(freshMesh_.uvBarb, a.v0, out.uvBarb, b.v0, a.vn);
+                            copySlice(freshMesh_.uvGrowth, a.v0, out.uvGrowth, b.v0, a.vn);
+                            copySlice(freshMesh_.alpha, a.v0, out.alpha, b.v0, a.vn);
+                            copySlice(freshMesh_.sheath, a.v0, out.sheath, b.v0, a.vn);
+                            copySlice(freshMesh_.barbCount, a.v0, out.barbCount, b.v0, a.vn);
+                            copySlice(freshMesh_.featherId, a.v0, out.featherId, b.v0, a.vn);
+                            const uint32_t shift = b.v0 - a.v0;
+                            const uint32_t* fi = freshMesh_.indices.data() + a.i0;
+                            uint32_t* ti = out.indices.data() + b.i0;
+                            for (uint32_t q = 0; q < a.in; ++q) ti[q] = fi[q] + shift;
+                          }
+                        });
+    } else {
+      // The layout moved: assemble a new mesh from the last one and the fresh slices, then let the last
+      // one go (no spare copy of the coat is kept between updates).
+      TriMesh next_;
+      std::vector<glm::vec3> nextPos(vTotal), nextNrm(vTotal), nextTan(vTotal);
+      resizeAll(next_, vTotal, iTotal);  // every element is overwritten (positions etc. when placed)
+      const TriMesh& last = out;
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t k = range.begin(); k < range.end(); ++k) {
+          const bool old = reuse[k] != 0;
+          const TriMesh& from = old ? last : freshMesh_;
+          const Slice& a = src[k];
+          const Slice& b = next[k];
+          copySlice(old ? localPos_ : freshMesh_.positions, a.v0, nextPos, b.v0, a.vn);
+          copySlice(old ? localNrm_ : freshMesh_.normals, a.v0, nextNrm, b.v0, a.vn);
+          copySlice(old ? localTan_ : freshMesh_.tangents, a.v0, nextTan, b.v0, a.vn);
+          copySlice(from.uvGlobal, a.v0, next_.uvGlobal, b.v0, a.vn);
+          copySlice(from.uvBarb, a.v0, next_.uvBarb, b.v0, a.vn);
+          copySlice(from.uvGrowth, a.v0, next_.uvGrowth, b.v0, a.vn);
+          copySlice(from.alpha, a.v0, next_.alpha, b.v0, a.vn);
+          copySlice(from.sheath, a.v0, next_.sheath, b.v0, a.vn);
+          copySlice(from.barbCount, a.v0, next_.barbCount, b.v0, a.vn);
+          copySlice(from.featherId, a.v0, next_.featherId, b.v0, a.vn);
+          const uint32_t shift = b.v0 - a.v0;  // modular: vertex indices move by the slice's shift
+          const uint32_t* fi = from.indices.data() + a.i0;
+          uint32_t* ti = next_.indices.data() + b.i0;
+          for (uint32_t q = 0; q < a.in; ++q) ti[q] = fi[q] + shift;
+        }
+      });
+      out = std::move(next_);
+      localPos_ = std::move(nextPos);
+      localNrm_ = std::move(nextNrm);
+      localTan_ = std::move(nextTan);
+    }
+    freshMesh_ = TriMesh{};  // the changed feathers' meshes are in `out` now
     for (size_t k = 0; k < count; ++k) ranges[k] = next[k].ranges;
   }
   // Place every feather.

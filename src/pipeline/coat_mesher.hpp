@@ -88,10 +88,11 @@ class CoatMesher {
   std::vector<feather::LodOrder> lodOrders_, grownOrders_;
   std::vector<uint64_t> curvesVersion_;  // bumped whenever a feather's curves are regenerated
   std::vector<Slice> slices_;
-  // Unplaced positions, normals and tangents of the last mesh's vertices, and spare buffers kept across
-  // updates (no reallocation per frame).
-  std::vector<glm::vec3> localPos_, localNrm_, localTan_, spareLocalPos_, spareLocalNrm_, spareLocalTan_;
-  TriMesh spareMesh_, freshMesh_;
+  // Unplaced positions, normals and tangents of the last mesh's vertices. No spare copy of the mesh is
+  // kept: an update writes changed slices in place when the layout is unchanged, else builds the new mesh
+  // beside the last one and frees the last (docs/limits.md, bytes per triangle).
+  std::vector<glm::vec3> localPos_, localNrm_, localTan_;
+  TriMesh freshMesh_;  // the changed feathers, unplaced, during an update (empty between updates)
   std::vector<uint32_t> keptIndices_;
   std::vector<uint32_t> which_;
   std::vector<feather::FeatherMeshRanges> ranges_;

@@ -98,6 +98,23 @@ TEST(CoatMesher, IncrementalUpdateEqualsFullMesh) {
   full.update(input(c), fresh);
   expectSameResult(incremental, mesh, full, fresh);
 
+  // A feather regrown with as many vertices and triangles is written over its old place: the mesh keeps
+  // its buffers (no second copy of the coat is made) and still equals a fresh one.
+  {
+    const void* uvs = mesh.uvGlobal.data();
+    const void* indices = mesh.indices.data();
+    c.feathers.age[90] = 0.9500001;
+    incremental.update(input(c), mesh);
+    EXPECT_EQ(incremental.regenerated(), 1u);
+    EXPECT_EQ(incremental.reused(), n - 1 - 1);  // all present but the regrown one
+    EXPECT_EQ(mesh.uvGlobal.data(), uvs);
+    EXPECT_EQ(mesh.indices.data(), indices);
+    CoatMesher full2;
+    TriMesh fresh3;
+    full2.update(input(c), fresh3);
+    expectSameResult(incremental, mesh, full2, fresh3);
+  }
+
   // A draped coat trims the indices of the mesh it was given; the next update starts from the kept ones.
   incremental.keepIndices(mesh);
   std::fill(mesh.indices.begin(), mesh.indices.begin() + 30, 0u);
