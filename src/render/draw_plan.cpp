@@ -386,7 +386,11 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
   // Pass 2: the surviving triangles in draw order (layer order, then each feather's parts in
   // octant order), split into maximal runs of one material: a feather none of whose triangles
   // survived neither starts a run nor splits one.
-  frameIndices_.resize(coatIndices_.size());
+  // Sized to what survives (not the whole coat): the list is kept between frames.
+  size_t total = 0;
+  for (const Feather& pl : feathers_)
+    if (pl.state == Feather::kDrawn) total += 3 * size_t(pl.triangles);
+  frameIndices_.resize(total);
   size_t used = 0;
   for (size_t i = 0; i < ranges_.size(); ++i) {
     const Feather& pl = feathers_[i];
@@ -411,7 +415,7 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
     }
     if (!runs_.empty()) runs_.back().count = used - runs_.back().first;
   }
-  frameIndices_.resize(used);
+  PTERYLA_CHECK_EQ(used, total, "draw plan index count");
 }
 
 }  // namespace pteryla::render
