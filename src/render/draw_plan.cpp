@@ -188,6 +188,7 @@ void DrawPlan::setCoat(const std::vector<glm::vec3>& positions, const std::vecto
   }
   // The shadow pass: runs of consecutive feathers of one material, each drawn from the full index list.
   shadowRuns_.clear();
+  shadowRunRanges_.clear();
   size_t i = 0;
   while (i < ranges_.size()) {
     const uint32_t material = ranges_[i].material;
@@ -195,7 +196,10 @@ void DrawPlan::setCoat(const std::vector<glm::vec3>& positions, const std::vecto
     size_t last = first + ranges_[i].indexCount, j = i + 1;
     while (j < ranges_.size() && ranges_[j].material == material && ranges_[j].firstIndex == last)
       last += ranges_[j].indexCount, ++j;
-    if (last > first) shadowRuns_.push_back({material, first, last - first});
+    if (last > first) {
+      shadowRuns_.push_back({material, first, last - first});
+      shadowRunRanges_.emplace_back(static_cast<uint32_t>(i), static_cast<uint32_t>(j));
+    }
     i = j;
   }
 }
@@ -416,6 +420,35 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
     if (!runs_.empty()) runs_.back().count = used - runs_.back().first;
   }
   PTERYLA_CHECK_EQ(used, total, "draw plan index count");
+}
+
+void DrawPlan::buildShadow(const glm::mat4& viewProj, int size) {
+  runs_.clear();
+  samples_.assign(1, glm::vec2(0.5f));
+  scratch_.resize(coatIndices_.size());
+  kept_.resize(chunks_.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks_.size(), 64), [&](const tbb::blocked_range<size_t>& br) {
+    std::vector<glm::vec3> projected;
+    uint32_t tiny = 0;
+    for (size_t c = br.begin(); c != br.end(); ++c)
+      kept_[c] = emitChunk(chunks_[c], false, nullptr, true, viewProj, size, size, scratch_.data() + chunks_[c].first,
+                           projected, tiny);
+  });
+  size_t total = 0;
+  for (const auto& [i0, i1] : shadowRunRanges_)
+    for (uint32_t c = partChunks_[5 * size_t(i0)]; c < partChunks_[5 * size_t(i1 - 1) + 4]; ++c) total += kept_[c];
+  frameIndices_.resize(total);
+  size_t used = 0;
+  for (const auto& [i0, i1] : shadowRunRanges_) {
+    const size_t first = used;
+    // A run's ranges are consecutive in the index list, and so are their chunks.
+    for (uint32_t c = partChunks_[5 * size_t(i0)]; c < partChunks_[5 * size_t(i1 - 1) + 4]; ++c) {
+      const uint32_t* from = scratch_.data() + chunks_[c].first;
+      std::copy(from, from + kept_[c], frameIndices_.data() + used);
+      used += kept_[c];
+    }
+    if (used > first) runs_.push_back({ranges_[i0].material, first, used - first});
+  }
 }
 
 }  // namespace pteryla::render

@@ -215,6 +215,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
   if (s.shadows && !s.wireframe && lightCount > 0 && (s.drawCoat || s.drawSkin)) {
     gl.Viewport(0, 0, s.width, s.height);
     stats_.shadowMapRendered = r.updateShadowMap(dirs[0], s);
+    if (stats_.shadowMapRendered) stats_.shadowTriangles = r.shadow.triangles;
     shadowsOn = r.shadow.valid;
   }
   gl.ActiveTexture(GL_TEXTURE3);

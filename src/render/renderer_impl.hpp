@@ -115,6 +115,7 @@ struct Renderer::Impl {
     bool alphaTexture = true;
     glm::mat4 viewProj{1.0f};
     float texelWorld = 0.0f;  // scene units per texel
+    size_t triangles = 0;     // coat triangles drawn into the map when it was last drawn
   } shadow;
   glm::vec3 skinLo{0.0f}, skinHi{0.0f};
   bool hasSkinBounds = false;

@@ -82,6 +82,7 @@ bool Renderer::Impl::updateShadowMap(const glm::vec3& toLight, const RenderSetti
   gl.Disable(GL_BLEND);
   gl.Enable(GL_POLYGON_OFFSET_FILL);
   gl.PolygonOffset(1.5f, 2.0f);
+  shadow.triangles = 0;
   const Program& p = depthProg;
   gl.UseProgram(p.id);
   gl.UniformMatrix4fv(p.u.lightViewProj, 1, GL_FALSE, glm::value_ptr(shadow.viewProj));
@@ -100,15 +101,19 @@ bool Renderer::Impl::updateShadowMap(const glm::vec3& toLight, const RenderSetti
     gl.Uniform1f(p.u.alphaCut, 0.5f);
     gl.BindVertexArray(coat.vao);
     applyDefaults(coat);
-    // Every coat triangle, from the coat's own index list (the colour pass streams its own after this).
-    streamIndices(coat, plan.coatIndices(), GL_STREAM_DRAW);
+    // Every coat triangle, in the coat's index-list order; with sub-pixel culling, less those that cover
+    // no texel centre of the map (they draw no depth: the map is the same).
+    const bool cull = s.subpixelCulling;
+    if (cull) plan.buildShadow(shadow.viewProj, size);
+    streamIndices(coat, cull ? plan.indices() : plan.coatIndices(), GL_STREAM_DRAW);
     size_t sinceWait = 0;
-    for (const DrawRun& run : plan.shadowRuns()) {
+    for (const DrawRun& run : cull ? plan.runs() : plan.shadowRuns()) {
       if (run.material >= materials.size()) continue;
       const GpuMaterial& m = materials[run.material];
       bindTextures({m.colorTex, m.alphaTex});
       gl.Uniform1i(p.u.colorUv, static_cast<int>(m.desc.colorUv));
       drawIndicesBounded(run.first, run.count, sinceWait);
+      shadow.triangles += run.count / 3;
     }
   }
   gl.Disable(GL_POLYGON_OFFSET_FILL);

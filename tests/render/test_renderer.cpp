@@ -720,6 +720,36 @@ TEST(RendererShadows, TheMapIsDrawnAgainOnlyWhenWhatCastsItChanges) {
   EXPECT_FALSE(r.lastStats().shadowMapRendered);
 }
 
+// The shadow pass drops coat triangles that cover no texel centre of the map (they write no depth):
+// with a small map most of a fine coat's triangles go, and the image (map included) is the same as with
+// every triangle drawn into it.
+TEST(RendererShadows, SubpixelCullingThinsTheShadowPassWithoutChangingTheImage) {
+  SyntheticCoatParams cp;
+  cp.featherCount = 300;
+  cp.featherLength = 0.4f;
+  cp.featherWidth = 0.12f;
+  const SyntheticCoat coat = makeSyntheticCoat(cp);
+  RenderSettings s;
+  s.width = s.height = 160;
+  s.shadows = true;
+  s.shadowMapSize = 128;
+  const std::vector<Light> lights{Light{glm::vec3(0.3f, 1.0f, 0.6f), glm::vec3(1.0f)}};
+  Renderer culledR(context());
+  const Camera cam = gltest::showCoat(culledR, coat);
+  const Image culled = culledR.renderImage(cam, lights, s);
+  const RenderStats on = culledR.lastStats();
+  Renderer allR(context());
+  gltest::showCoat(allR, coat);
+  s.subpixelCulling = false;
+  const Image all = allR.renderImage(cam, lights, s);
+  const RenderStats off = allR.lastStats();
+  ASSERT_TRUE(on.shadowMapRendered && off.shadowMapRendered);
+  EXPECT_EQ(off.shadowTriangles, coat.coat.triangleCount());
+  EXPECT_LT(on.shadowTriangles, off.shadowTriangles / 2);
+  EXPECT_GT(on.shadowTriangles, 0u);
+  EXPECT_EQ(meanAbsoluteError(culled, all), 0.0);
+}
+
 // ------------------------------------------------------------------ tone and ground (#29 item 3)
 
 // A white Lambert quad facing a unit front light, no ambient: linear output is the light, 2^exposure

@@ -19,6 +19,7 @@
 // index list, one run per stretch of consecutive feathers of one material that are contiguous in it.
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <glm/mat4x4.hpp>
@@ -119,7 +120,13 @@ class DrawPlan {
   glm::vec3 featherLo(size_t i) const { return boxes_[2 * i]; }
   glm::vec3 featherHi(size_t i) const { return boxes_[2 * i + 1]; }
 
-  // The last build: surviving coat indices in draw order, and the runs over them.
+  // Plans the shadow pass of a size x size single-sample depth map seen through `viewProj`: every
+  // triangle in the coat's index-list order, less those that cover no texel centre (within 0.05 texel)
+  // or lie outside the map, which draw no depth; the runs are shadowRuns() with their survivors. Sets
+  // indices() and runs() (the next build() replaces them); counts() are left as they were.
+  void buildShadow(const glm::mat4& viewProj, int size);
+
+  // The last build or buildShadow: surviving coat indices in draw order, and the runs over them.
   const std::vector<uint32_t>& indices() const { return frameIndices_; }
   const std::vector<DrawRun>& runs() const { return runs_; }
   const DrawCounts& counts() const { return counts_; }
@@ -155,6 +162,7 @@ class DrawPlan {
   // The chunks of part k of range i are chunks_[partChunks_[5 i + k], partChunks_[5 i + k + 1]).
   std::vector<Chunk> chunks_;
   std::vector<uint32_t> partChunks_;
+  std::vector<std::pair<uint32_t, uint32_t>> shadowRunRanges_;  // per shadow run: its ranges [first, last)
   std::vector<glm::vec3> positions_;
   std::vector<uint32_t> coatIndices_;
   std::vector<DrawRun> shadowRuns_;

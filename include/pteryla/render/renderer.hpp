@@ -88,7 +88,8 @@ struct RenderSettings {
   bool occlusionCulling = true;
   // Skip feather triangles that cover no sample point (within 0.05 px): the pixel centres, or with
   // multisampling the rasterizer's sample positions (GL_SAMPLE_POSITION). They produce no fragment, but
-  // llvmpipe still shades their vertices and sets them up. The image is unchanged; off in wireframe.
+  // llvmpipe still shades their vertices and sets them up. The same test, against the map's texel
+  // centres, thins the shadow pass. The image is unchanged; off in wireframe.
   bool subpixelCulling = true;
   // Draw the triangles' edges only (a modelling view); shadows and sub-pixel culling are off with it (the
   // map would be drawn in lines too; an edge shows even where its triangle covers no pixel centre).
@@ -129,6 +130,8 @@ struct RenderStats {
                                    // barbs, then single triangles) or outside the view
   size_t subpixelTriangles = 0;    // triangles of drawn feathers skipped for covering no sample point
   bool shadowMapRendered = false;  // the shadow map was (re)drawn for this frame (false: reused or off)
+  size_t shadowTriangles = 0;      // coat triangles drawn into it then (sub-pixel culling drops those
+                                   // covering no texel centre of the map)
 };
 
 class Renderer {
