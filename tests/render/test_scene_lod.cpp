@@ -244,3 +244,26 @@ TEST(SceneLook, StudioRigPutsKeyFillAndRimAroundTheCamera) {
   s.render.lightRig = "scene";
   EXPECT_EQ(sceneLights(s).size(), s.lights.size());
 }
+
+// A timeline step that changes no input of any stage (a scene that reads no time) costs nothing: no
+// stage evaluates again, the renderer keeps its uploaded coat and its shadow map, and the frame is the
+// same, with screen-size levels of detail on or off (#27).
+TEST(SceneLod, AStaticTimeStepRedoesNothing) {
+  for (const bool bySize : {false, true}) {
+    pipeline::Pipeline p(coatScene(bySize));
+    SceneView view(context());
+    const Image first = view.render(p, 160, 120);
+    EXPECT_TRUE(view.renderer().lastStats().shadowMapRendered);
+    const Image second = view.render(p, 160, 120);  // settles the per-feather levels of detail
+    using pipeline::Stage;
+    std::vector<uint64_t> before;
+    for (int s = 0; s <= static_cast<int>(Stage::Mesh); ++s) before.push_back(p.evaluations(static_cast<Stage>(s)));
+    p.setTime(p.time() + 0.04);
+    const Image third = view.render(p, 160, 120);
+    for (int s = 0; s <= static_cast<int>(Stage::Mesh); ++s)
+      EXPECT_EQ(p.evaluations(static_cast<Stage>(s)), before[s]) << pipeline::stageName(static_cast<Stage>(s));
+    EXPECT_FALSE(view.renderer().lastStats().shadowMapRendered) << "the map is kept";
+    EXPECT_EQ(third.rgba, second.rgba);
+    EXPECT_EQ(second.rgba, first.rgba);
+  }
+}
