@@ -56,16 +56,26 @@ bool batched(size_t n, size_t grain, const Progress& progress, F&& f) {
   return true;
 }
 
+// A triangle whose three corners are one vertex (how the drape removes a trimmed triangle) meets no other
+// triangle and no ray: trianglesIntersect and rayTriangle both answer no for it.
+bool collapsed(const TriMesh& m, size_t t) {
+  const uint32_t* i = &m.indices[3 * t];
+  return i[0] == i[1] && i[0] == i[2];
+}
+
 // The coat's triangles grouped by feather, a BVH per feather (small trees, built in parallel) and one
 // over the feathers' bounds; shared by the pair search and the coverage rays. Intersecting pairs are
 // searched only between feathers whose bounds meet, tree against tree: exactly the triangle pairs of
 // different feathers whose boxes overlap, the candidates a single BVH over the coat would give.
+// Collapsed triangles are left out (they meet nothing), and what the triangle test needs of each
+// triangle alone (TriangleShape) is made once per triangle.
 struct CoatBvh {
   const TriMesh& coat;
-  std::vector<uint32_t> order;      // triangles by feather (ascending within one)
-  std::vector<uint32_t> begin;      // per group: its first slot in order; groups.size() + 1 entries
-  std::vector<uint32_t> featherOf;  // per group
-  std::vector<uint32_t> indices;    // order's index triples, each feather's contiguous
+  std::vector<uint32_t> order;                // triangles by feather (ascending within one); slot -> triangle
+  std::vector<uint32_t> begin;                // per group: its first slot in order; groups.size() + 1 entries
+  std::vector<uint32_t> featherOf;            // per group
+  std::vector<uint32_t> indices;              // order's index triples, each feather's contiguous
+  std::vector<detail::TriangleShape> shapes;  // per slot
   std::vector<detail::TriangleBvh> trees;
   std::vector<glm::dvec3> boxCorners;  // per group lo, hi: the feather tree's bounds
   std::vector<uint32_t> boxIndices;    // (lo, hi, lo): a "triangle" whose box is the feather's bounds
@@ -75,37 +85,51 @@ struct CoatBvh {
 
   explicit CoatBvh(const TriMesh& m, const Progress& progress = {}) : coat(m) {
     const size_t nt = m.triangleCount();
-    order.resize(nt);
-    std::vector<uint32_t> f(nt);
-    for (size_t t = 0; t < nt; ++t) {
-      f[t] = triFeather(m, t);
-      order[t] = static_cast<uint32_t>(t);
-    }
+    std::vector<uint32_t> f;  // per slot
+    order.reserve(nt);
+    f.reserve(nt);
+    for (size_t t = 0; t < nt; ++t)
+      if (!collapsed(m, t)) {
+        order.push_back(static_cast<uint32_t>(t));
+        f.push_back(triFeather(m, t));
+      }
+    const size_t ns = order.size();
     // The coat mesh keeps each feather's triangles together; anything else is sorted by feather.
     bool grouped = true;
     {
       std::vector<uint32_t> runs;  // the feather of each run of equal feathers
-      for (size_t t = 0; t < nt; ++t)
-        if (t == 0 || f[t] != f[t - 1]) runs.push_back(f[t]);
+      for (size_t k = 0; k < ns; ++k)
+        if (k == 0 || f[k] != f[k - 1]) runs.push_back(f[k]);
       std::sort(runs.begin(), runs.end());
       grouped = std::adjacent_find(runs.begin(), runs.end()) == runs.end();
     }
-    if (!grouped) std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return f[a] < f[b]; });
-    for (size_t k = 0; k < nt; ++k)
-      if (k == 0 || f[order[k]] != f[order[k - 1]]) {
-        begin.push_back(static_cast<uint32_t>(k));
-        featherOf.push_back(f[order[k]]);
+    if (!grouped) {
+      std::vector<uint64_t> keyed(ns);  // (feather, triangle): sorted, each feather's ascending
+      for (size_t k = 0; k < ns; ++k) keyed[k] = (uint64_t(f[k]) << 32) | order[k];
+      std::sort(keyed.begin(), keyed.end());
+      for (size_t k = 0; k < ns; ++k) {
+        f[k] = static_cast<uint32_t>(keyed[k] >> 32);
+        order[k] = static_cast<uint32_t>(keyed[k] & 0xffffffffu);
       }
-    begin.push_back(static_cast<uint32_t>(nt));
-    indices.resize(3 * nt);
-    for (size_t k = 0; k < nt; ++k)
+    }
+    for (size_t k = 0; k < ns; ++k)
+      if (k == 0 || f[k] != f[k - 1]) {
+        begin.push_back(static_cast<uint32_t>(k));
+        featherOf.push_back(f[k]);
+      }
+    begin.push_back(static_cast<uint32_t>(ns));
+    indices.resize(3 * ns);
+    for (size_t k = 0; k < ns; ++k)
       for (int c = 0; c < 3; ++c) indices[3 * k + c] = m.indices[3 * static_cast<size_t>(order[k]) + c];
+    shapes.resize(ns);
     const size_t ng = featherOf.size();
     trees.resize(ng);
     complete = batched(ng, 4, progress, [&](const tbb::blocked_range<size_t>& r) {
       for (size_t g = r.begin(); g < r.end(); ++g) {
         trees[g].build(m.positions.data(), indices.data() + 3 * static_cast<size_t>(begin[g]), begin[g + 1] - begin[g]);
         trees[g].makePrimBoxes();
+        for (uint32_t s = begin[g]; s < begin[g + 1]; ++s)
+          shapes[s] = detail::triangleShape(vertex(s, 0), vertex(s, 1), vertex(s, 2));
       }
     });
     if (!complete) return;
@@ -125,7 +149,6 @@ struct CoatBvh {
     top.makePrimBoxes();
   }
   size_t groups() const { return featherOf.size(); }
-  uint32_t triangle(size_t group, uint32_t local) const { return order[begin[group] + local]; }
   // Pairs of groups whose bounds meet (g < h), sorted.
   std::vector<std::pair<uint32_t, uint32_t>> meetingGroups() const {
     std::vector<std::pair<uint32_t, uint32_t>> out;
@@ -139,8 +162,13 @@ struct CoatBvh {
     return top.anyLeafHit(origin, dir, tMin, tMax,
                           [&](uint32_t g) { return trees[g].anyHit(origin, dir, tMin, tMax); });
   }
-  glm::dvec3 vertex(uint32_t t, int c) const {
-    return dvec3(coat.positions[coat.indices[3 * static_cast<size_t>(t) + c]]);
+  // Corner c of the triangle in slot s.
+  glm::dvec3 vertex(uint32_t s, int c) const { return dvec3(coat.positions[indices[3 * static_cast<size_t>(s) + c]]); }
+  // Does the triangle in slot s cross the one in slot r? Moeller's test on the lower triangle index first.
+  bool cross(uint32_t s, uint32_t r) const {
+    if (order[r] < order[s]) std::swap(s, r);
+    return detail::trianglesIntersect(vertex(s, 0), vertex(s, 1), vertex(s, 2), shapes[s], vertex(r, 0), vertex(r, 1),
+                                      vertex(r, 2), shapes[r]);
   }
 };
 
@@ -161,13 +189,14 @@ std::optional<size_t> intersectingPairs(const CoatBvh& cb, std::vector<uint64_t>
       const uint32_t g = tasks[k].first, h = tasks[k].second;
       const uint32_t fg = cb.featherOf[g], fh = cb.featherOf[h];
       const uint64_t featherKey = (uint64_t(std::min(fg, fh)) << 32) | std::max(fg, fh);
+      const uint32_t bg = cb.begin[g], bh = cb.begin[h];
       cb.trees[g].overlappingPairs(cb.trees[h], [&](uint32_t a, uint32_t b) {
-        uint32_t t = cb.triangle(g, a), u = cb.triangle(h, b);
-        if (u < t) std::swap(t, u);
-        if (detail::trianglesIntersect(cb.vertex(t, 0), cb.vertex(t, 1), cb.vertex(t, 2), cb.vertex(u, 0),
-                                       cb.vertex(u, 1), cb.vertex(u, 2))) {
+        if (cb.cross(bg + a, bh + b)) {
           ++acc;
-          if (mine) mine->push_back(triangles ? (uint64_t(t) << 32) | u : featherKey);
+          if (mine) {
+            const uint32_t t = cb.order[bg + a], u = cb.order[bh + b];
+            mine->push_back(triangles ? (uint64_t(std::min(t, u)) << 32) | std::max(t, u) : featherKey);
+          }
         }
       });
     }
@@ -187,6 +216,40 @@ size_t intersectingPairs(const TriMesh& coat, std::vector<uint64_t>* attribution
   if (coat.triangleCount() < 2) return 0;
   const CoatBvh cb(coat);
   return *intersectingPairs(cb, attribution, triangles);
+}
+
+// The reference pair search (CheckOptions::reference): one BVH over the coat, its self-traversal
+// between triangles of different feathers, Moeller's test from scratch on the lower index first.
+size_t referencePairs(const TriMesh& coat, std::vector<uint64_t>* attribution) {
+  const size_t nt = coat.triangleCount();
+  if (nt < 2) return 0;
+  detail::TriangleBvh bvh;
+  bvh.build(coat.positions.data(), coat.indices.data(), nt);
+  std::vector<uint32_t> group(nt);
+  for (size_t t = 0; t < nt; ++t) group[t] = triFeather(coat, t);
+  bvh.setGroups(group.data());
+  const std::vector<std::pair<uint32_t, uint32_t>> tasks = bvh.pairTasks(64);
+  tbb::combinable<std::vector<uint64_t>> found;
+  tbb::combinable<size_t> count([] { return size_t(0); });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k)
+      bvh.overlappingPairs(tasks[k], [&](uint32_t t, uint32_t u) {
+        if (!detail::trianglesIntersect(bvh.vertex(t, 0), bvh.vertex(t, 1), bvh.vertex(t, 2), bvh.vertex(u, 0),
+                                        bvh.vertex(u, 1), bvh.vertex(u, 2)))
+          return;
+        ++count.local();
+        if (attribution) {
+          const uint32_t a = group[t], b = group[u];
+          found.local().push_back((uint64_t(std::min(a, b)) << 32) | std::max(a, b));
+        }
+      });
+  });
+  if (attribution) {
+    attribution->clear();
+    found.combine_each(
+        [&](const std::vector<uint64_t>& v) { attribution->insert(attribution->end(), v.begin(), v.end()); });
+  }
+  return count.combine([](size_t a, size_t b) { return a + b; });
 }
 
 std::vector<FeatherPairCount> groupPairs(std::vector<uint64_t>& keys) {
@@ -273,7 +336,7 @@ std::vector<uint8_t> insideSkin(const SkinMesh& skin, const SkinSign& sign, cons
       // keeps faces at exactly that distance and breaks ties by index), so the answer is the one of
       // an unbounded search, found sooner.
       double bound = std::numeric_limits<double>::infinity();
-      if (last >= 0) {
+      if (last >= 0 && !o.reference) {
         const auto& t = skin.faces[static_cast<size_t>(last)];
         const dvec3 d = closestPointOnTriangle(p, skin.positions[t[0]], skin.positions[t[1]], skin.positions[t[2]]) - p;
         bound = glm::dot(d, d);
@@ -383,13 +446,18 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
   auto body = [&] {
     if (!whole(0)) return;
     std::optional<CoatBvh> cb;
-    if (o.intersections || coverage) {
+    detail::TriangleBvh wholeTree;  // CheckOptions::reference: the coverage rays' tree
+    if (o.reference) {
+      if (coverage) wholeTree.build(coat.positions.data(), coat.indices.data(), coat.triangleCount());
+    } else if (o.intersections || coverage) {
       cb.emplace(coat, next(wBuild));
       if (!cb->complete) return;
     }
     if (o.intersections) {
       std::vector<uint64_t> keys;
-      const std::optional<size_t> pairs = intersectingPairs(*cb, o.attribute ? &keys : nullptr, nullptr, next(wPairs));
+      const std::optional<size_t> pairs =
+          o.reference ? std::optional<size_t>(referencePairs(coat, o.attribute ? &keys : nullptr))
+                      : intersectingPairs(*cb, o.attribute ? &keys : nullptr, nullptr, next(wPairs));
       if (!pairs) return;
       res.intersectingPairs = *pairs;
       if (o.attribute) res.featherPairs = groupPairs(keys);
@@ -428,7 +496,6 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
           acc += skin.faceAreas[faces[k]];
           cdf[k] = acc;
         }
-        const CoatBvh& bvh = *cb;
         const double off = o.rayOffset > 0 ? o.rayOffset : 1e-6 * diag;
         const double tMax = o.maxRayDistance > 0 ? o.maxRayDistance : std::numeric_limits<double>::infinity();
         const size_t ns = acc > 0 ? o.coverageSamples : 0;
@@ -450,7 +517,8 @@ CheckResult check(const SkinMesh& skin, const std::vector<uint32_t>& tractFaces,
             const dvec3 bary(1 - a - b, a, b);
             const dvec3 p = pointAt(skin, f, bary);
             const dvec3 n = normalAt(skin, f, bary);
-            const bool hit = bvh.anyHit(p + off * skin.faceNormals[f], n, 0.0, tMax);
+            const dvec3 origin = p + off * skin.faceNormals[f];
+            const bool hit = o.reference ? wholeTree.anyHit(origin, n, 0.0, tMax) : cb->anyHit(origin, n, 0.0, tMax);
             if (hit) ++hits;
             if (o.attribute) {
               faceSamples[f].fetch_add(1, std::memory_order_relaxed);

@@ -328,7 +328,7 @@ double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a
 
 namespace {
 
-double boxDist2(const TriangleBvh::Node& n, const glm::dvec3& p) {
+inline __attribute__((always_inline)) double boxDist2(const TriangleBvh::Node& n, const glm::dvec3& p) {
   double d2 = 0;
   for (int k = 0; k < 3; ++k) {
     const double v = p[k] < n.lo[k] ? n.lo[k] - p[k] : (p[k] > n.hi[k] ? p[k] - n.hi[k] : 0.0);
@@ -343,12 +343,19 @@ int64_t TriangleBvh::nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& b
   int64_t best = -1;
   double bestD = maxDist2;
   if (nodes_.empty()) return best;
-  // Nodes with their box distance, computed once (when the parent ranks its children).
-  std::pair<uint32_t, double> stack[128];
+  // Nodes with their box distance, computed once (when the parent ranks its children). Left
+  // uninitialised: only the entries pushed are read.
+  struct Entry {
+    uint32_t node;
+    double d2;
+  };
+  Entry stack[128];
   int sp = 0;
   stack[sp++] = {0u, boxDist2(nodes_[0], p)};
   while (sp > 0) {
-    const auto [ni, nd] = stack[--sp];
+    const uint32_t ni = stack[sp - 1].node;
+    const double nd = stack[sp - 1].d2;
+    --sp;
     const Node& n = nodes_[ni];
     if (nd > bestD) continue;
     if (n.count > 0) {
@@ -456,22 +463,33 @@ bool interval(const double p[3], const double d[3], double& t0, double& t1) {
 
 }  // namespace
 
+TriangleShape triangleShape(const V3& a0, const V3& a1, const V3& a2) {
+  TriangleShape s;
+  s.normalLength = glm::length(glm::cross(a1 - a0, a2 - a0));
+  // The longest edge: the maximum of the three lengths is the same whichever order they come in.
+  s.longestEdge = std::max({glm::length(a0 - a1), glm::length(a1 - a2), glm::length(a2 - a0)});
+  return s;
+}
+
 bool trianglesIntersect(const V3& a0, const V3& a1, const V3& a2, const V3& b0, const V3& b1, const V3& b2) {
+  return trianglesIntersect(a0, a1, a2, triangleShape(a0, a1, a2), b0, b1, b2, triangleShape(b0, b1, b2));
+}
+
+bool trianglesIntersect(const V3& a0, const V3& a1, const V3& a2, const TriangleShape& sa, const V3& b0, const V3& b1,
+                        const V3& b2, const TriangleShape& sb) {
+  if (sa.degenerate() || sb.degenerate()) return false;
+  const double lna = sa.normalLength, lnb = sb.normalLength;
   const V3 A[3] = {a0, a1, a2}, B[3] = {b0, b1, b2};
+  // Both triangles' edges, relative to which "touching" is judged.
+  const double eps = 1e-12 * std::max(sa.longestEdge, sb.longestEdge);
   const V3 nb = glm::cross(b1 - b0, b2 - b0);
-  const V3 na = glm::cross(a1 - a0, a2 - a0);
-  const double lnb = glm::length(nb), lna = glm::length(na);
-  if (!(lnb > 0) || !(lna > 0)) return false;
-  double scale = 0;
-  for (int k = 0; k < 3; ++k)
-    scale = std::max({scale, glm::length(A[k] - A[(k + 1) % 3]), glm::length(B[k] - B[(k + 1) % 3])});
-  const double eps = 1e-12 * scale;
   double da[3], db[3];
   for (int k = 0; k < 3; ++k) {
     da[k] = glm::dot(nb, A[k] - b0) / lnb;
     if (std::abs(da[k]) < eps) da[k] = 0;
   }
   if ((da[0] > 0 && da[1] > 0 && da[2] > 0) || (da[0] < 0 && da[1] < 0 && da[2] < 0)) return false;
+  const V3 na = glm::cross(a1 - a0, a2 - a0);
   for (int k = 0; k < 3; ++k) {
     db[k] = glm::dot(na, B[k] - a0) / lna;
     if (std::abs(db[k]) < eps) db[k] = 0;

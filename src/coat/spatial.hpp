@@ -304,4 +304,15 @@ bool TriangleBvh::anyLeafHit(const glm::dvec3& origin, const glm::dvec3& dir, do
 bool trianglesIntersect(const glm::dvec3& a0, const glm::dvec3& a1, const glm::dvec3& a2, const glm::dvec3& b0,
                         const glm::dvec3& b1, const glm::dvec3& b2);
 
+// What trianglesIntersect computes of each triangle alone (the square roots), made once per triangle
+// when it meets many others. The overload below gives the very answer of the one above.
+struct TriangleShape {
+  double normalLength = 0;  // |(a1 - a0) x (a2 - a0)|; not > 0: degenerate, never intersects
+  double longestEdge = 0;
+  bool degenerate() const { return !(normalLength > 0); }
+};
+TriangleShape triangleShape(const glm::dvec3& a0, const glm::dvec3& a1, const glm::dvec3& a2);
+bool trianglesIntersect(const glm::dvec3& a0, const glm::dvec3& a1, const glm::dvec3& a2, const TriangleShape& sa,
+                        const glm::dvec3& b0, const glm::dvec3& b1, const glm::dvec3& b2, const TriangleShape& sb);
+
 }  // namespace pteryla::coat::detail

@@ -290,3 +290,134 @@ TEST(FastCheck, ProgressMovesAndAFalseReturnStops) {
   EXPECT_EQ(coat::countIntersectingPairs(m, pteryla::ProgressFn([](const std::string&, double) { return true; })),
             std::optional<size_t>(full.intersectingPairs));
 }
+
+TEST(FastCheck, TriangleTestWithShapesIsTheFullTest) {
+  // The overload that takes each triangle's square roots made once answers exactly as the plain test,
+  // on random pairs and on the cases its tolerances decide: touching at a vertex or an edge, coplanar
+  // overlapping and apart, a vertex 1e-13 off the other's plane, degenerate and collapsed triangles.
+  auto both = [](const dvec3& a0, const dvec3& a1, const dvec3& a2, const dvec3& b0, const dvec3& b1, const dvec3& b2) {
+    const bool plain = detail::trianglesIntersect(a0, a1, a2, b0, b1, b2);
+    const bool shaped = detail::trianglesIntersect(a0, a1, a2, detail::triangleShape(a0, a1, a2), b0, b1, b2,
+                                                   detail::triangleShape(b0, b1, b2));
+    EXPECT_EQ(plain, shaped);
+    return plain;
+  };
+  const dvec3 a0(0, 0, 0), a1(1, 0, 0), a2(0, 1, 0);
+  EXPECT_TRUE(both(a0, a1, a2, {0.2, 0.2, -1}, {0.3, 0.2, 1}, {0.2, 0.3, 1}));     // crossing
+  EXPECT_TRUE(both(a0, a1, a2, {1, 0, 0}, {2, 0, 1}, {2, 1, 1}));                  // a shared vertex
+  EXPECT_TRUE(both(a0, a1, a2, {0, 0, 0}, {1, 0, 0}, {0.5, -1, 0.5}));             // a shared edge
+  EXPECT_TRUE(both(a0, a1, a2, {0.1, 0.1, 0}, {2, 0.1, 0}, {0.1, 2, 0}));          // coplanar, overlapping
+  EXPECT_FALSE(both(a0, a1, a2, {1, 1, 0}, {2, 1, 0}, {1, 2, 0}));                 // coplanar, apart
+  EXPECT_TRUE(both(a0, a1, a2, {0.2, 0.2, 1e-13}, {0.3, 0.2, 1}, {0.2, 0.3, 1}));  // touching within eps
+  EXPECT_FALSE(both(a0, a1, a2, {0.2, 0.2, 1e-6}, {0.3, 0.2, 1}, {0.2, 0.3, 1}));  // just above
+  EXPECT_FALSE(both(a0, a1, a2, {0.2, 0.2, -1}, {0.2, 0.2, 0}, {0.2, 0.2, 1}));    // degenerate (a segment)
+  EXPECT_FALSE(both(a0, a1, a2, {0.2, 0.2, 0}, {0.2, 0.2, 0}, {0.2, 0.2, 0}));     // collapsed to a point
+  pteryla::Rng rng(17);
+  size_t crossing = 0;
+  for (int k = 0; k < 20000; ++k) {
+    dvec3 p[6];
+    for (auto& q : p) q = dvec3(rng.uniform(0, 1), rng.uniform(0, 1), rng.uniform(0, 1));
+    if (k % 4 == 0) p[3] = p[0];            // share a vertex
+    if (k % 4 == 1) p[5].z = p[2].z = 0.5;  // vertices on one level
+    crossing += both(p[0], p[1], p[2], p[3], p[4], p[5]);
+  }
+  EXPECT_GT(crossing, 1000u);
+}
+
+namespace {
+
+// Every number check() gives, fast against CheckOptions::reference (one tree over the coat, from-scratch
+// triangle tests, unbounded nearest-skin searches).
+void expectSameAsReference(const coat::SkinMesh& skin, const std::vector<uint32_t>& tractFaces, const TriMesh& m,
+                           coat::CheckOptions o) {
+  o.attribute = true;
+  o.reference = false;
+  const coat::CheckResult fast = coat::check(skin, tractFaces, m, o);
+  o.reference = true;
+  const coat::CheckResult ref = coat::check(skin, tractFaces, m, o);
+  ASSERT_TRUE(fast.complete);
+  ASSERT_TRUE(ref.complete);
+  EXPECT_EQ(fast.intersectingPairs, ref.intersectingPairs);
+  EXPECT_EQ(fast.coatTriangles, ref.coatTriangles);
+  EXPECT_EQ(fast.skinPenetrations, ref.skinPenetrations);
+  EXPECT_EQ(fast.samplePoints, ref.samplePoints);
+  EXPECT_EQ(fast.penetratingFeathers, ref.penetratingFeathers);
+  EXPECT_EQ(fast.coverage, ref.coverage);
+  EXPECT_EQ(fast.coveredSamples, ref.coveredSamples);
+  EXPECT_EQ(fast.featherPenetrations, ref.featherPenetrations);
+  EXPECT_EQ(fast.faceSamples, ref.faceSamples);
+  EXPECT_EQ(fast.faceUncovered, ref.faceUncovered);
+  ASSERT_EQ(fast.featherPairs.size(), ref.featherPairs.size());
+  for (size_t k = 0; k < fast.featherPairs.size(); ++k) {
+    EXPECT_EQ(fast.featherPairs[k].a, ref.featherPairs[k].a);
+    EXPECT_EQ(fast.featherPairs[k].b, ref.featherPairs[k].b);
+    EXPECT_EQ(fast.featherPairs[k].pairs, ref.featherPairs[k].pairs);
+  }
+}
+
+}  // namespace
+
+TEST(FastCheck, AdversarialCoatsGiveTheReferenceNumbers) {
+  const coat::SkinMesh skin = sphereSkin(1.0, 14, 20);
+  coat::CheckOptions o;
+  o.coverageSamples = 1500;
+  o.seed = 3;
+  // Feathers as fans of quads over the sphere, each touching the next along a shared edge position
+  // (separate vertices, equal coordinates), the next one's tip pushed under the skin, and every third
+  // feather with triangles collapsed to a point (as the drape trims them) and one hidden entirely.
+  TriMesh m;
+  const int feathers = 24;
+  for (int f = 0; f < feathers; ++f) {
+    const double ph = 2 * kPi * f / feathers, ph1 = 2 * kPi * (f + 1) / feathers;
+    const uint32_t base = static_cast<uint32_t>(m.positions.size());
+    for (int k = 0; k <= 6; ++k) {
+      const double th = 0.3 + 0.15 * k;
+      const double r = (f % 5 == 1 && k == 6) ? 0.8 : 1.05 + 0.01 * (f % 2);  // a tip under the skin
+      for (const double p : {ph, ph1}) {
+        m.positions.emplace_back(
+            dvec3(r * std::sin(th) * std::cos(p), r * std::sin(th) * std::sin(p), r * std::cos(th)));
+        m.featherId.push_back(static_cast<uint32_t>(f));
+      }
+    }
+    for (uint32_t k = 0; k < 6; ++k) {
+      const uint32_t a = base + 2 * k, b = a + 1, c = a + 2, d = a + 3;
+      m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+    }
+    // A cross-piece standing through the previous feather's fan.
+    const uint32_t s = static_cast<uint32_t>(m.positions.size());
+    for (const double r : {0.98, 1.12})
+      for (const double th : {0.6, 0.9}) {
+        m.positions.emplace_back(
+            dvec3(r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph), r * std::cos(th)));
+        m.featherId.push_back(static_cast<uint32_t>(f));
+      }
+    m.indices.insert(m.indices.end(), {s, s + 1, s + 3, s, s + 3, s + 2});
+    if (f % 3 == 0)
+      for (size_t t = m.indices.size() / 3 - 4; t < m.indices.size() / 3; ++t)
+        m.indices[3 * t + 1] = m.indices[3 * t + 2] = m.indices[3 * t];
+    if (f == 7)
+      for (size_t t = (m.indices.size() - 3 * 14) / 3; t < m.indices.size() / 3; ++t)
+        m.indices[3 * t + 1] = m.indices[3 * t + 2] = m.indices[3 * t];
+  }
+  m.normals.assign(m.positions.size(), glm::vec3(0, 0, 1));
+  const coat::CheckResult r = coat::check(skin, {}, m, o);
+  ASSERT_TRUE(r.complete);
+  EXPECT_GT(r.intersectingPairs, 0u) << "neighbours touch and cross-pieces cross";
+  EXPECT_GT(r.skinPenetrations, 0u) << "tips under the skin";
+  expectSameAsReference(skin, {}, m, o);
+  // With the calamus exemption and a tract of half the faces.
+  std::vector<uint32_t> half;
+  for (uint32_t f = 0; f < skin.faces.size(); f += 2) half.push_back(f);
+  coat::CheckOptions bases = o;
+  for (int f = 0; f < feathers; ++f) {
+    bases.featherOrigins.push_back(dvec3(m.positions[static_cast<size_t>(f) * 18]));
+    bases.featherBaseRadius.push_back(0.1);
+  }
+  expectSameAsReference(skin, half, m, bases);
+  // The soups, grouped and shuffled, over a sphere.
+  for (const bool shuffled : {false, true}) {
+    TriMesh s = soup(3000, 90, 11, shuffled);
+    for (auto& p : s.positions) p = glm::vec3(dvec3(p) * 2.0 - dvec3(1, 1, 0.2));
+    expectSameAsReference(skin, {}, s, o);
+  }
+}

@@ -38,6 +38,10 @@ struct CheckOptions {
   std::vector<glm::dvec3> featherOrigins;
   std::vector<double> featherBaseRadius;
   int threads = 0;  // 0 = all available
+  // The straightforward search, kept to test the fast one against (same numbers, slower): one BVH over
+  // the whole coat whose self-traversal gives the candidate pairs and which the coverage rays walk,
+  // Moeller's test computed from scratch for each candidate, an unbounded nearest-skin search per vertex.
+  bool reference = false;
   // Diagnostics: also list which feathers the intersecting pairs and skin penetrations belong to
   // (CheckResult::featherPairs, featherPenetrations). The counts are the same either way.
   bool attribute = false;
