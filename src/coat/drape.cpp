@@ -283,13 +283,19 @@ void layChart(Chart& C, CoatTop& top, AirTop& air, double gap, double maxSlope, 
     req[j] = highest + gap + n.sag;
     if (n.free) req[j] = std::max(req[j], air.highest(n.c, n.n, 0.25 * (C.nx - 1) * C.hx) + gap);
   }
+  // Every node's height becomes the largest of the (pre-envelope) heights less maxSlope x distance. The
+  // nodes are visited by height, highest first, so each node stops at the first one no higher than
+  // itself: the same maximum, without the pairs that cannot raise it.
+  std::vector<uint32_t> byHeight(idx.size());
   auto envelope = [&] {
     for (size_t j = 0; j < idx.size(); ++j) req[j] = C.nodes[idx[j]].h;
+    for (size_t j = 0; j < idx.size(); ++j) byHeight[j] = static_cast<uint32_t>(j);
+    std::sort(byHeight.begin(), byHeight.end(), [&](uint32_t x, uint32_t y) { return req[x] > req[y]; });
     for (size_t j = 0; j < idx.size(); ++j) {
       const int aj = idx[j] / C.ny, bj = idx[j] % C.ny;
       double h = req[j];
-      for (size_t m = 0; m < idx.size(); ++m) {
-        if (req[m] <= h) continue;
+      for (const uint32_t m : byHeight) {
+        if (req[m] <= h) break;
         const double dx = (idx[m] / C.ny - aj) * C.hx, dy = (idx[m] % C.ny - bj) * C.hy;
         h = std::max(h, req[m] - maxSlope * std::sqrt(dx * dx + dy * dy));
       }
@@ -543,32 +549,63 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   }
   std::vector<uint8_t> overFollicle(nt, 0);
   {
+    // Per feather the later follicles within reach of its surface points (from the grid, once), then
+    // per triangle those whose root zone its box comes near: the follicles the test below can find.
     detail::PointGrid grid;
     grid.build(origins, std::max(reachMax, 1e-12));
+    std::vector<uint32_t> trisOf(n + 1, 0), tris(nt);  // triangles per feather (CSR)
+    for (size_t t = 0; t < nt; ++t) ++trisOf[mesh.featherId[mesh.indices[3 * t]] + 1];
+    for (size_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
+    {
+      std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
+      for (size_t t = 0; t < nt; ++t) tris[fill[mesh.featherId[mesh.indices[3 * t]]]++] = static_cast<uint32_t>(t);
+    }
     detail::inArena(o.threads, [&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, nt, 1024), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t t = r.begin(); t < r.end(); ++t) {
-          const uint32_t* tri = &mesh.indices[3 * t];
-          const uint32_t i = mesh.featherId[tri[0]];
-          if (rank[i] < 0 || bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) continue;
-          const dvec3 a(surfacePoint[tri[0]]), b(surfacePoint[tri[1]]), c(surfacePoint[tri[2]]);
-          const dvec3 lo = glm::min(a, glm::min(b, c)) - dvec3(reachMax),
-                      hi = glm::max(a, glm::max(b, c)) + dvec3(reachMax);
-          grid.query(lo, hi, [&](uint32_t j) {
-            if (static_cast<int64_t>(j) <= rank[i] || overFollicle[t]) return;
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        struct Later {
+          dvec3 g;
+          double rj, reach;  // the root zone's radius; how far from a triangle's box it can matter
+        };
+        std::vector<Later> later;
+        for (size_t k = r.begin(); k < r.end(); ++k) {
+          const uint32_t i = order[k];
+          detail::Box fb;
+          for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q)
+            for (int c = 0; c < 3; ++c) fb.add(dvec3(surfacePoint[mesh.indices[3 * static_cast<size_t>(tris[q]) + c]]));
+          if (fb.empty()) continue;
+          later.clear();
+          grid.query(fb.lo - dvec3(reachMax), fb.hi + dvec3(reachMax), [&](uint32_t j) {
+            if (j <= k) return;
             const uint32_t f = order[j];
             const dvec3& g = coat.frames[f].origin;
             const double rj = charts[f].ramp + 0.5 * coat.params[f].rachisWidth;
-            const dvec3 q = closestPointOnTriangle(g, a, b, c);
-            if (glm::dot(q - g, q - g) < rj * rj) overFollicle[t] = 1;
+            // A little past rj: the closest point's rounding never matters.
+            const double reach = rj + 1e-6 * (rj + std::max({std::abs(g.x), std::abs(g.y), std::abs(g.z)}));
+            later.push_back({g, rj, reach});
           });
+          if (later.empty()) continue;
+          for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
+            const uint32_t t = tris[q];
+            const uint32_t* tri = &mesh.indices[3 * static_cast<size_t>(t)];
+            if (bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) continue;
+            const dvec3 a(surfacePoint[tri[0]]), b(surfacePoint[tri[1]]), c(surfacePoint[tri[2]]);
+            const dvec3 lo = glm::min(a, glm::min(b, c)), hi = glm::max(a, glm::max(b, c));
+            for (const Later& L : later) {
+              const dvec3& g = L.g;
+              if (g.x < lo.x - L.reach || g.y < lo.y - L.reach || g.z < lo.z - L.reach || g.x > hi.x + L.reach ||
+                  g.y > hi.y + L.reach || g.z > hi.z + L.reach)
+                continue;
+              const dvec3 cq = closestPointOnTriangle(g, a, b, c);
+              if (glm::dot(cq - g, cq - g) < L.rj * L.rj) {
+                overFollicle[t] = 1;
+                break;
+              }
+            }
+          }
         }
       });
     });
   }
-  // The guarantee, with the checker's own tests: vertices inside the skin (a fold the chart did not see,
-  // another body part) are trimmed; then, of every pair of crossing triangles, the lower feather's (the
-  // upper one covers it there).
   {
     CheckOptions co;
     setFeatherBases(co, coat, o.baseAllowance);
