@@ -399,10 +399,22 @@ std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat) {
   return tris;
 }
 
+std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat, const ProgressFn& progress) {
+  const Progress whole{progress ? &progress : nullptr, 0, 1};
+  std::vector<uint64_t> tris;
+  if (!whole(0)) return tris;
+  if (coat.triangleCount() >= 2) {
+    const CoatBvh cb(coat, whole.part(0, 0.3));
+    if (!cb.complete || !intersectingPairs(cb, nullptr, &tris, whole.part(0.3, 1))) return {};
+  }
+  whole(1);
+  return tris;
+}
+
 std::vector<uint8_t> verticesInsideSkin(const SkinMesh& skin, const TriMesh& coat, const CheckOptions& o) {
   if (skin.faces.empty()) return std::vector<uint8_t>(coat.positions.size(), 0);
   const double tol = o.skinTolerance > 0 ? o.skinTolerance : 1e-6 * diagonal(skin);
-  return insideSkin(skin, buildSign(skin), coat, o, tol);
+  return insideSkin(skin, buildSign(skin), coat, o, tol, Progress{o.progress ? &o.progress : nullptr, 0, 1});
 }
 
 std::vector<FeatherPairCount> intersectingFeatherPairs(const TriMesh& coat, int threads) {

@@ -366,6 +366,16 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
       order.push_back(i);
     }
   if (order.empty()) return res;
+  // Progress after each step, at the share of the bird's drape done by then.
+  auto step = [&](double f) { report(o.progress, "drape", f); };
+  auto within = [&](double lo, double hi) -> ProgressFn {
+    if (!o.progress) return {};
+    return [&o, lo, hi](const std::string&, double f) {
+      report(o.progress, "drape", lo + (hi - lo) * f);
+      return true;
+    };
+  };
+  step(0);
   const Surface S(skin);
   std::vector<Chart> charts(n);
   // Longest triangle edge per feather as meshed (flat): its chords dip below the skin-following surface by
@@ -416,6 +426,7 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
       });
     });
   }
+  step(0.03);
   std::vector<double> lengths;
   detail::inArena(o.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
@@ -444,7 +455,9 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   double spacing = std::max(0.75 * steps[steps.size() / 2], 1e-12);
   const double area = skin.totalArea();
   if (area / (spacing * spacing) > 8e6) spacing = std::sqrt(area / 8e6);  // at most about 8M samples
+  step(0.14);
   CoatTop top(skin, spacing);
+  step(0.16);
   {
     std::vector<double> req;
     double airRadius = 1.5 * spacing;
@@ -455,7 +468,9 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
         for (size_t k = r.begin(); k < r.end(); ++k) gatherSamples(charts[order[k]], top, 1.5 * spacing);
       });
     });
+    step(0.37);
     for (uint32_t i : order) layChart(charts[i], top, air, gap, o.maxSlope, req);
+    step(0.46);
   }
   // A node whose lifted point has other skin closer than half its height sits in a fold: not draped.
   // (Thin parts keep their coat: a node's height goes out along its own normal, away from the other
@@ -536,6 +551,7 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
       }
     });
   });
+  step(0.5);
   const size_t nt = mesh.triangleCount();
   // Trim lower feathers' material over a later feather's follicle, where that feather rises out of the
   // skin: every triangle whose surface projection comes within the later feather's root zone (its calamus
@@ -607,8 +623,10 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
     });
   }
   {
+    step(0.53);
     CheckOptions co;
     setFeatherBases(co, coat, o.baseAllowance);
+    co.progress = within(0.53, 0.65);
     const std::vector<uint8_t> inside = verticesInsideSkin(skin, mesh, co);
     for (uint32_t v = 0; v < nv; ++v)
       if (inside[v] && rank[mesh.featherId[v]] >= 0) bad[v] = 1;
@@ -628,7 +646,7 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   // Trimmed vertices serve only collapsed triangles: park them at their follicle.
   for (uint32_t v = 0; v < nv; ++v)
     if (bad[v] && rank[mesh.featherId[v]] >= 0) mesh.positions[v] = glm::vec3(coat.frames[mesh.featherId[v]].origin);
-  for (uint64_t pr : intersectingTrianglePairs(mesh)) {
+  for (uint64_t pr : intersectingTrianglePairs(mesh, within(0.65, 1))) {
     const size_t t = pr >> 32, u = pr & 0xffffffffu;
     const uint32_t ft = mesh.featherId[mesh.indices[3 * t]], fu = mesh.featherId[mesh.indices[3 * u]];
     if (rank[ft] < 0 || rank[fu] < 0) continue;

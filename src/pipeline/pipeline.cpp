@@ -6,8 +6,10 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -223,6 +225,12 @@ void Pipeline::Impl::computeMesh() {
     dopt.maxSlope = std::tan(packOptions.drapeMaxSlopeDeg * feather::kPi / 180.0);
     dopt.threads = packOptions.threads;
     dopt.baseAllowance = packOptions.baseAllowance;
+    // The drape is most of the mesh stage's time: its steps move the stage's progress.
+    report(progress, "mesh", 0.1);
+    dopt.progress = [this](const std::string&, double f) {
+      report(progress, "mesh", 0.1 + 0.9 * f);
+      return true;
+    };
     drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt);
   }
   const std::vector<uint32_t>& which = mesher.feathers();
@@ -398,40 +406,92 @@ TriMesh Pipeline::skinTriMesh() { return coat::toTriMesh(posedSkin()); }
 
 QualityMetrics Pipeline::check() {
   QualityMetrics m;
-  // Progress "check" over its parts: the tracts' distribution to 10%, the checker (pairs, skin,
-  // coverage) to 75%, then the proxy coats' pair counts. A callback returning false stops it: the
-  // metrics not computed yet stay empty.
+  // Progress "check" over its parts, reported on the calling thread: the coat at full detail to 50%
+  // (the mesh stage reports its own progress meanwhile), the checker (pairs, skin, coverage) to 85%,
+  // and to 100% what runs beside them (below). A callback returning false stops it: the metrics not
+  // computed yet stay empty.
   bool stopped = false;
+  // What depends on neither the full-detail mesh nor the checker runs beside them as one TBB task, on
+  // whichever core the mesh and the checker leave idle (the drape's layering and the tracts' metrics
+  // have serial steps): the tracts' distribution metrics and the proxy coats' pair counts. It reports
+  // through `aside` (its share done) and stops when `quit` is set.
+  std::atomic<double> aside{0};
+  std::atomic<bool> quit{false};
   auto part = [&](double lo, double hi) -> ProgressFn {
-    return [this, lo, hi, &stopped](const std::string&, double x) {
-      if (!report(impl_->progress, "check", lo + (hi - lo) * x)) stopped = true;
+    return [this, lo, hi, &stopped, &aside](const std::string&, double x) {
+      const double fore = lo + (hi - lo) * std::clamp(x, 0.0, 1.0);
+      if (!report(impl_->progress, "check", 0.85 * fore + 0.15 * aside.load())) stopped = true;
       return !stopped;
     };
   };
   const auto& f = follicles();
   m.follicles = f.size();
-  double hexSum = 0, cvSum = 0;
-  size_t interior = 0;
-  const ProgressFn tractsDone = part(0, 0.1);
-  if (!tractsDone("check", 0)) return m;
-  for (size_t i = 0; i < impl_->tracts.size(); ++i) {
-    const auto d = coat::measureDistribution(impl_->rest, impl_->tracts[i], f);
-    hexSum += d.hexFraction * double(d.interior);
-    cvSum += d.nnCv * double(d.interior);
-    interior += d.interior;
-    if (!tractsDone("check", double(i + 1) / double(impl_->tracts.size()))) return m;
-  }
-  if (interior > 0) {
-    m.hexFraction = hexSum / double(interior);
-    m.nnCv = cvSum / double(interior);
-  }
+  const ProgressFn start = part(0, 0);
+  if (!start("check", 0)) return m;
   const auto& coat = feathers();
   size_t present = 0;
   for (auto p : coat.present) present += p ? 1 : 0;
   m.feathers = present;
   const bool draped = impl_->packOptions.method == coat::PackMethod::Drape;
-  // The independent checker (coat/check.hpp) on the coat at full geometry, and on the same coat before
-  // packing: every feather at the packed coat's median elevation with its unpacked key barbs.
+  Impl& im = *impl_;
+
+  // Beside: per tract its distribution, the packed proxy coat's pairs (height-field packing), and the
+  // unpacked coat's pairs, from the input alone: every feather at kUnpackedElevationDeg with its own key
+  // barbs (remembered with the coat it was counted on).
+  std::vector<coat::DistributionMetrics> tractMetrics(im.tracts.size());
+  std::optional<size_t> proxyPairs, unpackedPairs;
+  TriMesh unpacked;
+  bool unpackedReused = false;
+  auto besideProgress = [&](double lo, double hi) -> ProgressFn {
+    return [&aside, &quit, lo, hi](const std::string&, double x) {
+      aside.store(lo + (hi - lo) * std::clamp(x, 0.0, 1.0));
+      return !quit.load();
+    };
+  };
+  auto beside = [&] {
+    for (size_t i = 0; i < im.tracts.size() && !quit.load(); ++i) {
+      tractMetrics[i] = coat::measureDistribution(im.rest, im.tracts[i], f);
+      aside.store(0.1 * double(i + 1) / double(im.tracts.size()));
+    }
+    if (quit.load()) return;
+    if (!draped) {
+      const TriMesh packedProxy =
+          coat::proxyCoatMesh(im.coatNow, im.packed->elevation, coat::allPackedParams(*im.packedCoat, *im.packed));
+      proxyPairs = coat::countIntersectingPairs(packedProxy, besideProgress(0.1, 0.4));
+      if (!proxyPairs) return;
+    }
+    const std::vector<double> flat(im.coatNow.size(), kUnpackedElevationDeg * feather::kPi / 180.0);
+    unpacked = coat::proxyCoatMesh(im.coatNow, flat, im.coatNow.params);
+    if (im.lastUnpackedPairs && unpacked.positions == im.lastUnpacked.positions &&
+        unpacked.indices == im.lastUnpacked.indices && unpacked.featherId == im.lastUnpacked.featherId) {
+      unpackedPairs = im.lastUnpackedPairs;
+      unpackedReused = true;
+    } else {
+      unpackedPairs = coat::countIntersectingPairs(unpacked, besideProgress(draped ? 0.1 : 0.4, 1));
+    }
+    aside.store(1);
+  };
+  tbb::task_group group;
+  // Waits for the task however check() leaves (a cancel may throw out of the mesh stage).
+  struct Join {
+    tbb::task_group& group;
+    std::atomic<bool>& quit;
+    bool done = false;
+    void wait() {
+      if (!done) group.wait();
+      done = true;
+    }
+    ~Join() {
+      quit.store(true);
+      try {
+        wait();
+      } catch (...) {
+      }
+    }
+  } join{group, quit};
+  group.run(beside);
+
+  // The independent checker (coat/check.hpp) on the coat at full geometry.
   const double savedLod = impl_->lod;
   setLod(1.0);
   const TriMesh& full = coatMesh().mesh;
@@ -442,12 +502,30 @@ QualityMetrics Pipeline::check() {
   coat::CheckOptions co;
   co.seed = impl_->scene.seed;
   co.attribute = true;  // which feathers intersect or penetrate (the counts are the same either way)
-  co.progress = part(0.1, 0.75);
+  co.progress = part(0.5, 1);
+  if (!co.progress("check", 0)) {
+    setLod(savedLod);
+    return m;
+  }
   coat::setFeatherBases(co, impl_->coatNow, impl_->packOptions.baseAllowance);
   const coat::CheckResult r = coat::check(impl_->posed, tractFaces, full, co);
   if (!r.complete) {
     setLod(savedLod);
     return m;
+  }
+  join.wait();
+  const ProgressFn end = part(1, 1);
+  // The tracts' distribution, weighted by their interior follicles.
+  double hexSum = 0, cvSum = 0;
+  size_t interior = 0;
+  for (const coat::DistributionMetrics& d : tractMetrics) {
+    hexSum += d.hexFraction * double(d.interior);
+    cvSum += d.nnCv * double(d.interior);
+    interior += d.interior;
+  }
+  if (interior > 0) {
+    m.hexFraction = hexSum / double(interior);
+    m.nnCv = cvSum / double(interior);
   }
   m.intersectingPairs = r.intersectingPairs;
   m.skinPenetrations = r.skinPenetrations;
@@ -474,28 +552,13 @@ QualityMetrics Pipeline::check() {
     m.fixedFeathers = impl_->drape.stats.trimmedFeathers;
     m.hiddenFeathers = impl_->drape.stats.hiddenFeathers;
   }
-  if (!draped) {
-    const TriMesh packedProxy = coat::proxyCoatMesh(impl_->coatNow, impl_->packed->elevation,
-                                                    coat::allPackedParams(*impl_->packedCoat, *impl_->packed));
-    m.intersectingPairsProxy = coat::countIntersectingPairs(packedProxy, part(0.75, 0.85));
-    if (!m.intersectingPairsProxy) {
-      setLod(savedLod);
-      return m;
-    }
-  }
-  // The unpacked coat, from the input alone: every feather at kUnpackedElevationDeg with its own key barbs.
-  const std::vector<double> flat(impl_->coatNow.size(), kUnpackedElevationDeg * feather::kPi / 180.0);
-  TriMesh unpacked = coat::proxyCoatMesh(impl_->coatNow, flat, impl_->coatNow.params);
-  Impl& im = *impl_;
-  if (im.lastUnpackedPairs && unpacked.positions == im.lastUnpacked.positions &&
-      unpacked.indices == im.lastUnpacked.indices && unpacked.featherId == im.lastUnpacked.featherId) {
-    m.intersectingPairsUnpacked = im.lastUnpackedPairs;
-    report(impl_->progress, "check", 1);
-  } else {
-    m.intersectingPairsUnpacked = coat::countIntersectingPairs(unpacked, part(draped ? 0.75 : 0.85, 1));
-    im.lastUnpackedPairs = m.intersectingPairsUnpacked;
+  m.intersectingPairsProxy = proxyPairs;
+  m.intersectingPairsUnpacked = unpackedPairs;
+  if (unpackedPairs && !unpackedReused) {
+    im.lastUnpackedPairs = unpackedPairs;
     im.lastUnpacked = std::move(unpacked);
   }
+  end("check", 1);
   setLod(savedLod);
   return m;
 }

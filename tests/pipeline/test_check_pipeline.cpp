@@ -17,6 +17,8 @@
 
 #include "../../src/coat/spatial.hpp"
 #include "pteryla/coat/check.hpp"
+#include "pteryla/coat/pack.hpp"
+#include "pteryla/coat/tracts.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
 
@@ -155,4 +157,74 @@ TEST(PipelineCheck, AThrowingCallbackLeavesTheCheckAndTheNextOneIsWhole) {
   EXPECT_EQ(again.intersectingPairsUnpacked, full.intersectingPairsUnpacked);
   EXPECT_EQ(again.skinPenetrations, full.skinPenetrations);
   EXPECT_EQ(again.coverage, full.coverage);
+}
+
+namespace {
+
+// A small draped scene: the sphere with 150 feathers.
+Scene drapedSphere() {
+  Json j = Json::parse(R"({"pteryla": 1, "seed": 3, "mesh": "meshes/sphere_1600.obj",
+    "feathers": {"contour": "feathers/contour.json"},
+    "tracts": [{"name": "all", "count": 150, "feather_scale": "auto", "feather_spacings": 3.0,
+                "parameterization": {"method": "projection", "view_direction": [0, -1, 0]}}],
+    "directions": {"axis": [[0, 1.5, 0], [0, -1.5, 0]]},
+    "ordering": {"method": "axis", "axis": [[0, 1.5, 0], [0, -1.5, 0]]},
+    "packing": {"method": "drape"}})");
+  return sceneFromJson(j, std::string(PTERYLA_DATA_DIR) + "/scene_test.json");
+}
+
+// coat::check with Pipeline::check's options on the pipeline's full-detail coat, fast and reference.
+void expectFastIsReference(Pipeline& p) {
+  p.setLod(1.0);
+  const TriMesh& mesh = p.coatMesh().mesh;
+  std::vector<uint32_t> tractFaces;
+  for (const auto& t : p.tracts()) tractFaces.insert(tractFaces.end(), t.faces.begin(), t.faces.end());
+  std::sort(tractFaces.begin(), tractFaces.end());
+  tractFaces.erase(std::unique(tractFaces.begin(), tractFaces.end()), tractFaces.end());
+  coat::CheckOptions o;
+  o.seed = p.scene().seed;
+  o.attribute = true;
+  coat::setFeatherBases(o, p.feathers(), coat::PackOptions{}.baseAllowance);
+  const coat::CheckResult fast = coat::check(p.posedSkin(), tractFaces, mesh, o);
+  o.reference = true;
+  const coat::CheckResult ref = coat::check(p.posedSkin(), tractFaces, mesh, o);
+  EXPECT_EQ(fast.intersectingPairs, ref.intersectingPairs);
+  EXPECT_EQ(fast.skinPenetrations, ref.skinPenetrations);
+  EXPECT_EQ(fast.penetratingFeathers, ref.penetratingFeathers);
+  EXPECT_EQ(fast.featherPenetrations, ref.featherPenetrations);
+  EXPECT_EQ(fast.coverage, ref.coverage);
+  EXPECT_EQ(fast.faceUncovered, ref.faceUncovered);
+  ASSERT_EQ(fast.featherPairs.size(), ref.featherPairs.size());
+  for (size_t k = 0; k < fast.featherPairs.size(); ++k) {
+    EXPECT_EQ(fast.featherPairs[k].a, ref.featherPairs[k].a);
+    EXPECT_EQ(fast.featherPairs[k].b, ref.featherPairs[k].b);
+    EXPECT_EQ(fast.featherPairs[k].pairs, ref.featherPairs[k].pairs);
+  }
+}
+
+}  // namespace
+
+TEST(PipelineCheck, FastCheckerGivesTheReferenceNumbersOnSmallScenes) {
+  // The packed patch (its coat crosses) and a draped sphere (trimmed, collapsed triangles).
+  Pipeline patchScene(patch(24));
+  expectFastIsReference(patchScene);
+  Pipeline sphere(drapedSphere());
+  expectFastIsReference(sphere);
+}
+
+TEST(PipelineCheck, TheDrapeMovesTheMeshStagesProgressAndLaysTheSameCoat) {
+  std::vector<double> mesh;
+  Pipeline watched(drapedSphere(), [&](const std::string& stage, double f) {
+    if (stage == "mesh") mesh.push_back(f);
+    return true;
+  });
+  Pipeline quiet(drapedSphere());
+  EXPECT_EQ(watched.coatMesh().mesh.positions, quiet.coatMesh().mesh.positions);
+  EXPECT_EQ(watched.coatMesh().mesh.indices, quiet.coatMesh().mesh.indices);
+  ASSERT_FALSE(mesh.empty());
+  EXPECT_EQ(mesh.front(), 0.0);
+  EXPECT_EQ(mesh.back(), 1.0);
+  EXPECT_TRUE(std::is_sorted(mesh.begin(), mesh.end()));
+  // The drape's steps and its checks' batches: many values between the ends.
+  EXPECT_GE(std::count_if(mesh.begin(), mesh.end(), [](double f) { return f > 0.1 && f < 1; }), 10);
 }

@@ -90,7 +90,10 @@ std::optional<size_t> countIntersectingPairs(const TriMesh& coat, const Progress
 std::vector<FeatherPairCount> intersectingFeatherPairs(const TriMesh& coat, int threads = 0);
 // Every intersecting triangle pair of different feathers as (t << 32 | u), t < u, sorted.
 std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat);
+// The same with progress ("check", as CheckOptions::progress): empty when the callback asked to stop.
+std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat, const ProgressFn& progress);
 // Per coat vertex: 1 when check() counts it as a skin penetration (the same test, the same exemptions).
+// Reports to options.progress during the search; empty when it asked to stop.
 std::vector<uint8_t> verticesInsideSkin(const SkinMesh& skin, const TriMesh& coat, const CheckOptions& options);
 
 // Fills featherOrigins / featherBaseRadius from the coat: radius = baseAllowance x total feather length

@@ -37,6 +37,7 @@
 
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/skin.hpp"
+#include "pteryla/core/progress.hpp"
 #include "pteryla/core/trimesh.hpp"
 
 namespace pteryla::coat {
@@ -49,6 +50,10 @@ struct DrapeOptions {
   double baseAllowance =
       0.08;         // fraction of a feather's length around its follicle the checks exempt (PackOptions::baseAllowance)
   int threads = 0;  // 0 = all cores
+  // Called on the calling thread with ("drape", fraction done) after each step and during the checker's
+  // tests of the last two. Its answer is ignored: a caller stops the drape by throwing from it (the
+  // mesh is then left half draped).
+  ProgressFn progress;
 };
 
 struct DrapeStats {
