@@ -185,8 +185,11 @@ class Pipeline {
   TriMesh skinTriMesh();
 
   // Runs the independent checker (and an unpacked evaluation for intersecting_pairs_unpacked) on the
-  // coat at full detail. Reports progress "check" through its parts; when the progress callback
-  // returns false it stops early and returns the metrics computed so far (the rest empty).
+  // coat at full detail. The tracts' distribution metrics and the proxy coats' pair counts run as a TBB
+  // task beside the full-detail mesh and the checker (the same numbers; it keeps an idle core busy).
+  // Reports progress "check" through its parts on the calling thread (the mesh stage reports "mesh"
+  // meanwhile); when the progress callback returns false (or throws) it stops early, after waiting for
+  // that task, and returns the metrics computed so far (the rest empty).
   QualityMetrics check();
 
   FrameReuse frameReuse() const;
