@@ -228,3 +228,27 @@ TEST(PipelineCheck, TheDrapeMovesTheMeshStagesProgressAndLaysTheSameCoat) {
   // The drape's steps and its checks' batches: many values between the ends.
   EXPECT_GE(std::count_if(mesh.begin(), mesh.end(), [](double f) { return f > 0.1 && f < 1; }), 10);
 }
+
+TEST(PipelineCheck, ACancelInsideTheDrapeLeavesTheNextMeshWhole) {
+  // The drape now reports progress, so a host can cancel (throw) half way through it: the mesh stage
+  // stays dirty, and the next evaluation lays the coat of a fresh pipeline, bit for bit.
+  struct Cancelled {};
+  bool cancel = true, thrown = false;
+  Pipeline p(drapedSphere(), [&](const std::string& stage, double f) {
+    if (cancel && stage == "mesh" && f > 0.6) {
+      thrown = true;
+      throw Cancelled{};
+    }
+    return true;
+  });
+  EXPECT_THROW(p.coatMesh(), Cancelled);
+  EXPECT_TRUE(thrown);
+  cancel = false;
+  Pipeline fresh(drapedSphere());
+  const TriMesh& a = p.coatMesh().mesh;
+  const TriMesh& b = fresh.coatMesh().mesh;
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.normals, b.normals);
+  EXPECT_EQ(a.indices, b.indices);
+  EXPECT_EQ(p.check().intersectingPairs, fresh.check().intersectingPairs);
+}
