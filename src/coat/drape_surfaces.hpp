@@ -216,8 +216,12 @@ class AirTop {
   double highest(const dvec3& c, const dvec3& n, double depth) const {
     double best = -std::numeric_limits<double>::infinity();
     if (pos_.empty()) return best;
-    const double reach = r_ + depth;
-    const glm::ivec3 a = cellOf(c - dvec3(reach)), b = cellOf(c + dvec3(reach));
+    // A point that counts lies within depth along n and r_ beside the line, so along axis k within
+    // depth |n_k| + r_ of c (whatever n's length); a hair more covers the tests' rounding. The cells
+    // of that box hold every such point (a cube of r_ + depth did too, with many more cells).
+    const double slack = 1e-9 * (r_ + depth + std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)}));
+    const dvec3 reach = depth * glm::abs(n) + dvec3(r_ + slack);
+    const glm::ivec3 a = cellOf(c - reach), b = cellOf(c + reach);
     for (int z = a.z; z <= b.z; ++z)
       for (int y = a.y; y <= b.y; ++y)
         for (int x = a.x; x <= b.x; ++x) {
