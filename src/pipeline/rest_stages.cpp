@@ -42,6 +42,23 @@ void boxAxes(const coat::SkinMesh& m, glm::dvec3& lo, glm::dvec3& hi, int axes[3
   std::sort(axes, axes + 3, [&](int a, int b) { return ext[a] > ext[b]; });
 }
 
+// The scene's painted density factor (docs/scene-format.md, "Density map") as a multiplier over the rest
+// skin, linear across each face; empty without a map. Throws when it does not fit the mesh.
+std::function<double(uint32_t, const glm::dvec3&)> densityFactorField(const Scene& scene, const coat::SkinMesh& rest) {
+  if (!scene.densityFactor) return {};
+  const std::shared_ptr<const std::vector<float>> f = scene.densityFactor;
+  if (f->size() != rest.positions.size())
+    throw Error("the density map has " + std::to_string(f->size()) + " factors for a mesh of " +
+                    std::to_string(rest.positions.size()) + " vertices (paint it again on this mesh)",
+                scene.densityMap.empty() ? scene.file : scene.densityMap,
+                scene.densityMap.empty() ? "density_map" : "factor");
+  const coat::SkinMesh* mesh = &rest;
+  return [f, mesh](uint32_t face, const glm::dvec3& b) {
+    const auto& t = mesh->faces[face];
+    return b.x * double((*f)[t[0]]) + b.y * double((*f)[t[1]]) + b.z * double((*f)[t[2]]);
+  };
+}
+
 }  // namespace
 
 void Pipeline::Impl::computeSkin() {
@@ -189,12 +206,14 @@ void Pipeline::Impl::computeDistribute() {
   follicles.clear();
   relaxResults.clear();
   uint64_t nextId = 0;
+  const auto factor = densityFactorField(scene, rest);
   for (size_t i = 0; i < tractSettings.size(); ++i) {
     TractSettings& t = tractSettings[i];
     coat::ScatterOptions so;
     // A tract's own seed re-scatters only that tract; the others keep their follicles.
     so.seed = t.seed ? mix64(*t.seed * 0x9E37u + 0x5EED0000u) : mix64(scene.seed * 0x9E37u + i);
     so.density.uniform = t.density;
+    so.density.multiplier = factor;
     so.count = t.count;
     so.tractIndex = static_cast<uint32_t>(i);
     so.firstId = nextId;
@@ -205,6 +224,11 @@ void Pipeline::Impl::computeDistribute() {
     for (size_t k = 0; k < t.pinned.size(); ++k)
       coat::addPinnedFollicleNear(f, rest, t.tract, t.pinned[k], static_cast<uint32_t>(i), nextId - 1 - k);
     coat::RelaxOptions ro = t.relax;
+    if (factor) {
+      // Relaxation keeps the painted density (only its shape matters there).
+      ro.density.uniform = 1.0;
+      ro.density.multiplier = factor;
+    }
     ro.progress = [&, i](const std::string&, double fr) {
       return report(progress, "distribute", (double(i) + fr) / double(tractSettings.size()));
     };
@@ -256,11 +280,17 @@ void Pipeline::Impl::redistributeOverlaps(uint64_t& nextId) {
     coat::ScatterOptions so;
     so.seed = mix64(scene.seed * 0x9E37u + 0x0E7A0000u + g);
     so.density.uniform = density;
+    so.density.multiplier = densityFactorField(scene, rest);
     so.tractIndex = members[0];
     so.firstId = nextId;
     coat::Follicles fresh = coat::scatterFollicles(rest, shared, so);
     nextId += fresh.size() + 1;
-    if (fresh.size() > 1) coat::relaxFollicles(rest, shared, fresh, coat::RelaxOptions{});
+    coat::RelaxOptions ro;
+    if (so.density.multiplier) {
+      ro.density.uniform = 1.0;
+      ro.density.multiplier = so.density.multiplier;
+    }
+    if (fresh.size() > 1) coat::relaxFollicles(rest, shared, fresh, ro);
     // Each joins the member tract of the nearest remaining follicle (ties: the earlier tract).
     std::vector<glm::dvec3> sites;
     std::vector<uint32_t> siteTract;

@@ -3,8 +3,11 @@
 // sections are validated by the module parsers that the pipeline also uses (scene_sections.cpp).
 #include "pteryla/pipeline/scene.hpp"
 
+#include <charconv>
+#include <cmath>
 #include <filesystem>
 
+#include "pteryla/core/atomic_file.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
 #include "scene_sections.hpp"
@@ -132,6 +135,15 @@ Scene sceneFromJson(const Json& j, const std::string& file) {
     s.render = readRender(r.object("render"));
   else
     r.allow("render");
+  if (r.has("density_map")) {
+    s.densityMap = resolveRelative(file, r.string("density_map"));
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(s.densityMap, ec))
+      r.fail("density_map", "density map file '" + s.densityMap + "' does not exist");
+    s.densityFactor = std::make_shared<const std::vector<float>>(readDensityMap(s.densityMap));
+  } else {
+    r.allow("density_map");
+  }
   r.finish();
   if (s.lights.empty()) {
     s.lights.push_back(LightSpec{});
@@ -174,6 +186,7 @@ Json sceneToJson(const Scene& s, const std::string& relativeTo) {
   if (!s.controls.empty()) j["controls"] = s.controls;
   if (!s.packing.empty()) j["packing"] = s.packing;
   if (!s.ordering.empty()) j["ordering"] = s.ordering;
+  if (s.densityFactor && !s.densityMap.empty()) j["density_map"] = rel(s.densityMap);
   Json cam;
   cam["fov"] = s.camera.fovDeg;
   cam["up"] = vec(s.camera.up);
@@ -207,7 +220,66 @@ Json sceneToJson(const Scene& s, const std::string& relativeTo) {
 }
 
 void saveScene(const std::string& path, const Scene& scene) {
-  writeJsonFile(path, sceneToJson(scene, std::filesystem::absolute(path).lexically_normal().string()));
+  const std::string abs = std::filesystem::absolute(path).lexically_normal().string();
+  if (!scene.densityFactor) {
+    writeJsonFile(path, sceneToJson(scene, abs));
+    return;
+  }
+  // The painted density goes next to the scene file (written first: the scene never names a missing map).
+  Scene s = scene;
+  s.densityMap = densityMapPathFor(abs);
+  writeDensityMap(s.densityMap, *s.densityFactor);
+  writeJsonFile(path, sceneToJson(s, abs));
+}
+
+bool sameDensityFactors(const Scene& a, const Scene& b) {
+  if (a.densityFactor == b.densityFactor) return true;
+  if (!a.densityFactor || !b.densityFactor) return false;
+  return *a.densityFactor == *b.densityFactor;
+}
+
+std::string densityMapPathFor(const std::string& scenePath) {
+  const std::filesystem::path p(scenePath);
+  return (p.parent_path() / (p.stem().string() + ".density.json")).string();
+}
+
+std::vector<float> readDensityMap(const std::string& path) {
+  const Json j = readJsonFile(path);
+  JsonReader r(j, path);
+  if (!r.has("pteryla_density")) r.fail("pteryla_density", "not a density map (missing \"pteryla_density\": 1)");
+  r.integer("pteryla_density", 1, 1, 1);
+  const int64_t n = r.integer("vertices", 0, 0, 100000000);
+  if (!r.has("factor") || !j.at("factor").is_array()) r.fail("factor", "expected an array of factors, one per vertex");
+  const Json& f = j.at("factor");
+  if (int64_t(f.size()) != n)
+    r.fail("factor", std::to_string(f.size()) + " factors for " + std::to_string(n) + " vertices");
+  std::vector<float> out;
+  out.reserve(f.size());
+  for (size_t i = 0; i < f.size(); ++i) {
+    const std::string where = "factor[" + std::to_string(i) + "]";
+    if (!f[i].is_number()) throw Error("expected a number", path, where);
+    const double v = f[i].get<double>();
+    if (!std::isfinite(v) || v < 0 || v > 100) throw Error("a density factor must be in [0, 100]", path, where);
+    out.push_back(static_cast<float>(v));
+  }
+  r.allow("factor");
+  r.finish();
+  return out;
+}
+
+void writeDensityMap(const std::string& path, const std::vector<float>& factor) {
+  std::string text = "{\"pteryla_density\": 1, \"vertices\": " + std::to_string(factor.size()) + ", \"factor\": [";
+  char buf[32];
+  for (size_t i = 0; i < factor.size(); ++i) {
+    const float v = factor[i];
+    if (!std::isfinite(v) || v < 0 || v > 100)
+      throw Error("a density factor must be in [0, 100]", path, "factor[" + std::to_string(i) + "]");
+    const auto res = std::to_chars(buf, buf + sizeof buf, v);  // shortest form that reads back to v
+    if (i) text += i % 16 ? ", " : ",\n ";
+    text.append(buf, res.ptr);
+  }
+  text += "]}\n";
+  writeFileAtomic(path, text);
 }
 
 }  // namespace pteryla::pipeline

@@ -13,9 +13,10 @@ const std::vector<SectionStage>& sectionStages() {
       {"mesh_repair", "", Stage::Skin},
       {"feathers", "", Stage::Skin},  // the feather library is loaded with the skin
       {"tracts", "", Stage::Tracts},
-      {"tracts", "moult", Stage::Ages},  // per-tract moult overrides: read by the ages stage
-      {"growth", "", Stage::Tracts},     // the scene's growth schedule, read with the tracts
-      {"seed", "", Stage::Distribute},   // scatter seeds (and the interpolation's jitter)
+      {"tracts", "moult", Stage::Ages},        // per-tract moult overrides: read by the ages stage
+      {"growth", "", Stage::Tracts},           // the scene's growth schedule, read with the tracts
+      {"seed", "", Stage::Distribute},         // scatter seeds (and the interpolation's jitter)
+      {"density_map", "", Stage::Distribute},  // painted density factors (compared by value, not by file name)
       {"directions", "", Stage::Directions},
       {"ordering", "", Stage::Directions},  // layer order is computed with the directions
       {"skeleton", "", Stage::Pose},
@@ -58,7 +59,10 @@ std::optional<Stage> earliestChangedStage(const Scene& before, const Scene& afte
   std::optional<Stage> earliest;
   for (const SectionStage& row : sectionStages()) {
     if (!row.stage || (earliest && *earliest <= *row.stage)) continue;
-    if (sectionValue(a, row) != sectionValue(b, row)) earliest = row.stage;
+    // The density map is its factors: the same factors from another file (saved elsewhere) change nothing.
+    const bool changed = std::strcmp(row.key, "density_map") == 0 ? !sameDensityFactors(before, after)
+                                                                  : sectionValue(a, row) != sectionValue(b, row);
+    if (changed) earliest = row.stage;
   }
   return earliest;
 }

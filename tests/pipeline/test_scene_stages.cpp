@@ -14,6 +14,7 @@
 
 #include "frames.hpp"
 #include "pteryla/core/error.hpp"
+#include "pteryla/coat/skin.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
 #include "pteryla/pipeline/scene_stages.hpp"
@@ -96,6 +97,13 @@ std::vector<Edit> edits() {
          s.growth = Json::parse(R"({"ramps": [{"parameter": "shaft_length", "start": 0, "end": 0.6}]})");
        }},
       {"seed", "", [](Scene& s) { s.seed = 6; }},
+      {"density_map", "",
+       [](Scene& s) {
+         // Painted: half the wing's vertices at three times the density (the mesh has 1,000-odd vertices).
+         auto f = std::make_shared<std::vector<float>>(Pipeline(s).restSkin().positions.size(), 1.0f);
+         for (size_t v = 0; v < f->size(); v += 2) (*f)[v] = 3.0f;
+         s.densityFactor = f;
+       }},
       {"directions", "", [](Scene& s) { s.directions["axis"] = Json::parse("[[0, 0, -0.2], [2, 0, 0.1]]"); }},
       {"ordering", "",
        [](Scene& s) {

@@ -4,6 +4,7 @@
 #include <glm/vec3.hpp>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,13 +67,32 @@ struct Scene {
   CameraSpec camera;
   std::vector<LightSpec> lights;
   RenderSpec render;
+  // Painted follicle density (docs/scene-format.md, "Density map"): a factor >= 0 per mesh vertex
+  // (linear across faces) multiplying the tracts' density. `densityMap` is the side file it was read
+  // from (absolute; "" when painted and not saved yet); `densityFactor` the factors (null: no map).
+  // saveScene writes the factors next to the scene file. Shared, so copies of a scene (undo) are cheap;
+  // never modified in place: an edit stores a new vector.
+  std::string densityMap;
+  std::shared_ptr<const std::vector<float>> densityFactor;
 };
+
+// True when both scenes have no density map or the same factors.
+bool sameDensityFactors(const Scene& a, const Scene& b);
+// The side file saveScene writes for a scene file: "DIR/STEM.density.json".
+std::string densityMapPathFor(const std::string& scenePath);
+// Density map files: {"pteryla_density": 1, "vertices": N, "factor": [f0, f1, ...]} with N = the number of
+// factors (one per mesh vertex, finite, in [0, 100]). Throws pteryla::Error naming the file and the
+// element ("factor[17]"). The writer is atomic (core/atomic_file.hpp) and writes each factor in its
+// shortest form that reads back to the same float.
+std::vector<float> readDensityMap(const std::string& path);
+void writeDensityMap(const std::string& path, const std::vector<float>& factor);
 
 // Loads a scene file, or a bare mesh (.obj/.ply/.off/.stl) as a one-tract scene with default feathers.
 // Throws pteryla::Error with file and key path for anything malformed or unknown.
 Scene loadScene(const std::string& path);
 // Serialises a scene so that loadScene(saveScene(s)) evaluates to the same coat. Paths are written
-// relative to `path`'s directory.
+// relative to `path`'s directory. A scene with a density map also gets its side file
+// (densityMapPathFor(path)), written before the scene file.
 void saveScene(const std::string& path, const Scene& scene);
 Json sceneToJson(const Scene& scene, const std::string& relativeTo);
 Scene sceneFromJson(const Json& j, const std::string& file);
