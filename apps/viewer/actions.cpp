@@ -9,6 +9,8 @@
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/feather/io.hpp"
+#include "paint.hpp"
+#include "pteryla/coat/tracts.hpp"
 #include "pteryla/moult/controls.hpp"
 #include "scene_edit.hpp"
 
@@ -112,6 +114,91 @@ void removeTract(Document& d, size_t t) {
   d.edit("remove tract", [&](Scene& s) {
     needTract(s, t);
     s.tracts.erase(s.tracts.begin() + static_cast<long>(t));
+  });
+}
+
+std::vector<uint32_t> tractSourceFaces(const Scene& s, const coat::SkinMesh& rest, size_t t) {
+  needTract(s, t);
+  std::vector<coat::Tract> earlier;
+  for (size_t i = 0; i <= t; ++i) {
+    JsonReader r(s.tracts[i], s.file, "tracts[" + std::to_string(i) + "]");
+    earlier.push_back(coat::readTract(r, rest, earlier));
+  }
+  std::vector<uint32_t> out;
+  for (uint32_t tri : earlier.back().faces) out.push_back(tri < rest.sourceFace.size() ? rest.sourceFace[tri] : tri);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+bool paintTractFaces(Document& d, const coat::SkinMesh& rest, size_t t, const std::vector<uint32_t>& faces, bool add) {
+  std::vector<uint32_t> painted = faces;
+  std::sort(painted.begin(), painted.end());
+  painted.erase(std::unique(painted.begin(), painted.end()), painted.end());
+  {
+    Scene probe = d.scene();
+    fixTracts(probe);
+    const std::vector<uint32_t> current = tractSourceFaces(probe, rest, t);
+    const std::vector<uint32_t> next = add ? faceUnion(current, painted) : faceDifference(current, painted);
+    if (next == current) return false;
+  }
+  d.edit(add ? "paint tract faces" : "erase tract faces", [&](Scene& s) {
+    fixTracts(s);
+    const std::vector<uint32_t> current = tractSourceFaces(s, rest, t);
+    const std::vector<uint32_t> next = add ? faceUnion(current, painted) : faceDifference(current, painted);
+    Json& j = tractOf(s, t);
+    if (next.empty())
+      throw Error("the brush would leave tract '" + tractName(s, t) + "' without faces", s.file,
+                  "tracts[" + std::to_string(t) + "]");
+    const bool additiveOnly =
+        !j.contains("intersect") && !j.contains("subtract") && !j.contains("all") &&
+        (j.contains("groups") || j.contains("faces") || j.contains("labels_file") || j.contains("union"));
+    if (add && additiveOnly) {
+      // Keep the groups (or labels) and list the painted faces they do not select.
+      Json list =
+          j.contains("faces") ? (j["faces"].is_array() ? j["faces"] : Json::array({j["faces"]})) : Json::array();
+      for (uint32_t f : faceDifference(painted, current)) list.push_back(f);
+      j["faces"] = list;
+      return;
+    }
+    for (const char* k : {"all", "groups", "faces", "labels_file", "label", "union", "intersect", "subtract"})
+      j.erase(k);
+    j["faces"] = next;
+  });
+  return true;
+}
+
+void addTractFromFaces(Document& d, const std::string& name, const std::vector<uint32_t>& faces) {
+  if (name.empty()) throw Error("a tract needs a name", "", "name");
+  if (faces.empty()) throw Error("no faces are selected (paint a face selection first)", "", "faces");
+  std::vector<uint32_t> sorted = faces;
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  d.edit("tract from faces", [&](Scene& s) {
+    fixTracts(s);
+    for (size_t i = 0; i < s.tracts.size(); ++i)
+      if (tractName(s, i) == name) throw Error("a tract named '" + name + "' exists already", s.file, "tracts");
+    Json t = {{"name", name}, {"faces", sorted}};
+    // With several feathers a tract must say which it carries: the first of the library (the Key
+    // feathers panel changes it).
+    if (s.feathers.size() > 1) t["feather"] = s.feathers.begin().key();
+    s.tracts.push_back(t);
+  });
+}
+
+void setDensityFactors(Document& d, std::vector<float> factors) {
+  if (factors.empty()) throw Error("a density map needs one factor per mesh vertex", "", "density_map");
+  quantizeDensity(factors);
+  if (d.scene().densityFactor && *d.scene().densityFactor == factors) return;
+  auto shared = std::make_shared<const std::vector<float>>(std::move(factors));
+  d.edit("paint density", [&](Scene& s) { s.densityFactor = shared; });
+}
+
+void clearDensityMap(Document& d) {
+  if (!d.scene().densityFactor) throw Error("the scene has no density map", d.scene().file, "density_map");
+  d.edit("clear density map", [&](Scene& s) {
+    s.densityFactor.reset();
+    s.densityMap.clear();
   });
 }
 

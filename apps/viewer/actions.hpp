@@ -26,6 +26,23 @@ void addPinned(Document& d, size_t tract, const glm::dvec3& at);
 // A new tract from mesh groups (names of SkinMesh::groupNames).
 void addTract(Document& d, const std::string& name, const std::vector<std::string>& groups);
 void removeTract(Document& d, size_t tract);
+// Painting tract faces (source polygons, docs/tracts.md; `rest`: the rest skin, Snapshot::restSkin).
+// The faces a tract's selection gives, sorted.
+std::vector<uint32_t> tractSourceFaces(const pipeline::Scene& s, const coat::SkinMesh& rest, size_t tract);
+// Adds or removes faces. Adding to a tract built only from additive selectors (groups, faces, labels,
+// union) appends the new faces to its `faces` list and keeps the rest; otherwise (removing, or a tract
+// with intersect / subtract / no selector) the tract's selection becomes the explicit face list it now
+// selects. False (and no edit) when the tract does not change; an error when it would lose every face.
+bool paintTractFaces(Document& d, const coat::SkinMesh& rest, size_t tract, const std::vector<uint32_t>& faces,
+                     bool add);
+// A new tract of these source faces (the face selection painted in the view); with several feathers in
+// the library it carries the first (by name).
+void addTractFromFaces(Document& d, const std::string& name, const std::vector<uint32_t>& faces);
+
+// The painted follicle density (scene density_map, one factor per rest-skin vertex): stored rounded to
+// 1/1000 (paint.hpp); clearing removes the map from the scene (its side file stays on disk).
+void setDensityFactors(Document& d, std::vector<float> factors);
+void clearDensityMap(Document& d);
 
 // Feathers: a feather name mapped to a file (absolute or relative to the working directory) or an
 // inline definition (the designer's result).

@@ -421,6 +421,7 @@ void App::initCamera() {
   const float diag = glm::length(s.skinHi - s.skinLo);
   if (diag > 0) {
     view_.brushRadius = diag * 0.05f;
+    view_.paintRadius = diag * 0.05f;
     view_.controlRadius = diag * 0.1f;
     view_.biasSigma = diag * 0.1f;
   }

@@ -123,6 +123,11 @@ class App {
   void handleInput();
   // Returns false when a press hit nothing the tool uses (the drag then orbits as usual).
   bool handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse);
+  // app_paint.cpp: the face and density brushes (Tool::PaintFaces, Tool::PaintDensity)
+  bool handlePaint(bool pressed, bool down, bool released, const glm::vec2& mouse);
+  void updateBrushHover(const glm::vec2& mouse, bool overUi);
+  void paintDab(const glm::vec3& at);
+  void commitStroke();
   // app_script.cpp
   void scriptStep();
   // app_timeline.cpp
@@ -265,6 +270,11 @@ class App {
   glm::vec2 hoverAt_{-1.0f};   // where the hovered feather was last picked
   uint64_t hoverResult_ = 0;
   glm::vec3 dragNormal_{0, 0, 1};
+  // The stroke being painted: the skin it started on and where it last dabbed.
+  std::shared_ptr<const coat::SkinMesh> strokeSkin_;
+  std::vector<glm::vec3> strokePosed_;
+  glm::vec3 lastDab_{0};
+  bool dabbed_ = false;
 
   // Scratchboard preview (CPU renderer) as a GL texture.
   std::unique_ptr<render::ImageTexture> scratchTexture_;

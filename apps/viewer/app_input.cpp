@@ -40,6 +40,7 @@ void App::handleInput() {
     camera_.zoom(std::pow(0.88f, io.MouseWheel));
     cameraMoved_ = true;
   }
+  updateBrushHover(mouse, overUi);
   const bool leftPressed = ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !overUi;
   const bool toolActive = view_.tool != Tool::Orbit && !io.KeyShift;
   if (toolActive && (leftPressed || toolDrag_)) {
@@ -100,6 +101,8 @@ bool App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mo
   const Ray ray = pixelRay(cam, mouse, view_.viewSize);
   PanelContext& ctx = *panels_;
   auto tractIndex = [&] { return size_t(std::max(view_.selectedTract, 0)); };
+  if (view_.tool == Tool::PaintFaces || view_.tool == Tool::PaintDensity)
+    return handlePaint(pressed, down, released, mouse);
 
   if (pressed) {
     if (view_.tool == Tool::PlaceKey) {

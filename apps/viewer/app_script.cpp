@@ -7,8 +7,10 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "actions.hpp"
 #include "app.hpp"
 #include "overlays.hpp"
+#include "paint.hpp"
 #include "pteryla/core/error.hpp"
 
 namespace pteryla::viewer {
@@ -25,6 +27,15 @@ glm::vec2 App::scriptPoint(const ScriptCommand& c, size_t arg) const {
     p[k] = percent ? float(v / 100.0) * float(k == 0 ? view_.viewSize.x : view_.viewSize.y) : float(v);
   }
   return p;
+}
+
+// A positive number argument (a brush radius).
+static double positiveArg(const ScriptCommand& c, size_t arg, const std::string& file) {
+  const double v = scriptNumber(c, arg, file);
+  if (!(v > 0))
+    throw Error("argument " + std::to_string(arg + 1) + " of '" + c.verb + "' must be positive", file,
+                "line " + std::to_string(c.line));
+  return v;
 }
 
 void App::scriptStep() {
@@ -64,6 +75,7 @@ void App::scriptStep() {
   if (scriptNext_ >= script_.size()) return;  // done: stay open (interactive) unless the script quit
   const ScriptCommand& c = script_[scriptNext_++];
   const std::string& file = options_.script;
+  auto positive = [&](const ScriptCommand& cmd, size_t arg) { return positiveArg(cmd, arg, file); };
   try {
     if (c.verb == "quit") {
       needArgs(c, 0, 0, "quit", file);
@@ -171,6 +183,58 @@ void App::scriptStep() {
       fakeMouse_.push_back(m);  // release
       fakeMouse_.push_back(m);
       fakeMouseNext_ = 0;
+    } else if (c.verb == "tool" && !c.args.empty() && c.args[0] == "paint-faces") {
+      needArgs(c, 1, 3, "tool paint-faces [add|remove|select|deselect [RADIUS]]", file);
+      if (c.args.size() > 1) {
+        const std::string& m = c.args[1];
+        if (m != "add" && m != "remove" && m != "select" && m != "deselect")
+          throw Error("usage: tool paint-faces [add|remove|select|deselect [RADIUS]]", file,
+                      "line " + std::to_string(c.line));
+        view_.facePaint = m == "add"      ? FacePaint::Add
+                          : m == "remove" ? FacePaint::Remove
+                          : m == "select" ? FacePaint::Select
+                                          : FacePaint::Deselect;
+      }
+      if (c.args.size() > 2) view_.paintRadius = float(positive(c, 2));
+      view_.tool = Tool::PaintFaces;
+    } else if (c.verb == "tool" && !c.args.empty() && c.args[0] == "paint-density") {
+      needArgs(c, 1, 4, "tool paint-density [FACTOR [RADIUS [STRENGTH]]]", file);
+      if (c.args.size() > 1) {
+        const double f = scriptNumber(c, 1, file);
+        if (!(f >= 0 && f <= 100))
+          throw Error("a density factor must be in [0, 100]", file, "line " + std::to_string(c.line));
+        view_.densityValue = float(f);
+      }
+      if (c.args.size() > 2) view_.paintRadius = float(positive(c, 2));
+      if (c.args.size() > 3) {
+        const double st = scriptNumber(c, 3, file);
+        if (!(st >= 0 && st <= 1))
+          throw Error("the strength must be in [0, 1]", file, "line " + std::to_string(c.line));
+        view_.densityStrength = float(st);
+      }
+      view_.tool = Tool::PaintDensity;
+    } else if (c.verb == "select-faces") {
+      // The face brush in select (or remove: deselect) mode at a point, as one click of the tool.
+      if (c.args.size() == 1 && c.args[0] == "clear") {
+        view_.faceSelection.clear();
+      } else {
+        needArgs(c, 4, 5, "select-faces X Y Z RADIUS [remove] | select-faces clear", file);
+        if (c.args.size() == 5 && c.args[4] != "remove")
+          throw Error("usage: select-faces X Y Z RADIUS [remove] | select-faces clear", file,
+                      "line " + std::to_string(c.line));
+        const Snapshot& snap = doc_.snapshot();
+        if (!snap.restSkin) throw Error("the skin is not loaded", file, "line " + std::to_string(c.line));
+        const glm::vec3 at(float(scriptNumber(c, 0, file)), float(scriptNumber(c, 1, file)),
+                           float(scriptNumber(c, 2, file)));
+        const std::vector<uint32_t> faces = facesInBrush(*snap.restSkin, snap.posedVertex, at, float(positive(c, 3)));
+        view_.faceSelection =
+            c.args.size() == 5 ? faceDifference(view_.faceSelection, faces) : faceUnion(view_.faceSelection, faces);
+      }
+    } else if (c.verb == "tract-from-selection") {
+      needArgs(c, 1, 1, "tract-from-selection NAME", file);
+      actions::addTractFromFaces(doc_, c.args[0], view_.faceSelection);
+      view_.selectedTract = int(doc_.scene().tracts.size()) - 1;
+      view_.faceSelection.clear();
     } else if (c.verb == "tool") {
       needArgs(c, 1, 2, "tool orbit|key|vector|edit-vectors|bias|brush|control|pin [FEATHER]", file);
       static const std::pair<const char*, Tool> tools[] = {
@@ -185,7 +249,8 @@ void App::scriptStep() {
           found = true;
         }
       if (!found)
-        throw Error("unknown tool '" + c.args[0] + "' (orbit, key, vector, edit-vectors, bias, brush, control, pin)",
+        throw Error("unknown tool '" + c.args[0] +
+                        "' (orbit, key, vector, edit-vectors, bias, brush, control, pin, paint-faces, paint-density)",
                     file, "line " + std::to_string(c.line));
       if (c.args.size() == 2) view_.toolFeather = c.args[1];
     } else if (c.verb == "ui") {

@@ -415,6 +415,7 @@ void App::sceneJsonWindow() {
   if (jsonTextEditor("scene", j, state, ImGui::GetContentRegionAvail().y - 60)) {
     try {
       pipeline::Scene next = pipeline::sceneFromJson(j, doc_.scene().file);
+      keepPaintedDensity(doc_.scene(), next);
       doc_.edit("scene JSON", [&](pipeline::Scene& s) { s = next; });
     } catch (const std::exception& e) {
       showError(e.what());

@@ -284,7 +284,10 @@ void Document::startJob(bool check) {
       const uint64_t distBefore = p.evaluations(Stage::Distribute);
       const bool poseDirty = p.dirty(Stage::Pose);
       // Phase 1: the rest skin, shown while the rest evaluates.
+      const uint64_t skinBefore = p.evaluations(Stage::Skin);
       const coat::SkinMesh& rest = p.restSkin();
+      if (!work.restSkin || p.evaluations(Stage::Skin) != skinBefore)
+        work.restSkin = std::make_shared<const coat::SkinMesh>(rest);
       if (poseDirty && p.evaluations(Stage::Skin) > 0 && (work.skinVersion == 0 || work.skin.empty())) {
         work.skin = coat::toTriMesh(rest);
         bounds(work.skin, work.skinLo, work.skinHi);
@@ -321,6 +324,7 @@ void Document::startJob(bool check) {
       if (p.evaluations(Stage::Pose) != poseBefore || work.skinVersion == 0) {
         work.skin = coat::toTriMesh(posed);
         bounds(work.skin, work.skinLo, work.skinHi);
+        work.posedVertex.assign(posed.positions.begin(), posed.positions.end());
         work.groupNames = rest.groupNames;
         ++work.skinVersion;
       }

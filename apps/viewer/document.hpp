@@ -29,6 +29,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "pteryla/coat/skin.hpp"
 #include "pteryla/core/trimesh.hpp"
 #include "pteryla/exchange/coat_export.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
@@ -40,6 +41,10 @@ namespace pteryla::viewer {
 struct Snapshot {
   uint64_t skinVersion = 0, follicleVersion = 0, coatVersion = 0;  // bump when the part changes
   TriMesh skin;  // posed skin (triangles, for picking and the wire overlay)
+  // The rest skin as the library has it (vertex and triangle numbering, source polygons: what tract
+  // faces and the density map index) and its vertices posed (one per rest vertex): painting (paint.hpp).
+  std::shared_ptr<const coat::SkinMesh> restSkin;
+  std::vector<glm::vec3> posedVertex;
   glm::vec3 skinLo{0}, skinHi{0};
   std::vector<std::string> groupNames;  // skin mesh groups (tract building blocks)
   std::vector<std::string> tractNames;

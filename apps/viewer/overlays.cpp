@@ -268,6 +268,7 @@ void drawOverlays(ImDrawList* dl, PanelContext& ctx) {
       dl->AddText(ImVec2(p.x + 6, p.y - 16), col, c.value("name", "control " + std::to_string(k)).c_str());
     }
   }
+  drawPaintOverlays(dl, ctx);
   dl->PopClipRect();
 }
 

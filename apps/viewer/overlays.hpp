@@ -15,6 +15,8 @@ namespace pteryla::viewer {
 
 // Draws into the view rectangle ctx.view.viewOrigin / viewSize.
 void drawOverlays(ImDrawList* dl, PanelContext& ctx);
+// overlays_paint.cpp: face selection, the stroke, the density map and the brush (called by drawOverlays).
+void drawPaintOverlays(ImDrawList* dl, PanelContext& ctx);
 
 // What the viewer says of feather `i` (hover tooltip, the `selection` script command): index, tract,
 // feather type (its material's name), follicle id, elevation in degrees, age, presence.

@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -25,15 +26,20 @@
 namespace pteryla::viewer {
 
 enum class Tool {
-  Orbit,        // left drag orbits (default)
-  PlaceKey,     // click a follicle: key feather `toolFeather` there
-  AddVector,    // press on the skin and drag: styling vector
-  EditVectors,  // drag the tip of a styling vector
-  AddBias,      // press on the skin and drag: relaxation bias vector of the selected tract
-  Brush,        // click on the skin: fixed-angle packing brush
-  AddControl,   // click on the skin: expressive control
-  Pin,          // click on the skin: pinned follicle in the selected tract
+  Orbit,         // left drag orbits (default)
+  PlaceKey,      // click a follicle: key feather `toolFeather` there
+  AddVector,     // press on the skin and drag: styling vector
+  EditVectors,   // drag the tip of a styling vector
+  AddBias,       // press on the skin and drag: relaxation bias vector of the selected tract
+  Brush,         // click on the skin: fixed-angle packing brush
+  AddControl,    // click on the skin: expressive control
+  Pin,           // click on the skin: pinned follicle in the selected tract
+  PaintFaces,    // drag on the skin: add / remove faces of the selected tract, or (de)select faces
+  PaintDensity,  // drag on the skin: the follicle density map (app_paint.cpp)
 };
+
+// What the face brush does (Tool::PaintFaces).
+enum class FacePaint { Add, Remove, Select, Deselect };
 
 // A panel widget a script drives (`ui PANEL WIDGET [VALUE]`, app_script.cpp): the panel checks
 // uiRequested() next to the ImGui widget and acts exactly as when the user uses it, so a scripted session
@@ -66,6 +72,18 @@ struct ViewState {
   float controlRadius = 0.2f;
   float combRadius = 0.0f;  // reach of a new styling vector over a body axis, scene units (0 = a tenth of the axis)
   float biasSigma = 0.2f, biasStretch = 1.5f;
+  // Painting (app_paint.cpp, panels_paint.cpp, overlays_paint.cpp). Brush radius in scene units (set
+  // from the skin size on load). A stroke is previewed and committed as one edit on release.
+  FacePaint facePaint = FacePaint::Add;
+  float paintRadius = 0.1f;
+  std::vector<uint32_t> faceSelection;  // source faces, sorted: the view's face selection (never saved)
+  std::vector<uint32_t> strokeFaces;    // faces under the stroke being painted
+  float densityValue = 2.0f, densityStrength = 0.5f;
+  std::vector<float> strokeDensity;  // factors while a density stroke is painted (else empty)
+  bool painting = false;             // a stroke is under way
+  bool brushVisible = false;         // the paint brush is over the skin
+  glm::vec3 brushAt{0};
+  bool showDensity = true;  // painted density factors as dots on the skin
   // Timeline.
   bool playing = false;
   float timeStart = 0.0f, timeEnd = 10.0f, timeStep = 1.0f / 24.0f;
@@ -165,6 +183,10 @@ void drawFolliclesPanel(PanelContext& ctx);
 void drawKeyFeathersPanel(PanelContext& ctx);
 void drawDirectionsPanel(PanelContext& ctx);
 void drawPackingPanel(PanelContext& ctx);
+// panels_paint.cpp: the face brush and "new tract from selection" (in Tracts), the density brush (in
+// Follicles)
+void drawFacePaintSection(PanelContext& ctx);
+void drawDensityPaintSection(PanelContext& ctx);
 // panels_time.cpp
 void drawTimelinePanel(PanelContext& ctx);
 void drawControlsPanel(PanelContext& ctx);

@@ -141,6 +141,7 @@ void drawTractsPanel(PanelContext& ctx) {
       ImGui::TreePop();
     }
   }
+  drawFacePaintSection(ctx);
   if (ImGui::TreeNode("New tract from mesh groups")) {
     static std::string name = "tract";
     static std::set<std::string> chosen;
@@ -197,6 +198,8 @@ void drawFolliclesPanel(PanelContext& ctx) {
   bool fix = relax.value("fix_boundary", true);
   if (ImGui::Checkbox("Fix boundary follicles", &fix))
     guarded(ctx, [&] { actions::setRelaxNumber(doc, size_t(t), "fix_boundary", fix); });
+
+  drawDensityPaintSection(ctx);
 
   sectionTitle("Bias vectors (6.1.4)");
   ImGui::SliderFloat("sigma", &ctx.view.biasSigma, 0.0f, 2.0f);

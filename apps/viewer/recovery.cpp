@@ -72,6 +72,13 @@ std::string writeRecovery(const Document& doc) {
   const std::string path = recoveryPath(doc.path());
   pipeline::Scene s = doc.scene();
   s.time = doc.time();
+  if (s.densityFactor) {
+    // The painted density map goes next to the recovery file (NAME-HASH.density.json), whole first.
+    s.densityMap = pipeline::densityMapPathFor(path);
+    std::error_code dirEc;
+    fs::create_directories(fs::path(path).parent_path(), dirEc);
+    pipeline::writeDensityMap(s.densityMap, *s.densityFactor);
+  }
   const Json j = {{"pteryla_recovery", kFormat},
                   {"scene_path", doc.path()},
                   {"saved_at", utcNow()},
@@ -132,6 +139,7 @@ std::optional<std::string> findRecovery(const std::string& scenePath) {
   fs::file_time_type bestTime{};
   for (fs::directory_iterator it(recoveryDir(), ec), end; !ec && it != end; it.increment(ec)) {
     if (!it->is_regular_file(ec) || it->path().extension() != ".json") continue;
+    if (it->path().stem().extension() == ".density") continue;  // a recovery file's painted density
     const auto t = fs::last_write_time(it->path(), ec);
     if (ec) continue;
     if (!best || t > bestTime) {
@@ -162,6 +170,7 @@ void restoreRecovery(Document& doc, const Recovery& r) {
 void removeRecovery(const std::string& file) {
   std::error_code ec;
   if (!file.empty()) fs::remove(file, ec);
+  if (!file.empty()) fs::remove(pipeline::densityMapPathFor(file), ec);  // its painted density, if any
 }
 
 void Autosaver::forgetIfSaved(const Document& doc) {

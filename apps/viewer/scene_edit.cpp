@@ -68,7 +68,12 @@ void setScenePointer(Scene& s, const std::string& pointer, const Json& value) {
   }
   Scene next = pipeline::sceneFromJson(j, s.file);
   next.fromBareMesh = s.fromBareMesh;
+  keepPaintedDensity(s, next);
   s = std::move(next);
+}
+
+void keepPaintedDensity(const Scene& from, Scene& next) {
+  if (next.densityMap == from.densityMap) next.densityFactor = from.densityFactor;
 }
 
 void makeBareMeshExplicit(Scene& s, const glm::dvec3& lo, const glm::dvec3& hi) {

@@ -21,6 +21,10 @@ Json sceneJson(const pipeline::Scene& s);
 // re-reads the scene through the strict scene reader. Throws pteryla::Error naming the pointer for a
 // bad pointer or a value the scene reader rejects; `s` is unchanged then.
 void setScenePointer(pipeline::Scene& s, const std::string& pointer, const Json& value);
+// The scene's JSON form names the density map by its file only: a scene re-read from it (`set`, the
+// Scene JSON window) gets `from`'s factors back (painted since the last save) while it names the same
+// file (or none).
+void keepPaintedDensity(const pipeline::Scene& from, pipeline::Scene& next);
 // Parses a script or text-field value: JSON when it parses, else a plain string.
 Json parseLooseValue(const std::string& text);
 

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "actions.hpp"
+#include "paint.hpp"
 #include "pteryla/core/error.hpp"
 #include "scene_edit.hpp"
 
@@ -92,7 +93,8 @@ std::vector<ScriptCommand> loadScript(const std::string& path) {
 bool isViewCommand(const std::string& v) {
   return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "click" || v == "drag" ||
          v == "ui" || v == "autosave" || v == "crash" || v == "sleep" || v == "tool" || v == "orbit" || v == "zoom" ||
-         v == "frame" || v == "frames" || v == "quit" || v == "dialog" || v == "key" || v == "selection";
+         v == "frame" || v == "frames" || v == "quit" || v == "dialog" || v == "key" || v == "selection" ||
+         v == "select-faces" || v == "tract-from-selection";
 }
 
 double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file) {
@@ -202,6 +204,32 @@ void run(Document& doc, const ScriptCommand& c, const std::string& file, std::os
       throw Error("usage: brush X Y Z RADIUS ELEVATION_DEG [fixed|lift]", file, where(c));
     actions::addBrush(doc, vec(c, 0, file), scriptNumber(c, 3, file), scriptNumber(c, 4, file),
                       c.args.size() > 5 && c.args[5] == "lift");
+  } else if (v == "paint-faces") {
+    // The face brush at a point (what a click of the viewport tool paints): add to or remove from a tract.
+    needArgs(c, 6, 6, "paint-faces TRACT add|remove X Y Z RADIUS", file);
+    if (c.args[1] != "add" && c.args[1] != "remove")
+      throw Error("usage: paint-faces TRACT add|remove X Y Z RADIUS", file, where(c));
+    const auto rest = doc.snapshot().restSkin;
+    if (!rest) throw Error("the skin is not loaded", file, where(c));
+    const std::vector<uint32_t> faces =
+        facesInBrush(*rest, doc.snapshot().posedVertex, glm::vec3(vec(c, 2, file)), float(scriptNumber(c, 5, file)));
+    for (size_t t : tracts(0)) actions::paintTractFaces(doc, *rest, t, faces, c.args[1] == "add");
+  } else if (v == "paint-density") {
+    needArgs(c, 5, 6, "paint-density X Y Z RADIUS FACTOR [STRENGTH]", file);
+    const auto rest = doc.snapshot().restSkin;
+    if (!rest) throw Error("the skin is not loaded", file, where(c));
+    const double value = scriptNumber(c, 4, file), strength = c.args.size() > 5 ? scriptNumber(c, 5, file) : 1.0;
+    if (!(value >= 0 && value <= 100)) throw Error("a density factor must be in [0, 100]", file, where(c));
+    if (!(strength >= 0 && strength <= 1)) throw Error("the strength must be in [0, 1]", file, where(c));
+    std::vector<float> f = doc.scene().densityFactor ? *doc.scene().densityFactor : std::vector<float>{};
+    if (f.size() != rest->positions.size()) f.assign(rest->positions.size(), 1.0f);
+    densityDab(f, *rest, doc.snapshot().posedVertex, glm::vec3(vec(c, 0, file)), float(scriptNumber(c, 3, file)),
+               float(value), float(strength));
+    actions::setDensityFactors(doc, std::move(f));
+  } else if (v == "density-map") {
+    needArgs(c, 1, 1, "density-map clear", file);
+    if (c.args[0] != "clear") throw Error("usage: density-map clear", file, where(c));
+    actions::clearDensityMap(doc);
   } else if (v == "pack" || v == "wait") {
     needArgs(c, 0, 0, v, file);  // the runner waits for the evaluation before the next command
   } else if (v == "check") {
@@ -268,6 +296,11 @@ const char* scriptHelp() {
   key TRACT FEATHER FOLLICLE_ID | key-at TRACT FEATHER X Y Z     key feathers
   vector X Y Z DX DY DZ [RADIUS] | axis X1 Y1 Z1 X2 Y2 Z2 ...    directions (over an axis, a vector combs it)
   brush X Y Z RADIUS ELEVATION_DEG [fixed|lift]   packing brush: set the angle, or lift to at least it
+  paint-faces TRACT add|remove X Y Z RADIUS     tract face brush (source faces whose triangles it covers)
+  paint-density X Y Z RADIUS FACTOR [STRENGTH]  density brush dab (factor per vertex, saved as SCENE.density.json)
+  density-map clear              remove the painted density map
+  select-faces X Y Z RADIUS [remove] | select-faces clear   the view's face selection (not saved)
+  tract-from-selection NAME      new tract of the selected faces
   pack | wait                    wait for the evaluation (packing included)
   check                          print the checker's metrics as JSON
   control X Y Z RADIUS           add an expressive control
@@ -285,6 +318,8 @@ const char* scriptHelp() {
   cache-range                    draw every frame of the timeline range into the flipbook (then play shows them)
   panel NAME|* open|closed       open or close panel headers (names as shown)
   tool orbit|key|vector|edit-vectors|bias|brush|control|pin [FEATHER]   viewport tool
+  tool paint-faces [add|remove|select|deselect [RADIUS]]   tract face brush (drag to paint)
+  tool paint-density [FACTOR [RADIUS [STRENGTH]]]          density brush (drag to paint)
   click X Y | drag X1 Y1 X2 Y2 [left|right|middle [STEPS]]   mouse in the 3D view (pixels or N%)
   ui PANEL WIDGET [VALUE]        use a panel's widget as a user would (docs/viewer.md lists them)
   dialog open|save-as [PATH]     open the Open / Save As dialog (at PATH: its directory and file name)

@@ -1,0 +1,107 @@
+// Overlays of the painting tools (drawn with the other overlays, overlays.cpp): the view's face
+// selection, the faces under a face stroke, the painted density map on the skin and the brush itself.
+#include <imgui.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <glm/geometric.hpp>
+
+#include "overlays.hpp"
+
+namespace pteryla::viewer {
+
+namespace {
+
+struct Proj {
+  const render::Camera& cam;
+  glm::ivec2 vp;
+  glm::vec2 origin;
+  bool operator()(const glm::vec3& p, ImVec2& out) const {
+    glm::vec2 q;
+    if (!projectToPixel(cam, p, vp, q)) return false;
+    out = ImVec2(origin.x + q.x, origin.y + q.y);
+    return true;
+  }
+};
+
+// Density factor as a colour: below 1 blue, above 1 red, more opaque the further from 1.
+ImU32 densityColour(float f) {
+  const float t = std::clamp(std::abs(std::log2(std::max(f, 1e-3f))) / 2.0f, 0.0f, 1.0f);
+  const int a = int(40 + 150 * t);
+  return f < 1.0f ? IM_COL32(40, 110, 255, a) : IM_COL32(255, 70, 40, a);
+}
+
+}  // namespace
+
+void drawPaintOverlays(ImDrawList* dl, PanelContext& ctx) {
+  const Snapshot& snap = ctx.doc.snapshot();
+  const ViewState& v = ctx.view;
+  const Proj proj{ctx.camera.camera(), v.viewSize, v.viewOrigin};
+  const std::shared_ptr<const coat::SkinMesh> rest = snap.restSkin;
+  const bool painting = v.tool == Tool::PaintFaces || v.tool == Tool::PaintDensity;
+  if (rest && snap.posedVertex.size() == rest->positions.size()) {
+    const auto& P = snap.posedVertex;
+    // Per source face: 1 selected, 2 under the stroke.
+    std::vector<uint8_t> mark(rest->sourceFaceCount + 1, 0);
+    auto markAll = [&](const std::vector<uint32_t>& faces, uint8_t m) {
+      for (uint32_t f : faces)
+        if (f < mark.size()) mark[f] = m;
+    };
+    markAll(v.faceSelection, 1);
+    markAll(v.strokeFaces, 2);
+    const bool anyFaces = !v.faceSelection.empty() || !v.strokeFaces.empty();
+    const std::vector<float>* density = !v.strokeDensity.empty()        ? &v.strokeDensity
+                                        : ctx.doc.scene().densityFactor ? ctx.doc.scene().densityFactor.get()
+                                                                        : nullptr;
+    if (density && density->size() != P.size()) density = nullptr;
+    const bool showDensity = density && (v.showDensity || v.tool == Tool::PaintDensity);
+    const ImU32 strokeCol = v.facePaint == FacePaint::Remove     ? IM_COL32(255, 60, 60, 110)
+                            : v.facePaint == FacePaint::Add      ? IM_COL32(60, 230, 90, 110)
+                            : v.facePaint == FacePaint::Deselect ? IM_COL32(120, 120, 120, 110)
+                                                                 : IM_COL32(255, 220, 60, 110);
+    if (anyFaces || showDensity) {
+      for (size_t t = 0; t < rest->faces.size(); ++t) {
+        const auto& f = rest->faces[t];
+        const glm::vec3 a = P[f[0]], b = P[f[1]], c = P[f[2]];
+        if (glm::dot(glm::cross(b - a, c - a), proj.cam.eye - a) < 0.0f) continue;  // back-facing
+        const uint32_t src = t < rest->sourceFace.size() ? rest->sourceFace[t] : uint32_t(t);
+        const uint8_t m = src < mark.size() ? mark[src] : 0;
+        ImU32 col = 0;
+        if (m == 2)
+          col = strokeCol;
+        else if (m == 1)
+          col = IM_COL32(255, 220, 60, 90);
+        else if (showDensity) {
+          const float d = ((*density)[f[0]] + (*density)[f[1]] + (*density)[f[2]]) / 3.0f;
+          if (d != 1.0f) col = densityColour(d);
+        }
+        if (!col) continue;
+        ImVec2 pa, pb, pc;
+        if (proj(a, pa) && proj(b, pb) && proj(c, pc)) dl->AddTriangleFilled(pa, pb, pc, col);
+      }
+    }
+  }
+  if (painting && v.brushVisible) {
+    glm::vec3 side = glm::cross(proj.cam.forward(), proj.cam.up);
+    side = glm::length(side) > 1e-9f ? glm::normalize(side) : glm::vec3(1, 0, 0);
+    ImVec2 c, e;
+    if (proj(v.brushAt, c) && proj(v.brushAt + side * v.paintRadius, e)) {
+      const float r = std::hypot(e.x - c.x, e.y - c.y);
+      dl->AddCircle(c, r, IM_COL32(255, 255, 255, 220), 48, 1.5f);
+      char label[64];
+      if (v.tool == Tool::PaintDensity)
+        std::snprintf(label, sizeof label, "x%.2f", v.densityValue);
+      else
+        std::snprintf(label, sizeof label, "%s",
+                      v.facePaint == FacePaint::Add      ? "add"
+                      : v.facePaint == FacePaint::Remove ? "remove"
+                      : v.facePaint == FacePaint::Select ? "select"
+                                                         : "deselect");
+      dl->AddText(ImVec2(c.x + r + 4, c.y - 7), IM_COL32(255, 255, 255, 230), label);
+    }
+  }
+}
+
+}  // namespace pteryla::viewer

@@ -1,0 +1,114 @@
+// The painting tools in the real viewer under xvfb-run, driven like a user: the face brush (select, then
+// "New tract from selection" in the Tracts panel; remove from the patch tract) and the density brush,
+// each dragged across the 3D view. What they painted must reach the saved scene (and its density side
+// file) and evaluate there. Skipped only when xvfb-run is missing.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include "fixtures.hpp"
+#include "pteryla/coat/follicles.hpp"
+#include "pteryla/core/json.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/pipeline/scene.hpp"
+#include "viewer_run.hpp"
+
+using namespace pteryla;
+using viewer_test::haveXvfbRun;
+using viewer_test::runViewer;
+using viewer_test::slurp;
+using viewer_test::ViewerRun;
+
+TEST(ViewerPaint, FaceBrushStrokesReachTheSavedTracts) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("paint_faces");
+  const std::string saved = dir + "/painted.json", script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\n"
+                           "count 0 24\n"
+                           "relax 3\n"
+                           "show panels off\n"
+                           // Select a band across the middle of the patch, make it a tract from the panel.
+                           "tool paint-faces select 0.2\n"
+                           "drag 42% 52% 56% 52%\n"
+                           "ui Tracts \"new from selection\" band\n"
+                           "count band 12\n"
+                           // Remove a spot from the patch tract (the tract chosen in the panel).
+                           "ui Tracts select patch\n"
+                           "show panels off\n"
+                           "tool paint-faces remove 0.15\n"
+                           "drag 55% 44% 57% 44%\n"
+                           "undo\n"
+                           "redo\n"
+                           "wait\n"
+                        << "save " << saved << "\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+
+  const Json j = readJsonFile(saved);
+  ASSERT_EQ(j["tracts"].size(), 2u) << j["tracts"].dump();
+  const Json& patch = j["tracts"][0];
+  const Json& band = j["tracts"][1];
+  EXPECT_EQ(band["name"], "band");
+  ASSERT_TRUE(band.contains("faces"));
+  const auto bandFaces = band["faces"].get<std::vector<int>>();
+  EXPECT_GT(bandFaces.size(), 10u);
+  EXPECT_LT(bandFaces.size(), 400u);
+  // The removal made the patch an explicit face list without the removed spot.
+  EXPECT_FALSE(patch.contains("groups"));
+  ASSERT_TRUE(patch.contains("faces"));
+  const auto patchFaces = patch["faces"].get<std::vector<int>>();
+  EXPECT_LT(patchFaces.size(), 800u);
+  EXPECT_GT(patchFaces.size(), 700u);
+  EXPECT_EQ(patch["count"], 24);
+
+  // The saved scene evaluates with both tracts as painted.
+  const pipeline::Scene back = pipeline::loadScene(saved);
+  pipeline::Pipeline p(back);
+  ASSERT_EQ(p.tracts().size(), 2u);
+  EXPECT_EQ(p.tracts()[1].faces.size(), bandFaces.size());  // the patch's polygons are triangles
+  EXPECT_EQ(p.tracts()[0].faces.size(), patchFaces.size());
+  size_t inBand = 0;
+  for (uint32_t t : p.follicles().tract) inBand += t == 1 ? 1 : 0;
+  EXPECT_EQ(inBand, 12u);
+}
+
+TEST(ViewerPaint, DensityBrushStrokeReachesTheSavedSideFile) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("paint_density");
+  const std::string saved = dir + "/dense.json", script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\n"
+                           "density 0 20\n"
+                           "relax 3\n"
+                           "show panels off\n"
+                           "tool paint-density 4 0.4 1\n"
+                           "drag 40% 52% 58% 52%\n"
+                           "ui Follicles strength 0.5\n"
+                           "wait\n"
+                        << "save " << saved << "\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+
+  const Json j = readJsonFile(saved);
+  ASSERT_TRUE(j.contains("density_map")) << j.dump();
+  EXPECT_EQ(j["density_map"], "dense.density.json");
+  const std::vector<float> f = pipeline::readDensityMap(dir + "/dense.density.json");
+  ASSERT_EQ(f.size(), 441u);
+  const size_t painted = size_t(std::count_if(f.begin(), f.end(), [](float x) { return x != 1.0f; }));
+  EXPECT_GT(painted, 10u);
+  EXPECT_LT(painted, 300u);
+  EXPECT_NEAR(*std::max_element(f.begin(), f.end()), 4.0f, 0.05f) << "full strength under the stroke";
+  EXPECT_EQ(*std::min_element(f.begin(), f.end()), 1.0f);
+
+  // The painted region carries more follicles than the same scene without the map.
+  const pipeline::Scene back = pipeline::loadScene(saved);
+  pipeline::Scene plain = back;
+  plain.densityFactor.reset();
+  pipeline::Pipeline a(back), b(plain);
+  EXPECT_GT(a.follicles().size(), b.follicles().size() + 10);
+}
