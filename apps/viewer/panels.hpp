@@ -83,7 +83,11 @@ struct ViewState {
   bool painting = false;             // a stroke is under way
   bool brushVisible = false;         // the paint brush is over the skin
   glm::vec3 brushAt{0};
-  bool showDensity = true;  // painted density factors as dots on the skin
+  bool showDensity = true;  // painted density factors on the skin
+  // Mirror left/right (panels_paint.cpp, mirror.hpp): what to mirror and about which plane.
+  bool mirrorTract = true, mirrorBrushes = true, mirrorControls = true, mirrorVectors = true;
+  int mirrorAxis = 0;  // 0 x, 1 y, 2 z, 3 the body's symmetry plane
+  float mirrorOffset = 0.0f;
   // Timeline.
   bool playing = false;
   float timeStart = 0.0f, timeEnd = 10.0f, timeStep = 1.0f / 24.0f;
@@ -187,6 +191,7 @@ void drawPackingPanel(PanelContext& ctx);
 // Follicles)
 void drawFacePaintSection(PanelContext& ctx);
 void drawDensityPaintSection(PanelContext& ctx);
+void drawMirrorSection(PanelContext& ctx);  // in Tracts: mirror left/right
 // panels_time.cpp
 void drawTimelinePanel(PanelContext& ctx);
 void drawControlsPanel(PanelContext& ctx);

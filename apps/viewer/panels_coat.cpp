@@ -142,6 +142,7 @@ void drawTractsPanel(PanelContext& ctx) {
     }
   }
   drawFacePaintSection(ctx);
+  drawMirrorSection(ctx);
   if (ImGui::TreeNode("New tract from mesh groups")) {
     static std::string name = "tract";
     static std::set<std::string> chosen;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "actions.hpp"
+#include "mirror.hpp"
 #include "panels.hpp"
 
 namespace pteryla::viewer {
@@ -96,6 +97,53 @@ void drawDensityPaintSection(PanelContext& ctx) {
   } else {
     ImGui::TextDisabled("no density map: every factor is 1");
   }
+}
+
+void drawMirrorSection(PanelContext& ctx) {
+  ViewState& v = ctx.view;
+  const UiRequest& ui = v.ui;
+  if (ui.pending && ui.panel == "Tracts" && ui.widget.rfind("mirror", 0) == 0) ImGui::SetNextItemOpen(true);
+  if (!ImGui::TreeNode("Mirror left/right")) return;
+  ImGui::Checkbox("the tract chosen above", &v.mirrorTract);
+  ImGui::Checkbox("packing brushes", &v.mirrorBrushes);
+  ImGui::SameLine();
+  ImGui::Checkbox("controls", &v.mirrorControls);
+  ImGui::SameLine();
+  ImGui::Checkbox("styling vectors", &v.mirrorVectors);
+  static const char* const planes[] = {"x = offset", "y = offset", "z = offset", "body symmetry plane"};
+  static const char* const planeNames[] = {"x", "y", "z", "symmetry"};
+  ImGui::SetNextItemWidth(180);
+  ImGui::Combo("Plane", &v.mirrorAxis, planes, 4);
+  for (int i = 0; i < 4; ++i)
+    if (uiRequested(ctx, "Tracts", "mirror plane", planeNames[i])) v.mirrorAxis = i;
+  if (v.mirrorAxis < 3) {
+    ImGui::SetNextItemWidth(180);
+    ImGui::InputFloat("Offset", &v.mirrorOffset, 0, 0, "%.4g");
+    uiRequestedNumber(ctx, "Tracts", "mirror offset", v.mirrorOffset);
+  }
+  const auto rest = ctx.doc.snapshot().restSkin;
+  // The symmetry plane of the skin shown (estimated once per skin).
+  static std::weak_ptr<const coat::SkinMesh> planeOf;  // (a weak pointer: the address is not reused)
+  static MirrorPlane symmetry;
+  if (rest && v.mirrorAxis == 3) {
+    if (planeOf.lock() != rest) symmetry = symmetryPlane(*rest), planeOf = rest;
+    ImGui::TextDisabled("%c = %.4g", "xyz"[symmetry.axis], symmetry.offset);
+  }
+  if ((ImGui::Button("Mirror") || uiRequested(ctx, "Tracts", "mirror")) && rest) {
+    guarded(ctx, [&] {
+      MirrorRequest q;
+      if (v.mirrorTract && !ctx.doc.scene().tracts.empty())
+        q.tracts.push_back(size_t(std::clamp(v.selectedTract, 0, int(ctx.doc.scene().tracts.size()) - 1)));
+      q.brushes = v.mirrorBrushes;
+      q.controls = v.mirrorControls;
+      q.vectors = v.mirrorVectors;
+      q.plane = v.mirrorAxis == 3 ? symmetryPlane(*rest) : MirrorPlane{v.mirrorAxis, double(v.mirrorOffset)};
+      mirrorScene(ctx.doc, *rest, q);
+    });
+  }
+  ImGui::SameLine();
+  ImGui::TextDisabled("one undo step; copies already there are not added again");
+  ImGui::TreePop();
 }
 
 }  // namespace pteryla::viewer

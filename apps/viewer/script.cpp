@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "actions.hpp"
+#include "mirror.hpp"
 #include "paint.hpp"
 #include "pteryla/core/error.hpp"
 #include "scene_edit.hpp"
@@ -230,6 +231,44 @@ void run(Document& doc, const ScriptCommand& c, const std::string& file, std::os
     needArgs(c, 1, 1, "density-map clear", file);
     if (c.args[0] != "clear") throw Error("usage: density-map clear", file, where(c));
     actions::clearDensityMap(doc);
+  } else if (v == "mirror") {
+    // mirror x|y|z[=OFFSET]|symmetry ITEM...   ITEM: tract TRACT | brushes | controls | vectors
+    const std::string usage = "mirror x|y|z[=OFFSET]|symmetry [tract TRACT]... [brushes] [controls] [vectors]";
+    if (c.args.size() < 2) throw Error("usage: " + usage, file, where(c));
+    const auto rest = doc.snapshot().restSkin;
+    if (!rest) throw Error("the skin is not loaded", file, where(c));
+    MirrorRequest q;
+    const std::string& plane = c.args[0];
+    if (plane == "symmetry") {
+      q.plane = symmetryPlane(*rest);
+    } else if (!plane.empty() && (plane[0] == 'x' || plane[0] == 'y' || plane[0] == 'z') &&
+               (plane.size() == 1 || plane[1] == '=')) {
+      q.plane.axis = plane[0] - 'x';
+      if (plane.size() > 1) {
+        ScriptCommand one = c;
+        one.args = {plane.substr(2)};
+        q.plane.offset = scriptNumber(one, 0, file);
+      }
+    } else {
+      throw Error("usage: " + usage, file, where(c));
+    }
+    for (size_t i = 1; i < c.args.size(); ++i) {
+      const std::string& a = c.args[i];
+      if (a == "tract" && i + 1 < c.args.size()) {
+        for (size_t t : tracts(++i)) q.tracts.push_back(t);
+      } else if (a == "brushes") {
+        q.brushes = true;
+      } else if (a == "controls") {
+        q.controls = true;
+      } else if (a == "vectors") {
+        q.vectors = true;
+      } else {
+        throw Error("usage: " + usage, file, where(c));
+      }
+    }
+    const MirrorResult r = mirrorScene(doc, *rest, q);
+    out << "{\"mirrored\": {\"tracts\": " << r.tracts << ", \"brushes\": " << r.brushes
+        << ", \"controls\": " << r.controls << ", \"vectors\": " << r.vectors << "}}" << std::endl;
   } else if (v == "pack" || v == "wait") {
     needArgs(c, 0, 0, v, file);  // the runner waits for the evaluation before the next command
   } else if (v == "check") {
@@ -301,6 +340,8 @@ const char* scriptHelp() {
   density-map clear              remove the painted density map
   select-faces X Y Z RADIUS [remove] | select-faces clear   the view's face selection (not saved)
   tract-from-selection NAME      new tract of the selected faces
+  mirror x|y|z[=OFFSET]|symmetry [tract TRACT]... [brushes] [controls] [vectors]
+                                 mirrored copies about the plane, one undo step (prints what it added)
   pack | wait                    wait for the evaluation (packing included)
   check                          print the checker's metrics as JSON
   control X Y Z RADIUS           add an expressive control

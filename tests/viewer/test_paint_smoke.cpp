@@ -112,3 +112,54 @@ TEST(ViewerPaint, DensityBrushStrokeReachesTheSavedSideFile) {
   pipeline::Pipeline a(back), b(plain);
   EXPECT_GT(a.follicles().size(), b.follicles().size() + 10);
 }
+
+TEST(ViewerPaint, MirrorFromTheTractsPanelIsOneUndoStepThatSaveWrites) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("paint_mirror");
+  const std::string redo = dir + "/mirrored.json", undo = dir + "/undone.json", script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\n"
+                           "count 0 24\n"
+                           "relax 3\n"
+                           "select-faces 0.6 0.05 0.3 0.3\n"
+                           "tract-from-selection band_left\n"
+                           "count band_left 8\n"
+                           "brush 0.5 0.05 -0.4 0.2 40\n"
+                           "control 0.7 0.05 0.5 0.3\n"
+                           "ui Tracts select band_left\n"
+                           "ui Tracts \"mirror plane\" x\n"
+                           "ui Tracts mirror\n"
+                           "wait\n"
+                        << "save " << redo << "\n"
+                        << "undo\n"
+                        << "save " << undo << "\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+
+  const Json m = readJsonFile(redo);
+  ASSERT_EQ(m["tracts"].size(), 3u) << m["tracts"].dump();
+  EXPECT_EQ(m["tracts"][2]["name"], "band_right");
+  EXPECT_EQ(m["tracts"][2]["count"], 8);
+  ASSERT_EQ(m["packing"]["styling"].size(), 2u);
+  EXPECT_EQ(m["packing"]["styling"][1]["center"], Json::parse("[-0.5, 0.05, -0.4]"));
+  ASSERT_EQ(m["controls"].size(), 2u);
+  EXPECT_EQ(m["controls"][1]["at"], Json::parse("[-0.7, 0.05, 0.5]"));
+  // The mirrored tract's follicles lie on the other side.
+  const pipeline::Scene back = pipeline::loadScene(redo);
+  pipeline::Pipeline p(back);
+  const coat::Follicles& f = p.follicles();
+  size_t right = 0;
+  for (size_t i = 0; i < f.size(); ++i)
+    if (f.tract[i] == 2) {
+      EXPECT_LT(f.position[i].x, 0.0);
+      ++right;
+    }
+  EXPECT_EQ(right, 8u);
+
+  // One undo removed all of it.
+  const Json u = readJsonFile(undo);
+  EXPECT_EQ(u["tracts"].size(), 2u);
+  EXPECT_EQ(u["packing"]["styling"].size(), 1u);
+  EXPECT_EQ(u["controls"].size(), 1u);
+}
