@@ -28,6 +28,9 @@ bool App::updateColouring() {
     in.checked = true;
     in.intersecting = m->intersectingFeathers;
     in.penetrating = m->penetratingFeathers;
+    in.faceSamples = m->faceSamples;
+    in.faceUncovered = m->faceUncovered;
+    if (m->coverage) in.coverage = *m->coverage;
   }
   colouring_ = colourFeathers(view_.colourBy, in);
   return true;
@@ -72,7 +75,7 @@ void App::legendWindow() {
   ImGui::Text("Colour by %s", colourByName(view_.colourBy));
   ImGui::Separator();
   for (const LegendEntry& e : colouring_.legend) {
-    if (e.feathers == 0) continue;  // only what the coat shows
+    if (e.feathers == 0 && e.faces == 0) continue;  // only what the coat (or the skin) shows
     const ImVec2 p = ImGui::GetCursorScreenPos();
     const float h = ImGui::GetTextLineHeight();
     const auto c = [](float x) { return int(std::clamp(x, 0.0f, 1.0f) * 255.0f + 0.5f); };
@@ -80,7 +83,10 @@ void App::legendWindow() {
                                               IM_COL32(c(e.colour.r), c(e.colour.g), c(e.colour.b), 255));
     ImGui::Dummy(ImVec2(h, h));
     ImGui::SameLine();
-    ImGui::Text("%s  (%zu)", e.label.c_str(), e.feathers);
+    if (e.faces > 0)
+      ImGui::Text("%s  (%zu faces)", e.label.c_str(), e.faces);
+    else
+      ImGui::Text("%s  (%zu)", e.label.c_str(), e.feathers);
   }
   if (!colouring_.note.empty()) ImGui::TextDisabled("%s", colouring_.note.c_str());
   ImGui::End();

@@ -29,7 +29,8 @@ std::string degrees(double a, double b) {
 
 const std::vector<ColourBy>& allColourModes() {
   static const std::vector<ColourBy> all = {ColourBy::Material, ColourBy::Problems, ColourBy::Elevation,
-                                            ColourBy::Layer,    ColourBy::Tract,    ColourBy::Age};
+                                            ColourBy::Layer,    ColourBy::Tract,    ColourBy::Age,
+                                            ColourBy::Coverage};
   return all;
 }
 
@@ -47,6 +48,8 @@ const char* colourByName(ColourBy m) {
       return "tract";
     case ColourBy::Age:
       return "age";
+    case ColourBy::Coverage:
+      return "coverage";
   }
   return "material";
 }
@@ -144,10 +147,38 @@ FeatherColouring colourFeathers(ColourBy mode, const ColourInputs& in) {
       }
       break;
     }
+    case ColourBy::Coverage: {
+      add({0.62f, 0.62f, 0.60f}, "feathers");  // every feather: entry 0
+      const uint32_t partly = add(coverageColour(1), "partly bare skin (10 - 50%)");
+      const uint32_t bare = add(coverageColour(2), "bare skin (> 50%)");
+      const size_t faces = std::min(in.faceSamples.size(), in.faceUncovered.size());
+      for (size_t f = 0; f < faces; ++f) {
+        const int b = coverageBin(in.faceSamples[f], in.faceUncovered[f]);
+        if (b == 1) ++out.legend[partly].faces;
+        if (b == 2) ++out.legend[bare].faces;
+      }
+      char buf[96];
+      if (!in.checked) {
+        out.note = "no check of this coat yet: press Check (Follicles panel) or run 'check'";
+      } else if (in.coverage >= 0) {
+        std::snprintf(buf, sizeof buf, "coverage %.1f%% of the tracts' skin", 100.0 * in.coverage);
+        out.note = buf;
+      }
+      break;
+    }
   }
   for (size_t i = 0; i < n; ++i)
     if (i >= in.present.size() || in.present[i]) ++out.legend[out.featherEntry[i]].feathers;
   return out;
+}
+
+int coverageBin(uint32_t samples, uint32_t uncovered) {
+  if (samples == 0 || uncovered * 10u < samples) return 0;  // under 10% uncovered
+  return uncovered * 2u > samples ? 2 : 1;
+}
+
+glm::vec3 coverageColour(int bin) {
+  return bin == 2 ? glm::vec3(0.95f, 0.12f, 0.35f) : bin == 1 ? glm::vec3(1.0f, 0.62f, 0.10f) : glm::vec3(0.0f);
 }
 
 }  // namespace pteryla::viewer

@@ -18,6 +18,7 @@ enum class ColourBy {
   Layer,      // layer (packing) order, bottom to top, in eighths
   Tract,      // one colour per tract
   Age,        // growth and wear age (growth.md): collar, unfurling, opening, mature, worn, old
+  Coverage,   // the last check's bare skin: skin faces by their uncovered share (feathers grey)
 };
 
 const std::vector<ColourBy>& allColourModes();
@@ -28,6 +29,7 @@ struct LegendEntry {
   glm::vec3 colour{0.0f};
   std::string label;
   size_t feathers = 0;  // present feathers with this colour
+  size_t faces = 0;     // skin faces with this colour (coverage)
 };
 
 // What a mode reads, per feather (indexed like Pipeline::feathers()); arrays may be shorter (their
@@ -42,6 +44,9 @@ struct ColourInputs {
   std::vector<uint8_t> present;
   bool checked = false;  // Problems: a check ran on this coat
   std::vector<uint32_t> intersecting, penetrating;
+  // Coverage: per skin triangle, the check's coverage samples and the uncovered ones; the coverage.
+  std::vector<uint32_t> faceSamples, faceUncovered;
+  double coverage = -1;
 };
 
 struct FeatherColouring {
@@ -52,5 +57,10 @@ struct FeatherColouring {
 
 // Throws nothing; Material gives an empty colouring.
 FeatherColouring colourFeathers(ColourBy mode, const ColourInputs& in);
+
+// Coverage: how bare a skin face is from its samples: 0 covered (or not sampled: outside the tracts),
+// 1 partly bare (10 - 50% of its samples uncovered), 2 bare (more than half). Its colour on the skin.
+int coverageBin(uint32_t samples, uint32_t uncovered);
+glm::vec3 coverageColour(int bin);
 
 }  // namespace pteryla::viewer

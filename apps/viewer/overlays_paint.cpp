@@ -1,5 +1,6 @@
-// Overlays of the painting tools (drawn with the other overlays, overlays.cpp): the view's face
-// selection, the faces under a face stroke, the painted density map on the skin and the brush itself.
+// Overlays on the skin (drawn with the other overlays, overlays.cpp): bare skin in the coverage colour
+// mode, and the painting tools': the view's face selection, the faces under a face stroke, the painted
+// density map and the brush itself.
 #include <imgui.h>
 
 #include <algorithm>
@@ -41,6 +42,23 @@ void drawPaintOverlays(ImDrawList* dl, PanelContext& ctx) {
   const Proj proj{ctx.camera.camera(), v.viewSize, v.viewOrigin};
   const std::shared_ptr<const coat::SkinMesh> rest = snap.restSkin;
   const bool painting = v.tool == Tool::PaintFaces || v.tool == Tool::PaintDensity;
+  // Colour by coverage: the skin faces the last check found (partly) bare, front-facing, over the view.
+  const auto& metrics = ctx.doc.metrics();
+  const TriMesh& skin = snap.skin;
+  if (v.colourBy == ColourBy::Coverage && metrics && metrics->faceSamples.size() * 3 == skin.indices.size() &&
+      metrics->faceUncovered.size() == metrics->faceSamples.size()) {
+    for (size_t t = 0; t < metrics->faceSamples.size(); ++t) {
+      const int bin = coverageBin(metrics->faceSamples[t], metrics->faceUncovered[t]);
+      if (bin == 0) continue;
+      const glm::vec3 a = skin.positions[skin.indices[3 * t]], b = skin.positions[skin.indices[3 * t + 1]],
+                      c = skin.positions[skin.indices[3 * t + 2]];
+      if (glm::dot(glm::cross(b - a, c - a), proj.cam.eye - a) < 0.0f) continue;
+      const glm::vec3 col = coverageColour(bin);
+      ImVec2 pa, pb, pc;
+      if (proj(a, pa) && proj(b, pb) && proj(c, pc))
+        dl->AddTriangleFilled(pa, pb, pc, IM_COL32(int(col.r * 255), int(col.g * 255), int(col.b * 255), 170));
+    }
+  }
   if (rest && snap.posedVertex.size() == rest->positions.size()) {
     const auto& P = snap.posedVertex;
     // Per source face: 1 selected, 2 under the stroke.

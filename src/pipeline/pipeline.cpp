@@ -530,6 +530,8 @@ QualityMetrics Pipeline::check() {
   m.intersectingPairs = r.intersectingPairs;
   m.skinPenetrations = r.skinPenetrations;
   m.coverage = r.coverage;
+  m.faceSamples = r.faceSamples;
+  m.faceUncovered = r.faceUncovered;
   for (const coat::FeatherPairCount& p : r.featherPairs) {
     m.intersectingFeathers.push_back(p.a);
     m.intersectingFeathers.push_back(p.b);

@@ -87,3 +87,31 @@ TEST(ColourBy, ProblemsFromTheCheckAndANoteWithoutOne) {
   EXPECT_EQ(c.legend[c.featherEntry[2]].label, "both");
   EXPECT_EQ(c.legend[c.featherEntry[3]].label, "clean");
 }
+
+TEST(ColourBy, CoverageCountsBareSkinFacesAndGreysTheFeathers) {
+  ColourInputs in = fourFeathers();
+  // Six faces: unsampled, covered, 9% bare (covered), 10% (partly), 50% (partly), 51% (bare).
+  in.faceSamples = {0, 20, 100, 100, 100, 100};
+  in.faceUncovered = {0, 0, 9, 10, 50, 51};
+  const FeatherColouring none = colourFeathers(ColourBy::Coverage, in);
+  EXPECT_NE(none.note.find("no check"), std::string::npos);
+  in.checked = true;
+  in.coverage = 0.876;
+  const FeatherColouring c = colourFeathers(ColourBy::Coverage, in);
+  for (uint32_t e : c.featherEntry) EXPECT_EQ(c.legend[e].label, "feathers");
+  EXPECT_EQ(c.legend[c.featherEntry[0]].feathers, 3u);
+  size_t partly = 0, bare = 0;
+  for (const LegendEntry& e : c.legend) {
+    if (e.label.rfind("partly bare", 0) == 0) partly = e.faces;
+    if (e.label.rfind("bare skin", 0) == 0) bare = e.faces;
+  }
+  EXPECT_EQ(partly, 2u);
+  EXPECT_EQ(bare, 1u);
+  EXPECT_NE(c.note.find("87.6%"), std::string::npos) << c.note;
+  EXPECT_EQ(coverageBin(0, 0), 0);
+  EXPECT_EQ(coverageBin(100, 9), 0);
+  EXPECT_EQ(coverageBin(100, 10), 1);
+  EXPECT_EQ(coverageBin(100, 50), 1);
+  EXPECT_EQ(coverageBin(100, 51), 2);
+  EXPECT_NE(coverageColour(2), coverageColour(1));
+}

@@ -1,7 +1,8 @@
 // The painting tools in the real viewer under xvfb-run, driven like a user: the face brush (select, then
 // "New tract from selection" in the Tracts panel; remove from the patch tract) and the density brush,
-// each dragged across the 3D view. What they painted must reach the saved scene (and its density side
-// file) and evaluate there. Skipped only when xvfb-run is missing.
+// each dragged across the 3D view, and mirror from the Tracts panel. What they painted must reach the
+// saved scene (and its density side file) and evaluate there. Also the bare skin of colour by coverage.
+// Skipped only when xvfb-run is missing.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include "pteryla/core/json.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
+#include "pteryla/render/image.hpp"
 #include "viewer_run.hpp"
 
 using namespace pteryla;
@@ -162,4 +164,43 @@ TEST(ViewerPaint, MirrorFromTheTractsPanelIsOneUndoStepThatSaveWrites) {
   EXPECT_EQ(u["tracts"].size(), 2u);
   EXPECT_EQ(u["packing"]["styling"].size(), 1u);
   EXPECT_EQ(u["controls"].size(), 1u);
+}
+
+// Colour by coverage: after a check of a sparse coat, the bare skin faces show in the bare colour on the
+// skin (and the legend names them); in the material view that colour is absent.
+TEST(ViewerPaint, ColourByCoverageShowsBareSkinAfterACheck) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("paint_coverage");
+  const std::string script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\n"
+                           "count 0 6\n"
+                           "relax 3\n"
+                           "show panels off\n"
+                           "check\n"
+                           "frames 3\n"
+                        << "screenshot-window " << dir << "/material.png\n"
+                        << "ui View \"colour by\" coverage\n"
+                           "show panels off\n"
+                           "frames 3\n"
+                        << "screenshot-window " << dir << "/coverage.png\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+  // The checker's coverage of six feathers on the patch is far from whole.
+  ASSERT_NE(r.out.find("\"coverage\": 0."), std::string::npos) << r.out;
+  auto bareShare = [](const render::Image& im) {
+    size_t n = 0;
+    for (int y = 0; y < im.height; ++y)
+      for (int x = 0; x < im.width; ++x) {
+        const uint8_t* p = im.pixel(x, y);
+        // The bare colour (0.95, 0.12, 0.35) at 2/3 over skin, feathers or background.
+        n += p[0] > 170 && p[1] < 110 && p[2] > 70 && p[2] < 170 && p[0] > p[2] + 60 ? 1 : 0;
+      }
+    return double(n) / double(im.width * im.height);
+  };
+  const double coverage = bareShare(render::loadImage(dir + "/coverage.png"));
+  const double material = bareShare(render::loadImage(dir + "/material.png"));
+  EXPECT_GT(coverage, 0.02);
+  EXPECT_LT(material, 0.002);
 }

@@ -101,6 +101,9 @@ struct QualityMetrics {
   // intersects another feather's, and which have a vertex under the skin; ascending, each set with
   // intersectingPairs / skinPenetrations (empty when those are 0 or not computed).
   std::vector<uint32_t> intersectingFeathers, penetratingFeathers;
+  // Per posed-skin triangle: the coverage samples on it and how many of them no feather covers (the
+  // tracts' faces only; others have 0 samples). Bare skin is where faceUncovered is a large share.
+  std::vector<uint32_t> faceSamples, faceUncovered;
 };
 
 // The unpacked coat `check` compares against: every feather at this elevation (degrees) with its own,
