@@ -123,6 +123,10 @@ class App {
   void handleInput();
   // Returns false when a press hit nothing the tool uses (the drag then orbits as usual).
   bool handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse);
+  // app_handles.cpp: hover, drag and select the scene's handles with the orbit tool (handles.hpp); true
+  // when the mouse is on one (or dragging it), so the feather pick and the orbit leave it alone.
+  bool handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed);
+  void deleteSelectedHandle();
   // app_paint.cpp: the face and density brushes (Tool::PaintFaces, Tool::PaintDensity)
   bool handlePaint(bool pressed, bool down, bool released, const glm::vec2& mouse);
   void updateBrushHover(const glm::vec2& mouse, bool overUi);
@@ -270,6 +274,9 @@ class App {
   glm::vec2 hoverAt_{-1.0f};   // where the hovered feather was last picked
   uint64_t hoverResult_ = 0;
   glm::vec3 dragNormal_{0, 0, 1};
+  // A handle being dragged: where the press was, whether it moved, whether the skin was under the mouse.
+  bool handleDrag_ = false, handleMoved_ = false, handleOnSkin_ = false;
+  glm::vec2 handleStart_{0.0f};
   // The stroke being painted: the skin it started on and where it last dabbed.
   std::shared_ptr<const coat::SkinMesh> strokeSkin_;
   std::vector<glm::vec3> strokePosed_;

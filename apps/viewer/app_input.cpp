@@ -48,6 +48,11 @@ void App::handleInput() {
                                  ImGui::IsMouseReleased(ImGuiMouseButton_Left), mouse);
     if (used) return;
   }
+  // Handles (controls, brushes, vectors, key feathers, pinned follicles) come before feathers.
+  if (!toolActive && handleHandles(mouse, overUi, leftPressed)) {
+    view_.hoveredFeather = -1;
+    return;
+  }
   // Hover readout and click selection of feathers (orbit tool): the feather whose follicle projects
   // nearest the mouse, facing the camera. A click is a press and release that did not orbit.
   const Snapshot& snap = doc_.snapshot();
@@ -75,6 +80,7 @@ void App::handleInput() {
   if (clickPending_ && ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
     clickPending_ = false;
     view_.selectedFeather = snap.haveCoat ? featherAt(mouse) : -1;
+    view_.selectedHandle.reset();
   }
   const bool anyDown = ImGui::IsMouseDown(ImGuiMouseButton_Left) || ImGui::IsMouseDown(ImGuiMouseButton_Right) ||
                        ImGui::IsMouseDown(ImGuiMouseButton_Middle);

@@ -145,13 +145,15 @@ void App::scriptStep() {
       }
       scriptWaitFrames_ = 2;
     } else if (c.verb == "key") {
-      needArgs(c, 1, 1, "key enter|escape|tab", file);
+      needArgs(c, 1, 1, "key enter|escape|tab|delete", file);
       const std::string& k = c.args[0];
       const ImGuiKey key = k == "enter"    ? ImGuiKey_Enter
                            : k == "escape" ? ImGuiKey_Escape
                            : k == "tab"    ? ImGuiKey_Tab
+                           : k == "delete" ? ImGuiKey_Delete
                                            : ImGuiKey_COUNT;
-      if (key == ImGuiKey_COUNT) throw Error("usage: key enter|escape|tab", file, "line " + std::to_string(c.line));
+      if (key == ImGuiKey_COUNT)
+        throw Error("usage: key enter|escape|tab|delete", file, "line " + std::to_string(c.line));
       const int index = ImGui::GetKeyIndex(key);
       fakeKeys_ = {{index, true}, {index, false}};
       fakeKeysNext_ = 0;

@@ -151,7 +151,11 @@ void App::buildUi() {
   if (doc_.hasScene() && doc_.scene().render.style == "scratchboard")
     guardedUi("Scratchboard preview", [&] { scratchboardWindow(); });
   if (doc_.hasScene() && view_.colourBy != ColourBy::Material) guardedUi("legend", [&] { legendWindow(); });
-  if (doc_.hasScene() && view_.hoveredFeather >= 0 && !ImGui::GetIO().WantCaptureMouse) {
+  if (doc_.hasScene() && view_.hoveredHandle && !view_.handleDragging && !ImGui::GetIO().WantCaptureMouse) {
+    ImGui::BeginTooltip();
+    ImGui::TextUnformatted(handleReadout(doc_.scene(), *view_.hoveredHandle).c_str());
+    ImGui::EndTooltip();
+  } else if (doc_.hasScene() && view_.hoveredFeather >= 0 && !ImGui::GetIO().WantCaptureMouse) {
     ImGui::BeginTooltip();
     ImGui::TextUnformatted(readoutText(featherReadout(doc_.snapshot(), view_.hoveredFeather)).c_str());
     ImGui::EndTooltip();
@@ -174,10 +178,14 @@ void App::buildUi() {
     if (!ctrl && ImGui::IsKeyPressed('A')) frameAll();
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space))) view_.playing = !view_.playing;
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
-      if (view_.tool == Tool::Orbit) view_.selectedFeather = -1;  // Esc: end the tool, then the selection
+      if (view_.tool == Tool::Orbit) {  // Esc: end the tool, then the selection
+        view_.selectedFeather = -1;
+        view_.selectedHandle.reset();
+      }
       view_.tool = Tool::Orbit;
     }
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Tab))) view_.hidePanels = !view_.hidePanels;
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete)) && doc_.hasScene()) deleteSelectedHandle();
   }
   // Releasing the mouse ends a gesture: the next slider drag is a new undo step.
   if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) doc_.endGesture();

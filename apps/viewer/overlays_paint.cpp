@@ -101,6 +101,20 @@ void drawPaintOverlays(ImDrawList* dl, PanelContext& ctx) {
       }
     }
   }
+  // Handles: the hovered one ringed in white, the selected one in cyan, a dragged one's new place.
+  auto ring = [&](const std::optional<Handle>& h, ImU32 col, float thick) {
+    ImVec2 c;
+    if (h && proj(h->at, c)) dl->AddCircle(c, 9.0f, col, 24, thick);
+  };
+  ring(v.hoveredHandle, IM_COL32(255, 255, 255, 230), 1.5f);
+  ring(v.selectedHandle, IM_COL32(60, 230, 255, 255), 2.5f);
+  if (v.handleDragging && v.selectedHandle) {
+    ImVec2 a, b;
+    if (proj(v.selectedHandle->at, a) && proj(v.handlePreview, b)) {
+      dl->AddLine(a, b, IM_COL32(60, 230, 255, 200), 1.5f);
+      dl->AddCircleFilled(b, 5.0f, IM_COL32(60, 230, 255, 255));
+    }
+  }
   if (painting && v.brushVisible) {
     glm::vec3 side = glm::cross(proj.cam.forward(), proj.cam.up);
     side = glm::length(side) > 1e-9f ? glm::normalize(side) : glm::vec3(1, 0, 0);

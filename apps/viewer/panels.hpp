@@ -22,6 +22,7 @@
 #include "camera_controller.hpp"
 #include "colour_by.hpp"
 #include "document.hpp"
+#include "handles.hpp"
 
 namespace pteryla::viewer {
 
@@ -84,6 +85,11 @@ struct ViewState {
   bool brushVisible = false;         // the paint brush is over the skin
   glm::vec3 brushAt{0};
   bool showDensity = true;  // painted density factors on the skin
+  // Handles (app_handles.cpp): the point under the mouse, the one clicked (Delete removes it), and
+  // where a dragged one would go.
+  std::optional<Handle> hoveredHandle, selectedHandle;
+  bool handleDragging = false;
+  glm::vec3 handlePreview{0};
   // Mirror left/right (panels_paint.cpp, mirror.hpp): what to mirror and about which plane.
   bool mirrorTract = true, mirrorBrushes = true, mirrorControls = true, mirrorVectors = true;
   int mirrorAxis = 0;  // 0 x, 1 y, 2 z, 3 the body's symmetry plane

@@ -364,7 +364,8 @@ const char* scriptHelp() {
   click X Y | drag X1 Y1 X2 Y2 [left|right|middle [STEPS]]   mouse in the 3D view (pixels or N%)
   ui PANEL WIDGET [VALUE]        use a panel's widget as a user would (docs/viewer.md lists them)
   dialog open|save-as [PATH]     open the Open / Save As dialog (at PATH: its directory and file name)
-  key enter|escape|tab           press a key (Enter confirms a dialog's file name)
+  key enter|escape|tab|delete    press a key (Enter confirms a dialog's file name; Delete removes the
+                                 selected handle)
   selection                      print the selected feather (click one in the view) as JSON
   autosave                       write the recovery file now (the scene must have unsaved changes)
   crash                          end the process at once, without clean-up (tests recovery)

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -203,4 +204,43 @@ TEST(ViewerPaint, ColourByCoverageShowsBareSkinAfterACheck) {
   const double material = bareShare(render::loadImage(dir + "/material.png"));
   EXPECT_GT(coverage, 0.02);
   EXPECT_LT(material, 0.002);
+}
+
+// Handles with the orbit tool: a control dragged over the skin moves (and stays on it), a brush clicked
+// and deleted with the Delete key is gone from the saved scene; a drag where nothing is orbits.
+TEST(ViewerPaint, HandlesDragToMoveAndDeleteToRemove) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("paint_handles");
+  const std::string before = dir + "/before.json", after = dir + "/after.json", script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\n"
+                           "count 0 24\n"
+                           "relax 3\n"
+                           "show panels off\n"
+                           "tool control\n"
+                           "click 50% 50%\n"
+                           "tool brush\n"
+                           "click 40% 62%\n"
+                           "tool orbit\n"
+                           "wait\n"
+                        << "save " << before << "\n"
+                        << "drag 50% 50% 62% 58%\n"
+                           "wait\n"
+                           "click 40% 62%\n"
+                           "key delete\n"
+                           "wait\n"
+                        << "save " << after << "\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+  const Json b = readJsonFile(before), a = readJsonFile(after);
+  ASSERT_EQ(b["controls"].size(), 1u);
+  ASSERT_EQ(b["packing"]["styling"].size(), 1u);
+  ASSERT_EQ(a["controls"].size(), 1u);
+  const auto p0 = b["controls"][0]["at"].get<std::vector<double>>(),
+             p1 = a["controls"][0]["at"].get<std::vector<double>>();
+  EXPECT_GT(std::hypot(p1[0] - p0[0], p1[2] - p0[2]), 0.2) << "the control moved";
+  EXPECT_LT(std::abs(p1[1]), 0.15) << "onto the patch's skin";
+  EXPECT_EQ(a["controls"][0]["radius"], b["controls"][0]["radius"]);
+  EXPECT_FALSE(a.contains("packing") && a["packing"].contains("styling")) << a["packing"].dump();
 }

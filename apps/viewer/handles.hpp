@@ -1,0 +1,39 @@
+#pragma once
+// Handles in the 3D view (docs/viewer.md, "Handles"): the points of the scene a user grabs with the orbit
+// tool: expressive controls, packing brush spheres, styling vectors, key feathers placed at a point and
+// pinned follicles. Hovering one shows a readout, dragging it moves the point over the skin (one edit on
+// release), Delete removes the selected one. No GL, no ImGui (unit-tested in tests/viewer).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "document.hpp"
+
+namespace pteryla::viewer {
+
+enum class HandleKind { Control, Brush, Vector, KeyFeather, Pinned };
+const char* handleKindName(HandleKind k);  // "control", "brush", "vector", "key feather", "pinned follicle"
+
+struct Handle {
+  HandleKind kind = HandleKind::Control;
+  size_t index = 0;  // in its list (controls, packing.styling, directions.vectors, the tract's key_feathers / pinned)
+  size_t tract = 0;  // KeyFeather, Pinned
+  glm::vec3 at{0};
+  bool operator==(const Handle& o) const { return kind == o.kind && index == o.index && tract == o.tract; }
+};
+
+// Every handle of the scene, in a fixed order (controls, brushes, vectors, then per tract key feathers
+// and pinned follicles). Brushes are the sphere selections; key feathers given by follicle id have none.
+std::vector<Handle> sceneHandles(const pipeline::Scene& s);
+// The handle's current entry in `s` (its position may have moved); nullopt when it is gone.
+std::optional<Handle> findHandle(const pipeline::Scene& s, const Handle& h);
+// Several lines: what it is, its name or tract, where, its radius or direction.
+std::string handleReadout(const pipeline::Scene& s, const Handle& h);
+
+// One edit each; throw pteryla::Error (scene unchanged) when the handle is gone.
+void moveHandle(Document& d, const Handle& h, const glm::dvec3& to);
+void removeHandle(Document& d, const Handle& h);
+
+}  // namespace pteryla::viewer

@@ -1,0 +1,65 @@
+// Handles (handles.hpp): every control, brush sphere, styling vector, key feather at a point and pinned
+// follicle is listed where it is; moving one edits only its point (one undo step); removing it removes
+// that element; a handle that is gone is an error that changes nothing. No display.
+#include <gtest/gtest.h>
+
+#include "actions.hpp"
+#include "document.hpp"
+#include "fixtures.hpp"
+#include "handles.hpp"
+#include "pteryla/core/error.hpp"
+#include "scene_edit.hpp"
+
+using namespace pteryla;
+using namespace pteryla::viewer;
+using viewer_test::smallPatch;
+
+TEST(Handles, ListMoveAndRemoveEveryKind) {
+  Document d;
+  d.reset(smallPatch(), "");  // one styling vector at the origin, two key feathers at points
+  actions::addControl(d, {0.2, 0.05, 0.1}, 0.3);
+  actions::addBrush(d, {-0.3, 0.05, 0.2}, 0.2, 30);
+  d.edit("comb", [](pipeline::Scene& s) {  // a comb selection has no handle
+    s.packing["styling"].push_back(Json::parse(R"({"select": "comb", "from": [0,0,0], "to": [1,0,0], "radius": 0.1,
+                                                   "direction": [0, 0, 1]})"));
+  });
+  actions::addPinned(d, 0, {0.5, 0.05, -0.5});
+  actions::setTractFeather(d, 0, "contour");  // the tract still says its feather once its key feathers are gone
+  std::vector<Handle> hs = sceneHandles(d.scene());
+  ASSERT_EQ(hs.size(), 6u);
+  EXPECT_EQ(hs[0].kind, HandleKind::Control);
+  EXPECT_EQ(hs[1].kind, HandleKind::Brush);
+  EXPECT_EQ(hs[2].kind, HandleKind::Vector);
+  EXPECT_EQ(hs[3].kind, HandleKind::KeyFeather);
+  EXPECT_EQ(hs[5].kind, HandleKind::Pinned);
+  EXPECT_EQ(hs[1].at, glm::vec3(-0.3f, 0.05f, 0.2f));
+  EXPECT_NE(handleReadout(d.scene(), hs[0]).find("control 0 'control0'"), std::string::npos);
+  EXPECT_NE(handleReadout(d.scene(), hs[3]).find("feather: contour"), std::string::npos);
+
+  for (const Handle& h : hs) {
+    SCOPED_TRACE(handleKindName(h.kind));
+    d.endGesture();
+    const Json before = sceneJson(d.scene());
+    moveHandle(d, h, {0.7, 0.06, 0.7});
+    const auto moved = findHandle(d.scene(), h);
+    ASSERT_TRUE(moved);
+    EXPECT_EQ(moved->at, glm::vec3(0.7f, 0.06f, 0.7f));
+    // Only that point changed: putting it back gives the scene before.
+    ASSERT_TRUE(d.undo());
+    EXPECT_EQ(sceneJson(d.scene()), before);
+  }
+  // Remove, from the last (indices of earlier ones stay valid).
+  for (size_t i = hs.size(); i-- > 0;) {
+    d.endGesture();
+    removeHandle(d, hs[i]);
+    EXPECT_EQ(sceneHandles(d.scene()).size(), i);
+  }
+  EXPECT_TRUE(d.scene().controls.empty());
+  EXPECT_EQ(d.scene().packing["styling"].size(), 1u) << "the comb stays";
+  EXPECT_FALSE(d.scene().tracts[0].contains("pinned"));
+  const Json after = sceneJson(d.scene());
+  EXPECT_THROW(removeHandle(d, hs[0]), Error);
+  EXPECT_THROW(moveHandle(d, hs[0], {0, 0, 0}), Error);
+  EXPECT_EQ(sceneJson(d.scene()), after);
+  ASSERT_TRUE(d.waitIdle()) << d.takeError().value_or("");
+}
