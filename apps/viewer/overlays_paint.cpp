@@ -103,8 +103,9 @@ void drawPaintOverlays(ImDrawList* dl, PanelContext& ctx) {
   }
   // Handles: the hovered one ringed in white, the selected one in cyan, a dragged one's new place.
   auto ring = [&](const std::optional<Handle>& h, ImU32 col, float thick) {
+    const std::optional<Handle> now = h ? findHandle(ctx.doc.scene(), *h) : std::nullopt;  // where it is now
     ImVec2 c;
-    if (h && proj(h->at, c)) dl->AddCircle(c, 9.0f, col, 24, thick);
+    if (now && proj(now->at, c)) dl->AddCircle(c, 9.0f, col, 24, thick);
   };
   ring(v.hoveredHandle, IM_COL32(255, 255, 255, 230), 1.5f);
   ring(v.selectedHandle, IM_COL32(60, 230, 255, 255), 2.5f);
