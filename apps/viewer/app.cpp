@@ -442,6 +442,7 @@ void App::frameAll() {
 void App::frameSelection() {
   const Snapshot& s = doc_.snapshot();
   const int f = view_.selectedFeather;
+  if (frameBoxSelection()) return;  // app_handles.cpp
   if (f < 0 || size_t(f) >= s.featherOrigin.size()) {
     frameAll();
     return;

@@ -127,6 +127,11 @@ class App {
   // when the mouse is on one (or dragging it), so the feather pick and the orbit leave it alone.
   bool handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed);
   void deleteSelectedHandle();
+  // Box selection (Ctrl + drag): fills view_.boxFeathers / boxFollicles from a rectangle in view pixels;
+  // true when the mouse is boxing. frameBoxSelection frames the boxed feathers (false without any).
+  bool handleBox(const glm::vec2& mouse, bool overUi, bool leftPressed);
+  void boxSelect(const glm::vec2& a, const glm::vec2& b);
+  bool frameBoxSelection();
   // app_paint.cpp: the face and density brushes (Tool::PaintFaces, Tool::PaintDensity)
   bool handlePaint(bool pressed, bool down, bool released, const glm::vec2& mouse);
   void updateBrushHover(const glm::vec2& mouse, bool overUi);

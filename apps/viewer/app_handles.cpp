@@ -1,8 +1,12 @@
 // Handles with the orbit tool (docs/viewer.md, "Handles"; handles.hpp): the control, brush, styling vector,
 // key feather or pinned follicle nearest the mouse (within 8 pixels) is ringed with a readout; a press on
 // it selects it and a drag moves it over the skin (one edit on release); Delete removes the selected one.
+// Ctrl + drag boxes feathers (and shown follicles).
 #include <imgui.h>
 
+#include <algorithm>
+
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include "app.hpp"
@@ -59,6 +63,61 @@ void App::deleteSelectedHandle() {
   view_.selectedHandle.reset();
   view_.hoveredHandle.reset();
   guarded(*panels_, [&] { removeHandle(doc_, h); });
+}
+
+bool App::handleBox(const glm::vec2& mouse, bool overUi, bool leftPressed) {
+  if (view_.boxActive) {
+    view_.boxTo = mouse;
+    if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) return true;
+    view_.boxActive = false;
+    boxSelect(view_.boxFrom, view_.boxTo);
+    return true;
+  }
+  if (!leftPressed || overUi || !ImGui::GetIO().KeyCtrl) return false;
+  view_.boxActive = true;
+  view_.boxFrom = view_.boxTo = mouse;
+  return true;
+}
+
+void App::boxSelect(const glm::vec2& a, const glm::vec2& b) {
+  const glm::vec2 lo = glm::min(a, b), hi = glm::max(a, b);
+  const render::Camera& cam = camera_.camera();
+  const Snapshot& s = doc_.snapshot();
+  auto inside = [&](const glm::vec3& p, const glm::vec3* n) {
+    if (n && glm::dot(*n, cam.eye - p) < 0.0f) return false;  // facing away
+    glm::vec2 q;
+    return projectToPixel(cam, p, view_.viewSize, q) && q.x >= lo.x && q.y >= lo.y && q.x <= hi.x && q.y <= hi.y;
+  };
+  view_.boxFeathers.clear();
+  view_.boxFollicles.clear();
+  for (size_t i = 0; i < s.featherOrigin.size(); ++i) {
+    if (i < s.featherPresent.size() && !s.featherPresent[i]) continue;
+    if (inside(s.featherOrigin[i], i < s.featherNormal.size() ? &s.featherNormal[i] : nullptr))
+      view_.boxFeathers.push_back(int(i));
+  }
+  if (view_.showFollicles)
+    for (size_t i = 0; i < s.follicle.size(); ++i)
+      if (inside(s.follicle[i], i < s.follicleNormal.size() ? &s.follicleNormal[i] : nullptr))
+        view_.boxFollicles.push_back(int(i));
+  view_.selectedFeather = -1;
+  view_.selectedHandle.reset();
+}
+
+bool App::frameBoxSelection() {
+  const Snapshot& s = doc_.snapshot();
+  glm::vec3 lo(1e30f), hi(-1e30f);
+  bool any = false;
+  for (int f : view_.boxFeathers) {
+    if (size_t(f) >= s.featherOrigin.size()) continue;
+    const float r = size_t(f) < s.featherLength.size() ? std::max(s.featherLength[size_t(f)], 1e-4f) : 0.1f;
+    lo = glm::min(lo, s.featherOrigin[size_t(f)] - glm::vec3(r));
+    hi = glm::max(hi, s.featherOrigin[size_t(f)] + glm::vec3(r));
+    any = true;
+  }
+  if (!any) return false;
+  camera_.frame(lo, hi, float(view_.viewSize.x) / float(view_.viewSize.y));
+  cameraMoved_ = true;
+  return true;
 }
 
 }  // namespace pteryla::viewer

@@ -48,6 +48,11 @@ void App::handleInput() {
                                  ImGui::IsMouseReleased(ImGuiMouseButton_Left), mouse);
     if (used) return;
   }
+  // Ctrl + drag: box selection of feathers and follicles.
+  if (!toolActive && handleBox(mouse, overUi, leftPressed)) {
+    view_.hoveredFeather = -1;
+    return;
+  }
   // Handles (controls, brushes, vectors, key feathers, pinned follicles) come before feathers.
   if (!toolActive && handleHandles(mouse, overUi, leftPressed)) {
     view_.hoveredFeather = -1;
@@ -74,6 +79,10 @@ void App::handleInput() {
     hoverResult_ = doc_.resultVersion();
     view_.hoveredFeather = featherAt(mouse);
   }
+  view_.hoveredFollicle = -1;  // a follicle readout where no feather is under the mouse
+  if (view_.showFollicles && !overUi && !dragging_ && !toolActive && view_.hoveredFeather < 0)
+    view_.hoveredFollicle =
+        pickPoint(snap.follicle, snap.follicleNormal, camera_.camera(), view_.viewSize, mouse, 6.0f);
   if (leftPressed && !toolActive) clickStart_ = mouse, clickPending_ = true;
   if (clickPending_ && ImGui::IsMouseDown(ImGuiMouseButton_Left) && glm::length(mouse - clickStart_) > 3.0f)
     clickPending_ = false;  // it became an orbit

@@ -215,6 +215,13 @@ void App::scriptStep() {
         view_.densityStrength = float(st);
       }
       view_.tool = Tool::PaintDensity;
+    } else if (c.verb == "box-select") {
+      // What Ctrl + drag from (X1, Y1) to (X2, Y2) boxes.
+      needArgs(c, 4, 4, "box-select X1 Y1 X2 Y2", file);
+      boxSelect(scriptPoint(c, 0), scriptPoint(c, 2));
+    } else if (c.verb == "box-selection") {
+      needArgs(c, 0, 0, "box-selection", file);
+      std::cout << Json{{"feathers", view_.boxFeathers}, {"follicles", view_.boxFollicles}}.dump() << std::endl;
     } else if (c.verb == "select-faces") {
       // The face brush in select (or remove: deselect) mode at a point, as one click of the tool.
       if (c.args.size() == 1 && c.args[0] == "clear") {

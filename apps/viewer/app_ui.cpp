@@ -155,6 +155,15 @@ void App::buildUi() {
     ImGui::BeginTooltip();
     ImGui::TextUnformatted(handleReadout(doc_.scene(), *view_.hoveredHandle).c_str());
     ImGui::EndTooltip();
+  } else if (doc_.hasScene() && view_.hoveredFollicle >= 0 && !ImGui::GetIO().WantCaptureMouse) {
+    const Snapshot& snap = doc_.snapshot();
+    const size_t f = size_t(view_.hoveredFollicle);
+    const uint32_t t = f < snap.follicleTract.size() ? snap.follicleTract[f] : 0;
+    ImGui::BeginTooltip();
+    ImGui::Text("follicle %zu\nid: %llu\ntract: %s", f,
+                static_cast<unsigned long long>(f < snap.follicleId.size() ? snap.follicleId[f] : 0),
+                t < snap.tractNames.size() ? snap.tractNames[t].c_str() : "-");
+    ImGui::EndTooltip();
   } else if (doc_.hasScene() && view_.hoveredFeather >= 0 && !ImGui::GetIO().WantCaptureMouse) {
     ImGui::BeginTooltip();
     ImGui::TextUnformatted(readoutText(featherReadout(doc_.snapshot(), view_.hoveredFeather)).c_str());
@@ -181,6 +190,8 @@ void App::buildUi() {
       if (view_.tool == Tool::Orbit) {  // Esc: end the tool, then the selection
         view_.selectedFeather = -1;
         view_.selectedHandle.reset();
+        view_.boxFeathers.clear();
+        view_.boxFollicles.clear();
       }
       view_.tool = Tool::Orbit;
     }

@@ -116,6 +116,28 @@ void drawPaintOverlays(ImDrawList* dl, PanelContext& ctx) {
       dl->AddCircleFilled(b, 5.0f, IM_COL32(60, 230, 255, 255));
     }
   }
+  // Box selection: the rectangle being dragged, the boxed feathers' bases and follicles, and a count.
+  const ImVec2 o(v.viewOrigin.x, v.viewOrigin.y);
+  if (v.boxActive)
+    dl->AddRect(ImVec2(o.x + std::min(v.boxFrom.x, v.boxTo.x), o.y + std::min(v.boxFrom.y, v.boxTo.y)),
+                ImVec2(o.x + std::max(v.boxFrom.x, v.boxTo.x), o.y + std::max(v.boxFrom.y, v.boxTo.y)),
+                IM_COL32(60, 230, 255, 220), 0.0f, 0, 1.5f);
+  for (int f : v.boxFeathers) {
+    ImVec2 c;
+    if (size_t(f) < snap.featherOrigin.size() && proj(snap.featherOrigin[size_t(f)], c))
+      dl->AddCircle(c, 5.0f, IM_COL32(60, 230, 255, 230), 12, 1.5f);
+  }
+  for (int f : v.boxFollicles) {
+    ImVec2 c;
+    if (size_t(f) < snap.follicle.size() && proj(snap.follicle[size_t(f)], c))
+      dl->AddCircleFilled(c, 3.0f, IM_COL32(60, 230, 255, 255));
+  }
+  if (!v.boxFeathers.empty() || !v.boxFollicles.empty()) {
+    char text[96];
+    std::snprintf(text, sizeof text, "%zu feathers, %zu follicles boxed (F frames, Esc clears)", v.boxFeathers.size(),
+                  v.boxFollicles.size());
+    dl->AddText(ImVec2(o.x + 10, o.y + 8), IM_COL32(20, 60, 80, 255), text);
+  }
   if (painting && v.brushVisible) {
     glm::vec3 side = glm::cross(proj.cam.forward(), proj.cam.up);
     side = glm::length(side) > 1e-9f ? glm::normalize(side) : glm::vec3(1, 0, 0);

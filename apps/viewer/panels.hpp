@@ -90,6 +90,12 @@ struct ViewState {
   std::optional<Handle> hoveredHandle, selectedHandle;
   bool handleDragging = false;
   glm::vec3 handlePreview{0};
+  // Box selection (Ctrl + left drag with the orbit tool): present feathers whose base, and follicles (when
+  // shown) that project inside the box, facing the camera. F frames the feathers; Esc clears.
+  std::vector<int> boxFeathers, boxFollicles;
+  int hoveredFollicle = -1;  // with follicles shown and no feather or handle under the mouse (readout)
+  bool boxActive = false;
+  glm::vec2 boxFrom{0.0f}, boxTo{0.0f};
   // Mirror left/right (panels_paint.cpp, mirror.hpp): what to mirror and about which plane.
   bool mirrorTract = true, mirrorBrushes = true, mirrorControls = true, mirrorVectors = true;
   int mirrorAxis = 0;  // 0 x, 1 y, 2 z, 3 the body's symmetry plane

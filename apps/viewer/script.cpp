@@ -95,7 +95,7 @@ bool isViewCommand(const std::string& v) {
   return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "click" || v == "drag" ||
          v == "ui" || v == "autosave" || v == "crash" || v == "sleep" || v == "tool" || v == "orbit" || v == "zoom" ||
          v == "frame" || v == "frames" || v == "quit" || v == "dialog" || v == "key" || v == "selection" ||
-         v == "select-faces" || v == "tract-from-selection";
+         v == "select-faces" || v == "tract-from-selection" || v == "box-select" || v == "box-selection";
 }
 
 double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file) {
@@ -367,6 +367,8 @@ const char* scriptHelp() {
   key enter|escape|tab|delete    press a key (Enter confirms a dialog's file name; Delete removes the
                                  selected handle)
   selection                      print the selected feather (click one in the view) as JSON
+  box-select X1 Y1 X2 Y2         box selection (as Ctrl + drag): feathers, and follicles when shown
+  box-selection                  print the boxed feathers and follicles as JSON
   autosave                       write the recovery file now (the scene must have unsaved changes)
   crash                          end the process at once, without clean-up (tests recovery)
   show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin|navigation|problems on|off

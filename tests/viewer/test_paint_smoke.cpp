@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "fixtures.hpp"
 #include "pteryla/coat/follicles.hpp"
@@ -243,4 +244,38 @@ TEST(ViewerPaint, HandlesDragToMoveAndDeleteToRemove) {
   EXPECT_LT(std::abs(p1[1]), 0.15) << "onto the patch's skin";
   EXPECT_EQ(a["controls"][0]["radius"], b["controls"][0]["radius"]);
   EXPECT_FALSE(a.contains("packing") && a["packing"].contains("styling")) << a["packing"].dump();
+}
+
+// Box selection: the whole view boxes every feather (and, shown, every follicle); the left half a part;
+// follicles only while they are shown.
+TEST(ViewerPaint, BoxSelectionTakesWhatProjectsInsideTheBox) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("paint_box");
+  const std::string script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\n"
+                           "count 0 30\n"
+                           "relax 3\n"
+                           "show panels off\n"
+                           "box-select 0% 0% 100% 100%\n"
+                           "box-selection\n"
+                           "show follicles on\n"
+                           "box-select 0% 0% 100% 100%\n"
+                           "box-selection\n"
+                           "box-select 0% 0% 50% 100%\n"
+                           "box-selection\n"
+                           "quit\n";
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+  std::vector<Json> lines;
+  std::istringstream in(r.out);
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("{\"feathers\"", 0) == 0) lines.push_back(Json::parse(line));
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  EXPECT_EQ(lines[0]["feathers"].size(), 30u);
+  EXPECT_TRUE(lines[0]["follicles"].empty()) << "follicles are boxed only while shown";
+  EXPECT_EQ(lines[1]["follicles"].size(), 30u);
+  const size_t half = lines[2]["feathers"].size();
+  EXPECT_GT(half, 0u);
+  EXPECT_LT(half, 30u);
 }
