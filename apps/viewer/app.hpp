@@ -132,6 +132,11 @@ class App {
   bool handleBox(const glm::vec2& mouse, bool overUi, bool leftPressed);
   void boxSelect(const glm::vec2& a, const glm::vec2& b);
   bool frameBoxSelection();
+  // app_frames.cpp: the timeline range rendered to PNGs on a pipeline of its own (evaluated on a worker
+  // thread, drawn here), with progress and Cancel. Called once per frame.
+  void frameRenderStep();
+  struct FrameRender;
+  std::shared_ptr<FrameRender> frames_;  // shared: FrameRender is complete only in app_frames.cpp
   // app_paint.cpp: the face and density brushes (Tool::PaintFaces, Tool::PaintDensity)
   bool handlePaint(bool pressed, bool down, bool released, const glm::vec2& mouse);
   void updateBrushHover(const glm::vec2& mouse, bool overUi);

@@ -56,6 +56,7 @@ void App::scriptStep() {
   if (std::chrono::steady_clock::now() < scriptSleepUntil_) return;
   if (view_.playing && play_.until > 0) return;  // `play S` runs
   if (view_.cacheRangeRequested || fill_.active) return;  // `cache-range` runs
+  if (view_.frameRequest || view_.framesRunning) return;  // render-frames: wait until they are written
   if (scriptWaitFrames_ > 0) {
     --scriptWaitFrames_;
     return;
@@ -215,6 +216,17 @@ void App::scriptStep() {
         view_.densityStrength = float(st);
       }
       view_.tool = Tool::PaintDensity;
+    } else if (c.verb == "render-frames") {
+      // The Scene panel's Render frames: DIR, range and rate; the next command waits until they are done.
+      needArgs(c, 4, 4, "render-frames DIR FROM TO FPS", file);
+      ViewState::FrameRequest rq;
+      rq.dir = c.args[0];
+      rq.from = scriptNumber(c, 1, file);
+      rq.to = scriptNumber(c, 2, file);
+      rq.fps = scriptNumber(c, 3, file);
+      if (!(rq.fps > 0) || rq.to < rq.from)
+        throw Error("render-frames needs FPS > 0 and TO >= FROM", file, "line " + std::to_string(c.line));
+      view_.frameRequest = rq;
     } else if (c.verb == "box-select") {
       // What Ctrl + drag from (X1, Y1) to (X2, Y2) boxes.
       needArgs(c, 4, 4, "box-select X1 Y1 X2 Y2", file);

@@ -140,6 +140,7 @@ void App::afterSave() {
 }
 
 void App::buildUi() {
+  guardedUi("render frames", [&] { frameRenderStep(); });
   guardedUi("menu", [&] { menuBar(); });
   menuHeight_ = ImGui::GetFrameHeight();
   if (!view_.hidePanels) panelColumn();

@@ -96,6 +96,16 @@ struct ViewState {
   int hoveredFollicle = -1;  // with follicles shown and no feather or handle under the mouse (readout)
   bool boxActive = false;
   glm::vec2 boxFrom{0.0f}, boxTo{0.0f};
+  // Frame rendering (Scene panel, app_frames.cpp): a request the app picks up, its progress and outcome.
+  struct FrameRequest {
+    std::string dir;
+    double from = 0, to = 1, fps = 24;
+  };
+  std::optional<FrameRequest> frameRequest;
+  bool frameCancel = false;
+  bool framesRunning = false;
+  size_t framesDone = 0, framesTotal = 0;
+  std::string framesStatus;  // what the last render did ("" before any)
   // Mirror left/right (panels_paint.cpp, mirror.hpp): what to mirror and about which plane.
   bool mirrorTract = true, mirrorBrushes = true, mirrorControls = true, mirrorVectors = true;
   int mirrorAxis = 0;  // 0 x, 1 y, 2 z, 3 the body's symmetry plane
@@ -188,6 +198,7 @@ bool uiRequestedText(PanelContext& ctx, const char* panel, const char* widget, s
 
 // panels_scene.cpp: master seed, layer ordering, export
 void drawScenePanel(PanelContext& ctx);
+void drawFramesSection(PanelContext& ctx);  // panels_frames.cpp: render the timeline range to PNGs
 
 // panels_view.cpp
 void drawViewPanel(PanelContext& ctx);

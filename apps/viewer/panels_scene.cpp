@@ -161,6 +161,8 @@ void drawScenePanel(PanelContext& ctx) {
   orderingSection(ctx, s);
   sectionTitle("Export");
   exportSection(ctx, s);
+  sectionTitle("Render frames");
+  drawFramesSection(ctx);
 }
 
 }  // namespace pteryla::viewer

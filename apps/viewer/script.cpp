@@ -367,6 +367,8 @@ const char* scriptHelp() {
   key enter|escape|tab|delete    press a key (Enter confirms a dialog's file name; Delete removes the
                                  selected handle)
   selection                      print the selected feather (click one in the view) as JSON
+  render-frames DIR FROM TO FPS  render frame k at FROM + k/FPS to DIR/frame_NNNN.png (scene size, LOD,
+                                 camera); the next command waits until the frames are written
   box-select X1 Y1 X2 Y2         box selection (as Ctrl + drag): feathers, and follicles when shown
   box-selection                  print the boxed feathers and follicles as JSON
   autosave                       write the recovery file now (the scene must have unsaved changes)

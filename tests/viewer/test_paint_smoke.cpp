@@ -17,6 +17,7 @@
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
 #include "pteryla/render/image.hpp"
+#include "pteryla/render/image_diff.hpp"
 #include "viewer_run.hpp"
 
 using namespace pteryla;
@@ -278,4 +279,40 @@ TEST(ViewerPaint, BoxSelectionTakesWhatProjectsInsideTheBox) {
   const size_t half = lines[2]["feathers"].size();
   EXPECT_GT(half, 0u);
   EXPECT_LT(half, 30u);
+}
+
+// Render frames: the range at the rate, one PNG per frame at the scene's render size, each at its own time
+// (a keyed lift makes the last frame differ from the first).
+TEST(ViewerPaint, RenderFramesWritesTheRangeAtItsTimes) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("paint_frames");
+  const std::string frames = dir + "/frames", script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\n"
+                           "count 0 12\n"
+                           "relax 3\n"
+                           "render-lod 0.2\n"
+                           "control 0 0.05 0 0.8\n"
+                           "time 0\n"
+                           "lift 0 0\n"
+                           "keyframe 0 0\n"
+                           "time 1\n"
+                           "lift 0 1\n"
+                           "keyframe 0 1\n"
+                           "time 0\n"
+                        << "render-frames " << frames << " 0 1 2\n"
+                        << "echo frames done\n"
+                           "quit\n";
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+  ASSERT_NE(r.out.find("frames done"), std::string::npos);
+  std::vector<render::Image> im;
+  for (const char* f : {"frame_0000.png", "frame_0001.png", "frame_0002.png"}) {
+    ASSERT_TRUE(std::filesystem::is_regular_file(frames + "/" + f)) << f;
+    im.push_back(render::loadImage(frames + "/" + f));
+    EXPECT_EQ(im.back().width, 640);
+    EXPECT_EQ(im.back().height, 360);
+  }
+  EXPECT_FALSE(std::filesystem::exists(frames + "/frame_0003.png"));
+  EXPECT_GT(render::diffImages(im[0], im[2]).changedFraction, 0.01) << "the lift at t = 1 shows";
 }
