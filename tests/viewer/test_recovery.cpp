@@ -152,3 +152,27 @@ TEST(Recovery, NotARecoveryFileIsAnError) {
   EXPECT_THROW(readRecovery(f.scene), Error);
   EXPECT_FALSE(findRecovery(f.scene));
 }
+
+// A painted density map (unsaved) is in the recovery: written next to the recovery file, read back with
+// it, and removed with it.
+TEST(Recovery, PaintedDensityComesBackAndGoesWithTheRecoveryFile) {
+  Fixture f("recovery_density");
+  Document d;
+  d.open(f.scene);
+  ASSERT_TRUE(d.waitIdle());
+  const size_t n = d.snapshot().restSkin->positions.size();
+  std::vector<float> factor(n, 1.0f);
+  factor[7] = 2.5f;
+  d.edit("paint density",
+         [&](pipeline::Scene& s) { s.densityFactor = std::make_shared<const std::vector<float>>(factor); });
+  const std::string file = writeRecovery(d);
+  const std::string side = pipeline::densityMapPathFor(file);
+  EXPECT_TRUE(exists(side));
+  const Recovery r = readRecovery(file);
+  ASSERT_TRUE(r.scene.densityFactor);
+  EXPECT_EQ(*r.scene.densityFactor, factor);
+  EXPECT_EQ(findRecovery("").value_or(""), file) << "the side file is not a recovery file";
+  removeRecovery(file);
+  EXPECT_FALSE(exists(file));
+  EXPECT_FALSE(exists(side));
+}
