@@ -485,6 +485,7 @@ void App::uploadResults() {
       context_->makeCurrent();
       updateColouring();
       renderer_->setCoat(coat.mesh, drawRangesFor(coat.ranges));
+      uploadedMaterials_ = coat.materials;  // the ranges index these: set together, never the snapshot's
       meshEvals_ = meshEvals;
       materialsStale_ = true;
       ++uploadVersion_;
@@ -500,6 +501,7 @@ void App::uploadResults() {
   if (p && doc_.upToDate() && doc_.resultVersion() == syncedResult_ && updateColouring()) {
     context_->makeCurrent();
     renderer_->setCoat(p->coatMesh().mesh, drawRangesFor(p->coatMesh().ranges));
+    uploadedMaterials_ = p->coatMesh().materials;
     materialsStale_ = true;
     navNeeded_ = true;
     ++uploadVersion_;
@@ -508,17 +510,21 @@ void App::uploadResults() {
     navNeeded_ = false;
     buildNavigationCoat(p->coatMesh());
   }
-  if (snap.haveCoat && (materialsStale_ || lastBrdfD_ != scene.render.brdfD || lastBrdfH_ != scene.render.brdfH ||
-                        lastMaterials_ != snap.materials)) {
+  // The materials of the coat the renderer holds (its draw ranges index them): a snapshot published by
+  // a later job can list other materials (a changed coat blends other key feathers) before that job's
+  // coat is uploaded, and drawing the old ranges with them failed.
+  if (snap.haveCoat && meshEvals_ != ~0ull &&
+      (materialsStale_ || lastBrdfD_ != scene.render.brdfD || lastBrdfH_ != scene.render.brdfH ||
+       lastMaterials_ != uploadedMaterials_)) {
     pipeline::CoatMesh materialsOnly;
-    materialsOnly.materials = snap.materials;
+    materialsOnly.materials = uploadedMaterials_;
     const auto materials =
         view_.colourBy == ColourBy::Material ? render::sceneMaterials(scene, materialsOnly) : paletteMaterials();
     renderer_->setMaterials(materials);
     if (navRenderer_) navRenderer_->setMaterials(materials);
     lastBrdfD_ = scene.render.brdfD;
     lastBrdfH_ = scene.render.brdfH;
-    lastMaterials_ = snap.materials;
+    lastMaterials_ = uploadedMaterials_;
     materialsStale_ = false;
     ++uploadVersion_;
   }

@@ -187,6 +187,7 @@ class App {
   std::vector<uint64_t> colourKey_;
   double lastBrdfD_ = -1, lastBrdfH_ = -1;
   std::vector<pipeline::CoatMaterial> lastMaterials_;  // the materials last set (blends follow the rest coat)
+  std::vector<pipeline::CoatMaterial> uploadedMaterials_;  // those of the coat last given to the renderer
   glm::ivec2 windowSize_{0}, fbSize_{0};
   glm::ivec2 viewPixels_{0};  // the 3D view in framebuffer pixels
   float menuHeight_ = 19.0f;

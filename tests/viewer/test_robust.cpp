@@ -276,3 +276,21 @@ TEST(ViewerRobust, AnIdleViewerDrawsNothing) {
   EXPECT_GE(j.at("frames_skipped").get<int>(), 6) << r.out;
   EXPECT_LT(j.at("frames_drawn").get<int>(), 200) << r.out;
 }
+
+// A found crash (session 18): edits queued without waiting (a render LOD, a new follicle count, a
+// relaxation) left the renderer with a coat whose draw ranges named more materials than it had been
+// given (the snapshot's list, from another evaluation), and the view threw "feather draw range uses
+// material 8 but 7 materials are set". The renderer now takes the materials of the coat it is given.
+TEST(ViewerRobust, QueuedRestEditsKeepTheCoatAndItsMaterialsTogether) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_materials");
+  const std::string script = dir + "/s.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\nrender-lod 0.2\ncount 0 12\nrelax 3\nwait\n"
+                        << "screenshot " << dir << "/after.png\nquit\n";
+  const ViewerRun r = runViewer("--script \"" + script + "\"", dir + "/stderr.txt", stateEnv(dir));
+  const std::string err = slurp(dir + "/stderr.txt");
+  EXPECT_EQ(r.code, 0) << err;
+  EXPECT_EQ(err.find("materials are set"), std::string::npos) << err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/after.png")) << err;
+}
