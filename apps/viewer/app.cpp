@@ -622,7 +622,10 @@ void App::renderView() {
   std::vector<float> key = viewKey();
   key.push_back(nav ? 1.0f : 0.0f);
   key.push_back(float(scale));
-  if (key == lastViewKey_ && viewTexture_ && viewTexture_->id()) return;
+  if (key == lastViewKey_ && viewTexture_ && viewTexture_->id()) {
+    drawnResult_ = syncedResult_;  // the view on screen shows the synced result
+    return;
+  }
   render::Renderer& renderer = nav ? *navRenderer_ : *renderer_;
   navUsed_ = nav;
   const pipeline::Scene& scene = doc_.scene();
@@ -655,6 +658,7 @@ void App::renderView() {
   }
   if (!nav && !moving && scale == 1) storeFlipbookFrame();
   lastViewKey_ = std::move(key);
+  drawnResult_ = syncedResult_;
 }
 
 void App::captureScreenshot(int fbw, int fbh, bool afterUi) {

@@ -223,6 +223,7 @@ class App {
   bool flipbookShown_ = false;  // the view texture holds a flipbook frame (of flipbookShownTime_)
   double flipbookShownTime_ = 0;
   uint64_t flipbookChanges_ = 0;  // the document's change count the flipbook's frames belong to
+  uint64_t drawnResult_ = ~0ull;  // the result version (syncedResult_) the 3D view last showed
   // Filling the flipbook over the timeline range (Timeline panel "Cache range", script `cache-range`):
   // the next frame to draw, and the time to return to.
   struct CacheFill {

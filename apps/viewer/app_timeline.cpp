@@ -69,8 +69,10 @@ void App::advancePlayback() {
     play_.startWall = now;
     playClock_.start(grid, doc_.time(), now);
   }
-  // The frame asked for last has been evaluated: it is what the view shows now.
-  if (play_.awaitingResult && doc_.upToDate() && doc_.time() == displayTime_) {
+  // The frame asked for last is on screen once it is evaluated, its coat uploaded and the view drawn
+  // (renderView, which also keeps it in the flipbook); only then is the next one asked for.
+  if (play_.awaitingResult && doc_.upToDate() && doc_.time() == displayTime_ &&
+      doc_.resultVersion() == syncedResult_ && drawnResult_ == syncedResult_) {
     play_.awaitingResult = false;
     ++play_.shown;
     ++play_.evaluated;
@@ -94,9 +96,9 @@ void App::advancePlayback() {
     ++play_.fromCache;
     return;
   }
-  // Still evaluating the frame asked for last: it shows when ready, and the frames due meanwhile are
-  // dropped (the next one asked for is the one due then).
-  if (!doc_.upToDate()) return;
+  // Still evaluating or drawing the frame asked for last: it shows when ready, and the frames due
+  // meanwhile are dropped (the next one asked for is the one due then).
+  if (play_.awaitingResult || !doc_.upToDate()) return;
   play_.lastDue = *due;
   displayTime_ = t;
   play_.awaitingResult = true;
