@@ -67,7 +67,9 @@ void App::advancePlayback() {
     play_.seconds = seconds;
     play_.until = seconds > 0 ? now + seconds : 0;
     play_.startWall = now;
-    playClock_.start(grid, doc_.time(), now);
+    // Play from where the timeline is; at (or past) the end of a range played once, from its start.
+    const bool atEnd = !view_.loop && grid.nearest(doc_.time()) >= grid.last();
+    playClock_.start(grid, atEnd ? grid.start : doc_.time(), now);
   }
   // The frame asked for last is on screen once it is evaluated, its coat uploaded and the view drawn
   // (renderView, which also keeps it in the flipbook); only then is the next one asked for.

@@ -312,7 +312,8 @@ TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
   const std::string script = dir + "/s.txt";
   // The moult scene, thinned: every frame of the range is another coat.
   std::ofstream(script) << "count 0 25\ncount 1 25\ncount 2 25\n"
-                        << "wait\nrange 3 4 0.01 once\nplay 5 240\nrange 3 4 0.25 loop\ncache-range\nplay 2 10\n"
+                        << "time 3\nwait\nrange 3 4 0.01 once\nplay 5 240\nrange 3 4 0.25 loop\ncache-range\n"
+                        << "play 2 10\n"
                         << "quit\n";
   const ViewerRun r = runViewer(
       "\"" + viewer_test::dataPath("scenes/moult.json") + "\" --lod 0.2 --size 800x600 --script \"" + script + "\"",
@@ -331,6 +332,10 @@ TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
   EXPECT_LT(live["play_seconds"].get<double>(), 2.0) << "playback waited for frames: " << r.out;
   EXPECT_GE(live["frames_shown"].get<int>(), 1);
   EXPECT_LT(live["frames_shown"].get<int>(), 50) << r.out;
+  // Every frame it evaluated was drawn before the next was asked for: each is in the flipbook (with
+  // the frame playback started on).
+  EXPECT_GE(live["frames_evaluated"].get<int>(), 1) << r.out;
+  EXPECT_GE(live["flipbook_frames"].get<int>(), live["frames_evaluated"].get<int>() + 1) << r.out;
   // Cached: the range's 5 frames, looped at 10 fps, all from the flipbook.
   EXPECT_GE(cached["flipbook_frames"].get<int>(), 5);
   EXPECT_EQ(cached["frames_evaluated"].get<int>(), 0) << r.out;
