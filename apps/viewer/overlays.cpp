@@ -22,19 +22,6 @@ ImU32 tractColour(uint32_t t, int alpha = 255) {
   return (c & 0x00FFFFFFu) | (static_cast<ImU32>(alpha) << 24);
 }
 
-struct Projector {
-  const render::Camera& cam;
-  glm::ivec2 vp;
-  glm::vec2 origin;
-  bool operator()(const glm::vec3& p, ImVec2& out) const {
-    glm::vec2 q;
-    if (!projectToPixel(cam, p, vp, q)) return false;
-    out = ImVec2(origin.x + q.x, origin.y + q.y);
-    return true;
-  }
-  bool facing(const glm::vec3& p, const glm::vec3& n) const { return glm::dot(n, cam.eye - p) >= 0.0f; }
-};
-
 void arrow(ImDrawList* dl, const Projector& proj, const glm::vec3& from, const glm::vec3& to, ImU32 col, float thick) {
   ImVec2 a, b;
   if (!proj(from, a) || !proj(to, b)) return;

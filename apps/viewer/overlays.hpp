@@ -5,13 +5,33 @@
 #include <cstdint>
 #include <string>
 
-#include <glm/vec2.hpp>
+#include <imgui.h>
 
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "camera_controller.hpp"
 #include "panels.hpp"
 
-struct ImDrawList;
-
 namespace pteryla::viewer {
+
+// A world point to window pixels in the 3D view rectangle (false behind the camera).
+struct Projector {
+  const render::Camera& cam;
+  glm::ivec2 vp;
+  glm::vec2 origin;
+  bool operator()(const glm::vec3& p, ImVec2& out) const {
+    glm::vec2 q;
+    if (!projectToPixel(cam, p, vp, q)) return false;
+    out = ImVec2(origin.x + q.x, origin.y + q.y);
+    return true;
+  }
+  // Does a surface at p with normal n face the camera?
+  bool facing(const glm::vec3& p, const glm::vec3& n) const {
+    const glm::vec3 d = cam.eye - p;
+    return n.x * d.x + n.y * d.y + n.z * d.z >= 0.0f;
+  }
+};
 
 // Draws into the view rectangle ctx.view.viewOrigin / viewSize.
 void drawOverlays(ImDrawList* dl, PanelContext& ctx);

@@ -15,17 +15,6 @@ namespace pteryla::viewer {
 
 namespace {
 
-struct Proj {
-  const render::Camera& cam;
-  glm::ivec2 vp;
-  glm::vec2 origin;
-  bool operator()(const glm::vec3& p, ImVec2& out) const {
-    glm::vec2 q;
-    if (!projectToPixel(cam, p, vp, q)) return false;
-    out = ImVec2(origin.x + q.x, origin.y + q.y);
-    return true;
-  }
-};
 
 // Density factor as a colour: below 1 blue, above 1 red, more opaque the further from 1.
 ImU32 densityColour(float f) {
@@ -39,7 +28,7 @@ ImU32 densityColour(float f) {
 void drawPaintOverlays(ImDrawList* dl, PanelContext& ctx) {
   const Snapshot& snap = ctx.doc.snapshot();
   const ViewState& v = ctx.view;
-  const Proj proj{ctx.camera.camera(), v.viewSize, v.viewOrigin};
+  const Projector proj{ctx.camera.camera(), v.viewSize, v.viewOrigin};
   const std::shared_ptr<const coat::SkinMesh> rest = snap.restSkin;
   const bool painting = v.tool == Tool::PaintFaces || v.tool == Tool::PaintDensity;
   // Colour by coverage: the skin faces the last check found (partly) bare, front-facing, over the view.

@@ -230,10 +230,7 @@ TEST(ViewerSmoke, AClickSelectsTheFeatherUnderTheMouse) {
       "\"" + viewer_test::dataPath("scenes/patch.json") + "\" --lod 0.3 --size 1000x700 --script \"" + script + "\"",
       dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
-  std::vector<Json> lines;
-  std::istringstream in(r.out);
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] == '{') lines.push_back(Json::parse(line));
+  const std::vector<Json> lines = viewer_test::jsonLines(r.out);
   ASSERT_EQ(lines.size(), 3u) << r.out;
   EXPECT_TRUE(lines[0]["feather"].is_null());
   ASSERT_TRUE(lines[1]["feather"].is_number()) << "the click at the centre of the patch selected nothing";
@@ -319,10 +316,7 @@ TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
       "\"" + viewer_test::dataPath("scenes/moult.json") + "\" --lod 0.2 --size 800x600 --script \"" + script + "\"",
       dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
-  std::vector<Json> lines;
-  std::istringstream in(r.out);
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] == '{') lines.push_back(Json::parse(line));
+  const std::vector<Json> lines = viewer_test::jsonLines(r.out);
   ASSERT_EQ(lines.size(), 2u) << r.out;
   const Json& live = lines[0];
   const Json& cached = lines[1];

@@ -7,7 +7,11 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
+#include <vector>
+
+#include "pteryla/core/json.hpp"
 
 namespace viewer_test {
 
@@ -17,6 +21,15 @@ struct ViewerRun {
   int code = -1;
   std::string out;
 };
+
+// The JSON objects a scripted run printed on stdout, one per line starting with '{', in order.
+inline std::vector<pteryla::Json> jsonLines(const std::string& out) {
+  std::vector<pteryla::Json> lines;
+  std::istringstream in(out);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty() && line[0] == '{') lines.push_back(pteryla::Json::parse(line));
+  return lines;
+}
 
 inline std::string slurp(const std::string& path) {
   std::ifstream f(path);
