@@ -145,6 +145,7 @@ void Pipeline::Impl::computeControls() {
     coat::evaluateFrames(rest, follicles, directions, c);
     if (!packing.styling.empty()) coat::applyStyling(c, packing.styling, {});
     pr.frames = std::move(c.frames);
+    pr.coat = coat::CoatFeathers{};  // referenceCoat copies the new frames in
     pr.generation = restGeneration();
     pr.packing = scene.packing;
     pr.natural.clear();

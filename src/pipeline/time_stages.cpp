@@ -131,13 +131,14 @@ bool posedSkin(const Posed* p, const coat::SkinMesh& skin, const coat::CoatFeath
   return a.size() == b.size() && !sameBits(a.data(), b.data(), a.size() * sizeof(glm::dvec3));
 }
 
-// `coat` with the reference frames (into ref.coat, reusing its storage).
+// `coat` with the reference frames (into ref.coat, reusing its storage). The parameters change only with
+// the rest state or a moult's grown feathers: they are compared first, not copied every posed frame.
 const coat::CoatFeathers& referenceCoat(const coat::CoatFeathers& coat, PoseReference& ref) {
   coat::CoatFeathers& c = ref.coat;
   c.follicle = coat.follicle;
   c.tract = coat.tract;
-  c.params = coat.params;
-  c.frames = ref.frames;
+  if (c.params != coat.params) c.params = coat.params;
+  if (c.frames.size() != ref.frames.size()) c.frames = ref.frames;
   c.age = coat.age;
   c.present = coat.present;
   c.layerOrder = coat.layerOrder;
@@ -185,8 +186,8 @@ const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative
     bool refIncremental = false;
     size_t refChanged = 0, refRecomputed = 0;
     const coat::PackResult& base =
-        packWithMemo(*posed->refMemo, nullptr, *posed->rest, referenceCoat(coat, ref), options, constraints,
-                     generation, packing, refIncremental, refChanged, refRecomputed, grownAge);
+        packWithMemo(*posed->refMemo, nullptr, *posed->rest, referenceCoat(coat, ref), options, constraints, generation,
+                     packing, refIncremental, refChanged, refRecomputed, grownAge);
     coat::DeformedPackStats ds;
     result = coat::packDeformed(skin, coat, *posed->rest, ref.frames, base, ref.tolerance, options, constraints, &ds);
     exact = false;
