@@ -186,7 +186,7 @@ class App {
   FeatherColouring colouring_;  // of view_.colourBy, for the uploaded coat
   std::vector<uint64_t> colourKey_;
   double lastBrdfD_ = -1, lastBrdfH_ = -1;
-  std::vector<pipeline::CoatMaterial> lastMaterials_;  // the materials last set (blends follow the rest coat)
+  std::vector<pipeline::CoatMaterial> lastMaterials_;      // the materials last set (blends follow the rest coat)
   std::vector<pipeline::CoatMaterial> uploadedMaterials_;  // those of the coat last given to the renderer
   glm::ivec2 windowSize_{0}, fbSize_{0};
   glm::ivec2 viewPixels_{0};  // the 3D view in framebuffer pixels
@@ -219,7 +219,7 @@ class App {
   // Playback (app_timeline.cpp): the clock, what it showed, and the flipbook.
   PlaybackClock playClock_;
   Flipbook flipbook_;
-  double displayTime_ = 0;    // the time on screen while playing (a flipbook frame may run ahead)
+  double displayTime_ = 0;      // the time on screen while playing (a flipbook frame may run ahead)
   bool flipbookShown_ = false;  // the view texture holds a flipbook frame (of flipbookShownTime_)
   double flipbookShownTime_ = 0;
   uint64_t flipbookChanges_ = 0;  // the document's change count the flipbook's frames belong to

@@ -54,7 +54,7 @@ void App::scriptStep() {
     return;
   }
   if (std::chrono::steady_clock::now() < scriptSleepUntil_) return;
-  if (view_.playing && play_.until > 0) return;  // `play S` runs
+  if (view_.playing && play_.until > 0) return;           // `play S` runs
   if (view_.cacheRangeRequested || fill_.active) return;  // `cache-range` runs
   if (view_.frameRequest || view_.framesRunning) return;  // render-frames: wait until they are written
   if (scriptWaitFrames_ > 0) {

@@ -73,8 +73,8 @@ void App::advancePlayback() {
   }
   // The frame asked for last is on screen once it is evaluated, its coat uploaded and the view drawn
   // (renderView, which also keeps it in the flipbook); only then is the next one asked for.
-  if (play_.awaitingResult && doc_.upToDate() && doc_.time() == displayTime_ &&
-      doc_.resultVersion() == syncedResult_ && drawnResult_ == syncedResult_) {
+  if (play_.awaitingResult && doc_.upToDate() && doc_.time() == displayTime_ && doc_.resultVersion() == syncedResult_ &&
+      drawnResult_ == syncedResult_) {
     play_.awaitingResult = false;
     ++play_.shown;
     ++play_.evaluated;

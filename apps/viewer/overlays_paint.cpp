@@ -15,7 +15,6 @@ namespace pteryla::viewer {
 
 namespace {
 
-
 // Density factor as a colour: below 1 blue, above 1 red, more opaque the further from 1.
 ImU32 densityColour(float f) {
   const float t = std::clamp(std::abs(std::log2(std::max(f, 1e-3f))) / 2.0f, 0.0f, 1.0f);

@@ -21,8 +21,8 @@ namespace pteryla::viewer {
 // Frames of a timeline range: start + m * step for m = 0 .. last(), the last one at or before end.
 struct FrameGrid {
   double start = 0, end = 10, step = 1.0 / 24.0;
-  int64_t last() const;                 // index of the last frame (>= 0)
-  int64_t nearest(double t) const;      // the frame nearest to t, clamped to the range
+  int64_t last() const;             // index of the last frame (>= 0)
+  int64_t nearest(double t) const;  // the frame nearest to t, clamped to the range
   double time(int64_t m) const { return start + double(m) * step; }
 };
 

@@ -221,7 +221,8 @@ PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const Sk
             const uint32_t v = still ? movedVertex[item] : item;
             if (m) return;
             const dvec3& p0 = refSkin.positions[v];
-            if (!inFootprint(L, refFrames[i], p0, maxEdge) && !inFootprint(L, coat.frames[i], skin.positions[v], maxEdge))
+            if (!inFootprint(L, refFrames[i], p0, maxEdge) &&
+                !inFootprint(L, coat.frames[i], skin.positions[v], maxEdge))
               return;
             if (glm::length(mi(p0) - skin.positions[v]) > tol) m = true;
           });
@@ -253,9 +254,10 @@ PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const Sk
       bool dirty = moved[i] != 0;
       for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !dirty; ++k) dirty = outChanged[ctx.deps[k]] != 0;
       const uint32_t cnt = res.pointOffset[i + 1] - res.pointOffset[i];
-      const bool sameShape = ref.pointOffset[i + 1] - ref.pointOffset[i] == cnt &&
-                             ref.groupOffset[i + 1] - ref.groupOffset[i] == res.groupOffset[i + 1] - res.groupOffset[i] &&
-                             sameKeyLayout(ref.packedKeys, res.packedKeys, i);
+      const bool sameShape =
+          ref.pointOffset[i + 1] - ref.pointOffset[i] == cnt &&
+          ref.groupOffset[i + 1] - ref.groupOffset[i] == res.groupOffset[i + 1] - res.groupOffset[i] &&
+          sameKeyLayout(ref.packedKeys, res.packedKeys, i);
       if (!dirty && sameShape) {
         if (motion[i].identity)
           keepFeather(ref, res, run.out, i);

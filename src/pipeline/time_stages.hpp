@@ -68,7 +68,7 @@ struct PoseReference {
   bool valid = false;
   uint64_t generation = 0;
   Json packing;
-  double tolerance = 0;                     // PackingSettings::poseTolerance (0: posed frames pack in full)
+  double tolerance = 0;                    // PackingSettings::poseTolerance (0: posed frames pack in full)
   std::vector<coat::FeatherFrame> frames;  // per feather, at rest
   coat::CoatFeathers coat;                 // scratch: the coat being packed, with `frames`
   PackMemo natural, frame;                 // the reference packs (exact) of the natural and the frame pack

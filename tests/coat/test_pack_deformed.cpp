@@ -174,9 +174,10 @@ TEST(PackDeformed, ALocalBulgeRepacksOnlyWhatItMoved) {
   co.intersections = false;
   co.coverage = false;
   EXPECT_EQ(check(skin, {}, pd, co).skinPenetrations, check(skin, {}, pf, co).skinPenetrations);
-  std::printf("bulge: %zu feathers, %zu moved, %zu packed again, %zu differ from the full pack (worst %.2g rad), "
-              "proxy pairs %zu vs %zu\n",
-              coat.size(), st.moved, st.repacked, differ, worst, pairsDeformed, pairsFull);
+  std::printf(
+      "bulge: %zu feathers, %zu moved, %zu packed again, %zu differ from the full pack (worst %.2g rad), "
+      "proxy pairs %zu vs %zu\n",
+      coat.size(), st.moved, st.repacked, differ, worst, pairsDeformed, pairsFull);
 }
 
 TEST(PackDeformed, BadInputIsAnError) {

@@ -328,7 +328,7 @@ TEST(IncrementalFrames, PosedFramesEqualFreshEvaluationWhateverCameBefore) {
     return grab(p);
   };
   const std::pair<double, double> frames[] = {{0.05, 4.0}, {0.1, 4.0}, {0.1, 4.1}, {0.05, 4.0}, {0.0, 4.0},
-                                              {0.1, 2.0}, {0.1, 1.0}, {0.1, 3.0}, {0.05, 4.0}};
+                                              {0.1, 2.0},  {0.1, 1.0}, {0.1, 3.0}, {0.05, 4.0}};
   size_t deformed = 0, partial = 0;
   for (const auto& [h, t] : frames) {
     scrub.setSkinPose(pose(h));

@@ -52,7 +52,7 @@ TEST(Playback, FlipbookFindsWhatItStoredByTimeAndView) {
   f.store(0.5, a, image(8, 8, 10));
   ASSERT_NE(f.find(0.5, a), nullptr);
   EXPECT_EQ(f.find(0.5, a)->rgba[0], 10);
-  EXPECT_EQ(f.find(0.5, b), nullptr);          // another camera or look
+  EXPECT_EQ(f.find(0.5, b), nullptr);         // another camera or look
   EXPECT_EQ(f.find(0.5 + 1e-3, a), nullptr);  // another time
   f.store(0.5, a, image(8, 8, 20));           // replaced, not added
   EXPECT_EQ(f.size(), 1u);
@@ -70,7 +70,7 @@ TEST(Playback, FlipbookKeepsTheMostRecentlyUsedWithinItsBudget) {
   const std::vector<float> k = {0};
   for (int i = 0; i < 3; ++i) f.store(i, k, image(16, 16, uint8_t(i)));
   ASSERT_NE(f.find(0, k), nullptr);  // frame 0 is now the most recent
-  f.store(3, k, image(16, 16, 3));    // drops frame 1, the least recently used
+  f.store(3, k, image(16, 16, 3));   // drops frame 1, the least recently used
   EXPECT_EQ(f.size(), 3u);
   EXPECT_LE(f.bytes(), 3 * one);
   EXPECT_NE(f.find(0, k), nullptr);
