@@ -63,7 +63,8 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   const double times[] = {3.0, 5.5, 4.25, 6.0, 2.5, 7.75, 5.0, 3.5};
   size_t k = 0;
   double packChanged = 0, packRecomputed = 0, naturalRecomputed = 0, meshRegenerated = 0, meshReused = 0,
-         incremental = 0, moultChanged = 0, moultRecomputed = 0, poseMoved = 0, poseRepacked = 0;
+         incremental = 0, moultChanged = 0, moultRecomputed = 0, poseMoved = 0, poseRepacked = 0, drapeRelaid = 0,
+         drapeReused = 0;
   p->resetTimings();
   for (auto _ : state) {
     p->setTime(consecutive ? 4.0 + double(++k) / 24.0 : times[k++ % 8]);
@@ -79,6 +80,8 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
     moultRecomputed += double(r.moultRecomputed);
     poseMoved += double(r.poseMoved);
     poseRepacked += double(r.poseRepacked);
+    drapeRelaid += double(r.drapeRelaid);
+    drapeReused += double(r.drapeReused);
   }
   const auto& c = p->feathers();
   size_t absent = 0, growing = 0;
@@ -112,6 +115,9 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   // Posed frames: feathers whose surroundings moved beyond the pose tolerance, and those packed again.
   state.counters["pose_moved"] = poseMoved / n;
   state.counters["pose_repacked"] = poseRepacked / n;
+  // Draped coats: feathers the drape laid again, and those whose draped vertices it copied.
+  state.counters["drape_relaid"] = drapeRelaid / n;
+  state.counters["drape_reused"] = drapeReused / n;
 }
 
 void BM_FrameBirdScene(benchmark::State& state) {

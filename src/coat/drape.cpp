@@ -270,18 +270,31 @@ void gatherSamples(Chart& C, const CoatTop& top, double reqRadius) {
   C.reqSamples.shrink_to_fit();
 }
 
-// Heights of one chart's active nodes over the skin: above the coat's top near each node by the gap, as
-// the smallest function with slope <= maxSlope over those requirements. Then the feather becomes the
-// coat's top over the samples its material covers.
-void layChart(Chart& C, CoatTop& top, AirTop& air, double gap, double maxSlope, std::vector<double>& req) {
-  const std::vector<int>& idx = C.active;
-  req.resize(idx.size());
-  for (size_t j = 0; j < idx.size(); ++j) {
-    const Node& n = C.nodes[idx[j]];
+// What laying a chart reads of the coat laid so far: per active node the highest top among its
+// requirement samples (and past the skin's edge, the highest laid point over it), then the top at every
+// sample under its material. Laying depends on nothing else but the chart: equal reads, equal heights.
+void readChart(const Chart& C, const CoatTop& top, const AirTop& air, std::vector<double>& reads) {
+  reads.clear();
+  for (size_t j = 0; j < C.active.size(); ++j) {
+    const Node& n = C.nodes[C.active[j]];
     double highest = 0;
     for (uint32_t q = C.reqOffset[j]; q < C.reqOffset[j + 1]; ++q) highest = std::max(highest, top.at(C.reqSamples[q]));
-    req[j] = highest + gap + n.sag;
-    if (n.free) req[j] = std::max(req[j], air.highest(n.c, n.n, 0.25 * (C.nx - 1) * C.hx) + gap);
+    reads.push_back(highest);
+    if (n.free) reads.push_back(air.highest(n.c, n.n, 0.25 * (C.nx - 1) * C.hx));
+  }
+  for (const Chart::Cover& cv : C.under) reads.push_back(top.at(cv.sample));
+}
+
+// Heights of one chart's active nodes over the skin from what it read (readChart): above the coat's top
+// near each node by the gap, as the smallest function with slope <= maxSlope over those requirements.
+void layFromReads(Chart& C, const std::vector<double>& reads, double gap, double maxSlope, std::vector<double>& req) {
+  const std::vector<int>& idx = C.active;
+  req.resize(idx.size());
+  size_t r = 0;
+  for (size_t j = 0; j < idx.size(); ++j) {
+    const Node& n = C.nodes[idx[j]];
+    req[j] = reads[r++] + gap + n.sag;
+    if (n.free) req[j] = std::max(req[j], reads[r++] + gap);
   }
   // Every node's height becomes the largest of the (pre-envelope) heights less maxSlope x distance. The
   // nodes are visited by height, highest first, so each node stops at the first one no higher than
@@ -306,7 +319,8 @@ void layChart(Chart& C, CoatTop& top, AirTop& air, double gap, double maxSlope, 
   // Every sample under the feather's material: where the interpolated height is below the coat's top
   // there plus the gap, the cell's corners rise to it (heights only rise, so one pass leaves every
   // sample satisfied, and no node rises above the highest need near it).
-  for (const Chart::Cover& cv : C.under) {
+  for (size_t k = 0; k < C.under.size(); ++k) {
+    const Chart::Cover& cv = C.under[k];
     Node* c4[4] = {&C.at(cv.a, cv.b), &C.at(cv.a + 1, cv.b), &C.at(cv.a, cv.b + 1), &C.at(cv.a + 1, cv.b + 1)};
     const double u = cv.u, v = cv.v;
     const double w4[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
@@ -317,26 +331,110 @@ void layChart(Chart& C, CoatTop& top, AirTop& air, double gap, double maxSlope, 
     }
     // Each corner rises to the need, no higher: raising all four by the shortfall instead stacked up
     // where neighbouring cells share corners (up to 4x the need, compounding layer over layer).
-    const double need = top.at(cv.sample) + gap + sag;
+    const double need = reads[r + k] + gap + sag;
     if (h < need)
       for (int m = 0; m < 4; ++m) c4[m]->h = std::max(c4[m]->h, need);
   }
   envelope();
+}
+
+// The laid feather becomes the coat's top over the samples its material covers, and its nodes join the
+// coat in the air.
+void writeChart(const Chart& C, CoatTop& top, AirTop& air) {
   for (const Chart::Cover& cv : C.under) {
     const double u = cv.u, v = cv.v;
     top.raise(cv.sample, (1 - u) * (1 - v) * C.at(cv.a, cv.b).h + u * (1 - v) * C.at(cv.a + 1, cv.b).h +
                              (1 - u) * v * C.at(cv.a, cv.b + 1).h + u * v * C.at(cv.a + 1, cv.b + 1).h);
   }
-  for (int k : idx) air.add(C.nodes[k].c + C.nodes[k].h * C.nodes[k].n, C.nodes[k].n);
-  // What was gathered for laying is not needed again.
-  C.reqSamples = {};
-  C.reqOffset = {};
-  C.under = {};
+  for (int k : C.active) air.add(C.nodes[k].c + C.nodes[k].h * C.nodes[k].n, C.nodes[k].n);
 }
+
+// What the last drape kept of one feather (DrapeCache).
+struct FeatherMemo {
+  bool laid = false;  // it was draped
+  // Inputs: the follicle frame, what the drape reads of the parameters, the flat mesh.
+  FeatherFrame frame;
+  double rachisWidth = 0, calamusLength = 0, totalLength = 0, baseRadius = 0;
+  std::vector<glm::vec3> flatPos, flatNrm, flatTan;
+  std::vector<uint32_t> flatTris;  // local vertex indices
+  // Outputs.
+  double shrink = 1, scale = 1, flatEdge = 0, reach = 0, rootZone = 0, elevation = 0;
+  Chart chart;                   // laid, after the fold test, with what it gathered
+  std::vector<uint32_t> folded;  // nodes the fold test cleared
+  std::vector<double> reads;     // what laying it read (readChart)
+  std::vector<glm::vec3> pos, nrm, tan, surface;
+  std::vector<uint8_t> bad, inside;           // per vertex: trimmed by the chart; under the skin
+  std::vector<uint8_t> overFollicle, preCut;  // per triangle: over a later follicle; cut before the pairs
+  detail::Box box;                            // surface points of its triangles
+};
+
+// A crossing pair of triangles, as feather and triangle within the feather.
+struct PairMemo {
+  uint32_t fa, ta, fb, tb;
+};
 
 }  // namespace
 
-DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& o) {
+struct DrapeCache::State {
+  bool valid = false;
+  SkinMesh skin;  // the skin it was laid on (the Surface refers to it)
+  std::unique_ptr<Surface> surface;
+  double gapOption = 0, spacingOption = 0, maxSlope = 0, baseAllowance = 0;
+  int gridAlong = 0, gridAcross = 0;
+  double gap = 0, spacing = 0;
+  std::unique_ptr<CoatTop> top;
+  std::vector<FeatherMemo> feathers;
+  std::vector<uint32_t> order;
+  std::vector<PairMemo> pairs;
+};
+
+DrapeCache::DrapeCache() : state_(std::make_unique<State>()) {}
+DrapeCache::~DrapeCache() = default;
+DrapeCache::DrapeCache(DrapeCache&&) noexcept = default;
+DrapeCache& DrapeCache::operator=(DrapeCache&&) noexcept = default;
+void DrapeCache::clear() { state_ = std::make_unique<State>(); }
+size_t DrapeCache::bytes() const {
+  const State& s = *state_;
+  size_t b = s.skin.positions.capacity() * sizeof(dvec3) * 3 + s.skin.faces.capacity() * 16 +
+             s.pairs.capacity() * sizeof(PairMemo) + (s.top ? s.top->bytes() : 0);
+  for (const FeatherMemo& f : s.feathers) {
+    b += sizeof(FeatherMemo) + (f.flatPos.capacity() + f.flatNrm.capacity() + f.flatTan.capacity() + f.pos.capacity() +
+                                f.nrm.capacity() + f.tan.capacity() + f.surface.capacity()) *
+                                   sizeof(glm::vec3);
+    b += f.flatTris.capacity() * 4 + f.reads.capacity() * 8 + f.chart.nodes.capacity() * sizeof(Node) +
+         f.chart.reqSamples.capacity() * 4 + f.chart.under.capacity() * sizeof(Chart::Cover) + f.chart.fine.capacity() +
+         f.bad.capacity() * 2 + f.overFollicle.capacity() * 2;
+  }
+  return b;
+}
+
+struct DrapeAccess {
+  static DrapeCache::State& state(DrapeCache& c) { return *c.state_; }
+};
+
+namespace {
+
+bool sameSkin(const SkinMesh& a, const SkinMesh& b) {
+  return a.positions.size() == b.positions.size() && a.faces.size() == b.faces.size() &&
+         std::equal(a.positions.begin(), a.positions.end(), b.positions.begin()) &&
+         std::equal(a.faces.begin(), a.faces.end(), b.faces.begin()) &&
+         std::equal(a.vertexNormals.begin(), a.vertexNormals.end(), b.vertexNormals.begin(), b.vertexNormals.end()) &&
+         std::equal(a.faceNormals.begin(), a.faceNormals.end(), b.faceNormals.begin(), b.faceNormals.end());
+}
+
+bool sameFrame(const FeatherFrame& a, const FeatherFrame& b) {
+  return a.origin == b.origin && a.normal == b.normal && a.tangent == b.tangent && a.binormal == b.binormal;
+}
+
+template <class T>
+bool sameRange(const std::vector<T>& a, const T* b, size_t count) {
+  return a.size() == count && std::equal(a.begin(), a.end(), b);
+}
+
+// Drapes the coat (M: the cache, or null). With `only`, stops once the gap and spacing are known and
+// returns them there (the mesh is left untouched).
+DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& o,
+                  DrapeCache::State* M, DrapeSpacing* only = nullptr) {
   const auto t0 = std::chrono::steady_clock::now();
   const size_t n = coat.size(), nv = mesh.positions.size();
   if (mesh.featherId.size() != nv) throw Error("the coat mesh needs one featherId per vertex", {}, "featherId");
@@ -346,7 +444,10 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   res.elevation.assign(n, 0.0);
   res.trimmed.assign(n, 0);
   res.hidden.assign(n, 0);
-  if (nv == 0 || skin.faces.empty()) return res;
+  if (nv == 0 || skin.faces.empty()) {
+    if (M) *M = DrapeCache::State{};
+    return res;
+  }
   // Vertices per feather (CSR).
   std::vector<uint32_t> first(n + 1, 0), verts(nv);
   for (uint32_t f : mesh.featherId) {
@@ -354,9 +455,14 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
     ++first[f + 1];
   }
   for (size_t i = 0; i < n; ++i) first[i + 1] += first[i];
+  std::vector<uint32_t> localVert(nv);  // a vertex's place among its feather's
   {
     std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-    for (uint32_t v = 0; v < nv; ++v) verts[fill[mesh.featherId[v]]++] = v;
+    for (uint32_t v = 0; v < nv; ++v) {
+      const uint32_t f = mesh.featherId[v];
+      localVert[v] = fill[f] - first[f];
+      verts[fill[f]++] = v;
+    }
   }
   std::vector<int64_t> rank(n, -1);
   std::vector<uint32_t> order;
@@ -365,7 +471,23 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
       rank[i] = static_cast<int64_t>(order.size());
       order.push_back(i);
     }
-  if (order.empty()) return res;
+  if (order.empty()) {
+    if (M) *M = DrapeCache::State{};
+    return res;
+  }
+  const size_t nt = mesh.triangleCount();
+  std::vector<uint32_t> trisOf(n + 1, 0), tris(nt);  // triangles per feather (CSR)
+  for (size_t t = 0; t < nt; ++t) ++trisOf[mesh.featherId[mesh.indices[3 * t]] + 1];
+  for (size_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
+  std::vector<uint32_t> localTri(M ? nt : 0);  // a triangle's place among its feather's
+  {
+    std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
+    for (size_t t = 0; t < nt; ++t) {
+      const uint32_t f = mesh.featherId[mesh.indices[3 * t]];
+      if (M) localTri[t] = fill[f] - trisOf[f];
+      tris[fill[f]++] = static_cast<uint32_t>(t);
+    }
+  }
   // Progress after each step, at the share of the bird's drape done by then.
   auto step = [&](double f) { report(o.progress, "drape", f); };
   auto within = [&](double lo, double hi) -> ProgressFn {
@@ -376,39 +498,169 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
     };
   };
   step(0);
-  const Surface S(skin);
-  std::vector<Chart> charts(n);
+  const bool hasN = mesh.normals.size() == nv, hasT = mesh.tangents.size() == nv;
+  auto baseRadius = [&](uint32_t i) {
+    const feather::FeatherParams& p = coat.params[i];
+    return std::max(o.baseAllowance * p.totalLength(), 0.5 * p.calamusWidthRatio * p.rachisWidth);
+  };
+  // The last drape can be reused where the skin, the options and the layers' relative order are the same.
+  bool usable = M && M->valid && M->feathers.size() == n && M->gapOption == o.gap && M->spacingOption == o.spacing &&
+                M->maxSlope == o.maxSlope && M->baseAllowance == o.baseAllowance && M->gridAlong == o.gridAlong &&
+                M->gridAcross == o.gridAcross && sameSkin(M->skin, skin);
+  if (usable) {
+    // Feathers in both layer orders keep their relative order.
+    size_t k = 0;
+    for (uint32_t i : M->order) {
+      if (rank[i] < 0) continue;
+      while (k < order.size() && !M->feathers[order[k]].laid) ++k;
+      if (k == order.size() || order[k] != i) {
+        usable = false;
+        break;
+      }
+      ++k;
+    }
+  }
+  if (M) {
+    M->valid = false;  // until this drape completes
+    if (!usable) {
+      M->feathers.assign(n, FeatherMemo{});
+      M->pairs.clear();
+      M->top.reset();
+      M->skin = skin;
+      M->surface = std::make_unique<Surface>(M->skin);
+      M->gapOption = o.gap;
+      M->spacingOption = o.spacing;
+      M->maxSlope = o.maxSlope;
+      M->baseAllowance = o.baseAllowance;
+      M->gridAlong = o.gridAlong;
+      M->gridAcross = o.gridAcross;
+    }
+  }
+  std::unique_ptr<Surface> ownSurface;
+  if (!M) ownSurface = std::make_unique<Surface>(skin);
+  const Surface& S = M ? *M->surface : *ownSurface;
+  auto memo = [&](uint32_t i) -> FeatherMemo& { return M->feathers[i]; };
+  // Per feather: the same inputs as last time (frame, parameters read, flat vertices and triangles).
+  std::vector<uint8_t> sameInput(n, 0);
+  // Per feather: its follicle, as the later-follicle tests of other feathers see it, changed (or it came
+  // or went).
+  std::vector<uint8_t> footChanged(n, 0);
+  if (usable) {
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<uint32_t> local;
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const FeatherMemo& m = M->feathers[i];
+          const bool laid = rank[i] >= 0;
+          const feather::FeatherParams& p = coat.params[i];
+          const bool sameFoot =
+              laid == m.laid && (!laid || (sameFrame(m.frame, coat.frames[i]) && m.rachisWidth == p.rachisWidth &&
+                                           m.calamusLength == p.calamusLength && m.totalLength == p.totalLength()));
+          footChanged[i] = !sameFoot;
+          if (!laid || !m.laid || !sameFoot || m.baseRadius != baseRadius(static_cast<uint32_t>(i))) continue;
+          const uint32_t* vs = verts.data() + first[i];
+          const size_t cnt = first[i + 1] - first[i];
+          if (m.flatPos.size() != cnt) continue;
+          bool same = true;
+          for (size_t q = 0; q < cnt && same; ++q) same = m.flatPos[q] == mesh.positions[vs[q]];
+          for (size_t q = 0; q < cnt && same && hasN; ++q) same = m.flatNrm[q] == mesh.normals[vs[q]];
+          for (size_t q = 0; q < cnt && same && hasT; ++q) same = m.flatTan[q] == mesh.tangents[vs[q]];
+          const size_t tc = trisOf[i + 1] - trisOf[i];
+          same = same && m.flatTris.size() == 3 * tc;
+          for (size_t q = 0; q < tc && same; ++q)
+            for (int c = 0; c < 3 && same; ++c) {
+              const uint32_t v = mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c];
+              same = mesh.featherId[v] == i && m.flatTris[3 * q + c] == localVert[v];
+            }
+          sameInput[i] = same;
+        }
+      });
+    });
+  }
+  // The flat inputs of the others, before the drape moves them.
+  if (M)
+    for (uint32_t i : order) {
+      if (sameInput[i]) continue;
+      FeatherMemo& m = M->feathers[i];
+      const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
+      m.flatPos.resize(cnt);
+      m.flatNrm.resize(hasN ? cnt : 0);
+      m.flatTan.resize(hasT ? cnt : 0);
+      for (size_t l = 0; l < cnt; ++l) {
+        const uint32_t v = verts[first[i] + l];
+        m.flatPos[l] = mesh.positions[v];
+        if (hasN) m.flatNrm[l] = mesh.normals[v];
+        if (hasT) m.flatTan[l] = mesh.tangents[v];
+      }
+      m.flatTris.resize(3 * tc);
+      for (size_t q = 0; q < tc; ++q)
+        for (int c = 0; c < 3; ++c)
+          m.flatTris[3 * q + c] = localVert[mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c]];
+    }
+  // Follicles whose change can reach feather i's tests: origins (last and now) of changed follicles.
+  std::vector<dvec3> movedFeet;
+  if (usable)
+    for (size_t j = 0; j < n; ++j)
+      if (footChanged[j]) {
+        if (M->feathers[j].laid) movedFeet.push_back(M->feathers[j].frame.origin);
+        if (rank[j] >= 0) movedFeet.push_back(coat.frames[j].origin);
+      }
   // Longest triangle edge per feather as meshed (flat): its chords dip below the skin-following surface by
   // about edge^2 x curvature / 8, which the gap over what lies under it must exceed.
   std::vector<double> flatEdge(n, 0.0);
-  for (size_t t = 0; t < mesh.triangleCount(); ++t) {
-    const uint32_t* tri = &mesh.indices[3 * t];
-    const uint32_t f = mesh.featherId[tri[0]];
-    for (int k = 0; k < 3; ++k)
-      flatEdge[f] =
-          std::max(flatEdge[f], double(glm::length(mesh.positions[tri[k]] - mesh.positions[tri[(k + 1) % 3]])));
+  for (uint32_t i : order) {
+    if (sameInput[i]) {
+      flatEdge[i] = memo(i).flatEdge;
+      continue;
+    }
+    for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
+      const uint32_t* tri = &mesh.indices[3 * static_cast<size_t>(tris[q])];
+      for (int k = 0; k < 3; ++k)
+        flatEdge[i] =
+            std::max(flatEdge[i], double(glm::length(mesh.positions[tri[k]] - mesh.positions[tri[(k + 1) % 3]])));
+    }
   }
   // Scale factors: no feather covers a later follicle's root zone.
-  std::vector<double> scale(n, 1.0);
+  std::vector<double> scale(n, 1.0), shrink(n, 1.0), reachOf(n, 0.0);
   {
     std::vector<dvec3> origins;
     double reach = 0;
     for (uint32_t i : order) {
       origins.push_back(coat.frames[i].origin);
-      for (uint32_t q = first[i]; q < first[i + 1]; ++q)
-        reach = std::max(reach, double(glm::length(dvec3(mesh.positions[verts[q]]) - coat.frames[i].origin)));
+      if (sameInput[i]) {
+        reachOf[i] = memo(i).reach;
+      } else {
+        for (uint32_t q = first[i]; q < first[i + 1]; ++q)
+          reachOf[i] =
+              std::max(reachOf[i], double(glm::length(dvec3(mesh.positions[verts[q]]) - coat.frames[i].origin)));
+      }
+      reach = std::max(reach, reachOf[i]);
+    }
+    // A feather's factor depends on its own flat mesh and the later follicles within its reach.
+    std::vector<uint32_t> todo;
+    for (size_t k = 0; k < order.size(); ++k) {
+      const uint32_t i = order[k];
+      bool need = !sameInput[i];
+      const double r2 = reachOf[i] * (1 + 1e-9) + 1e-12;
+      for (size_t m = 0; m < movedFeet.size() && !need; ++m) {
+        const dvec3 d = movedFeet[m] - coat.frames[i].origin;
+        need = glm::dot(d, d) <= r2 * r2;
+      }
+      if (need)
+        todo.push_back(static_cast<uint32_t>(k));
+      else
+        shrink[i] = memo(i).shrink;
     }
     detail::PointGrid og;
     og.build(origins, std::max(reach, 1e-12));
     detail::inArena(o.threads, [&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
         std::vector<std::pair<glm::dvec2, double>> later;
-        for (size_t k = r.begin(); k < r.end(); ++k) {
+        for (size_t z = r.begin(); z < r.end(); ++z) {
+          const size_t k = todo[z];
           const uint32_t i = order[k];
           const FeatherFrame& F = coat.frames[i];
-          double ri = 0;
-          for (uint32_t q = first[i]; q < first[i + 1]; ++q)
-            ri = std::max(ri, double(glm::length(dvec3(mesh.positions[verts[q]]) - F.origin)));
+          const double ri = reachOf[i];
           later.clear();
           og.query(F.origin - dvec3(ri), F.origin + dvec3(ri), [&](uint32_t j) {
             if (j <= k) return;
@@ -420,30 +672,46 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
             later.push_back({{glm::dot(d, F.tangent), glm::dot(d, F.binormal)},
                              0.5 * pj.rachisWidth + std::max(pj.calamusLength, 0.02 * pj.totalLength())});
           });
-          scale[i] = shrinkScale(F, mesh, verts.data() + first[i], first[i + 1] - first[i], later,
-                                 4 * (std::max(2, o.gridAlong) - 1), 4 * (std::max(2, o.gridAcross) - 1), 0.3);
+          shrink[i] = shrinkScale(F, mesh, verts.data() + first[i], first[i + 1] - first[i], later,
+                                  4 * (std::max(2, o.gridAlong) - 1), 4 * (std::max(2, o.gridAcross) - 1), 0.3);
         }
       });
     });
   }
   step(0.03);
-  std::vector<double> lengths;
-  detail::inArena(o.threads, [&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t k = r.begin(); k < r.end(); ++k) {
-        const uint32_t i = order[k];
-        // A feather whose chart folds over a rim or into a crease, or leaves the skin, is shortened
-        // (shorter where the surface curves tightly) before anything of it is trimmed.
-        for (int attempt = 0;; ++attempt) {
-          buildChart(S, coat.frames[i], coat.params[i], mesh, verts.data() + first[i], first[i + 1] - first[i],
-                     scale[i], o, charts[i]);
-          if (attempt == 3 || scale[i] < 0.4 || !foldsOrLeaves(charts[i])) break;
-          scale[i] *= 0.8;
-        }
-        setSag(charts[i], scale[i] * flatEdge[i]);
+  std::vector<Chart> charts(n);
+  // Per feather: its chart was built now (else it is the last drape's, laid and fold-tested).
+  std::vector<uint8_t> newChart(n, 0);
+  {
+    std::vector<uint32_t> todo;
+    for (uint32_t i : order) {
+      if (sameInput[i] && shrink[i] == memo(i).shrink) {
+        charts[i] = std::move(memo(i).chart);
+        scale[i] = memo(i).scale;
+      } else {
+        newChart[i] = 1;
+        scale[i] = shrink[i];
+        todo.push_back(i);
       }
+    }
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t z = r.begin(); z < r.end(); ++z) {
+          const uint32_t i = todo[z];
+          // A feather whose chart folds over a rim or into a crease, or leaves the skin, is shortened
+          // (shorter where the surface curves tightly) before anything of it is trimmed.
+          for (int attempt = 0;; ++attempt) {
+            buildChart(S, coat.frames[i], coat.params[i], mesh, verts.data() + first[i], first[i + 1] - first[i],
+                       scale[i], o, charts[i]);
+            if (attempt == 3 || scale[i] < 0.4 || !foldsOrLeaves(charts[i])) break;
+            scale[i] *= 0.8;
+          }
+          setSag(charts[i], scale[i] * flatEdge[i]);
+        }
+      });
     });
-  });
+  }
+  std::vector<double> lengths;
   for (uint32_t i : order) lengths.push_back(charts[i].hx * (charts[i].nx - 1));
   std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
   const double medianLength = lengths[lengths.size() / 2];
@@ -452,44 +720,121 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   std::vector<double> steps;
   for (uint32_t i : order) steps.push_back(std::min(charts[i].hx, charts[i].hy));
   std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
-  double spacing = std::max(0.75 * steps[steps.size() / 2], 1e-12);
+  double spacing = o.spacing > 0 ? o.spacing : std::max(0.75 * steps[steps.size() / 2], 1e-12);
   const double area = skin.totalArea();
   if (area / (spacing * spacing) > 8e6) spacing = std::sqrt(area / 8e6);  // at most about 8M samples
+  if (only) {
+    *only = {gap, spacing};
+    return res;
+  }
   step(0.14);
-  CoatTop top(skin, spacing);
+  // The coat's top is reused with the same samples (the same skin and spacing); what was gathered
+  // against it, and read from it, stays valid.
+  const bool sameTop = usable && M->top && M->spacing == spacing && M->gap == gap;
+  std::unique_ptr<CoatTop> ownTop;
+  if (M) {
+    if (sameTop)
+      M->top->reset();
+    else
+      M->top = std::make_unique<CoatTop>(skin, spacing);
+    M->gap = gap;
+    M->spacing = spacing;
+  } else {
+    ownTop = std::make_unique<CoatTop>(skin, spacing);
+  }
+  CoatTop& top = M ? *M->top : *ownTop;
   step(0.16);
+  // Per feather: laid now (its heights, fold test and vertices computed again).
+  std::vector<uint8_t> laidNow(n, 0);
   {
-    std::vector<double> req;
+    std::vector<uint32_t> todo;
+    for (uint32_t i : order)
+      if (newChart[i] || !sameTop) {
+        todo.push_back(i);
+        if (!newChart[i]) {
+          // A kept chart gathers again: restore what its last fold test cleared.
+          for (uint32_t k : memo(i).folded) charts[i].nodes[k].ok = 1;
+          memo(i).folded.clear();
+        }
+      }
     double airRadius = 1.5 * spacing;
     for (uint32_t i : order) airRadius = std::max(airRadius, 0.75 * charts[i].diag);
     AirTop air(airRadius);
     detail::inArena(o.threads, [&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t k = r.begin(); k < r.end(); ++k) gatherSamples(charts[order[k]], top, 1.5 * spacing);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t z = r.begin(); z < r.end(); ++z) gatherSamples(charts[todo[z]], top, 1.5 * spacing);
       });
     });
     step(0.37);
-    for (uint32_t i : order) layChart(charts[i], top, air, gap, o.maxSlope, req);
+    std::vector<double> req, reads;
+    for (uint32_t i : order) {
+      Chart& C = charts[i];
+      readChart(C, top, air, reads);
+      const bool relay = newChart[i] || !sameTop || reads != memo(i).reads;
+      if (relay) {
+        if (!newChart[i] && sameTop) {
+          for (uint32_t k : memo(i).folded) C.nodes[k].ok = 1;
+          memo(i).folded.clear();
+        }
+        layFromReads(C, reads, gap, o.maxSlope, req);
+        laidNow[i] = 1;
+        if (M) memo(i).reads = reads;
+      }
+      writeChart(C, top, air);
+      if (!M) {
+        // What was gathered for laying is not needed again.
+        C.reqSamples = {};
+        C.reqOffset = {};
+        C.under = {};
+      }
+    }
     step(0.46);
   }
+  std::vector<uint32_t> relaid;
+  for (uint32_t i : order)
+    if (laidNow[i]) {
+      relaid.push_back(i);
+      if (M) memo(i).folded.clear();
+    }
   // A node whose lifted point has other skin closer than half its height sits in a fold: not draped.
   // (Thin parts keep their coat: a node's height goes out along its own normal, away from the other
   // side, and past a thin part's rim the feather overhangs instead of wrapping onto the other side.)
   detail::inArena(o.threads, [&] {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t k = r.begin(); k < r.end(); ++k)
-        for (Node& nd : charts[order[k]].nodes)
-          if (nd.ok && nd.active && S.skinWithin(nd.c + nd.h * nd.n, 0.5 * nd.h * (1 - 1e-9))) nd.ok = 0;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, relaid.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t z = r.begin(); z < r.end(); ++z) {
+        const uint32_t i = relaid[z];
+        std::vector<Node>& nodes = charts[i].nodes;
+        for (size_t k = 0; k < nodes.size(); ++k) {
+          Node& nd = nodes[k];
+          if (nd.ok && nd.active && S.skinWithin(nd.c + nd.h * nd.n, 0.5 * nd.h * (1 - 1e-9))) {
+            nd.ok = 0;
+            if (M) memo(i).folded.push_back(static_cast<uint32_t>(k));
+          }
+        }
+      }
     });
   });
   // Move every vertex; remember its surface point for trimming.
   std::vector<glm::vec3> surfacePoint(nv);
   std::vector<uint8_t> bad(nv, 0);
-  const bool hasN = mesh.normals.size() == nv, hasT = mesh.tangents.size() == nv;
   detail::inArena(o.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         const uint32_t i = order[k];
+        if (!laidNow[i]) {
+          // The last drape's vertices.
+          const FeatherMemo& m = memo(i);
+          for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
+            const uint32_t v = verts[q], l = q - first[i];
+            mesh.positions[v] = m.pos[l];
+            if (hasN) mesh.normals[v] = m.nrm[l];
+            if (hasT) mesh.tangents[v] = m.tan[l];
+            surfacePoint[v] = m.surface[l];
+            bad[v] = m.bad[l];
+          }
+          res.elevation[i] = m.elevation;
+          continue;
+        }
         Chart& C = charts[i];
         const FeatherFrame& F = coat.frames[i];
         for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
@@ -552,30 +897,65 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
     });
   });
   step(0.5);
-  const size_t nt = mesh.triangleCount();
   // Trim lower feathers' material over a later feather's follicle, where that feather rises out of the
   // skin: every triangle whose surface projection comes within the later feather's root zone (its calamus
   // ramp and half its rachis) of that follicle. Exact per triangle, so a feather with long triangles
   // (a flight feather's barbs) loses only the triangles over the follicle, not a band its edge wide.
   std::vector<dvec3> origins;
+  std::vector<double> rootZone(n, 0.0);
   double reachMax = 0;
   for (uint32_t i : order) {
     origins.push_back(coat.frames[i].origin);
-    reachMax = std::max(reachMax, charts[i].ramp + 0.5 * coat.params[i].rachisWidth);
+    rootZone[i] = charts[i].ramp + 0.5 * coat.params[i].rachisWidth;
+    reachMax = std::max(reachMax, rootZone[i]);
   }
+  std::vector<detail::Box> surfaceBox(n);
   std::vector<uint8_t> overFollicle(nt, 0);
   {
+    // A feather's triangles are tested again when it was laid again, or a follicle whose root zone
+    // changed (or that came or went) is near its triangles.
+    std::vector<dvec3> zoneFeet;
+    std::vector<double> zoneRadius;
+    if (usable)
+      for (size_t j = 0; j < n; ++j) {
+        const FeatherMemo& m = M->feathers[j];
+        const bool laid = rank[j] >= 0;
+        if (laid == m.laid && (!laid || (m.frame.origin == coat.frames[j].origin && m.rootZone == rootZone[j])))
+          continue;
+        const double rz = std::max(laid ? rootZone[j] : 0.0, m.laid ? m.rootZone : 0.0);
+        if (m.laid) {
+          zoneFeet.push_back(m.frame.origin);
+          zoneRadius.push_back(rz);
+        }
+        if (laid) {
+          zoneFeet.push_back(coat.frames[j].origin);
+          zoneRadius.push_back(rz);
+        }
+      }
+    std::vector<uint8_t> retest(n, 0);
+    for (uint32_t i : order) {
+      if (laidNow[i] || !usable) {
+        retest[i] = 1;
+        continue;
+      }
+      const detail::Box& b = memo(i).box;
+      surfaceBox[i] = b;
+      if (b.empty()) continue;
+      for (size_t m = 0; m < zoneFeet.size() && !retest[i]; ++m) {
+        const double r = 2 * zoneRadius[m] + 1e-6 * (1 + glm::length(zoneFeet[m]));
+        const dvec3 g = zoneFeet[m];
+        retest[i] = g.x >= b.lo.x - r && g.y >= b.lo.y - r && g.z >= b.lo.z - r && g.x <= b.hi.x + r &&
+                    g.y <= b.hi.y + r && g.z <= b.hi.z + r;
+      }
+      if (!retest[i]) {
+        const FeatherMemo& m = memo(i);
+        for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) overFollicle[tris[q]] = m.overFollicle[q - trisOf[i]];
+      }
+    }
     // Per feather the later follicles within reach of its surface points (from the grid, once), then
     // per triangle those whose root zone its box comes near: the follicles the test below can find.
     detail::PointGrid grid;
     grid.build(origins, std::max(reachMax, 1e-12));
-    std::vector<uint32_t> trisOf(n + 1, 0), tris(nt);  // triangles per feather (CSR)
-    for (size_t t = 0; t < nt; ++t) ++trisOf[mesh.featherId[mesh.indices[3 * t]] + 1];
-    for (size_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
-    {
-      std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
-      for (size_t t = 0; t < nt; ++t) tris[fill[mesh.featherId[mesh.indices[3 * t]]]++] = static_cast<uint32_t>(t);
-    }
     detail::inArena(o.threads, [&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
         struct Later {
@@ -585,16 +965,18 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
         std::vector<Later> later;
         for (size_t k = r.begin(); k < r.end(); ++k) {
           const uint32_t i = order[k];
+          if (!retest[i]) continue;
           detail::Box fb;
           for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q)
             for (int c = 0; c < 3; ++c) fb.add(dvec3(surfacePoint[mesh.indices[3 * static_cast<size_t>(tris[q]) + c]]));
+          surfaceBox[i] = fb;
           if (fb.empty()) continue;
           later.clear();
           grid.query(fb.lo - dvec3(reachMax), fb.hi + dvec3(reachMax), [&](uint32_t j) {
             if (j <= k) return;
             const uint32_t f = order[j];
             const dvec3& g = coat.frames[f].origin;
-            const double rj = charts[f].ramp + 0.5 * coat.params[f].rachisWidth;
+            const double rj = rootZone[f];
             // A little past rj: the closest point's rounding never matters.
             const double reach = rj + 1e-6 * (rj + std::max({std::abs(g.x), std::abs(g.y), std::abs(g.z)}));
             later.push_back({g, rj, reach});
@@ -622,15 +1004,59 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
       });
     });
   }
+  // Vertices under the skin, tested again only for feathers laid again (a test of one vertex depends on
+  // its position, its feather's base and the skin).
+  std::vector<uint8_t> inside(nv, 0);
   {
     step(0.53);
     CheckOptions co;
     setFeatherBases(co, coat, o.baseAllowance);
     co.progress = within(0.53, 0.65);
-    const std::vector<uint8_t> inside = verticesInsideSkin(skin, mesh, co);
-    for (uint32_t v = 0; v < nv; ++v)
-      if (inside[v] && rank[mesh.featherId[v]] >= 0) bad[v] = 1;
+    if (!usable || relaid.size() == order.size()) {
+      inside = verticesInsideSkin(skin, mesh, co);
+    } else {
+      for (uint32_t i : order)
+        if (!laidNow[i])
+          for (uint32_t q = first[i]; q < first[i + 1]; ++q) inside[verts[q]] = memo(i).inside[q - first[i]];
+      if (!relaid.empty()) {
+        TriMesh part;
+        std::vector<uint32_t> back;
+        for (uint32_t i : relaid)
+          for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
+            back.push_back(verts[q]);
+            part.positions.push_back(mesh.positions[verts[q]]);
+            part.featherId.push_back(i);
+          }
+        const std::vector<uint8_t> in = verticesInsideSkin(skin, part, co);
+        if (in.size() != back.size()) throw Error("the drape was cancelled", {}, "drape");
+        for (size_t k = 0; k < back.size(); ++k) inside[back[k]] = in[k];
+      }
+    }
+    if (inside.size() != nv) throw Error("the drape was cancelled", {}, "drape");
   }
+  // Keep what the trims and tests below need of this drape's own outputs before trimming moves vertices.
+  if (M) {
+    for (uint32_t i : relaid) {
+      FeatherMemo& m = memo(i);
+      const size_t cnt = first[i + 1] - first[i];
+      m.pos.resize(cnt);
+      m.nrm.resize(hasN ? cnt : 0);
+      m.tan.resize(hasT ? cnt : 0);
+      m.surface.resize(cnt);
+      m.bad.resize(cnt);
+      for (size_t l = 0; l < cnt; ++l) {
+        const uint32_t v = verts[first[i] + l];
+        m.pos[l] = mesh.positions[v];
+        if (hasN) m.nrm[l] = mesh.normals[v];
+        if (hasT) m.tan[l] = mesh.tangents[v];
+        m.surface[l] = surfacePoint[v];
+        m.bad[l] = bad[v];
+      }
+      m.elevation = res.elevation[i];
+    }
+  }
+  for (uint32_t v = 0; v < nv; ++v)
+    if (inside[v] && rank[mesh.featherId[v]] >= 0) bad[v] = 1;
   std::vector<size_t> kept(n, 0), cut(n, 0);
   auto collapse = [&](size_t t) {
     uint32_t* tri = &mesh.indices[3 * t];
@@ -646,7 +1072,86 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
   // Trimmed vertices serve only collapsed triangles: park them at their follicle.
   for (uint32_t v = 0; v < nv; ++v)
     if (bad[v] && rank[mesh.featherId[v]] >= 0) mesh.positions[v] = glm::vec3(coat.frames[mesh.featherId[v]].origin);
-  for (uint64_t pr : intersectingTrianglePairs(mesh, within(0.65, 1))) {
+  // Crossing pairs. With the last drape's pairs: a pair of triangles both unchanged (same feather input,
+  // not laid again, cut before the pairs as before) crosses as it did; pairs with a changed triangle are
+  // searched among the triangles near the changed ones.
+  auto isCut = [&](size_t t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    return tri[1] == tri[0] && tri[2] == tri[0];
+  };
+  std::vector<uint64_t> pairs;
+  if (!usable) {
+    pairs = intersectingTrianglePairs(mesh, within(0.65, 1));
+  } else {
+    std::vector<uint8_t> changedTri(nt, 0);
+    std::vector<uint8_t> touched(n, 0);  // feathers with a changed live triangle
+    for (uint32_t i : order)
+      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
+        const uint32_t t = tris[q];
+        const bool c = laidNow[i] || memo(i).preCut[q - trisOf[i]] != (isCut(t) ? 1 : 0);
+        changedTri[t] = c;
+        if (c && !isCut(t)) touched[i] = 1;
+      }
+    for (const PairMemo& pm : M->pairs) {
+      if (rank[pm.fa] < 0 || rank[pm.fb] < 0 || laidNow[pm.fa] || laidNow[pm.fb]) continue;
+      if (pm.ta >= trisOf[pm.fa + 1] - trisOf[pm.fa] || pm.tb >= trisOf[pm.fb + 1] - trisOf[pm.fb]) continue;
+      const uint32_t t = tris[trisOf[pm.fa] + pm.ta], u = tris[trisOf[pm.fb] + pm.tb];
+      if (changedTri[t] || changedTri[u] || isCut(t) || isCut(u)) continue;
+      pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
+    }
+    // The live triangles' bounds per feather, and the feathers whose bounds meet a touched feather's.
+    std::vector<detail::Box> liveBox(n);
+    for (uint32_t i : order)
+      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
+        const size_t t = tris[q];
+        if (isCut(t)) continue;
+        for (int c = 0; c < 3; ++c) liveBox[i].add(dvec3(mesh.positions[mesh.indices[3 * t + c]]));
+      }
+    std::vector<uint32_t> touchedList;
+    for (uint32_t i : order)
+      if (touched[i] && !liveBox[i].empty()) touchedList.push_back(i);
+    if (!touchedList.empty()) {
+      std::vector<uint8_t> take(n, 0);
+      for (uint32_t i : order) {
+        if (liveBox[i].empty()) continue;
+        for (uint32_t j : touchedList)
+          if (liveBox[i].overlaps(liveBox[j])) {
+            take[i] = 1;
+            break;
+          }
+      }
+      // The taken feathers' live triangles in mesh order, on their own vertices.
+      TriMesh part;
+      std::vector<uint32_t> triBack, vertOf(nv, UINT32_MAX);
+      for (size_t t = 0; t < nt; ++t) {
+        const uint32_t* tri = &mesh.indices[3 * t];
+        if (!take[mesh.featherId[tri[0]]] || isCut(t)) continue;
+        for (int c = 0; c < 3; ++c) {
+          uint32_t& w = vertOf[tri[c]];
+          if (w == UINT32_MAX) {
+            w = static_cast<uint32_t>(part.positions.size());
+            part.positions.push_back(mesh.positions[tri[c]]);
+            part.featherId.push_back(mesh.featherId[tri[c]]);
+          }
+          part.indices.push_back(w);
+        }
+        triBack.push_back(static_cast<uint32_t>(t));
+      }
+      const std::vector<uint64_t> found = intersectingTrianglePairs(part, within(0.65, 1));
+      for (uint64_t pr : found) {
+        const uint32_t t = triBack[pr >> 32], u = triBack[pr & 0xffffffffu];
+        if (changedTri[t] || changedTri[u]) pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
+      }
+    }
+    std::sort(pairs.begin(), pairs.end());
+  }
+  // Of every crossing pair, the lower feather's triangle goes.
+  std::vector<uint8_t> preCut;
+  if (M) {
+    preCut.resize(nt);
+    for (size_t t = 0; t < nt; ++t) preCut[t] = isCut(t) ? 1 : 0;
+  }
+  for (uint64_t pr : pairs) {
     const size_t t = pr >> 32, u = pr & 0xffffffffu;
     const uint32_t ft = mesh.featherId[mesh.indices[3 * t]], fu = mesh.featherId[mesh.indices[3 * u]];
     if (rank[ft] < 0 || rank[fu] < 0) continue;
@@ -669,8 +1174,83 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
       }
     }
   }
+  res.stats.relaid = relaid.size();
+  res.stats.reused = order.size() - relaid.size();
+  if (M) {
+    // Keep this drape for the next.
+    for (size_t i = 0; i < n; ++i) {
+      FeatherMemo& m = memo(static_cast<uint32_t>(i));
+      if (rank[i] < 0) {
+        m = FeatherMemo{};
+        continue;
+      }
+      m.laid = true;
+      m.chart = std::move(charts[i]);
+      m.shrink = shrink[i];
+      m.scale = scale[i];
+      m.flatEdge = flatEdge[i];
+      m.reach = reachOf[i];
+      m.rootZone = rootZone[i];
+      m.box = surfaceBox[i];
+      const size_t tc = trisOf[i + 1] - trisOf[i];
+      m.overFollicle.resize(tc);
+      m.preCut.resize(tc);
+      for (size_t q = 0; q < tc; ++q) {
+        m.overFollicle[q] = overFollicle[tris[trisOf[i] + q]];
+        m.preCut[q] = preCut[tris[trisOf[i] + q]];
+      }
+      if (laidNow[i]) {
+        const size_t cnt = first[i + 1] - first[i];
+        m.inside.resize(cnt);
+        for (size_t l = 0; l < cnt; ++l) m.inside[l] = inside[verts[first[i] + l]];
+      }
+      if (!sameInput[i]) {
+        const feather::FeatherParams& p = coat.params[i];
+        m.frame = coat.frames[i];
+        m.rachisWidth = p.rachisWidth;
+        m.calamusLength = p.calamusLength;
+        m.totalLength = p.totalLength();
+        m.baseRadius = baseRadius(static_cast<uint32_t>(i));
+      }
+    }
+    M->order = order;
+    M->pairs.clear();
+    for (uint64_t pr : pairs) {
+      const uint32_t t = static_cast<uint32_t>(pr >> 32), u = static_cast<uint32_t>(pr & 0xffffffffu);
+      const uint32_t ft = mesh.featherId[mesh.indices[3 * static_cast<size_t>(t)]],
+                     fu = mesh.featherId[mesh.indices[3 * static_cast<size_t>(u)]];
+      M->pairs.push_back({ft, localTri[t], fu, localTri[u]});
+    }
+    M->valid = true;
+  }
   res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
+}
+
+}  // namespace
+
+DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& o) {
+  return drape(skin, coat, mesh, o, nullptr);
+}
+
+DrapeSpacing drapeSpacing(const SkinMesh& skin, const CoatFeathers& coat, const TriMesh& mesh, const DrapeOptions& o) {
+  DrapeSpacing out;
+  TriMesh& unchanged = const_cast<TriMesh&>(mesh);  // read only: drape() returns before it moves anything
+  DrapeOptions quiet = o;
+  quiet.progress = {};
+  drape(skin, coat, unchanged, quiet, nullptr, &out);
+  if (out.spacing == 0) out.gap = o.gap;  // nothing to drape
+  return out;
+}
+
+DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& o,
+                          DrapeCache& cache) {
+  try {
+    return drape(skin, coat, mesh, o, &DrapeAccess::state(cache));
+  } catch (...) {
+    cache.clear();
+    throw;
+  }
 }
 
 }  // namespace pteryla::coat

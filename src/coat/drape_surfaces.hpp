@@ -190,6 +190,8 @@ class CoatTop {
   const dvec3& position(uint32_t s) const { return pos_[s]; }
   double at(uint32_t s) const { return top_[s]; }
   void raise(uint32_t s, double h) { top_[s] = std::max(top_[s], static_cast<float>(h)); }
+  void reset() { std::fill(top_.begin(), top_.end(), 0.0f); }  // bare skin again
+  size_t bytes() const { return pos_.capacity() * 2 * sizeof(dvec3) + top_.capacity() * sizeof(float); }
 
  private:
   std::vector<dvec3> pos_, nrm_;

@@ -208,6 +208,41 @@ void Pipeline::Impl::computePack() {
   report(progress, "pack", 1);
 }
 
+const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOptions& o) {
+  const uint64_t generation = restGeneration();
+  if (drapeRef && drapeRef->generation == generation && drapeRef->lod == lod && drapeRef->gap == o.gap &&
+      drapeRef->maxSlope == o.maxSlope && drapeRef->baseAllowance == o.baseAllowance &&
+      drapeRef->featherLods == featherLods)
+    return drapeRef->spacing;
+  // The rest coat, every feather present and mature, meshed flat as the mesh stage meshes a frame.
+  coat::CoatFeathers mature = coatRest;
+  const size_t n = mature.size();
+  mature.age.assign(n, 1.0);
+  mature.present.assign(n, 1);
+  coat::PackResult flat;
+  flat.order = mature.layerOrder;
+  flat.elevation.assign(n, 0.0);
+  CoatMeshInput in;
+  in.coat = &mature;
+  in.packedCoat = &mature;
+  in.packed = &flat;
+  in.lod = lod;
+  in.featherLods = &featherLods;
+  CoatMesher mesher;
+  TriMesh restMesh;
+  mesher.update(in, restMesh);
+  DrapeReference r;
+  r.generation = generation;
+  r.lod = lod;
+  r.gap = o.gap;
+  r.maxSlope = o.maxSlope;
+  r.baseAllowance = o.baseAllowance;
+  r.featherLods = featherLods;
+  r.spacing = coat::drapeSpacing(rest, mature, restMesh, o);
+  drapeRef = std::move(r);
+  return drapeRef->spacing;
+}
+
 void Pipeline::Impl::computeMesh() {
   report(progress, "mesh", 0);
   CoatMeshInput in;
@@ -232,7 +267,12 @@ void Pipeline::Impl::computeMesh() {
       report(progress, "mesh", 0.1 + 0.9 * f);
       return true;
     };
-    drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt);
+    if (timeMatters() || !skinPose.empty()) {
+      const coat::DrapeSpacing& ref = drapeReference(dopt);
+      dopt.gap = ref.gap;
+      dopt.spacing = ref.spacing;
+    }
+    drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt, drapeCache);
   }
   const std::vector<uint32_t>& which = mesher.feathers();
   const std::vector<feather::FeatherMeshRanges>& ranges = mesher.ranges();
@@ -300,7 +340,7 @@ void Pipeline::setProgress(ProgressFn progress) { impl_->progress = std::move(pr
 // Whether the time stages read the time (poseSkin: a skeleton; featherAges: a moult; applyControls:
 // controls). Conservative: any such section counts, even one that turns out to be disabled.
 namespace {
-bool timeMatters(const Scene& scene) {
+bool timeMattersIn(const Scene& scene) {
   auto nonEmpty = [](const Json& j) {
     return !j.is_null() && !(j.is_object() && j.empty()) && !(j.is_array() && j.empty());
   };
@@ -311,6 +351,8 @@ bool timeMatters(const Scene& scene) {
 }
 }  // namespace
 
+bool Pipeline::Impl::timeMatters() const { return timeMattersIn(scene); }
+
 void Pipeline::setTime(double t) {
   if (!std::isfinite(t)) throw Error("time must be a finite number", "", "--time");
   if (t == impl_->time) return;
@@ -318,7 +360,7 @@ void Pipeline::setTime(double t) {
   // Only stages that depend on time: the skin pose and everything after it, and only when something in
   // the scene reads the time. A scene with no skeleton, moult or controls is the same coat at every
   // time, so scrubbing its timeline (a host's frame change) costs nothing.
-  if (timeMatters(impl_->scene)) impl_->graph.invalidate(impl_->id(Stage::Pose));
+  if (timeMattersIn(impl_->scene)) impl_->graph.invalidate(impl_->id(Stage::Pose));
 }
 double Pipeline::time() const { return impl_->time; }
 
@@ -599,6 +641,8 @@ FrameReuse Pipeline::frameReuse() const {
   r.poseRepacked = p.poseRepacked;
   r.meshRegenerated = impl_->mesher.regenerated();
   r.meshReused = impl_->mesher.reused();
+  r.drapeRelaid = impl_->drape.stats.relaid;
+  r.drapeReused = impl_->drape.stats.reused;
   return r;
 }
 

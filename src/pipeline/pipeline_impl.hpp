@@ -87,6 +87,17 @@ struct Pipeline::Impl {
   // and the mesh stage drapes the assembled mesh; `drape` is its last result.
   coat::PackResult flatPack;
   coat::DrapeResult drape;
+  coat::DrapeCache drapeCache;  // the last drape, for the next frame's (its result is the same bits)
+  // A timeline's drape takes its gap and sample spacing from the rest coat, mature and whole, meshed at
+  // the same level of detail (drapeReference): a moult or a pose does not change them frame to frame.
+  struct DrapeReference {
+    uint64_t generation = 0;
+    double lod = 0, gap = 0, maxSlope = 0, baseAllowance = 0;
+    std::vector<double> featherLods;
+    coat::DrapeSpacing spacing;
+  };
+  std::optional<DrapeReference> drapeRef;
+  const coat::DrapeSpacing& drapeReference(const coat::DrapeOptions& options);
   CoatMesh mesh;
   CoatMesher mesher;  // mesh.mesh is its last result
   // Caches of time-stage results are stamped with the rest state they were made from: the number of
@@ -115,6 +126,7 @@ struct Pipeline::Impl {
   void computeControls();
   void computePack();
   void computeMesh();
+  bool timeMatters() const;
 };
 
 }  // namespace pteryla::pipeline

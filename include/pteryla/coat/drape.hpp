@@ -33,6 +33,7 @@
 //     triangles, the lower feather's. A draped coat has no skin penetration and no crossing triangles.
 //     Trimmed and hidden feathers are counted.
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "pteryla/coat/coat_feathers.hpp"
@@ -44,6 +45,9 @@ namespace pteryla::coat {
 
 struct DrapeOptions {
   double gap = 0;  // scene units between stacked feathers and above the skin; 0 = auto (0.004 x median feather length)
+  // Spacing of the coat's top, the samples over the skin that record how high the coat laid so far
+  // reaches; 0 = auto (0.75 x the median chart cell). At most about 8 million samples either way.
+  double spacing = 0;
   double maxSlope = 1.0;  // largest rise of a feather's height over the skin per unit length (tan 45 degrees)
   int gridAlong = 16;     // chart nodes along a feather (>= 2)
   int gridAcross = 9;     // chart nodes across it (>= 2)
@@ -64,6 +68,10 @@ struct DrapeStats {
   size_t overhangingNodes = 0;  // chart nodes past the skin's edge (the feather goes straight on there)
   double gap = 0;               // the gap used (scene units)
   double seconds = 0;
+  // With a DrapeCache: feathers laid afresh (their chart, what they read or the skin changed) and
+  // feathers whose draped vertices were copied from the last drape (the rest of `draped`).
+  size_t relaid = 0;
+  size_t reused = 0;
 };
 
 struct DrapeResult {
@@ -75,11 +83,48 @@ struct DrapeResult {
   DrapeStats stats;
 };
 
+// What one drape keeps for the next (the timeline's frames): per feather its inputs (frame, the
+// parameters the drape reads, its flat vertices and triangles), its chart, the coat's top it read and its
+// draped vertices, and the crossing pairs. The next drape over the same skin and options lays again only
+// the feathers whose inputs changed or whose reads of the coat under them differ, tests only their
+// vertices against the skin and searches pairs only among changed triangles: the result is the one a
+// drape without the cache gives, bit for bit (tests/coat/test_drape_cache.cpp). Any change of the skin,
+// the options, the gap or the sample spacing (medians over the coat) lays everything again.
+class DrapeCache {
+ public:
+  DrapeCache();
+  ~DrapeCache();
+  DrapeCache(DrapeCache&&) noexcept;
+  DrapeCache& operator=(DrapeCache&&) noexcept;
+  void clear();          // the next drape lays everything
+  size_t bytes() const;  // roughly what the cache holds
+
+  struct State;
+
+ private:
+  std::unique_ptr<State> state_;
+  friend struct DrapeAccess;
+};
+
 // Drapes `mesh`, the coat meshed with every feather at elevation 0 from `coat.frames` (featherId per
 // vertex; feathers absent from coat.layerOrder are left alone), over `skin`. Rewrites positions, normals
 // and tangents in place and collapses trimmed triangles to a point (index ranges stay valid).
 // Throws Error for inconsistent input (featherId out of range or missing).
 DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
                           const DrapeOptions& options = {});
+// The gap and sample spacing drapeCoatMesh would use with `options` (their "auto" values from this coat's
+// charts, or the options' own). A timeline fixes them from its rest coat, so that a moult or a pose does
+// not change them frame to frame (a change lays the whole coat again, DrapeCache).
+struct DrapeSpacing {
+  double gap = 0, spacing = 0;
+};
+DrapeSpacing drapeSpacing(const SkinMesh& skin, const CoatFeathers& coat, const TriMesh& mesh,
+                          const DrapeOptions& options = {});
+
+// The same, reusing what `cache` kept from its last drape where the inputs allow, and keeping this one's.
+// The result equals drapeCoatMesh(skin, coat, mesh, options) bit for bit. If it throws (progress
+// cancelled, bad input), the cache is cleared.
+DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& options,
+                          DrapeCache& cache);
 
 }  // namespace pteryla::coat

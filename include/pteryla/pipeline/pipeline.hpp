@@ -130,6 +130,9 @@ struct FrameReuse {
   // way this frame, and over them the feathers whose surroundings moved (relative to them) beyond the
   // tolerance and the feathers packed again (those and what packs over a changed one).
   size_t deformedPacks = 0, poseMoved = 0, poseRepacked = 0;
+  // Draped coats (coat::DrapeCache): feathers laid again by the mesh stage's drape, and feathers whose
+  // draped vertices it copied from the last drape.
+  size_t drapeRelaid = 0, drapeReused = 0;
 };
 
 // Checks a posed skin given by a caller against the rest skin: one position per rest vertex, each

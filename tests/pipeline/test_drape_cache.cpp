@@ -1,0 +1,238 @@
+// coat::DrapeCache (coat/drape.hpp): a drape that reuses the last one gives the same bits as a drape
+// without it, whatever changed in between (a feather turned, grown, lost, the layer order, the skin), and
+// really lays again only part of the coat when little changed. Also a draped moult scrub through the
+// pipeline equals fresh evaluations.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
+
+#include "coat_mesher.hpp"
+#include "frames.hpp"
+#include "pteryla/coat/drape.hpp"
+#include "pteryla/coat/pack.hpp"
+#include "pteryla/core/error.hpp"
+#include "pteryla/pipeline/pipeline.hpp"
+#include "pteryla/pipeline/scene.hpp"
+
+using namespace pteryla;
+using pipeline::CoatMesher;
+using pipeline::CoatMeshInput;
+using pipeline_test::sameBytes;
+using pipeline_test::sameMesh;
+
+namespace {
+
+const std::string kSceneFile = std::string(PTERYLA_DATA_DIR) + "/scene_test.json";
+
+// The sphere, draped: feathers over feathers in several layers, a follicle under most feathers' tips.
+Json sphereJson(int count) {
+  Json j = Json::parse(R"({"pteryla": 1, "seed": 3, "mesh": "meshes/sphere_1600.obj",
+    "feathers": {"contour": "feathers/contour.json"},
+    "tracts": [{"name": "all", "count": 200, "feather_scale": "auto", "feather_spacings": 3.0,
+                "parameterization": {"method": "projection", "view_direction": [0, -1, 0]}}],
+    "directions": {"axis": [[0, 1.5, 0], [0, -1.5, 0]]},
+    "ordering": {"method": "axis", "axis": [[0, 1.5, 0], [0, -1.5, 0]]},
+    "packing": {"method": "drape"}})");
+  j["tracts"][0]["count"] = count;
+  return j;
+}
+
+// The flat coat the mesh stage drapes (every feather at elevation 0, in layer order).
+struct FlatCoat {
+  coat::CoatFeathers feathers;
+  coat::PackResult flat;
+  CoatMesher mesher;
+  TriMesh mesh;
+  void remesh() {
+    flat = coat::PackResult{};
+    flat.order = feathers.layerOrder;
+    flat.elevation.assign(feathers.size(), 0.0);
+    CoatMeshInput in;
+    in.coat = &feathers;
+    in.packedCoat = &feathers;
+    in.packed = &flat;
+    in.lod = 0.3;
+    mesher.update(in, mesh);
+  }
+};
+
+void expectSameDrape(const TriMesh& a, const coat::DrapeResult& ra, const TriMesh& b, const coat::DrapeResult& rb,
+                     const std::string& what) {
+  SCOPED_TRACE(what);
+  EXPECT_TRUE(sameMesh(a, b));
+  EXPECT_TRUE(sameBytes(ra.elevation, rb.elevation));
+  EXPECT_EQ(ra.trimmed, rb.trimmed);
+  EXPECT_EQ(ra.hidden, rb.hidden);
+  EXPECT_EQ(ra.stats.draped, rb.stats.draped);
+  EXPECT_EQ(ra.stats.trimmedFeathers, rb.stats.trimmedFeathers);
+  EXPECT_EQ(ra.stats.hiddenFeathers, rb.stats.hiddenFeathers);
+  EXPECT_EQ(ra.stats.trimmedTriangles, rb.stats.trimmedTriangles);
+  EXPECT_EQ(ra.stats.overhangingNodes, rb.stats.overhangingNodes);
+  EXPECT_EQ(ra.stats.gap, rb.stats.gap);
+}
+
+// Drapes the coat with the cache and without; both must agree. Returns the cached drape's result.
+coat::DrapeResult drapeBoth(const coat::SkinMesh& skin, const FlatCoat& c, coat::DrapeCache& cache,
+                            const std::string& what) {
+  TriMesh withCache = c.mesh, without = c.mesh;
+  const coat::DrapeResult r = coat::drapeCoatMesh(skin, c.feathers, withCache, {}, cache);
+  const coat::DrapeResult fresh = coat::drapeCoatMesh(skin, c.feathers, without, {});
+  expectSameDrape(withCache, r, without, fresh, what);
+  EXPECT_EQ(r.stats.relaid + r.stats.reused, r.stats.draped) << what;
+  return r;
+}
+
+// Turns feather i's frame about its normal by `radians`.
+void turn(coat::FeatherFrame& F, double radians) {
+  const glm::dvec3 t = std::cos(radians) * F.tangent + std::sin(radians) * F.binormal;
+  F.tangent = t;
+  F.binormal = glm::cross(F.normal, t);
+}
+
+}  // namespace
+
+TEST(DrapeCache, EveryEditDrapesAsWithoutTheCache) {
+  pipeline::Pipeline p(pipeline::sceneFromJson(sphereJson(260), kSceneFile));
+  const coat::SkinMesh skin = p.posedSkin();
+  FlatCoat c;
+  c.feathers = p.feathers();
+  const size_t n = c.feathers.size();
+  ASSERT_GT(n, 200u);
+  c.remesh();
+  coat::DrapeCache cache;
+
+  coat::DrapeResult r = drapeBoth(skin, c, cache, "first drape");
+  EXPECT_EQ(r.stats.relaid, r.stats.draped);
+  EXPECT_GT(r.stats.trimmedFeathers, 0u);  // the trims are exercised, not only the laying
+
+  r = drapeBoth(skin, c, cache, "nothing changed");
+  EXPECT_EQ(r.stats.relaid, 0u);
+  EXPECT_GT(cache.bytes(), 0u);
+
+  // One feather in the middle of the layers turned: it, what lies over it and the feathers whose
+  // trims its follicle's root zone touches are laid again, not the coat.
+  const uint32_t mid = c.feathers.layerOrder[c.feathers.layerOrder.size() / 2];
+  turn(c.feathers.frames[mid], 0.3);
+  c.remesh();
+  r = drapeBoth(skin, c, cache, "one feather turned");
+  EXPECT_GT(r.stats.relaid, 0u);
+  EXPECT_LT(r.stats.relaid, r.stats.draped / 2);
+
+  // Shorter feathers (as when growing), a few of them.
+  for (uint32_t k = 0; k < n; k += 37) c.feathers.params[k].rachisLength *= 0.6;
+  c.remesh();
+  drapeBoth(skin, c, cache, "feathers shortened");
+  // With the gap and spacing fixed (as a timeline fixes them from its rest coat), shortening feathers
+  // lays again only part of the coat.
+  {
+    coat::DrapeOptions fixed;
+    const coat::DrapeSpacing ds = coat::drapeSpacing(skin, c.feathers, c.mesh, fixed);
+    EXPECT_GT(ds.gap, 0);
+    EXPECT_GT(ds.spacing, 0);
+    fixed.gap = ds.gap;
+    fixed.spacing = ds.spacing;
+    coat::DrapeCache fixedCache;
+    TriMesh m = c.mesh;
+    coat::drapeCoatMesh(skin, c.feathers, m, fixed, fixedCache);
+    for (uint32_t k = 5; k < n; k += 41) c.feathers.params[k].rachisLength *= 0.8;
+    c.remesh();
+    TriMesh a = c.mesh, b = c.mesh;
+    const coat::DrapeResult ra = coat::drapeCoatMesh(skin, c.feathers, a, fixed, fixedCache);
+    const coat::DrapeResult rb = coat::drapeCoatMesh(skin, c.feathers, b, fixed);
+    expectSameDrape(a, ra, b, rb, "shortened with a fixed spacing");
+    EXPECT_GT(ra.stats.relaid, 0u);
+    EXPECT_LT(ra.stats.relaid, ra.stats.draped);
+    // The auto spacing of a drape is what drapeSpacing says.
+    TriMesh d = c.mesh;
+    const coat::DrapeSpacing auto2 = coat::drapeSpacing(skin, c.feathers, c.mesh, {});
+    EXPECT_EQ(coat::drapeCoatMesh(skin, c.feathers, d, {}).stats.gap, auto2.gap);
+  }
+
+  // A lost feather (absent: no vertices), and one back.
+  c.feathers.present[mid] = 0;
+  c.remesh();
+  r = drapeBoth(skin, c, cache, "a feather lost");
+  EXPECT_EQ(r.stats.draped, n - 1);
+  c.feathers.present[mid] = 1;
+  c.remesh();
+  drapeBoth(skin, c, cache, "the feather back");
+
+  // A follicle moved along the skin (the later-follicle tests of the feathers under it change).
+  const uint32_t low = c.feathers.layerOrder[c.feathers.layerOrder.size() / 4];
+  c.feathers.frames[low].origin += 0.01 * c.feathers.frames[low].tangent;
+  c.remesh();
+  drapeBoth(skin, c, cache, "a follicle moved");
+
+  // Two feathers swap layers: everything is laid again.
+  std::swap(c.feathers.layerOrder[10], c.feathers.layerOrder[11]);
+  c.remesh();
+  r = drapeBoth(skin, c, cache, "layer order changed");
+  EXPECT_EQ(r.stats.relaid, r.stats.draped);
+
+  // Another skin (inflated): everything again.
+  coat::SkinMesh bigger = skin;
+  for (auto& v : bigger.positions) v *= 1.01;
+  r = drapeBoth(bigger, c, cache, "skin changed");
+  EXPECT_EQ(r.stats.relaid, r.stats.draped);
+  drapeBoth(skin, c, cache, "skin back");
+
+  // Other options: everything again.
+  TriMesh a = c.mesh, b = c.mesh;
+  coat::DrapeOptions o;
+  o.maxSlope = 0.5;
+  const coat::DrapeResult ra = coat::drapeCoatMesh(skin, c.feathers, a, o, cache);
+  const coat::DrapeResult rb = coat::drapeCoatMesh(skin, c.feathers, b, o);
+  expectSameDrape(a, ra, b, rb, "options changed");
+  EXPECT_EQ(ra.stats.relaid, ra.stats.draped);
+}
+
+TEST(DrapeCache, ACancelledDrapeClearsTheCache) {
+  pipeline::Pipeline p(pipeline::sceneFromJson(sphereJson(120), kSceneFile));
+  FlatCoat c;
+  c.feathers = p.feathers();
+  c.remesh();
+  coat::DrapeCache cache;
+  TriMesh m = c.mesh;
+  coat::drapeCoatMesh(p.posedSkin(), c.feathers, m, {}, cache);
+  coat::DrapeOptions o;
+  o.progress = [](const std::string&, double f) -> bool {
+    if (f > 0.2) throw Error("cancelled");
+    return true;
+  };
+  m = c.mesh;
+  EXPECT_THROW(coat::drapeCoatMesh(p.posedSkin(), c.feathers, m, o, cache), Error);
+  m = c.mesh;
+  const coat::DrapeResult r = coat::drapeCoatMesh(p.posedSkin(), c.feathers, m, {}, cache);
+  EXPECT_EQ(r.stats.relaid, r.stats.draped);  // nothing half-written was reused
+  TriMesh fresh = c.mesh;
+  const coat::DrapeResult rf = coat::drapeCoatMesh(p.posedSkin(), c.feathers, fresh, {});
+  expectSameDrape(m, r, fresh, rf, "after the cancel");
+}
+
+// A draped moult scrubbed back and forth: every frame equals a fresh evaluation, and frames next to
+// each other lay only part of the coat again.
+TEST(DrapeCache, DrapedMoultScrubEqualsFreshEvaluation) {
+  Json j = sphereJson(200);
+  j["moult"] = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "sequence": "centre_out", "gap": 0,
+                               "seed": 3})");
+  const pipeline::Scene scene = pipeline::sceneFromJson(j, kSceneFile);
+  pipeline::Pipeline scrub(scene);
+  scrub.setLod(0.2);
+  const double times[] = {4.0, 4.05, 4.1, 4.1, 2.0, 4.05};
+  size_t partial = 0;
+  for (double t : times) {
+    scrub.setTime(t);
+    const pipeline_test::Frame f = pipeline_test::grab(scrub);
+    const pipeline::FrameReuse r = scrub.frameReuse();
+    partial += r.drapeReused > 0 ? 1 : 0;
+    pipeline::Pipeline fresh(scene);
+    fresh.setLod(0.2);
+    fresh.setTime(t);
+    pipeline_test::expectIdentical(f, pipeline_test::grab(fresh), t);
+  }
+  EXPECT_GE(partial, 2u);
+}
