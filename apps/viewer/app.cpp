@@ -371,7 +371,10 @@ void App::frame() {
   guardedUi("viewport", [&] { handleInput(); });
   buildUi();
   if (doc_.hasScene() && options_.benchmarkOrbit <= 0)
-    guardedUi("overlays", [&] { drawOverlays(ImGui::GetBackgroundDrawList(), *panels_); });
+    guardedUi("overlays", [&] {
+      drawOverlays(ImGui::GetBackgroundDrawList(), *panels_);
+      drawGizmos(ImGui::GetBackgroundDrawList());
+    });
   ImGui::Render();
 
   if (fw > 0 && fh > 0) {

@@ -16,6 +16,7 @@
 #include "camera_controller.hpp"
 #include "document.hpp"
 #include "file_browser.hpp"
+#include "gizmo.hpp"
 #include "navigation.hpp"
 #include "panels.hpp"
 #include "playback.hpp"
@@ -23,6 +24,7 @@
 #include "script.hpp"
 
 struct GLFWwindow;
+struct ImDrawList;
 
 #include "pteryla/render/image.hpp"
 #include "pteryla/render/image_texture.hpp"
@@ -132,6 +134,21 @@ class App {
   bool handleBox(const glm::vec2& mouse, bool overUi, bool leftPressed);
   void boxSelect(const glm::vec2& a, const glm::vec2& b);
   bool frameBoxSelection();
+  // app_gizmo.cpp: the selected control's offset gizmo and the skeleton's joints and rotation rings
+  // (gizmo.hpp); true when the mouse is on one (or dragging it). keySelected is K: key the selected
+  // joint's rotation, else the selected control, at the current time. gizmoDragPoints: where a scripted
+  // `gizmo-drag` presses and releases (view pixels); false when there is no such gizmo.
+  GizmoGeometry gizmoGeometry();
+  glm::dvec3 ringPoint(const GizmoGeometry& g, int joint, int axis, int k) const;
+  bool handleGizmo(const glm::vec2& mouse, bool overUi, bool leftPressed);
+  void drawGizmos(ImDrawList* dl);
+  void keySelected();
+  bool gizmoDragPoints(bool ring, int axis, double amount, glm::vec2& from, glm::vec2& to);
+  bool gizmoDrag_ = false, gizmoRing_ = false, gizmoMoved_ = false;
+  int gizmoAxis_ = -1, gizmoJoint_ = -1, gizmoHover_ = -1;  // hover: 0-2 offset axes, 3-5 rings
+  glm::dvec3 gizmoAxisWorld_{0.0}, gizmoStartTip_{0.0}, gizmoStartOffset_{0.0}, gizmoPreview_{0.0};
+  glm::dvec3 gizmoPivot_{0.0}, gizmoStartVec_{0.0};
+  double gizmoStartParam_ = 0, gizmoDegrees_ = 0;
   // app_frames.cpp: the timeline range rendered to PNGs on a pipeline of its own (evaluated on a worker
   // thread, drawn here), with progress and Cancel. Called once per frame.
   void frameRenderStep();

@@ -48,6 +48,9 @@ bool App::handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed) {
   if (leftPressed) {
     view_.selectedHandle = handles[size_t(k)];
     view_.selectedFeather = -1;
+    // A control shows its offset gizmo (app_gizmo.cpp); any other handle hides it.
+    view_.selectedControl = handles[size_t(k)].kind == HandleKind::Control ? int(handles[size_t(k)].index) : -1;
+    view_.selectedJoint = -1;
     view_.handlePreview = handles[size_t(k)].at;
     view_.handleDragging = true;
     handleDrag_ = true;

@@ -53,6 +53,11 @@ void App::handleInput() {
     view_.hoveredFeather = -1;
     return;
   }
+  // Gizmos (the selected control's offset, skeleton joints and rings) come before handles and feathers.
+  if (!toolActive && handleGizmo(mouse, overUi, leftPressed)) {
+    view_.hoveredFeather = -1;
+    return;
+  }
   // Handles (controls, brushes, vectors, key feathers, pinned follicles) come before feathers.
   if (!toolActive && handleHandles(mouse, overUi, leftPressed)) {
     view_.hoveredFeather = -1;

@@ -146,16 +146,17 @@ void App::scriptStep() {
       }
       scriptWaitFrames_ = 2;
     } else if (c.verb == "key") {
-      needArgs(c, 1, 1, "key enter|escape|tab|delete", file);
+      needArgs(c, 1, 1, "key enter|escape|tab|delete|k", file);
       const std::string& k = c.args[0];
       const ImGuiKey key = k == "enter"    ? ImGuiKey_Enter
                            : k == "escape" ? ImGuiKey_Escape
                            : k == "tab"    ? ImGuiKey_Tab
                            : k == "delete" ? ImGuiKey_Delete
                                            : ImGuiKey_COUNT;
-      if (key == ImGuiKey_COUNT)
-        throw Error("usage: key enter|escape|tab|delete", file, "line " + std::to_string(c.line));
-      const int index = ImGui::GetKeyIndex(key);
+      if (key == ImGuiKey_COUNT && k != "k")
+        throw Error("usage: key enter|escape|tab|delete|k", file, "line " + std::to_string(c.line));
+      // Letters are indexed by their upper-case code in io.KeysDown (the GLFW backend's key codes).
+      const int index = k == "k" ? int('K') : ImGui::GetKeyIndex(key);
       fakeKeys_ = {{index, true}, {index, false}};
       fakeKeysNext_ = 0;
       scriptWaitFrames_ = 2;
@@ -183,6 +184,32 @@ void App::scriptStep() {
         fakeMouse_.push_back(m);
       }
       m.down[button] = false;
+      fakeMouse_.push_back(m);  // release
+      fakeMouse_.push_back(m);
+      fakeMouseNext_ = 0;
+    } else if (c.verb == "gizmo-drag") {
+      // A drag on the gizmo as a user makes it: press on the offset's axis handle (or on the selected
+      // joint's ring, where it is widest on screen) and release AMOUNT scene units (or degrees) further.
+      needArgs(c, 3, 3, "gizmo-drag offset|joint x|y|z AMOUNT", file);
+      const std::string& what = c.args[0];
+      const std::string& ax = c.args[1];
+      if ((what != "offset" && what != "joint") || ax.size() != 1 || ax[0] < 'x' || ax[0] > 'z')
+        throw Error("usage: gizmo-drag offset|joint x|y|z AMOUNT", file, "line " + std::to_string(c.line));
+      glm::vec2 a, b;
+      if (!gizmoDragPoints(what == "joint", ax[0] - 'x', scriptNumber(c, 2, file), a, b))
+        throw Error(what == "joint" ? "gizmo-drag: no joint is selected (ui Skeleton select NAME)"
+                                    : "gizmo-drag: no control is selected (ui \"Expressive controls\" select NAME)",
+                    file, "line " + std::to_string(c.line));
+      FakeMouse m;
+      m.pos = a;
+      fakeMouse_.push_back(m);  // hover
+      m.down[0] = true;
+      fakeMouse_.push_back(m);  // press
+      for (int i = 1; i <= 8; ++i) {
+        m.pos = a + (b - a) * (float(i) / 8.0f);
+        fakeMouse_.push_back(m);
+      }
+      m.down[0] = false;
       fakeMouse_.push_back(m);  // release
       fakeMouse_.push_back(m);
       fakeMouseNext_ = 0;

@@ -90,7 +90,7 @@ void App::openNow(const std::string& path) {
   cameraReady_ = cameraFramedCoat_ = false;
   materialsStale_ = true;
   view_.selectedTract = 0;
-  view_.selectedControl = view_.selectedVector = view_.selectedFollicle = -1;
+  view_.selectedControl = view_.selectedVector = view_.selectedFollicle = view_.selectedJoint = -1;
   view_.tool = Tool::Orbit;
   view_.playing = false;
   fitTimeRange();
@@ -186,11 +186,13 @@ void App::buildUi() {
     if (ctrl && ImGui::IsKeyPressed('O')) popupToOpen_ = "Open scene";
     if (!ctrl && ImGui::IsKeyPressed('F')) frameSelection();
     if (!ctrl && ImGui::IsKeyPressed('A')) frameAll();
+    if (!ctrl && ImGui::IsKeyPressed('K') && doc_.hasScene()) keySelected();
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space))) view_.playing = !view_.playing;
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
       if (view_.tool == Tool::Orbit) {  // Esc: end the tool, then the selection
         view_.selectedFeather = -1;
         view_.selectedHandle.reset();
+        view_.selectedJoint = view_.selectedControl = -1;
         view_.boxFeathers.clear();
         view_.boxFollicles.clear();
       }
@@ -291,6 +293,7 @@ void App::panelColumn() {
   panel("Packing", false, drawPackingPanel);
   panel("Timeline", true, drawTimelinePanel);
   panel("Expressive controls", false, drawControlsPanel);
+  panel("Skeleton", false, drawSkeletonPanel);
   panel("Render", false, drawRenderPanel);
   if (header("Stage timings", false)) {
     const Snapshot& s = doc_.snapshot();

@@ -22,6 +22,7 @@
 #include "camera_controller.hpp"
 #include "colour_by.hpp"
 #include "document.hpp"
+#include "gizmo.hpp"
 #include "handles.hpp"
 
 namespace pteryla::viewer {
@@ -63,6 +64,11 @@ struct ViewState {
   int selectedFollicle = -1;
   int selectedControl = -1;
   int selectedVector = -1;
+  // Skeleton joints (app_gizmo.cpp, panels_skeleton.cpp): drawn at their posed pivots; the selected one
+  // shows rotation rings. The rig is the scene's skeleton section parsed (cached).
+  bool showJoints = true;
+  int selectedJoint = -1, hoveredJoint = -1;
+  RigCache rig;
   int selectedFeather = -1;  // index into the coat's feathers (click in the view with the orbit tool)
   int hoveredFeather = -1;   // under the mouse (readout)
   Tool tool = Tool::Orbit;
@@ -218,6 +224,9 @@ void drawMirrorSection(PanelContext& ctx);  // in Tracts: mirror left/right
 // panels_time.cpp
 void drawTimelinePanel(PanelContext& ctx);
 void drawControlsPanel(PanelContext& ctx);
+// panels_gizmo.cpp: the selected control's offset and Key (in Expressive controls); the Skeleton panel
+void drawControlOffsetSection(PanelContext& ctx, size_t control);
+void drawSkeletonPanel(PanelContext& ctx);
 
 // panel_feather.cpp: the feather designer window.
 class FeatherDesigner {

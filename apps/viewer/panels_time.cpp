@@ -204,6 +204,7 @@ void drawControlsPanel(PanelContext& ctx) {
         uiRequestedNumber(ctx, "Expressive controls", b, value))
       guarded(ctx, [&] { actions::setControlValue(doc, k, b, value, doc.time()); });
   }
+  drawControlOffsetSection(ctx, k);
   glm::dvec3 at = actions::jsonVec3(c.value("at", Json()));
   float a[3] = {float(at.x), float(at.y), float(at.z)};
   float radius = c.value("radius", 0.0f);

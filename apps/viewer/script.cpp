@@ -1,11 +1,14 @@
 #include "script.hpp"
 
 #include <cmath>
+
+#include <glm/geometric.hpp>
 #include <fstream>
 #include <ostream>
 #include <sstream>
 
 #include "actions.hpp"
+#include "gizmo.hpp"
 #include "mirror.hpp"
 #include "paint.hpp"
 #include "pteryla/core/error.hpp"
@@ -95,7 +98,7 @@ bool isViewCommand(const std::string& v) {
   return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "click" || v == "drag" ||
          v == "ui" || v == "autosave" || v == "crash" || v == "sleep" || v == "tool" || v == "orbit" || v == "zoom" ||
          v == "frame" || v == "frames" || v == "quit" || v == "dialog" || v == "key" || v == "selection" ||
-         v == "select-faces" || v == "tract-from-selection" || v == "box-select" || v == "box-selection";
+         v == "select-faces" || v == "tract-from-selection" || v == "box-select" || v == "box-selection" || v == "gizmo-drag";
 }
 
 double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file) {
@@ -284,6 +287,25 @@ void run(Document& doc, const ScriptCommand& c, const std::string& file, std::os
     needArgs(c, 2, 2, v + " CONTROL VALUE", file);
     actions::setControlValue(doc, count(c, 0, file), v == "blend" ? "dynamic" : v, scriptNumber(c, 1, file),
                              doc.time());
+  } else if (v == "offset") {
+    needArgs(c, 4, 4, "offset CONTROL DX DY DZ", file);
+    setControlOffset(doc, count(c, 0, file), vec(c, 1, file), doc.time());
+  } else if (v == "key-control") {
+    needArgs(c, 1, 1, "key-control CONTROL", file);
+    keyControlAll(doc, count(c, 0, file), doc.time());
+  } else if (v == "joint-key") {
+    needArgs(c, 5, 5, "joint-key JOINT AX AY AZ DEGREES", file);
+    const auto rest = doc.snapshot().restSkin;
+    if (!rest) throw Error("the skin is not loaded", file, where(c));
+    RigCache cache;
+    const moult::SkinRig* rig = cache.get(doc.scene(), rest->vertexCount());
+    if (!rig) throw Error(cache.error().empty() ? "the scene has no skeleton" : cache.error(), file, where(c));
+    const int32_t j = rig->skeleton.find(c.args[0]);
+    if (j < 0) throw Error("unknown joint '" + c.args[0] + "'", file, where(c));
+    const glm::dvec3 axis = vec(c, 1, file);
+    const double degrees = scriptNumber(c, 4, file);
+    if (glm::length(axis) == 0 && degrees != 0) throw Error("a rotation needs a non-zero axis", file, where(c));
+    keyJointRotation(doc, rig->skeleton, size_t(j), doc.time(), moult::rotationFromAxisAngle(axis, degrees));
   } else if (v == "keyframe") {
     needArgs(c, 2, 2, "keyframe CONTROL T", file);
     actions::addControlKeyframe(doc, count(c, 0, file), scriptNumber(c, 1, file));
@@ -347,6 +369,11 @@ const char* scriptHelp() {
   control X Y Z RADIUS           add an expressive control
   lift|aim|direction|random|dynamic CONTROL VALUE   behaviour weight in [0,1] (keyed: at the current time)
   keyframe CONTROL T             key the control's weights at time T
+  offset CONTROL DX DY DZ        the control's offset (keyed: a key at the current time; else the constant)
+  key-control CONTROL            key every behaviour and the offset at the current time (the gizmo's K)
+  joint-key JOINT AX AY AZ DEG   key a skeleton joint's rotation (axis, degrees) at the current time
+  gizmo-drag offset|joint x|y|z AMOUNT   drag the selected control's offset handle AMOUNT scene units along
+                                 the axis, or the selected joint's ring AMOUNT degrees, with the mouse
   set /JSON/POINTER VALUE        set any scene value (JSON or a plain string)
   style shaded|scratchboard | brdf D H
   echo TEXT
@@ -364,8 +391,8 @@ const char* scriptHelp() {
   click X Y | drag X1 Y1 X2 Y2 [left|right|middle [STEPS]]   mouse in the 3D view (pixels or N%)
   ui PANEL WIDGET [VALUE]        use a panel's widget as a user would (docs/viewer.md lists them)
   dialog open|save-as [PATH]     open the Open / Save As dialog (at PATH: its directory and file name)
-  key enter|escape|tab|delete    press a key (Enter confirms a dialog's file name; Delete removes the
-                                 selected handle)
+  key enter|escape|tab|delete|k  press a key (Enter confirms a dialog's file name; Delete removes the
+                                 selected handle; K keys the selected joint or control)
   selection                      print the selected feather (click one in the view) as JSON
   render-frames DIR FROM TO FPS  render frame k at FROM + k/FPS to DIR/frame_NNNN.png (scene size, LOD,
                                  camera); the next command waits until the frames are written
