@@ -39,13 +39,19 @@ void planeBasis(const glm::dvec3& n, glm::dvec3& u, glm::dvec3& v) {
   v = glm::cross(n, u);
 }
 
+// Scene units per pixel of the view at p (the gizmos keep their size on screen as the camera zooms).
+double unitsPerPixel(const render::Camera& cam, const glm::dvec3& p, int viewHeight) {
+  const double depth = std::max(glm::dot(p - glm::dvec3(cam.eye), glm::dvec3(cam.forward())), 1e-6);
+  return 2.0 * depth * std::tan(glm::radians(double(cam.fovYDegrees)) * 0.5) / double(std::max(viewHeight, 1));
+}
+
 }  // namespace
 
 GizmoGeometry App::gizmoGeometry() {
   GizmoGeometry g;
   if (!doc_.hasScene()) return g;
   const Snapshot& snap = doc_.snapshot();
-  const float len = overlayArrowLength(snap);
+  const render::Camera& cam = camera_.camera();
   const double t = doc_.time();
   // The selected control's offset arrow and its axis handles.
   if (view_.selectedControl >= 0) {
@@ -54,7 +60,7 @@ GizmoGeometry App::gizmoGeometry() {
       g.at = off->at;
       g.offset = off->offset;
       g.offsetKeyed = off->keyed;
-      g.handleLength = 0.6 * double(len);
+      g.handleLength = 70.0 * unitsPerPixel(cam, g.at + g.offset, view_.viewSize.y);
     }
   }
   // The skeleton's joints, posed at the current time.
@@ -62,8 +68,9 @@ GizmoGeometry App::gizmoGeometry() {
   if (rig) {
     g.rig = rig;
     g.joints = poseJoints(*rig, t);
-    g.ringRadius = double(len);
     if (view_.selectedJoint >= int(rig->skeleton.jointCount())) view_.selectedJoint = -1;
+    if (view_.selectedJoint >= 0)
+      g.ringRadius = 60.0 * unitsPerPixel(cam, g.joints.pivot[size_t(view_.selectedJoint)], view_.viewSize.y);
   } else {
     view_.selectedJoint = -1;
   }
