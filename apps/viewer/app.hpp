@@ -259,6 +259,8 @@ class App {
   } play_;
   std::chrono::steady_clock::time_point scriptSleepUntil_{};  // `sleep S`: keep drawing until then
   bool awaitingMetrics_ = false;
+  bool awaitingFrames_ = false;  // render-frames: print what was written when the frames end
+  int cancelFramesAfter_ = -1;   // render-frames ... cancel-after N: Cancel once N frames are written
   int exitCode_ = 0;
 
   // Measurement.

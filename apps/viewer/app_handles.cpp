@@ -48,6 +48,7 @@ bool App::handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed) {
   if (leftPressed) {
     view_.selectedHandle = handles[size_t(k)];
     view_.selectedFeather = -1;
+    view_.boxHandles.clear();  // Delete now means this handle
     // A control shows its offset gizmo (app_gizmo.cpp); any other handle hides it.
     view_.selectedControl = handles[size_t(k)].kind == HandleKind::Control ? int(handles[size_t(k)].index) : -1;
     view_.selectedJoint = -1;
@@ -61,6 +62,14 @@ bool App::handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed) {
 }
 
 void App::deleteSelectedHandle() {
+  if (!view_.boxHandles.empty()) {  // a box selection: every boxed handle, one undo step
+    const std::vector<Handle> hs = view_.boxHandles;
+    view_.boxHandles.clear();
+    view_.selectedHandle.reset();
+    view_.hoveredHandle.reset();
+    guarded(*panels_, [&] { removeHandles(doc_, hs); });
+    return;
+  }
   if (!view_.selectedHandle) return;
   const Handle h = *view_.selectedHandle;
   view_.selectedHandle.reset();
@@ -93,6 +102,18 @@ void App::boxSelect(const glm::vec2& a, const glm::vec2& b) {
   };
   view_.boxFeathers.clear();
   view_.boxFollicles.clear();
+  view_.boxHandles.clear();
+  {
+    // The handles of the kinds the overlays show (controls, brushes, vectors; key feathers, pinned follicles).
+    const ViewState& v = view_;
+    for (const Handle& h : sceneHandles(doc_.scene())) {
+      const bool shown = h.kind == HandleKind::Control  ? v.showControls
+                         : h.kind == HandleKind::Brush  ? v.showBrushes
+                         : h.kind == HandleKind::Vector ? v.showVectors
+                                                        : v.showKeys;
+      if (shown && inside(h.at, nullptr)) view_.boxHandles.push_back(h);
+    }
+  }
   for (size_t i = 0; i < s.featherOrigin.size(); ++i) {
     if (i < s.featherPresent.size() && !s.featherPresent[i]) continue;
     if (inside(s.featherOrigin[i], i < s.featherNormal.size() ? &s.featherNormal[i] : nullptr))

@@ -56,7 +56,24 @@ void App::scriptStep() {
   if (std::chrono::steady_clock::now() < scriptSleepUntil_) return;
   if (view_.playing && play_.until > 0) return;           // `play S` runs
   if (view_.cacheRangeRequested || fill_.active) return;  // `cache-range` runs
-  if (view_.frameRequest || view_.framesRunning) return;  // render-frames: wait until they are written
+  if (view_.frameRequest || view_.framesRunning) {  // render-frames: wait until they are written
+    if (cancelFramesAfter_ >= 0 && view_.framesRunning && view_.framesDone >= size_t(cancelFramesAfter_)) {
+      // `cancel-after N`: press the Scene panel's Cancel once N frames are written.
+      cancelFramesAfter_ = -1;
+      view_.ui = UiRequest{"Scene", "cancel frames", "", true, 0};
+      view_.panelRequests["Scene"] = 1;
+      view_.hidePanels = false;
+    }
+    return;
+  }
+  if (awaitingFrames_) {
+    awaitingFrames_ = false;
+    std::cout << Json{{"frames_written", view_.framesDone},
+                      {"frames_total", view_.framesTotal},
+                      {"frames_status", view_.framesStatus}}
+                     .dump()
+              << std::endl;
+  }
   if (scriptWaitFrames_ > 0) {
     --scriptWaitFrames_;
     return;
@@ -245,7 +262,11 @@ void App::scriptStep() {
       view_.tool = Tool::PaintDensity;
     } else if (c.verb == "render-frames") {
       // The Scene panel's Render frames: DIR, range and rate; the next command waits until they are done.
-      needArgs(c, 4, 4, "render-frames DIR FROM TO FPS", file);
+      needArgs(c, 4, 6, "render-frames DIR FROM TO FPS [cancel-after N]", file);
+      if (c.args.size() != 4 && (c.args.size() != 6 || c.args[4] != "cancel-after"))
+        throw Error("usage: render-frames DIR FROM TO FPS [cancel-after N]", file, "line " + std::to_string(c.line));
+      cancelFramesAfter_ = c.args.size() == 6 ? int(scriptNumber(c, 5, file)) : -1;
+      awaitingFrames_ = true;
       ViewState::FrameRequest rq;
       rq.dir = c.args[0];
       rq.from = scriptNumber(c, 1, file);
@@ -260,7 +281,11 @@ void App::scriptStep() {
       boxSelect(scriptPoint(c, 0), scriptPoint(c, 2));
     } else if (c.verb == "box-selection") {
       needArgs(c, 0, 0, "box-selection", file);
-      std::cout << Json{{"feathers", view_.boxFeathers}, {"follicles", view_.boxFollicles}}.dump() << std::endl;
+      Json handles = Json::array();
+      for (const Handle& h : view_.boxHandles)
+        handles.push_back({{"kind", handleKindName(h.kind)}, {"index", h.index}, {"tract", h.tract}});
+      std::cout << Json{{"feathers", view_.boxFeathers}, {"follicles", view_.boxFollicles}, {"handles", handles}}.dump()
+                << std::endl;
     } else if (c.verb == "select-faces") {
       // The face brush in select (or remove: deselect) mode at a point, as one click of the tool.
       if (c.args.size() == 1 && c.args[0] == "clear") {

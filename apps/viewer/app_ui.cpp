@@ -195,6 +195,7 @@ void App::buildUi() {
         view_.selectedJoint = view_.selectedControl = -1;
         view_.boxFeathers.clear();
         view_.boxFollicles.clear();
+        view_.boxHandles.clear();
       }
       view_.tool = Tool::Orbit;
     }

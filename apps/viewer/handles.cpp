@@ -1,5 +1,6 @@
 #include "handles.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "actions.hpp"
@@ -149,6 +150,50 @@ void removeHandle(Document& d, const Handle& h) {
       });
       break;
   }
+}
+
+size_t removeHandles(Document& d, const std::vector<Handle>& hs) {
+  // The handles that still exist, removed from the back of each list so earlier indices stay valid.
+  std::vector<Handle> live;
+  {
+    Scene probe = d.scene();
+    for (const Handle& h : hs) {
+      const Json* j = entry(probe, h);
+      if (j && isHandle(*j, h.kind) && std::find(live.begin(), live.end(), h) == live.end()) live.push_back(h);
+    }
+  }
+  if (live.empty()) return 0;
+  std::sort(live.begin(), live.end(), [](const Handle& a, const Handle& b) {
+    if (a.kind != b.kind) return a.kind < b.kind;
+    if (a.tract != b.tract) return a.tract < b.tract;
+    return a.index > b.index;
+  });
+  d.edit("remove " + std::to_string(live.size()) + " handles", [&](Scene& s) {
+    for (const Handle& h : live) {
+      switch (h.kind) {
+        case HandleKind::Control:
+          s.controls.erase(s.controls.begin() + long(h.index));
+          break;
+        case HandleKind::Brush:
+          s.packing["styling"].erase(s.packing["styling"].begin() + long(h.index));
+          if (s.packing["styling"].empty()) s.packing.erase("styling");
+          break;
+        case HandleKind::Vector:
+          s.directions["vectors"].erase(s.directions["vectors"].begin() + long(h.index));
+          if (s.directions["vectors"].empty()) s.directions.erase("vectors");
+          break;
+        case HandleKind::KeyFeather:
+        case HandleKind::Pinned: {
+          const char* key = h.kind == HandleKind::KeyFeather ? "key_feathers" : "pinned";
+          Json& list = s.tracts[h.tract][key];
+          list.erase(list.begin() + long(h.index));
+          if (list.empty()) s.tracts[h.tract].erase(key);
+          break;
+        }
+      }
+    }
+  });
+  return live.size();
 }
 
 }  // namespace pteryla::viewer

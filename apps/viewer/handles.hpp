@@ -35,5 +35,8 @@ std::string handleReadout(const pipeline::Scene& s, const Handle& h);
 // One edit each; throw pteryla::Error (scene unchanged) when the handle is gone.
 void moveHandle(Document& d, const Handle& h, const glm::dvec3& to);
 void removeHandle(Document& d, const Handle& h);
+// Removes several handles as one edit (one undo step; a box selection's Delete). Handles that are gone are
+// skipped; returns how many were removed (0: no edit).
+size_t removeHandles(Document& d, const std::vector<Handle>& hs);
 
 }  // namespace pteryla::viewer

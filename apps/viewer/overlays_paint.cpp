@@ -120,10 +120,15 @@ void drawPaintOverlays(ImDrawList* dl, PanelContext& ctx) {
     if (size_t(f) < snap.follicle.size() && proj(snap.follicle[size_t(f)], c))
       dl->AddCircleFilled(c, 3.0f, IM_COL32(60, 230, 255, 255));
   }
-  if (!v.boxFeathers.empty() || !v.boxFollicles.empty()) {
-    char text[96];
-    std::snprintf(text, sizeof text, "%zu feathers, %zu follicles boxed (F frames, Esc clears)", v.boxFeathers.size(),
-                  v.boxFollicles.size());
+  for (const Handle& h : v.boxHandles) {
+    const std::optional<Handle> now = findHandle(ctx.doc.scene(), h);
+    ImVec2 c;
+    if (now && proj(now->at, c)) dl->AddCircle(c, 9.0f, IM_COL32(60, 230, 255, 255), 24, 2.0f);
+  }
+  if (!v.boxFeathers.empty() || !v.boxFollicles.empty() || !v.boxHandles.empty()) {
+    char text[160];
+    std::snprintf(text, sizeof text, "%zu feathers, %zu follicles, %zu handles boxed (F frames, Delete removes the handles, Esc clears)",
+                  v.boxFeathers.size(), v.boxFollicles.size(), v.boxHandles.size());
     dl->AddText(ImVec2(o.x + 10, o.y + 8), IM_COL32(20, 60, 80, 255), text);
   }
   if (painting && v.brushVisible) {

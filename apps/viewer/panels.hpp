@@ -97,8 +97,10 @@ struct ViewState {
   bool handleDragging = false;
   glm::vec3 handlePreview{0};
   // Box selection (Ctrl + left drag with the orbit tool): present feathers whose base, and follicles (when
-  // shown) that project inside the box, facing the camera. F frames the feathers; Esc clears.
+  // shown) that project inside the box, facing the camera, and the handles inside it. F frames the
+  // feathers; Delete removes the boxed handles (pinned follicles, key feathers, ...); Esc clears.
   std::vector<int> boxFeathers, boxFollicles;
+  std::vector<Handle> boxHandles;  // handles inside the box (shown ones): Delete removes them as one edit
   int hoveredFollicle = -1;  // with follicles shown and no feather or handle under the mouse (readout)
   bool boxActive = false;
   glm::vec2 boxFrom{0.0f}, boxTo{0.0f};

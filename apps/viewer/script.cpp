@@ -394,10 +394,13 @@ const char* scriptHelp() {
   key enter|escape|tab|delete|k  press a key (Enter confirms a dialog's file name; Delete removes the
                                  selected handle; K keys the selected joint or control)
   selection                      print the selected feather (click one in the view) as JSON
-  render-frames DIR FROM TO FPS  render frame k at FROM + k/FPS to DIR/frame_NNNN.png (scene size, LOD,
-                                 camera); the next command waits until the frames are written
-  box-select X1 Y1 X2 Y2         box selection (as Ctrl + drag): feathers, and follicles when shown
-  box-selection                  print the boxed feathers and follicles as JSON
+  render-frames DIR FROM TO FPS [cancel-after N]   render frame k at FROM + k/FPS to DIR/frame_NNNN.png
+                                 (scene size, LOD, camera); the next command waits until the frames are
+                                 written (cancel-after N: the panel's Cancel once N are), then prints
+                                 {"frames_written", "frames_total", "frames_status"}
+  box-select X1 Y1 X2 Y2         box selection (as Ctrl + drag): feathers, handles, and follicles when shown
+                                 (then `key delete` removes the boxed handles as one undo step)
+  box-selection                  print the boxed feathers, follicles and handles as JSON
   autosave                       write the recovery file now (the scene must have unsaved changes)
   crash                          end the process at once, without clean-up (tests recovery)
   show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin|navigation|problems on|off

@@ -63,3 +63,25 @@ TEST(Handles, ListMoveAndRemoveEveryKind) {
   EXPECT_EQ(sceneJson(d.scene()), after);
   ASSERT_TRUE(d.waitIdle()) << d.takeError().value_or("");
 }
+
+TEST(Handles, RemoveSeveralIsOneEditAndSkipsWhatIsGone) {
+  Document d;
+  d.reset(smallPatch(), "");  // one styling vector, two key feathers at points
+  actions::addPinned(d, 0, {0.1, 0.05, 0.1});
+  actions::addPinned(d, 0, {0.2, 0.05, 0.1});
+  actions::addPinned(d, 0, {0.3, 0.05, 0.1});
+  d.endGesture();
+  const std::vector<Handle> all = sceneHandles(d.scene());
+  ASSERT_EQ(all.size(), 6u);  // vector, 2 key feathers, 3 pinned
+  // The first and last pinned follicles and the second key feather, plus a handle that does not exist.
+  std::vector<Handle> pick = {all[3], all[5], all[2], Handle{HandleKind::Control, 7, 0, {}}};
+  EXPECT_EQ(removeHandles(d, pick), 3u);
+  const Json& t = d.scene().tracts[0];
+  ASSERT_EQ(t["pinned"].size(), 1u);
+  EXPECT_EQ(t["pinned"][0]["at"][0], 0.2);
+  ASSERT_EQ(t["key_feathers"].size(), 1u);
+  EXPECT_EQ(t["key_feathers"][0]["feather"], "contour");
+  ASSERT_TRUE(d.undo());  // one step back restores all three
+  EXPECT_EQ(sceneHandles(d.scene()).size(), 6u);
+  EXPECT_EQ(removeHandles(d, {Handle{HandleKind::Brush, 0, 0, {}}}), 0u);  // nothing there: no edit
+}

@@ -316,3 +316,99 @@ TEST(ViewerPaint, RenderFramesWritesTheRangeAtItsTimes) {
   EXPECT_FALSE(std::filesystem::exists(frames + "/frame_0003.png"));
   EXPECT_GT(render::diffImages(im[0], im[2]).changedFraction, 0.01) << "the lift at t = 1 shows";
 }
+
+// Box selection does more than frame: the handles inside the box (here pinned follicles, a key feather and
+// the styling vector) are removed by Delete as one edit, the others stay, and undo brings them all back.
+TEST(ViewerPaint, BoxSelectionDeleteRemovesTheBoxedHandles) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("paint_box_delete");
+  const std::string script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\n"
+                           "count 0 24\n"
+                           "relax 2\n"
+                           "pin 0 -0.6 0.05 0.3\n"
+                           "pin 0 -0.5 0.05 -0.3\n"
+                           "pin 0 0.9 0.05 -0.2\n"
+                           "wait\n"
+                           "show panels off\n"
+                           "box-select 0% 0% 45% 100%\n"
+                           "box-selection\n"
+                           "key delete\n"
+                           "wait\n"
+                        << "save " << dir << "/deleted.json\n"
+                        << "undo\n"
+                        << "save " << dir << "/undone.json\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+  const std::vector<Json> lines = viewer_test::jsonLines(r.out);
+  ASSERT_EQ(lines.size(), 1u) << r.out;
+  size_t pinnedBoxed = 0, keysBoxed = 0;
+  for (const Json& h : lines[0]["handles"]) {
+    pinnedBoxed += h["kind"] == "pinned follicle" ? 1 : 0;
+    keysBoxed += h["kind"] == "key feather" ? 1 : 0;
+  }
+  // The two pinned follicles on the left (-x) side and the contour key feather at x = -0.8 are boxed; the
+  // pinned follicle at x = 0.9 and the covert key feather at x = 0.8 are not.
+  ASSERT_EQ(pinnedBoxed, 2u) << lines[0].dump();
+  ASSERT_EQ(keysBoxed, 1u) << lines[0].dump();
+
+  const Json deleted = readJsonFile(dir + "/deleted.json")["tracts"][0];
+  ASSERT_TRUE(deleted.contains("pinned")) << deleted.dump();
+  ASSERT_EQ(deleted["pinned"].size(), 1u);
+  EXPECT_EQ(deleted["pinned"][0]["at"][0], 0.9);
+  ASSERT_EQ(deleted["key_feathers"].size(), 1u);
+  EXPECT_EQ(deleted["key_feathers"][0]["feather"], "covert");
+  // One undo step brings every boxed handle back.
+  const Json undone = readJsonFile(dir + "/undone.json")["tracts"][0];
+  EXPECT_EQ(undone["pinned"].size(), 3u);
+  EXPECT_EQ(undone["key_feathers"].size(), 2u);
+}
+
+// Render frames can be cancelled part way: fewer frames than asked, each of them whole (no partial or
+// temporary file left), and the viewer keeps running the script afterwards.
+TEST(ViewerPaint, RenderFramesCancelStopsPartWay) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("paint_frames_cancel");
+  const std::string frames = dir + "/frames", script = dir + "/session.txt";
+  std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                        << "lod 0.2\n"
+                           "count 0 12\n"
+                           "relax 2\n"
+                           "render-lod 0.2\n"
+                           "show panels off\n"
+                        << "render-frames " << frames << " 0 4 12 cancel-after 2\n"
+                        << "echo still running\n"
+                           "count 0 10\n"
+                           "wait\n"
+                        << "save " << dir << "/after.json\n"
+                        << "quit\n";
+  const ViewerRun r = runViewer("--size 1000x700 --script \"" + script + "\"", dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << "stdout: " << r.out << "\nstderr: " << slurp(dir + "/stderr.txt");
+  const std::vector<Json> lines = viewer_test::jsonLines(r.out);
+  ASSERT_EQ(lines.size(), 1u) << r.out;
+  const size_t written = lines[0]["frames_written"].get<size_t>();
+  EXPECT_EQ(lines[0]["frames_total"], 49);
+  EXPECT_GE(written, 2u);
+  EXPECT_LT(written, 49u);
+  EXPECT_NE(lines[0]["frames_status"].get<std::string>().find("cancelled"), std::string::npos);
+  // Exactly frames 0 .. written-1, each a whole PNG of the render size; nothing else in the directory.
+  size_t files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(frames)) {
+    ++files;
+    const std::string name = e.path().filename().string();
+    ASSERT_EQ(name.rfind("frame_", 0), 0u) << name;
+    ASSERT_EQ(e.path().extension(), ".png") << name;
+    const render::Image im = render::loadImage(e.path().string());
+    EXPECT_EQ(im.width, 640) << name;
+    EXPECT_EQ(im.height, 360) << name;
+  }
+  EXPECT_EQ(files, written);
+  char last[32];
+  std::snprintf(last, sizeof last, "/frame_%04zu.png", written - 1);
+  EXPECT_TRUE(std::filesystem::exists(frames + last));
+  // The viewer went on: the script's later lines ran and their edit reached the saved scene.
+  EXPECT_NE(r.out.find("still running"), std::string::npos);
+  EXPECT_EQ(readJsonFile(dir + "/after.json")["tracts"][0]["count"], 10);
+}
