@@ -137,13 +137,18 @@ void App::scriptStep() {
                    : w == "skin"       ? &view_.showSkin
                    : w == "navigation" ? &view_.forceNavigation
                    : w == "problems"   ? &view_.showProblems
+                   : w == "keys"       ? &view_.showKeys
+                   : w == "vectors"    ? &view_.showVectors
+                   : w == "brushes"    ? &view_.showBrushes
+                   : w == "controls"   ? &view_.showControls
+                   : w == "joints"     ? &view_.showJoints
                                        : nullptr;
       if (w == "panels")
         view_.hidePanels = !on;
       else if (!flag)
         throw Error("unknown view item '" + w +
                         "' (designer, json, help, panels, follicles, directions, tract, wireframe, coat, skin, "
-                        "navigation, problems)",
+                        "navigation, problems, keys, vectors, brushes, controls, joints)",
                     file, "line " + std::to_string(c.line));
       else
         *flag = on;
