@@ -64,7 +64,8 @@ GizmoGeometry App::gizmoGeometry() {
     }
   }
   // The skeleton's joints, posed at the current time.
-  const moult::SkinRig* rig = snap.restSkin ? view_.rig.get(doc_.scene(), snap.restSkin->vertexCount()) : nullptr;
+  const moult::SkinRig* rig =
+      snap.restSkin ? view_.rig.get(doc_.scene(), snap.restSkin->vertexCount(), doc_.changeCount()) : nullptr;
   if (rig) {
     g.rig = rig;
     g.joints = poseJoints(*rig, t);
@@ -254,12 +255,15 @@ void App::drawGizmos(ImDrawList* dl) {
   if (g.rig && view_.showJoints) {
     const moult::Skeleton& sk = g.rig->skeleton;
     for (size_t j = 0; j < sk.jointCount(); ++j)
-      if (sk.parent[j] >= 0) line(g.joints.pivot[size_t(sk.parent[j])], g.joints.pivot[j], IM_COL32(240, 200, 120, 200), 2.0f);
+      if (sk.parent[j] >= 0)
+        line(g.joints.pivot[size_t(sk.parent[j])], g.joints.pivot[j], IM_COL32(240, 200, 120, 200), 2.0f);
     for (size_t j = 0; j < sk.jointCount(); ++j) {
       ImVec2 p;
       if (!proj(glm::vec3(g.joints.pivot[j]), p)) continue;
       const bool sel = int(j) == view_.selectedJoint, hov = int(j) == view_.hoveredJoint;
-      const ImU32 col = sel ? IM_COL32(80, 230, 255, 255) : hov ? IM_COL32(255, 255, 255, 255) : IM_COL32(240, 200, 120, 255);
+      const ImU32 col = sel   ? IM_COL32(80, 230, 255, 255)
+                        : hov ? IM_COL32(255, 255, 255, 255)
+                              : IM_COL32(240, 200, 120, 255);
       dl->AddRectFilled(ImVec2(p.x - 4, p.y - 4), ImVec2(p.x + 4, p.y + 4), col);
       if (sel || hov) dl->AddText(ImVec2(p.x + 7, p.y - 16), col, sk.names[j].c_str());
     }
@@ -273,8 +277,8 @@ void App::drawGizmos(ImDrawList* dl) {
       }
       if (gizmoDrag_ && gizmoRing_) {
         line(gizmoPivot_, gizmoPivot_ + gizmoStartVec_, IM_COL32(255, 255, 255, 160), 1.0f);
-        const glm::dvec3 now = glm::mat3_cast(glm::angleAxis(glm::radians(gizmoDegrees_), gizmoAxisWorld_)) *
-                               gizmoStartVec_;
+        const glm::dvec3 now =
+            glm::mat3_cast(glm::angleAxis(glm::radians(gizmoDegrees_), gizmoAxisWorld_)) * gizmoStartVec_;
         line(gizmoPivot_, gizmoPivot_ + now, IM_COL32(255, 255, 255, 255), 2.0f);
         std::snprintf(buf, sizeof buf, "%s %+.1f deg about %c", sk.names[size_t(j)].c_str(), gizmoDegrees_,
                       "xyz"[gizmoAxis_]);
@@ -285,7 +289,8 @@ void App::drawGizmos(ImDrawList* dl) {
                       r[2].get<double>());
       }
       ImVec2 p;
-      if (proj(glm::vec3(g.joints.pivot[size_t(j)]), p)) dl->AddText(ImVec2(p.x + 7, p.y + 4), IM_COL32(255, 255, 255, 255), buf);
+      if (proj(glm::vec3(g.joints.pivot[size_t(j)]), p))
+        dl->AddText(ImVec2(p.x + 7, p.y + 4), IM_COL32(255, 255, 255, 255), buf);
     }
   }
   dl->PopClipRect();
@@ -318,9 +323,8 @@ bool App::gizmoDragPoints(bool ring, int axis, double amount, glm::vec2& from, g
   if (bestK < 0) return false;
   const glm::dvec3 n = g.joints.parentFrame[size_t(j)] * glm::dvec3(axis == 0, axis == 1, axis == 2);
   const glm::dvec3 p0 = ringPoint(g, j, axis, bestK);
-  const glm::dvec3 p1 =
-      g.joints.pivot[size_t(j)] +
-      glm::mat3_cast(glm::angleAxis(glm::radians(amount), n)) * (p0 - g.joints.pivot[size_t(j)]);
+  const glm::dvec3 p1 = g.joints.pivot[size_t(j)] +
+                        glm::mat3_cast(glm::angleAxis(glm::radians(amount), n)) * (p0 - g.joints.pivot[size_t(j)]);
   return projectToPixel(cam, glm::vec3(p0), view_.viewSize, from) &&
          projectToPixel(cam, glm::vec3(p1), view_.viewSize, to);
 }

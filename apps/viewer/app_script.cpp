@@ -56,7 +56,7 @@ void App::scriptStep() {
   if (std::chrono::steady_clock::now() < scriptSleepUntil_) return;
   if (view_.playing && play_.until > 0) return;           // `play S` runs
   if (view_.cacheRangeRequested || fill_.active) return;  // `cache-range` runs
-  if (view_.frameRequest || view_.framesRunning) {  // render-frames: wait until they are written
+  if (view_.frameRequest || view_.framesRunning) {        // render-frames: wait until they are written
     if (cancelFramesAfter_ >= 0 && view_.framesRunning && view_.framesDone >= size_t(cancelFramesAfter_)) {
       // `cancel-after N`: press the Scene panel's Cancel once N frames are written.
       cancelFramesAfter_ = -1;

@@ -17,9 +17,9 @@ namespace {
 
 void needControl(const Scene& s, size_t c) {
   if (c >= s.controls.size() || !s.controls[c].is_object())
-    throw Error("control index " + std::to_string(c) + " out of range (" + std::to_string(s.controls.size()) +
-                    " controls)",
-                s.file, "controls");
+    throw Error(
+        "control index " + std::to_string(c) + " out of range (" + std::to_string(s.controls.size()) + " controls)",
+        s.file, "controls");
 }
 
 bool keyedIn(const Json& ctl, const char* attribute) {
@@ -103,7 +103,11 @@ std::optional<double> closestOnLine(const glm::dvec3& o, const glm::dvec3& a, co
   return (b * e - d) / den;
 }
 
-const moult::SkinRig* RigCache::get(const Scene& s, size_t vertexCount) {
+const moult::SkinRig* RigCache::get(const Scene& s, size_t vertexCount, uint64_t version) {
+  if (version != 0 && version == version_ && vertexCount == vertexCount_ && s.file == file_) return rig_.get();
+  version_ = version;
+  vertexCount_ = vertexCount;
+  file_ = s.file;
   if (s.skeleton.empty() || vertexCount == 0) {
     rig_.reset();
     key_ = Json();

@@ -10,6 +10,7 @@
 //     posed frame (a key's rotation axis is in rest coordinates and turns with the parent, docs/moult.md),
 //     so a ring drag of `a` degrees about axis k makes the joint's local rotation rot(e_k, a) * R. The
 //     release keys the joint's rotation at the current time.
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -49,13 +50,17 @@ std::optional<double> closestOnLine(const glm::dvec3& origin, const glm::dvec3& 
 
 // The scene's skeleton section parsed (a cache: read again only when the section, the scene file or the
 // vertex count change). get() returns nullptr without a skeleton or when it does not read (error() says
-// why).
+// why). `version` (Document::changeCount(), 0 = unknown) skips even comparing the section while the
+// scene has not changed: the app asks several times a frame.
 class RigCache {
  public:
-  const moult::SkinRig* get(const pipeline::Scene& s, size_t vertexCount);
+  const moult::SkinRig* get(const pipeline::Scene& s, size_t vertexCount, uint64_t version = 0);
   const std::string& error() const { return error_; }
 
  private:
+  uint64_t version_ = 0;
+  size_t vertexCount_ = 0;
+  std::string file_;
   Json key_;
   std::shared_ptr<moult::SkinRig> rig_;
   std::string error_;
@@ -77,8 +82,7 @@ Json axisAngleJson(const glm::dquat& q);
 // One edit: the joint's key at `time` (replacing a key of that joint, by name or index, at that time) with
 // this local rotation; a new key names the joint. Throws pteryla::Error (scene unchanged) without a
 // skeleton section or for a joint out of range.
-void keyJointRotation(Document& d, const moult::Skeleton& skeleton, size_t joint, double time,
-                      const glm::dquat& local);
+void keyJointRotation(Document& d, const moult::Skeleton& skeleton, size_t joint, double time, const glm::dquat& local);
 
 // What the app draws and drags this frame (app_gizmo.cpp): the selected control's offset arrow (control
 // < 0: none) and the skeleton posed at the current time (rig null: no skeleton).

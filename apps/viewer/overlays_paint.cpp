@@ -127,7 +127,8 @@ void drawPaintOverlays(ImDrawList* dl, PanelContext& ctx) {
   }
   if (!v.boxFeathers.empty() || !v.boxFollicles.empty() || !v.boxHandles.empty()) {
     char text[160];
-    std::snprintf(text, sizeof text, "%zu feathers, %zu follicles, %zu handles boxed (F frames, Delete removes the handles, Esc clears)",
+    std::snprintf(text, sizeof text,
+                  "%zu feathers, %zu follicles, %zu handles boxed (F frames, Delete removes the handles, Esc clears)",
                   v.boxFeathers.size(), v.boxFollicles.size(), v.boxHandles.size());
     dl->AddText(ImVec2(o.x + 10, o.y + 8), IM_COL32(20, 60, 80, 255), text);
   }

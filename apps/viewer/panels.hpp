@@ -101,7 +101,7 @@ struct ViewState {
   // feathers; Delete removes the boxed handles (pinned follicles, key feathers, ...); Esc clears.
   std::vector<int> boxFeathers, boxFollicles;
   std::vector<Handle> boxHandles;  // handles inside the box (shown ones): Delete removes them as one edit
-  int hoveredFollicle = -1;  // with follicles shown and no feather or handle under the mouse (readout)
+  int hoveredFollicle = -1;        // with follicles shown and no feather or handle under the mouse (readout)
   bool boxActive = false;
   glm::vec2 boxFrom{0.0f}, boxTo{0.0f};
   // Frame rendering (Scene panel, app_frames.cpp): a request the app picks up, its progress and outcome.

@@ -24,9 +24,10 @@ void drawControlOffsetSection(PanelContext& ctx, size_t control) {
   std::string typed;
   bool set = ImGui::DragFloat3(label.c_str(), o, 0.002f, 0.0f, 0.0f, "%.4f");
   if (ImGui::IsItemHovered())
-    ImGui::SetTooltip("Displacement of the control, scene units: `direction` turns feathers toward it, `aim`\n"
-                      "points them at the control's place plus it, and its motion drives `dynamic`.\n"
-                      "Drag the axis handles at the arrow's tip in the view.");
+    ImGui::SetTooltip(
+        "Displacement of the control, scene units: `direction` turns feathers toward it, `aim`\n"
+        "points them at the control's place plus it, and its motion drives `dynamic`.\n"
+        "Drag the axis handles at the arrow's tip in the view.");
   if (uiRequestedText(ctx, "Expressive controls", "offset", typed)) {
     float x = 0, y = 0, z = 0;
     if (std::sscanf(typed.c_str(), "%f %f %f", &x, &y, &z) != 3)
@@ -45,7 +46,7 @@ void drawSkeletonPanel(PanelContext& ctx) {
   ViewState& v = ctx.view;
   const Scene s = doc.scene();
   const Snapshot& snap = doc.snapshot();
-  const moult::SkinRig* rig = snap.restSkin ? v.rig.get(s, snap.restSkin->vertexCount()) : nullptr;
+  const moult::SkinRig* rig = snap.restSkin ? v.rig.get(s, snap.restSkin->vertexCount(), doc.changeCount()) : nullptr;
   if (!rig) {
     ImGui::TextWrapped("%s", v.rig.error().empty() ? "No skeleton: the scene's \"skeleton\" section (docs/moult.md)."
                                                    : v.rig.error().c_str());
@@ -56,7 +57,8 @@ void drawSkeletonPanel(PanelContext& ctx) {
   const moult::Skeleton& sk = rig->skeleton;
   for (size_t j = 0; j < sk.jointCount(); ++j) {
     const std::string label = sk.names[j] + "##joint" + std::to_string(j);
-    if (ImGui::Selectable(label.c_str(), v.selectedJoint == int(j)) || uiRequested(ctx, "Skeleton", "select", sk.names[j])) {
+    if (ImGui::Selectable(label.c_str(), v.selectedJoint == int(j)) ||
+        uiRequested(ctx, "Skeleton", "select", sk.names[j])) {
       v.selectedJoint = int(j);
       v.selectedControl = -1;
       v.showJoints = true;
@@ -67,8 +69,8 @@ void drawSkeletonPanel(PanelContext& ctx) {
   const PosedJoints posed = poseJoints(*rig, doc.time());
   const Json r = axisAngleJson(posed.local[j]);
   sectionTitle(("Joint " + sk.names[j]).c_str());
-  ImGui::Text("rotation at t=%.3f: %.2f deg about (%.3f, %.3f, %.3f)", doc.time(), r[3].get<double>(), r[0].get<double>(),
-              r[1].get<double>(), r[2].get<double>());
+  ImGui::Text("rotation at t=%.3f: %.2f deg about (%.3f, %.3f, %.3f)", doc.time(), r[3].get<double>(),
+              r[0].get<double>(), r[1].get<double>(), r[2].get<double>());
   ImGui::TextDisabled("drag a ring in the view: x red, y green, z blue (the parent's frame)");
   if (ImGui::Button("Key rotation (K)") || uiRequested(ctx, "Skeleton", "key"))
     guarded(ctx, [&] { keyJointRotation(doc, sk, j, doc.time(), posed.local[j]); });

@@ -98,7 +98,8 @@ bool isViewCommand(const std::string& v) {
   return v == "screenshot" || v == "screenshot-window" || v == "panel" || v == "show" || v == "click" || v == "drag" ||
          v == "ui" || v == "autosave" || v == "crash" || v == "sleep" || v == "tool" || v == "orbit" || v == "zoom" ||
          v == "frame" || v == "frames" || v == "quit" || v == "dialog" || v == "key" || v == "selection" ||
-         v == "select-faces" || v == "tract-from-selection" || v == "box-select" || v == "box-selection" || v == "gizmo-drag";
+         v == "select-faces" || v == "tract-from-selection" || v == "box-select" || v == "box-selection" ||
+         v == "gizmo-drag";
 }
 
 double scriptNumber(const ScriptCommand& c, size_t arg, const std::string& file) {

@@ -140,8 +140,8 @@ TEST(Gizmo, RingTurnsAboutTheParentFrameAxisAndKeysReachTheScene) {
   const PosedJoints now = poseJoints(*after, t);
   // The mid joint stays put; the tip turned about the ring's world axis through the mid pivot.
   EXPECT_NEAR(glm::length(now.pivot[1] - before.pivot[1]), 0.0, 1e-12);
-  const glm::dvec3 expected =
-      before.pivot[1] + glm::mat3_cast(glm::angleAxis(glm::radians(degrees), ringAxis)) * (before.pivot[2] - before.pivot[1]);
+  const glm::dvec3 expected = before.pivot[1] + glm::mat3_cast(glm::angleAxis(glm::radians(degrees), ringAxis)) *
+                                                    (before.pivot[2] - before.pivot[1]);
   EXPECT_NEAR(glm::length(now.pivot[2] - expected), 0.0, 1e-9);
   EXPECT_NEAR(glm::degrees(angleAbout(before.pivot[2] - before.pivot[1], now.pivot[2] - now.pivot[1], ringAxis)),
               degrees, 1e-9);
