@@ -127,7 +127,8 @@ bool App::handleGizmo(const glm::vec2& mouse, bool overUi, bool leftPressed) {
   }
   view_.hoveredJoint = -1;
   gizmoHover_ = -1;
-  if (overUi || dragging_) return false;
+  // A handle being dragged keeps the mouse until its release, even over a gizmo.
+  if (overUi || dragging_ || handleDrag_) return false;
   const GizmoGeometry g = gizmoGeometry();
   // Offset axis handles of the selected control.
   if (g.control >= 0) {
