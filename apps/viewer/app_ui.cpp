@@ -458,6 +458,9 @@ void App::helpWindow() {
   ImGui::TextWrapped(
       "Mouse: left drag orbits, right or middle drag (or shift + left) pans, the wheel zooms. F frames all, "
       "Ctrl+Z / Ctrl+Y undo and redo, Ctrl+S saves, Ctrl+O opens, Space plays the timeline, Esc ends a tool.\n"
+      "Click a handle to select it (drag moves it, Delete removes it); Ctrl + drag boxes feathers and handles "
+      "(Delete removes the boxed handles). A selected control shows its offset gizmo, a selected skeleton joint "
+      "its rotation rings: drag them; K keys the joint, else the control, at the current time.\n"
       "Edits re-run only the stages after them, in the background; the status bar shows progress and "
       "Cancel. docs/viewer.md has the details.");
   ImGui::Separator();
