@@ -140,3 +140,33 @@ TEST(ViewerGizmo, JointRingTurnedAndKeyedReachesTheSavedSkeleton) {
   const pipeline::Scene back = pipeline::loadScene(saved);
   EXPECT_EQ(back.skeleton["keys"].size(), keys.size());
 }
+
+// Scripted gizmo use without a gizmo is a script error (exit 2, the line named), not a crash or a silent
+// no-op: no control selected, a scene without a skeleton, an unknown joint.
+TEST(ViewerGizmo, GizmoCommandsWithoutTheirTargetFailTheScript) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("gizmo_errors");
+  const struct {
+    const char* line;
+    const char* message;
+  } cases[] = {{"gizmo-drag offset x 0.1", "no control is selected"},
+               {"gizmo-drag joint z 10", "no joint is selected"},
+               {"joint-key elbow 0 0 1 10", "no skeleton"},
+               {"offset 3 0 0 0.1", "control index 3 out of range"}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.line);
+    const std::string script = dir + "/session.txt";
+    std::ofstream(script) << "load " << viewer_test::dataPath("scenes/patch.json") << "\n"
+                          << "lod 0.2\n"
+                             "count 0 12\n"
+                             "relax 0\n"
+                             "wait\n"
+                          << c.line << "\n"
+                          << "quit\n";
+    const ViewerRun r = runViewer("--size 800x600 --script \"" + script + "\"", dir + "/stderr.txt");
+    EXPECT_EQ(r.code, 2) << "stdout: " << r.out;
+    const std::string err = slurp(dir + "/stderr.txt");
+    EXPECT_NE(err.find("line 6"), std::string::npos) << err;
+    EXPECT_NE(err.find(c.message), std::string::npos) << err;
+  }
+}
