@@ -175,11 +175,19 @@ struct CoatBvh {
 // Counts intersecting triangle pairs of different feathers; with `attribution`, also lists the feather
 // pair of every intersecting triangle pair (as (a << 32 | b), a < b, unsorted). nullopt = cancelled.
 std::optional<size_t> intersectingPairs(const CoatBvh& cb, std::vector<uint64_t>* attribution = nullptr,
-                                        std::vector<uint64_t>* triangles = nullptr, const Progress& progress = {}) {
+                                        std::vector<uint64_t>* triangles = nullptr, const Progress& progress = {},
+                                        const std::vector<uint8_t>* only = nullptr) {
   // Feathers whose bounds meet, then each such pair's trees against each other: every pair of triangles
   // of different feathers with overlapping boxes is visited once, and Moeller's test (always on the
-  // lower triangle index first) decides.
-  const std::vector<std::pair<uint32_t, uint32_t>> tasks = cb.meetingGroups();
+  // lower triangle index first) decides. With `only`, just the feather pairs with a feather it marks.
+  std::vector<std::pair<uint32_t, uint32_t>> tasks = cb.meetingGroups();
+  if (only)
+    tasks.erase(std::remove_if(tasks.begin(), tasks.end(),
+                               [&](const std::pair<uint32_t, uint32_t>& gh) {
+                                 const uint32_t fg = cb.featherOf[gh.first], fh = cb.featherOf[gh.second];
+                                 return !(fg < only->size() && (*only)[fg]) && !(fh < only->size() && (*only)[fh]);
+                               }),
+                tasks.end());
   tbb::combinable<std::vector<uint64_t>> found;
   tbb::combinable<size_t> count([] { return size_t(0); });
   const bool done = batched(tasks.size(), 16, progress, [&](const tbb::blocked_range<size_t>& r) {
@@ -406,6 +414,19 @@ std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat, const Progr
   if (coat.triangleCount() >= 2) {
     const CoatBvh cb(coat, whole.part(0, 0.3));
     if (!cb.complete || !intersectingPairs(cb, nullptr, &tris, whole.part(0.3, 1))) return {};
+  }
+  whole(1);
+  return tris;
+}
+
+std::vector<uint64_t> intersectingTrianglePairsWith(const TriMesh& coat, const std::vector<uint8_t>& feathers,
+                                                    const ProgressFn& progress) {
+  const Progress whole{progress ? &progress : nullptr, 0, 1};
+  std::vector<uint64_t> tris;
+  if (!whole(0)) return tris;
+  if (coat.triangleCount() >= 2) {
+    const CoatBvh cb(coat, whole.part(0, 0.3));
+    if (!cb.complete || !intersectingPairs(cb, nullptr, &tris, whole.part(0.3, 1), &feathers)) return {};
   }
   whole(1);
   return tris;

@@ -338,15 +338,234 @@ void layFromReads(Chart& C, const std::vector<double>& reads, double gap, double
   envelope();
 }
 
-// The laid feather becomes the coat's top over the samples its material covers, and its nodes join the
-// coat in the air.
-void writeChart(const Chart& C, CoatTop& top, AirTop& air) {
+// The laid feather becomes the coat's top over the samples its material covers (writeChart), and its
+// nodes join the coat in the air (addToAir; only a chart with free nodes reads the air, readsAir).
+void writeChart(const Chart& C, CoatTop& top) {
   for (const Chart::Cover& cv : C.under) {
     const double u = cv.u, v = cv.v;
     top.raise(cv.sample, (1 - u) * (1 - v) * C.at(cv.a, cv.b).h + u * (1 - v) * C.at(cv.a + 1, cv.b).h +
                              (1 - u) * v * C.at(cv.a, cv.b + 1).h + u * v * C.at(cv.a + 1, cv.b + 1).h);
   }
+}
+void addToAir(const Chart& C, AirTop& air) {
   for (int k : C.active) air.add(C.nodes[k].c + C.nodes[k].h * C.nodes[k].n, C.nodes[k].n);
+}
+bool readsAir(const Chart& C) {
+  return std::any_of(C.active.begin(), C.active.end(), [&](int k) { return C.nodes[k].free != 0; });
+}
+
+// Moves a feather's vertices (vs[0..count), flat, at elevation 0 in frame F) onto its laid chart: each to
+// its chart point plus its height along the chart normal, normals and tangents turned with the chart
+// frame. Vertices over a cell that folds or that the chart did not reach are marked bad (trimmed).
+// Returns the feather's elevation: the steepest rise of the spine's nodes past the calamus.
+double placeOnChart(const Chart& C, const FeatherFrame& F, TriMesh& mesh, const uint32_t* vs, size_t count, bool hasN,
+                    bool hasT, std::vector<glm::vec3>& surfacePoint, std::vector<uint8_t>& bad) {
+  for (size_t q = 0; q < count; ++q) {
+    const uint32_t v = vs[q];
+    const dvec3 d = dvec3(mesh.positions[v]) - F.origin;
+    const double x = C.scale * glm::dot(d, F.tangent), y = C.scale * glm::dot(d, F.binormal);
+    int a, b;
+    double u, w;
+    C.locate(x, y, a, b, u, w);
+    const Node* c4[4] = {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)};
+    const double w4[4] = {(1 - u) * (1 - w), u * (1 - w), (1 - u) * w, u * w};
+    dvec3 c(0), nn(0), tt(0);
+    double h = 0;
+    bool ok = true;
+    // A cell whose corners' normals differ by more than ~40 degrees folds over a rim or into a
+    // crease: its chords leave the skin's side. Trimmed.
+    for (int m = 0; m < 4 && ok; ++m)
+      for (int m2 = m + 1; m2 < 4 && ok; ++m2)
+        ok = c4[m]->free || c4[m2]->free || glm::dot(c4[m]->n, c4[m2]->n) > kFoldCos;
+    for (int m = 0; m < 4; ++m) {
+      ok = ok && c4[m]->ok;
+      c += w4[m] * c4[m]->c;
+      nn += w4[m] * c4[m]->n;
+      tt += w4[m] * c4[m]->t;
+      h += w4[m] * c4[m]->h;
+    }
+    const double nl = glm::length(nn);
+    if (!ok || !(nl > 1e-9)) {
+      bad[v] = 1;
+      surfacePoint[v] = glm::vec3(F.origin + d);
+      continue;
+    }
+    nn /= nl;
+    tt -= glm::dot(tt, nn) * nn;
+    const double tl = glm::length(tt);
+    tt = tl > 1e-12 ? tt / tl : F.tangent;
+    const dvec3 bb = glm::cross(nn, tt);
+    if (x < C.ramp) h *= std::max(0.0, x) / C.ramp;
+    const dvec3 pos = c + h * nn;
+    mesh.positions[v] = glm::vec3(pos);
+    surfacePoint[v] = glm::vec3(c);
+    auto turn = [&](const glm::vec3& e) {
+      const dvec3 ed(e);
+      return glm::vec3(glm::dot(ed, F.tangent) * tt + glm::dot(ed, F.binormal) * bb + glm::dot(ed, F.normal) * nn);
+    };
+    if (hasN) mesh.normals[v] = turn(mesh.normals[v]);
+    if (hasT) mesh.tangents[v] = turn(mesh.tangents[v]);
+  }
+  // Elevation: the steepest rise of the spine's nodes past the calamus.
+  const int b0 = std::clamp(static_cast<int>(std::lround(-C.y0 / C.hy)), 0, C.ny - 1);
+  double e = 0;
+  for (int a = 0; a < C.nx; ++a) {
+    const double x = C.x0 + a * C.hx;
+    const Node& nd = C.at(a, b0);
+    if (x > C.ramp && nd.ok && nd.active) e = std::max(e, std::atan2(nd.h, x));
+  }
+  return e;
+}
+
+// The follicles of a layer order with their root zones (the calamus ramp and half the rachis), in a
+// grid of cell reachMax.
+struct RootZones {
+  const std::vector<uint32_t>& order;
+  const CoatFeathers& coat;
+  const std::vector<double>& rootZone;  // per feather
+  double reachMax;
+  const detail::PointGrid& grid;  // origins in layer order
+};
+struct LaterZone {
+  dvec3 g;
+  double rj, reach;  // the root zone's radius; how far from a triangle's box it can matter
+};
+
+// Trims material of the feather k-th in layer order over a later feather's follicle, where that feather
+// rises out of the skin: marks every triangle (tris[0..count), not already bad) whose surface projection
+// comes within the later feather's root zone. Exact per triangle, so a feather with long triangles (a
+// flight feather's barbs) loses only the triangles over the follicle, not a band its edge wide. Returns the
+// box of the triangles' surface points.
+detail::Box trimOverFollicles(const RootZones& Z, size_t k, const TriMesh& mesh, const uint32_t* tris, size_t count,
+                              const std::vector<glm::vec3>& surfacePoint, const std::vector<uint8_t>& bad,
+                              std::vector<uint8_t>& overFollicle, std::vector<LaterZone>& later) {
+  // The later follicles within reach of its surface points (from the grid, once), then per triangle those
+  // whose root zone its box comes near: the follicles the test below can find.
+  detail::Box fb;
+  for (size_t q = 0; q < count; ++q)
+    for (int c = 0; c < 3; ++c) fb.add(dvec3(surfacePoint[mesh.indices[3 * static_cast<size_t>(tris[q]) + c]]));
+  if (fb.empty()) return fb;
+  later.clear();
+  Z.grid.query(fb.lo - dvec3(Z.reachMax), fb.hi + dvec3(Z.reachMax), [&](uint32_t j) {
+    if (j <= k) return;
+    const uint32_t f = Z.order[j];
+    const dvec3& g = Z.coat.frames[f].origin;
+    const double rj = Z.rootZone[f];
+    // A little past rj: the closest point's rounding never matters.
+    const double reach = rj + 1e-6 * (rj + std::max({std::abs(g.x), std::abs(g.y), std::abs(g.z)}));
+    later.push_back({g, rj, reach});
+  });
+  if (later.empty()) return fb;
+  for (size_t q = 0; q < count; ++q) {
+    const uint32_t t = tris[q];
+    const uint32_t* tri = &mesh.indices[3 * static_cast<size_t>(t)];
+    if (bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) continue;
+    const dvec3 a(surfacePoint[tri[0]]), b(surfacePoint[tri[1]]), c(surfacePoint[tri[2]]);
+    const dvec3 lo = glm::min(a, glm::min(b, c)), hi = glm::max(a, glm::max(b, c));
+    for (const LaterZone& L : later) {
+      const dvec3& g = L.g;
+      if (g.x < lo.x - L.reach || g.y < lo.y - L.reach || g.z < lo.z - L.reach || g.x > hi.x + L.reach ||
+          g.y > hi.y + L.reach || g.z > hi.z + L.reach)
+        continue;
+      const dvec3 cq = closestPointOnTriangle(g, a, b, c);
+      if (glm::dot(cq - g, cq - g) < L.rj * L.rj) {
+        overFollicle[t] = 1;
+        break;
+      }
+    }
+  }
+  return fb;
+}
+
+bool isCut(const TriMesh& mesh, size_t t) {
+  const uint32_t* tri = &mesh.indices[3 * t];
+  return tri[1] == tri[0] && tri[2] == tri[0];
+}
+
+// The crossing pairs of live triangles (t < u, as t << 32 | u) with at least one changed triangle: the
+// pair search over the live triangles of every feather whose live bounds meet those of a feather with a
+// changed live triangle. A pair's test depends on its two triangles alone (and which comes first in the
+// mesh, kept here), so these are exactly the changed triangles' pairs of a search over the whole coat.
+std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<uint32_t>& order,
+                                       const std::vector<uint32_t>& trisOf, const std::vector<uint32_t>& tris,
+                                       const std::vector<uint8_t>& changedTri, const ProgressFn& progress) {
+  const size_t n = trisOf.size() - 1, nt = mesh.triangleCount(), nv = mesh.positions.size();
+  std::vector<uint8_t> touched(n, 0);   // feathers with a changed live triangle
+  std::vector<detail::Box> liveBox(n);  // per feather, its live triangles' bounds
+  for (uint32_t i : order)
+    for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
+      const size_t t = tris[q];
+      if (isCut(mesh, t)) continue;
+      if (changedTri[t]) touched[i] = 1;
+      for (int c = 0; c < 3; ++c) liveBox[i].add(dvec3(mesh.positions[mesh.indices[3 * t + c]]));
+    }
+  std::vector<uint32_t> touchedList;
+  for (uint32_t i : order)
+    if (touched[i]) touchedList.push_back(i);
+  std::vector<uint64_t> pairs;
+  if (touchedList.empty()) return pairs;
+  std::vector<uint8_t> take(n, 0);
+  for (uint32_t i : order) {
+    if (liveBox[i].empty()) continue;
+    for (uint32_t j : touchedList)
+      if (liveBox[i].overlaps(liveBox[j])) {
+        take[i] = 1;
+        break;
+      }
+  }
+  // The taken feathers' live triangles in mesh order, on their own vertices.
+  TriMesh part;
+  std::vector<uint32_t> triBack, vertOf(nv, UINT32_MAX);
+  for (size_t t = 0; t < nt; ++t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    if (!take[mesh.featherId[tri[0]]] || isCut(mesh, t)) continue;
+    for (int c = 0; c < 3; ++c) {
+      uint32_t& w = vertOf[tri[c]];
+      if (w == UINT32_MAX) {
+        w = static_cast<uint32_t>(part.positions.size());
+        part.positions.push_back(mesh.positions[tri[c]]);
+        part.featherId.push_back(mesh.featherId[tri[c]]);
+      }
+      part.indices.push_back(w);
+    }
+    triBack.push_back(static_cast<uint32_t>(t));
+  }
+  for (uint64_t pr : intersectingTrianglePairsWith(part, touched, progress)) {
+    const uint32_t t = triBack[pr >> 32], u = triBack[pr & 0xffffffffu];
+    if (changedTri[t] || changedTri[u]) pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
+  }
+  return pairs;
+}
+
+// Where laying a chart reads the coat in the air: around its free nodes, within the air radius of the
+// line along the normal, to a depth of a quarter of its length (AirTop::highest's reach, and a little).
+detail::Box airReadBox(const Chart& C, double airRadius) {
+  detail::Box b;
+  const double depth = 0.25 * (C.nx - 1) * C.hx;
+  for (int k : C.active) {
+    const Node& nd = C.nodes[k];
+    if (!nd.free) continue;
+    const dvec3 r = depth * glm::abs(nd.n) + dvec3(airRadius * (1 + 1e-6) + 1e-9 * (1 + depth));
+    b.add(nd.c - r);
+    b.add(nd.c + r);
+  }
+  return b;
+}
+
+// Where laying a chart reads: its requirement and covered samples, and the air (airReadBox).
+detail::Box readBoxOf(const Chart& C, const CoatTop& top, double airRadius) {
+  detail::Box b = airReadBox(C, airRadius);
+  for (uint32_t s : C.reqSamples) b.add(top.position(s));
+  for (const Chart::Cover& cv : C.under) b.add(top.position(cv.sample));
+  return b;
+}
+
+// Where a laid chart writes: the samples under its material, and its nodes' lifted points (the air).
+detail::Box writeBoxOf(const Chart& C, const CoatTop& top) {
+  detail::Box b;
+  for (const Chart::Cover& cv : C.under) b.add(top.position(cv.sample));
+  for (int k : C.active) b.add(C.nodes[k].c + C.nodes[k].h * C.nodes[k].n);
+  return b;
 }
 
 // What the last drape kept of one feather (DrapeCache).
@@ -363,9 +582,10 @@ struct FeatherMemo {
   std::vector<uint32_t> folded;  // nodes the fold test cleared
   std::vector<double> reads;     // what laying it read (readChart)
   std::vector<glm::vec3> pos, nrm, tan, surface;
-  std::vector<uint8_t> bad, inside;           // per vertex: trimmed by the chart; under the skin
-  std::vector<uint8_t> overFollicle, preCut;  // per triangle: over a later follicle; cut before the pairs
-  detail::Box box;                            // surface points of its triangles
+  std::vector<uint8_t> bad, inside;                // per vertex: trimmed by the chart; under the skin
+  std::vector<uint8_t> overFollicle, preCut, cut;  // per triangle: over a later follicle; cut before the pairs; cut
+  detail::Box box;                                 // surface points of its triangles
+  detail::Box readBox, writeBox;                   // where laying it read (the top's samples, the air) and wrote
 };
 
 // A crossing pair of triangles, as feather and triangle within the feather.
@@ -381,7 +601,7 @@ struct DrapeCache::State {
   std::unique_ptr<Surface> surface;
   double gapOption = 0, spacingOption = 0, maxSlope = 0, baseAllowance = 0;
   int gridAlong = 0, gridAcross = 0;
-  double gap = 0, spacing = 0;
+  double gap = 0, spacing = 0, airRadius = 0;
   std::unique_ptr<CoatTop> top;
   std::vector<FeatherMemo> feathers;
   std::vector<uint32_t> order;
@@ -410,6 +630,7 @@ size_t DrapeCache::bytes() const {
 
 struct DrapeAccess {
   static DrapeCache::State& state(DrapeCache& c) { return *c.state_; }
+  static const DrapeCache::State& state(const DrapeCache& c) { return *c.state_; }
 };
 
 namespace {
@@ -597,6 +818,57 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
         for (int c = 0; c < 3; ++c)
           m.flatTris[3 * q + c] = localVert[mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c]];
     }
+  // Nothing changed: the last drape, copied.
+  if (usable && std::none_of(footChanged.begin(), footChanged.end(), [](uint8_t c) { return c != 0; }) &&
+      std::all_of(order.begin(), order.end(), [&](uint32_t i) { return sameInput[i] != 0; })) {
+    std::vector<size_t> cut(n, 0), kept(n, 0);
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k < r.end(); ++k) {
+          const uint32_t i = order[k];
+          const FeatherMemo& m = M->feathers[i];
+          const glm::vec3 parked(coat.frames[i].origin);
+          for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
+            const uint32_t v = verts[q], l = q - first[i];
+            mesh.positions[v] = m.bad[l] || m.inside[l] ? parked : m.pos[l];
+            if (hasN) mesh.normals[v] = m.nrm[l];
+            if (hasT) mesh.tangents[v] = m.tan[l];
+          }
+          for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
+            uint32_t* tri = &mesh.indices[3 * static_cast<size_t>(tris[q])];
+            if (m.cut[q - trisOf[i]]) {
+              if (tri[1] == tri[0] && tri[2] == tri[0]) continue;  // collapsed as given
+              tri[1] = tri[2] = tri[0];
+              ++cut[i];
+            } else {
+              ++kept[i];
+            }
+          }
+          res.elevation[i] = m.elevation;
+        }
+      });
+    });
+    res.stats.gap = M->gap;
+    for (uint32_t i : order) {
+      ++res.stats.draped;
+      for (const Node& nd : M->feathers[i].chart.nodes) res.stats.overhangingNodes += nd.free && nd.active;
+      if (cut[i]) {
+        res.trimmed[i] = 1;
+        ++res.stats.trimmedFeathers;
+        res.stats.trimmedTriangles += cut[i];
+        if (!kept[i]) {
+          res.hidden[i] = 1;
+          ++res.stats.hiddenFeathers;
+        }
+      }
+    }
+    res.stats.reused = order.size();
+    M->order = order;
+    M->valid = true;
+    step(1);
+    res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return res;
+  }
   // Follicles whose change can reach feather i's tests: origins (last and now) of changed follicles.
   std::vector<dvec3> movedFeet;
   if (usable)
@@ -767,20 +1039,61 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     });
     step(0.37);
     std::vector<double> req, reads;
-    for (uint32_t i : order) {
+    // Where the coat's top or the coat in the air may differ from last time when a feather reads it: the
+    // places feathers laid again so far wrote (before and now), and those of feathers gone since. A kept
+    // chart whose reads meet none of them reads what it read last time, so it is not read again.
+    std::vector<detail::Box> dirty;
+    const double airReach = air.radius();
+    // The air's radius is the largest chart's: when it changes, every read of the air may.
+    const bool sameAir = M && M->airRadius == airReach;
+    if (M) M->airRadius = airReach;
+    if (M && sameTop)
+      for (size_t j = 0; j < n; ++j)
+        if (M->feathers[j].laid && rank[j] < 0) dirty.push_back(M->feathers[j].writeBox);
+    // The air holds the nodes of the feathers laid so far whose lifted nodes' box meets that of a chart
+    // that read it: added when a chart reads it, from the feathers before it whose nodes can be found.
+    std::vector<detail::Box> airBox(n);
+    std::vector<uint8_t> inAir(n, 0);
+    for (size_t k = 0; k < order.size(); ++k) {
+      const uint32_t i = order[k];
       Chart& C = charts[i];
-      readChart(C, top, air, reads);
-      const bool relay = newChart[i] || !sameTop || reads != memo(i).reads;
+      bool mustRead = newChart[i] || !sameTop || !sameAir;
+      if (!mustRead) {
+        const detail::Box& rb = memo(i).readBox;
+        mustRead = std::any_of(dirty.begin(), dirty.end(), [&](const detail::Box& b) { return rb.overlaps(b); });
+      }
+      bool relay = false;
+      if (mustRead) {
+        if (readsAir(C)) {
+          const detail::Box rb = airReadBox(C, airReach);
+          for (size_t j = 0; j < k; ++j) {
+            const uint32_t f = order[j];
+            if (!inAir[f] && airBox[f].overlaps(rb)) {
+              addToAir(charts[f], air);
+              inAir[f] = 1;
+            }
+          }
+        }
+        readChart(C, top, air, reads);
+        relay = newChart[i] || !sameTop || reads != memo(i).reads;
+      }
       if (relay) {
         if (!newChart[i] && sameTop) {
           for (uint32_t k : memo(i).folded) C.nodes[k].ok = 1;
           memo(i).folded.clear();
         }
+        if (M) dirty.push_back(memo(i).writeBox);
         layFromReads(C, reads, gap, o.maxSlope, req);
         laidNow[i] = 1;
-        if (M) memo(i).reads = reads;
+        if (M) {
+          memo(i).reads = reads;
+          memo(i).readBox = readBoxOf(C, top, airReach);
+          memo(i).writeBox = writeBoxOf(C, top);
+          dirty.push_back(memo(i).writeBox);
+        }
       }
-      writeChart(C, top, air);
+      writeChart(C, top);
+      for (int a : C.active) airBox[i].add(C.nodes[a].c + C.nodes[a].h * C.nodes[a].n);
       if (!M) {
         // What was gathered for laying is not needed again.
         C.reqSamples = {};
@@ -835,64 +1148,8 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
           res.elevation[i] = m.elevation;
           continue;
         }
-        Chart& C = charts[i];
-        const FeatherFrame& F = coat.frames[i];
-        for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
-          const uint32_t v = verts[q];
-          const dvec3 d = dvec3(mesh.positions[v]) - F.origin;
-          const double x = C.scale * glm::dot(d, F.tangent), y = C.scale * glm::dot(d, F.binormal);
-          int a, b;
-          double u, w;
-          C.locate(x, y, a, b, u, w);
-          const Node* c4[4] = {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)};
-          const double w4[4] = {(1 - u) * (1 - w), u * (1 - w), (1 - u) * w, u * w};
-          dvec3 c(0), nn(0), tt(0);
-          double h = 0;
-          bool ok = true;
-          // A cell whose corners' normals differ by more than ~40 degrees folds over a rim or into a
-          // crease: its chords leave the skin's side. Trimmed.
-          for (int m = 0; m < 4 && ok; ++m)
-            for (int m2 = m + 1; m2 < 4 && ok; ++m2)
-              ok = c4[m]->free || c4[m2]->free || glm::dot(c4[m]->n, c4[m2]->n) > kFoldCos;
-          for (int m = 0; m < 4; ++m) {
-            ok = ok && c4[m]->ok;
-            c += w4[m] * c4[m]->c;
-            nn += w4[m] * c4[m]->n;
-            tt += w4[m] * c4[m]->t;
-            h += w4[m] * c4[m]->h;
-          }
-          const double nl = glm::length(nn);
-          if (!ok || !(nl > 1e-9)) {
-            bad[v] = 1;
-            surfacePoint[v] = glm::vec3(F.origin + d);
-            continue;
-          }
-          nn /= nl;
-          tt -= glm::dot(tt, nn) * nn;
-          const double tl = glm::length(tt);
-          tt = tl > 1e-12 ? tt / tl : F.tangent;
-          const dvec3 bb = glm::cross(nn, tt);
-          if (x < C.ramp) h *= std::max(0.0, x) / C.ramp;
-          const dvec3 pos = c + h * nn;
-          mesh.positions[v] = glm::vec3(pos);
-          surfacePoint[v] = glm::vec3(c);
-          auto turn = [&](const glm::vec3& e) {
-            const dvec3 ed(e);
-            return glm::vec3(glm::dot(ed, F.tangent) * tt + glm::dot(ed, F.binormal) * bb +
-                             glm::dot(ed, F.normal) * nn);
-          };
-          if (hasN) mesh.normals[v] = turn(mesh.normals[v]);
-          if (hasT) mesh.tangents[v] = turn(mesh.tangents[v]);
-        }
-        // Elevation: the steepest rise of the spine's nodes past the calamus.
-        const int b0 = std::clamp(static_cast<int>(std::lround(-C.y0 / C.hy)), 0, C.ny - 1);
-        double e = 0;
-        for (int a = 0; a < C.nx; ++a) {
-          const double x = C.x0 + a * C.hx;
-          const Node& nd = C.at(a, b0);
-          if (x > C.ramp && nd.ok && nd.active) e = std::max(e, std::atan2(nd.h, x));
-        }
-        res.elevation[i] = e;
+        res.elevation[i] = placeOnChart(charts[i], coat.frames[i], mesh, verts.data() + first[i],
+                                        first[i + 1] - first[i], hasN, hasT, surfacePoint, bad);
       }
     });
   });
@@ -956,50 +1213,15 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     // per triangle those whose root zone its box comes near: the follicles the test below can find.
     detail::PointGrid grid;
     grid.build(origins, std::max(reachMax, 1e-12));
+    const RootZones zones{order, coat, rootZone, reachMax, grid};
     detail::inArena(o.threads, [&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
-        struct Later {
-          dvec3 g;
-          double rj, reach;  // the root zone's radius; how far from a triangle's box it can matter
-        };
-        std::vector<Later> later;
+        std::vector<LaterZone> later;
         for (size_t k = r.begin(); k < r.end(); ++k) {
           const uint32_t i = order[k];
           if (!retest[i]) continue;
-          detail::Box fb;
-          for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q)
-            for (int c = 0; c < 3; ++c) fb.add(dvec3(surfacePoint[mesh.indices[3 * static_cast<size_t>(tris[q]) + c]]));
-          surfaceBox[i] = fb;
-          if (fb.empty()) continue;
-          later.clear();
-          grid.query(fb.lo - dvec3(reachMax), fb.hi + dvec3(reachMax), [&](uint32_t j) {
-            if (j <= k) return;
-            const uint32_t f = order[j];
-            const dvec3& g = coat.frames[f].origin;
-            const double rj = rootZone[f];
-            // A little past rj: the closest point's rounding never matters.
-            const double reach = rj + 1e-6 * (rj + std::max({std::abs(g.x), std::abs(g.y), std::abs(g.z)}));
-            later.push_back({g, rj, reach});
-          });
-          if (later.empty()) continue;
-          for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
-            const uint32_t t = tris[q];
-            const uint32_t* tri = &mesh.indices[3 * static_cast<size_t>(t)];
-            if (bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) continue;
-            const dvec3 a(surfacePoint[tri[0]]), b(surfacePoint[tri[1]]), c(surfacePoint[tri[2]]);
-            const dvec3 lo = glm::min(a, glm::min(b, c)), hi = glm::max(a, glm::max(b, c));
-            for (const Later& L : later) {
-              const dvec3& g = L.g;
-              if (g.x < lo.x - L.reach || g.y < lo.y - L.reach || g.z < lo.z - L.reach || g.x > hi.x + L.reach ||
-                  g.y > hi.y + L.reach || g.z > hi.z + L.reach)
-                continue;
-              const dvec3 cq = closestPointOnTriangle(g, a, b, c);
-              if (glm::dot(cq - g, cq - g) < L.rj * L.rj) {
-                overFollicle[t] = 1;
-                break;
-              }
-            }
-          }
+          surfaceBox[i] = trimOverFollicles(zones, k, mesh, tris.data() + trisOf[i], trisOf[i + 1] - trisOf[i],
+                                            surfacePoint, bad, overFollicle, later);
         }
       });
     });
@@ -1075,81 +1297,30 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
   // Crossing pairs. With the last drape's pairs: a pair of triangles both unchanged (same feather input,
   // not laid again, cut before the pairs as before) crosses as it did; pairs with a changed triangle are
   // searched among the triangles near the changed ones.
-  auto isCut = [&](size_t t) {
-    const uint32_t* tri = &mesh.indices[3 * t];
-    return tri[1] == tri[0] && tri[2] == tri[0];
-  };
   std::vector<uint64_t> pairs;
   if (!usable) {
     pairs = intersectingTrianglePairs(mesh, within(0.65, 1));
   } else {
     std::vector<uint8_t> changedTri(nt, 0);
-    std::vector<uint8_t> touched(n, 0);  // feathers with a changed live triangle
     for (uint32_t i : order)
-      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
-        const uint32_t t = tris[q];
-        const bool c = laidNow[i] || memo(i).preCut[q - trisOf[i]] != (isCut(t) ? 1 : 0);
-        changedTri[t] = c;
-        if (c && !isCut(t)) touched[i] = 1;
-      }
+      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q)
+        changedTri[tris[q]] = laidNow[i] || memo(i).preCut[q - trisOf[i]] != (isCut(mesh, tris[q]) ? 1 : 0);
     for (const PairMemo& pm : M->pairs) {
       if (rank[pm.fa] < 0 || rank[pm.fb] < 0 || laidNow[pm.fa] || laidNow[pm.fb]) continue;
       if (pm.ta >= trisOf[pm.fa + 1] - trisOf[pm.fa] || pm.tb >= trisOf[pm.fb + 1] - trisOf[pm.fb]) continue;
       const uint32_t t = tris[trisOf[pm.fa] + pm.ta], u = tris[trisOf[pm.fb] + pm.tb];
-      if (changedTri[t] || changedTri[u] || isCut(t) || isCut(u)) continue;
+      if (changedTri[t] || changedTri[u] || isCut(mesh, t) || isCut(mesh, u)) continue;
       pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
     }
-    // The live triangles' bounds per feather, and the feathers whose bounds meet a touched feather's.
-    std::vector<detail::Box> liveBox(n);
-    for (uint32_t i : order)
-      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
-        const size_t t = tris[q];
-        if (isCut(t)) continue;
-        for (int c = 0; c < 3; ++c) liveBox[i].add(dvec3(mesh.positions[mesh.indices[3 * t + c]]));
-      }
-    std::vector<uint32_t> touchedList;
-    for (uint32_t i : order)
-      if (touched[i] && !liveBox[i].empty()) touchedList.push_back(i);
-    if (!touchedList.empty()) {
-      std::vector<uint8_t> take(n, 0);
-      for (uint32_t i : order) {
-        if (liveBox[i].empty()) continue;
-        for (uint32_t j : touchedList)
-          if (liveBox[i].overlaps(liveBox[j])) {
-            take[i] = 1;
-            break;
-          }
-      }
-      // The taken feathers' live triangles in mesh order, on their own vertices.
-      TriMesh part;
-      std::vector<uint32_t> triBack, vertOf(nv, UINT32_MAX);
-      for (size_t t = 0; t < nt; ++t) {
-        const uint32_t* tri = &mesh.indices[3 * t];
-        if (!take[mesh.featherId[tri[0]]] || isCut(t)) continue;
-        for (int c = 0; c < 3; ++c) {
-          uint32_t& w = vertOf[tri[c]];
-          if (w == UINT32_MAX) {
-            w = static_cast<uint32_t>(part.positions.size());
-            part.positions.push_back(mesh.positions[tri[c]]);
-            part.featherId.push_back(mesh.featherId[tri[c]]);
-          }
-          part.indices.push_back(w);
-        }
-        triBack.push_back(static_cast<uint32_t>(t));
-      }
-      const std::vector<uint64_t> found = intersectingTrianglePairs(part, within(0.65, 1));
-      for (uint64_t pr : found) {
-        const uint32_t t = triBack[pr >> 32], u = triBack[pr & 0xffffffffu];
-        if (changedTri[t] || changedTri[u]) pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
-      }
-    }
+    const std::vector<uint64_t> found = pairsWithChanged(mesh, order, trisOf, tris, changedTri, within(0.65, 1));
+    pairs.insert(pairs.end(), found.begin(), found.end());
     std::sort(pairs.begin(), pairs.end());
   }
   // Of every crossing pair, the lower feather's triangle goes.
   std::vector<uint8_t> preCut;
   if (M) {
     preCut.resize(nt);
-    for (size_t t = 0; t < nt; ++t) preCut[t] = isCut(t) ? 1 : 0;
+    for (size_t t = 0; t < nt; ++t) preCut[t] = isCut(mesh, t) ? 1 : 0;
   }
   for (uint64_t pr : pairs) {
     const size_t t = pr >> 32, u = pr & 0xffffffffu;
@@ -1195,9 +1366,11 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
       const size_t tc = trisOf[i + 1] - trisOf[i];
       m.overFollicle.resize(tc);
       m.preCut.resize(tc);
+      m.cut.resize(tc);
       for (size_t q = 0; q < tc; ++q) {
         m.overFollicle[q] = overFollicle[tris[trisOf[i] + q]];
         m.preCut[q] = preCut[tris[trisOf[i] + q]];
+        m.cut[q] = isCut(mesh, tris[trisOf[i] + q]) ? 1 : 0;
       }
       if (laidNow[i]) {
         const size_t cnt = first[i + 1] - first[i];
@@ -1227,10 +1400,217 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
   return res;
 }
 
+// drapeOverMature (drape.hpp).
+DrapeResult drapeOver(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeCache::State& M,
+                      const DrapeOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t n = coat.size(), nv = mesh.positions.size();
+  if (mesh.featherId.size() != nv) throw Error("the coat mesh needs one featherId per vertex", {}, "featherId");
+  if (coat.frames.size() != n || coat.params.size() != n)
+    throw Error("the coat needs one frame and one parameter set per feather", {}, "frames");
+  if (!M.valid) throw Error("the mature coat has not been draped", {}, "mature");
+  if (M.feathers.size() != n)
+    throw Error(
+        "the mature coat has " + std::to_string(M.feathers.size()) + " feathers, this frame " + std::to_string(n), {},
+        "mature");
+  if (!sameSkin(M.skin, skin)) throw Error("the mature coat was draped over another skin", {}, "mature");
+  DrapeResult res;
+  res.elevation.assign(n, 0.0);
+  res.trimmed.assign(n, 0);
+  res.hidden.assign(n, 0);
+  res.stats.gap = M.gap;
+  if (nv == 0) return res;
+  std::vector<uint32_t> first(n + 1, 0), verts(nv), localVert(nv);
+  for (uint32_t f : mesh.featherId) {
+    if (f >= n) throw Error("featherId " + std::to_string(f) + " out of range", {}, "featherId");
+    ++first[f + 1];
+  }
+  for (size_t i = 0; i < n; ++i) first[i + 1] += first[i];
+  {
+    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+    for (uint32_t v = 0; v < nv; ++v) {
+      const uint32_t f = mesh.featherId[v];
+      localVert[v] = fill[f] - first[f];
+      verts[fill[f]++] = v;
+    }
+  }
+  std::vector<int64_t> rank(n, -1);
+  std::vector<uint32_t> order;
+  for (uint32_t i : coat.layerOrder)
+    if (i < n && rank[i] < 0 && first[i + 1] > first[i]) {
+      if (!M.feathers[i].laid) throw Error("feather " + std::to_string(i) + " has no mature drape", {}, "mature");
+      rank[i] = static_cast<int64_t>(order.size());
+      order.push_back(i);
+    }
+  {
+    // This frame's layers keep the mature coat's order.
+    size_t k = 0;
+    for (uint32_t i : M.order)
+      if (k < order.size() && order[k] == i) ++k;
+    if (k != order.size()) throw Error("the frame's layer order differs from the mature coat's", {}, "layerOrder");
+  }
+  const size_t nt = mesh.triangleCount();
+  std::vector<uint32_t> trisOf(n + 1, 0), tris(nt);
+  for (size_t t = 0; t < nt; ++t) ++trisOf[mesh.featherId[mesh.indices[3 * t]] + 1];
+  for (size_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
+  {
+    std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
+    for (size_t t = 0; t < nt; ++t) tris[fill[mesh.featherId[mesh.indices[3 * t]]]++] = static_cast<uint32_t>(t);
+  }
+  const bool hasN = mesh.normals.size() == nv, hasT = mesh.tangents.size() == nv;
+  report(o.progress, "drape", 0);
+  // Per feather: its flat mesh is the mature drape's (copied), else placed on its mature chart.
+  std::vector<uint8_t> placed(n, 0);
+  std::vector<glm::vec3> surfacePoint(nv);
+  std::vector<uint8_t> bad(nv, 0), inside(nv, 0), overFollicle(nt, 0);
+  detail::inArena(o.threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) {
+        const uint32_t i = order[k];
+        const FeatherMemo& m = M.feathers[i];
+        const uint32_t* vs = verts.data() + first[i];
+        const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
+        bool same = m.flatPos.size() == cnt && m.flatTris.size() == 3 * tc && sameFrame(m.frame, coat.frames[i]);
+        for (size_t q = 0; q < cnt && same; ++q) same = m.flatPos[q] == mesh.positions[vs[q]];
+        for (size_t q = 0; q < cnt && same && hasN; ++q) same = m.flatNrm[q] == mesh.normals[vs[q]];
+        for (size_t q = 0; q < cnt && same && hasT; ++q) same = m.flatTan[q] == mesh.tangents[vs[q]];
+        for (size_t q = 0; q < tc && same; ++q)
+          for (int c = 0; c < 3 && same; ++c) {
+            const uint32_t v = mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c];
+            same = mesh.featherId[v] == i && m.flatTris[3 * q + c] == localVert[v];
+          }
+        if (same) {
+          for (size_t l = 0; l < cnt; ++l) {
+            const uint32_t v = vs[l];
+            mesh.positions[v] = m.pos[l];
+            if (hasN) mesh.normals[v] = m.nrm[l];
+            if (hasT) mesh.tangents[v] = m.tan[l];
+            surfacePoint[v] = m.surface[l];
+            bad[v] = m.bad[l];
+            inside[v] = m.inside[l];
+          }
+          for (size_t q = 0; q < tc; ++q) overFollicle[tris[trisOf[i] + q]] = m.overFollicle[q];
+          res.elevation[i] = m.elevation;
+        } else {
+          placed[i] = 1;
+          res.elevation[i] = placeOnChart(m.chart, coat.frames[i], mesh, vs, cnt, hasN, hasT, surfacePoint, bad);
+        }
+      }
+    });
+  });
+  std::vector<uint32_t> placedList;
+  for (uint32_t i : order)
+    if (placed[i]) placedList.push_back(i);
+  report(o.progress, "drape", 0.3);
+  // Placed feathers' material over a later follicle of this frame.
+  {
+    std::vector<dvec3> origins;
+    std::vector<double> rootZone(n, 0.0);
+    double reachMax = 0;
+    for (uint32_t i : order) {
+      origins.push_back(coat.frames[i].origin);
+      rootZone[i] = M.feathers[i].rootZone;
+      reachMax = std::max(reachMax, rootZone[i]);
+    }
+    detail::PointGrid grid;
+    grid.build(origins, std::max(reachMax, 1e-12));
+    const RootZones zones{order, coat, rootZone, reachMax, grid};
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, placedList.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<LaterZone> later;
+        for (size_t z = r.begin(); z < r.end(); ++z) {
+          const uint32_t i = placedList[z];
+          trimOverFollicles(zones, static_cast<size_t>(rank[i]), mesh, tris.data() + trisOf[i],
+                            trisOf[i + 1] - trisOf[i], surfacePoint, bad, overFollicle, later);
+        }
+      });
+    });
+  }
+  // Placed feathers' vertices under the skin.
+  if (!placedList.empty()) {
+    CheckOptions co;
+    setFeatherBases(co, coat, o.baseAllowance);
+    TriMesh part;
+    std::vector<uint32_t> back;
+    for (uint32_t i : placedList)
+      for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
+        back.push_back(verts[q]);
+        part.positions.push_back(mesh.positions[verts[q]]);
+        part.featherId.push_back(i);
+      }
+    const std::vector<uint8_t> in = verticesInsideSkin(skin, part, co);
+    if (in.size() != back.size()) throw Error("the drape was cancelled", {}, "drape");
+    for (size_t k = 0; k < back.size(); ++k) inside[back[k]] = in[k];
+  }
+  report(o.progress, "drape", 0.6);
+  for (uint32_t v = 0; v < nv; ++v)
+    if (inside[v]) bad[v] = 1;
+  std::vector<size_t> kept(n, 0), cut(n, 0);
+  auto collapse = [&](size_t t) {
+    uint32_t* tri = &mesh.indices[3 * t];
+    if (tri[1] == tri[0] && tri[2] == tri[0]) return;
+    tri[1] = tri[2] = tri[0];
+    ++cut[mesh.featherId[tri[0]]];
+  };
+  for (size_t t = 0; t < nt; ++t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    if (overFollicle[t] || bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) collapse(t);
+  }
+  for (uint32_t v = 0; v < nv; ++v)
+    if (bad[v]) mesh.positions[v] = glm::vec3(coat.frames[mesh.featherId[v]].origin);
+  // Crossing pairs: the mature drape's pairs of two copied feathers' live triangles, and those of the
+  // placed feathers' triangles searched here. A pair with a lost feather is gone, and its lower triangle
+  // stays.
+  std::vector<uint64_t> pairs;
+  for (const PairMemo& pm : M.pairs) {
+    if (rank[pm.fa] < 0 || rank[pm.fb] < 0 || placed[pm.fa] || placed[pm.fb]) continue;
+    const uint32_t t = tris[trisOf[pm.fa] + pm.ta], u = tris[trisOf[pm.fb] + pm.tb];
+    if (isCut(mesh, t) || isCut(mesh, u)) continue;
+    pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
+  }
+  {
+    std::vector<uint8_t> changedTri(nt, 0);
+    for (uint32_t i : placedList)
+      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) changedTri[tris[q]] = 1;
+    const std::vector<uint64_t> found = pairsWithChanged(mesh, order, trisOf, tris, changedTri, {});
+    pairs.insert(pairs.end(), found.begin(), found.end());
+  }
+  for (uint64_t pr : pairs) {
+    const size_t t = pr >> 32, u = pr & 0xffffffffu;
+    const uint32_t ft = mesh.featherId[mesh.indices[3 * t]], fu = mesh.featherId[mesh.indices[3 * u]];
+    collapse(rank[ft] < rank[fu] ? t : u);
+  }
+  for (size_t t = 0; t < nt; ++t)
+    if (!isCut(mesh, t)) ++kept[mesh.featherId[mesh.indices[3 * t]]];
+  for (uint32_t i : order) {
+    ++res.stats.draped;
+    for (const Node& nd : M.feathers[i].chart.nodes) res.stats.overhangingNodes += nd.free && nd.active;
+    if (cut[i]) {
+      res.trimmed[i] = 1;
+      ++res.stats.trimmedFeathers;
+      res.stats.trimmedTriangles += cut[i];
+      if (!kept[i]) {
+        res.hidden[i] = 1;
+        ++res.stats.hiddenFeathers;
+      }
+    }
+  }
+  res.stats.relaid = placedList.size();
+  res.stats.reused = order.size() - placedList.size();
+  report(o.progress, "drape", 1);
+  res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
 }  // namespace
 
 DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& o) {
   return drape(skin, coat, mesh, o, nullptr);
+}
+
+DrapeResult drapeOverMature(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeCache& mature,
+                            const DrapeOptions& o) {
+  return drapeOver(skin, coat, mesh, DrapeAccess::state(mature), o);
 }
 
 DrapeSpacing drapeSpacing(const SkinMesh& skin, const CoatFeathers& coat, const TriMesh& mesh, const DrapeOptions& o) {

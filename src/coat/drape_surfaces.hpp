@@ -206,6 +206,7 @@ class CoatTop {
 class AirTop {
  public:
   explicit AirTop(double radius) : r_(std::max(radius, 1e-12)), cell_(2 * r_) {}
+  double radius() const { return r_; }
   void add(const dvec3& p, const dvec3& n) {
     const uint32_t id = static_cast<uint32_t>(pos_.size());
     pos_.push_back(p);

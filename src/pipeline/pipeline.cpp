@@ -208,6 +208,17 @@ void Pipeline::Impl::computePack() {
   report(progress, "pack", 1);
 }
 
+bool Pipeline::Impl::MatureDrapeKey::operator==(const MatureDrapeKey& o) const {
+  auto sameFrames = [](const std::vector<coat::FeatherFrame>& a, const std::vector<coat::FeatherFrame>& b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](const auto& x, const auto& y) {
+             return x.origin == y.origin && x.normal == y.normal && x.tangent == y.tangent && x.binormal == y.binormal;
+           });
+  };
+  return generation == o.generation && lod == o.lod && gap == o.gap && spacing == o.spacing && maxSlope == o.maxSlope &&
+         baseAllowance == o.baseAllowance && featherLods == o.featherLods && sameFrames(frames, o.frames) &&
+         skin == o.skin;
+}
+
 const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOptions& o) {
   const uint64_t generation = restGeneration();
   if (drapeRef && drapeRef->generation == generation && drapeRef->lod == lod && drapeRef->gap == o.gap &&
@@ -272,7 +283,43 @@ void Pipeline::Impl::computeMesh() {
       dopt.gap = ref.gap;
       dopt.spacing = ref.spacing;
     }
-    drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt, drapeCache);
+    if (moultOver && moulting(coatNow)) {
+      // A moult frame over the mature coat (docs/moult.md): the mature coat (every feather present and
+      // mature) is meshed and draped by a mesher and a drape cache of its own, which reuse everything
+      // while the skin and the controls do not move; the frame's feathers are copied from it or placed
+      // on their mature charts.
+      const coat::CoatFeathers& mature = matureCoat(coatNow, timeState);
+      MatureDrapeKey key{timeState.generation, lod,         dopt.gap,      dopt.spacing,   dopt.maxSlope,
+                         dopt.baseAllowance,   featherLods, mature.frames, posed.positions};
+      const bool bent = std::any_of(timeState.bends.begin(), timeState.bends.end(),
+                                    [](const feather::ShaftBend& b) { return !b.rigid(); });
+      if (bent || !matureDrapeKey || !(*matureDrapeKey == key)) {
+        matureDrapeKey.reset();
+        matureFlat = coat::PackResult{};
+        matureFlat.order = mature.layerOrder;
+        matureFlat.elevation.assign(mature.size(), 0.0);
+        CoatMeshInput min = in;
+        min.coat = &mature;
+        min.packedCoat = &mature;
+        min.packed = &matureFlat;
+        matureMesher.update(min, matureMesh);
+        matureMesher.keepIndices(matureMesh);
+        coat::DrapeOptions mopt = dopt;
+        mopt.progress = [this](const std::string&, double f) {
+          report(progress, "mesh", 0.1 + 0.8 * f);
+          return true;
+        };
+        coat::drapeCoatMesh(posed, mature, matureMesh, mopt, matureDrapeCache);
+        if (!bent) matureDrapeKey = std::move(key);
+      }
+      dopt.progress = [this](const std::string&, double f) {
+        report(progress, "mesh", 0.9 + 0.1 * f);
+        return true;
+      };
+      drape = coat::drapeOverMature(posed, coatNow, mesh.mesh, matureDrapeCache, dopt);
+    } else {
+      drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt, drapeCache);
+    }
   }
   const std::vector<uint32_t>& which = mesher.feathers();
   const std::vector<feather::FeatherMeshRanges>& ranges = mesher.ranges();

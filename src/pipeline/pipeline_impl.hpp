@@ -97,6 +97,22 @@ struct Pipeline::Impl {
     coat::DrapeSpacing spacing;
   };
   std::optional<DrapeReference> drapeRef;
+  // Moult frames of a draped coat are laid over the mature coat's drape (moultOver): its own flat layout,
+  // mesher, mesh and drape cache.
+  coat::PackResult matureFlat;
+  CoatMesher matureMesher;
+  TriMesh matureMesh;
+  coat::DrapeCache matureDrapeCache;
+  // What the mature drape was made from; an equal next one is not meshed or draped again.
+  struct MatureDrapeKey {
+    uint64_t generation = 0;
+    double lod = 0, gap = 0, spacing = 0, maxSlope = 0, baseAllowance = 0;
+    std::vector<double> featherLods;
+    std::vector<coat::FeatherFrame> frames;
+    std::vector<glm::dvec3> skin;
+    bool operator==(const MatureDrapeKey& o) const;
+  };
+  std::optional<MatureDrapeKey> matureDrapeKey;
   const coat::DrapeSpacing& drapeReference(const coat::DrapeOptions& options);
   CoatMesh mesh;
   CoatMesher mesher;  // mesh.mesh is its last result

@@ -12,6 +12,7 @@
 
 #include "coat_mesher.hpp"
 #include "frames.hpp"
+#include "pteryla/coat/check.hpp"
 #include "pteryla/coat/drape.hpp"
 #include "pteryla/coat/pack.hpp"
 #include "pteryla/core/error.hpp"
@@ -235,4 +236,79 @@ TEST(DrapeCache, DrapedMoultScrubEqualsFreshEvaluation) {
     pipeline_test::expectIdentical(f, pipeline_test::grab(fresh), t);
   }
   EXPECT_GE(partial, 2u);
+}
+
+// A moult frame laid over the mature coat's drape: unchanged feathers are the mature drape's bits, lost
+// ones are gone, growing ones lie on their mature charts, and the guarantees hold (no vertex of a live
+// triangle under the skin, no crossing triangles).
+TEST(DrapeCache, MoultFramesLieOverTheMatureCoat) {
+  pipeline::Pipeline p(pipeline::sceneFromJson(sphereJson(260), kSceneFile));
+  const coat::SkinMesh skin = p.posedSkin();
+  FlatCoat mature;
+  mature.feathers = p.feathers();
+  const size_t n = mature.feathers.size();
+  mature.remesh();
+  coat::DrapeCache cache;
+  TriMesh matureMesh = mature.mesh;
+  coat::drapeCoatMesh(skin, mature.feathers, matureMesh, {}, cache);
+
+  // The same coat over itself is the mature drape.
+  {
+    TriMesh m = mature.mesh;
+    const coat::DrapeResult r = coat::drapeOverMature(skin, mature.feathers, m, cache);
+    EXPECT_TRUE(sameMesh(m, matureMesh));
+    EXPECT_EQ(r.stats.relaid, 0u);
+  }
+
+  // Lose every 7th feather, grow every 5th.
+  FlatCoat frame;
+  frame.feathers = mature.feathers;
+  size_t lost = 0, growing = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (i % 7 == 3) {
+      frame.feathers.present[i] = 0;
+      ++lost;
+    } else if (i % 5 == 1) {
+      frame.feathers.age[i] = 0.6;
+      ++growing;
+    }
+  }
+  frame.remesh();
+  TriMesh m = frame.mesh;
+  const coat::DrapeResult r = coat::drapeOverMature(skin, frame.feathers, m, cache);
+  EXPECT_EQ(r.stats.draped, n - lost);
+  EXPECT_GE(r.stats.relaid, growing / 2);  // growing feathers placed on their charts (some may be the mature mesh)
+  EXPECT_LT(r.stats.relaid, r.stats.draped / 2);
+
+  // Copied feathers keep the mature drape's positions.
+  std::vector<uint32_t> firstOf(n, UINT32_MAX), firstMature(n, UINT32_MAX);
+  for (uint32_t v = static_cast<uint32_t>(m.positions.size()); v-- > 0;) firstOf[m.featherId[v]] = v;
+  for (uint32_t v = static_cast<uint32_t>(matureMesh.positions.size()); v-- > 0;)
+    firstMature[matureMesh.featherId[v]] = v;
+  size_t same = 0;
+  for (uint32_t i = 0; i < n; ++i)
+    if (frame.feathers.present[i] && frame.feathers.age[i] == 1 && firstOf[i] != UINT32_MAX)
+      same += m.positions[firstOf[i] + 2] == matureMesh.positions[firstMature[i] + 2] ? 1 : 0;
+  EXPECT_GT(same, (n - lost - growing) * 9 / 10);
+
+  // The guarantees: nothing crosses, no live vertex under the skin.
+  EXPECT_TRUE(coat::intersectingTrianglePairs(m).empty());
+  coat::CheckOptions co;
+  coat::setFeatherBases(co, frame.feathers, coat::DrapeOptions{}.baseAllowance);
+  const std::vector<uint8_t> inside = coat::verticesInsideSkin(skin, m, co);
+  size_t under = 0;
+  for (size_t t = 0; t < m.triangleCount(); ++t) {
+    const uint32_t* tri = &m.indices[3 * t];
+    if (tri[1] == tri[0] && tri[2] == tri[0]) continue;
+    for (int c = 0; c < 3; ++c) under += inside[tri[c]];
+  }
+  EXPECT_EQ(under, 0u);
+
+  // Another skin than the mature drape's is an error, not a wrong coat.
+  coat::SkinMesh other = skin;
+  other.positions[0] *= 1.01;
+  TriMesh m2 = frame.mesh;
+  EXPECT_THROW(coat::drapeOverMature(other, frame.feathers, m2, cache), Error);
+  coat::DrapeCache empty;
+  EXPECT_THROW(coat::drapeOverMature(skin, frame.feathers, m2, empty), Error);
 }

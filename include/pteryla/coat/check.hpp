@@ -92,6 +92,10 @@ std::vector<FeatherPairCount> intersectingFeatherPairs(const TriMesh& coat, int 
 std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat);
 // The same with progress ("check", as CheckOptions::progress): empty when the callback asked to stop.
 std::vector<uint64_t> intersectingTrianglePairs(const TriMesh& coat, const ProgressFn& progress);
+// The same, only for pairs with a triangle of a feather `feathers` marks (indexed by featherId; shorter
+// means unmarked): exactly those pairs of intersectingTrianglePairs(coat).
+std::vector<uint64_t> intersectingTrianglePairsWith(const TriMesh& coat, const std::vector<uint8_t>& feathers,
+                                                    const ProgressFn& progress = {});
 // Per coat vertex: 1 when check() counts it as a skin penetration (the same test, the same exemptions).
 // Reports to options.progress during the search; empty when it asked to stop.
 std::vector<uint8_t> verticesInsideSkin(const SkinMesh& skin, const TriMesh& coat, const CheckOptions& options);

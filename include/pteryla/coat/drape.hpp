@@ -70,6 +70,7 @@ struct DrapeStats {
   double seconds = 0;
   // With a DrapeCache: feathers laid afresh (their chart, what they read or the skin changed) and
   // feathers whose draped vertices were copied from the last drape (the rest of `draped`).
+  // drapeOverMature: feathers placed on their mature chart, and feathers copied from the mature drape.
   size_t relaid = 0;
   size_t reused = 0;
 };
@@ -112,6 +113,19 @@ class DrapeCache {
 // Throws Error for inconsistent input (featherId out of range or missing).
 DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
                           const DrapeOptions& options = {});
+// A moult frame of a draped coat laid over its mature coat (packing "moult_pack": "over", the default,
+// as the height-field packer lays a moult frame over the mature coat's pack): `mature` holds the drape of
+// the same coat with every feather present and mature (drapeCoatMesh with a cache, over `skin`). A
+// feather whose flat vertices are the mature drape's keeps its draped vertices; a growing feather (or any
+// other whose flat mesh differs) is placed on its mature chart, at the mature coat's heights, so nothing
+// laid over it moves while it grows; a lost feather leaves its place open. Then the guarantees run for
+// what changed: vertices of placed feathers under the skin and their material over a later follicle are
+// trimmed, and of every crossing pair with a placed triangle the lower feather's triangle goes, while the
+// triangles the mature drape cut only because they crossed a feather lost now come back. Throws Error if
+// `mature` is empty, was laid over another skin or coat size, or its layer order disagrees.
+DrapeResult drapeOverMature(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeCache& mature,
+                            const DrapeOptions& options = {});
+
 // The gap and sample spacing drapeCoatMesh would use with `options` (their "auto" values from this coat's
 // charts, or the options' own). A timeline fixes them from its rest coat, so that a moult or a pose does
 // not change them frame to frame (a change lays the whole coat again, DrapeCache).
