@@ -95,6 +95,7 @@ Loaded load(const Common& c, const SceneArgs& a) {
   if (a.time && !std::isfinite(*a.time)) throw Error("expected a finite time", "", "--time");
   SceneFileOptions options;
   if (!a.seed.empty()) options.seed = parseSeed(a.seed);
+  if (a.fixedLod) options.lodByScreenSize = false;
   if (width) requireMemory(double(width) * height * kBytesPerPixel, "a " + a.size + " image", "", "--size");
   options.progress = makeProgress(c);
   Loaded l{Session::fromSceneFile(a.scene, options), width, height};

@@ -11,8 +11,9 @@ struct SceneArgs {
   std::string scene;
   std::optional<double> time;
   std::optional<double> lod;
-  std::string seed;  // empty = the scene's seed; else a non-negative integer (checked in load)
-  std::string size;  // "WxH" or empty for the scene's render size
+  std::string seed;       // empty = the scene's seed; else a non-negative integer (checked in load)
+  std::string size;       // "WxH" or empty for the scene's render size
+  bool fixedLod = false;  // --fixed-lod: render.lod_by_screen_size false (render, bench, frames, farm)
 };
 
 struct BenchArgs : SceneArgs {

@@ -122,6 +122,7 @@ nlohmann::json frameParams(const FramesArgs& a, const std::string& sceneDigest, 
     p["meters_per_unit"] = a.metersPerUnit;
   }
   p["lod"] = a.lod ? nlohmann::json(*a.lod) : nlohmann::json(nullptr);
+  if (a.exportExt.empty()) p["fixed_lod"] = a.fixedLod;  // exports mesh at --lod either way
   p["seed"] = a.seed;
   return p;
 }
@@ -536,6 +537,7 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& args) {
   std::string common = shellQuote(exe) + " frames " + shellQuote(scene) + " --from " + fmt17(a.from) + " --to " +
                        fmt17(a.to) + " --fps " + fmt17(a.fps) + " --out " + shellQuote(out);
   if (a.lod) common += " --lod " + fmt17(*a.lod);
+  if (a.fixedLod) common += " --fixed-lod";
   if (!a.size.empty()) common += " --size " + shellQuote(a.size);
   if (!a.seed.empty()) common += " --seed " + a.seed;
   if (!a.style.empty()) common += " --style " + a.style;

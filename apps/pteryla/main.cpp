@@ -17,10 +17,18 @@ void addSceneOptions(CLI::App* sub, SceneArgs& a, bool withSize) {
       ->required();
   sub->add_option("--time,-t", a.time, "Time on the scene's timeline (moult, skinning, controls); default: scene time");
   sub->add_option("--lod", a.lod,
-                  "Fraction of feather geometry in (0,1]; default: the scene's render.lod (with "
-                  "render.lod_by_screen_size, the level of the largest feathers on screen)");
+                  withSize ? "Fraction of feather geometry in (0,1]; default: the scene's render.lod. Rendering "
+                             "by screen size (render.lod_by_screen_size, default on) it is the cap: the level of a "
+                             "feather long enough on screen to show its barbs 2 pixels apart; smaller feathers "
+                             "get less (docs/render.md)"
+                           : "Fraction of feather geometry in (0,1]; default: the scene's render.lod");
   sub->add_option("--seed", a.seed, "Override the scene's master seed (an integer in [0, 2^64-1])");
-  if (withSize) sub->add_option("--size", a.size, "Image size WxH; default: the scene's render.size");
+  if (withSize) {
+    sub->add_option("--size", a.size, "Image size WxH; default: the scene's render.size");
+    sub->add_flag("--fixed-lod", a.fixedLod,
+                  "Mesh every feather at --lod (a fixed level) instead of by its size on screen: as if the scene "
+                  "had render.lod_by_screen_size false");
+  }
 }
 
 void addToleranceOptions(CLI::App* sub, pteryla::render::DiffTolerance& t, const std::string& prefix) {

@@ -284,8 +284,13 @@ struct StageSeconds {
 // Session::fromSceneFile's options.
 struct SceneFileOptions {
   std::optional<uint64_t> seed;  // replaces the scene's master seed (the file's "seed")
-  Progress progress;             // reports of reading the skin and tracts, and then of every evaluation
-                                 // until setProgress replaces it (see setProgress)
+  // Replaces the scene's render.lod_by_screen_size (default true: render and renderImage mesh each
+  // feather at lod() times a fraction that follows its size on screen, so lod() is the cap; false: every
+  // feather at lod(), a fixed level; docs/render.md). evaluate() before any render meshes every feather at
+  // lod(); after a render, frame() is the coat that render drew.
+  std::optional<bool> lodByScreenSize;
+  Progress progress;  // reports of reading the skin and tracts, and then of every evaluation
+                      // until setProgress replaces it (see setProgress)
 };
 
 // One feather definition file (docs/feather-format.md) on its own, as `pteryla feather` makes it: built
@@ -392,7 +397,9 @@ class PTERYLA_API Session {
   // skin), lights and feather materials, as `pteryla render` does, and writes it to `path` (.png, .jpg,
   // .tif, .exr) through a temporary file renamed on success. libOSMesa is loaded on the first call:
   // without it, or for a bad size, style or path, throws pteryla::Error naming it. Not for a
-  // PoseMode::Follow pose yet (throws). frame() stays valid if it was.
+  // PoseMode::Follow pose yet (throws). frame() stays valid if it was. With screen-size levels of detail
+  // (the scene's render.lod_by_screen_size, default on; SceneFileOptions::lodByScreenSize) it first sets
+  // each feather's level from its size in this image and meshes the coat once at those levels.
   RenderSummary render(const std::string& path, const RenderSettings& settings = {});
   // The same image, in memory.
   render::Image renderImage(const RenderSettings& settings = {});

@@ -298,6 +298,7 @@ Session::Session(const SkinArrays& skin, const CoatSetup& setup) {
 Session Session::fromSceneFile(const std::string& path, const SceneFileOptions& options) {
   pipeline::Scene scene = pipeline::loadScene(path);
   if (options.seed) scene.seed = *options.seed;
+  if (options.lodByScreenSize) scene.render.lodByScreenSize = *options.lodByScreenSize;
   // The constructor reads the skin and the tracts: their reports go to the options' callback.
   const Progress& report = options.progress;
   auto impl = std::make_unique<Impl>(std::make_unique<pipeline::Pipeline>(

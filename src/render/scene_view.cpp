@@ -3,11 +3,16 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/core/data_dir.hpp"
 #include "pteryla/core/paths.hpp"
+#include "pteryla/feather/barbs.hpp"
 #include "pteryla/feather/mesh.hpp"
 #include "pteryla/feather/params.hpp"
 #include "pteryla/core/error.hpp"
@@ -25,6 +30,30 @@ std::string textureDir() { return dataDirectory() + "/textures"; }
 }  // namespace
 
 Camera sceneCamera(const pipeline::Scene& scene, const TriMesh& skin, const TriMesh& coat, int width, int height) {
+  glm::vec3 lo(-1), hi(1);
+  if (scene.camera.autoFrame) {
+    glm::vec3 lo2, hi2;
+    bool any = skin.bounds(lo, hi);
+    if (coat.bounds(lo2, hi2)) {
+      if (any) {
+        lo = glm::min(lo, lo2);
+        hi = glm::max(hi, hi2);
+      } else {
+        lo = lo2;
+        hi = hi2;
+        any = true;
+      }
+    }
+    if (!any) {
+      lo = glm::vec3(-1);
+      hi = glm::vec3(1);
+    }
+  }
+  return sceneCameraForBounds(scene, lo, hi, width, height);
+}
+
+Camera sceneCameraForBounds(const pipeline::Scene& scene, const glm::vec3& lo, const glm::vec3& hi, int width,
+                            int height) {
   Camera c;
   c.fovYDegrees = static_cast<float>(scene.camera.fovDeg);
   c.up = v3(scene.camera.up);
@@ -37,28 +66,72 @@ Camera sceneCamera(const pipeline::Scene& scene, const TriMesh& skin, const TriM
     c.zFar = dist * 10.0f;
     return c;
   }
-  glm::vec3 lo, hi, lo2, hi2;
-  bool any = skin.bounds(lo, hi);
-  if (coat.bounds(lo2, hi2)) {
-    if (any) {
-      lo = glm::min(lo, lo2);
-      hi = glm::max(hi, hi2);
-    } else {
-      lo = lo2;
-      hi = hi2;
-      any = true;
-    }
-  }
-  if (!any) {
-    lo = glm::vec3(-1);
-    hi = glm::vec3(1);
-  }
   glm::vec3 dir = glm::normalize(v3(scene.camera.viewDir));
   const glm::vec3 centre = 0.5f * (lo + hi);
   c.target = centre;
   c.eye = centre - dir;
   c.frameBounds(lo, hi, aspect, 0.8f);  // the box's bounding sphere is loose: frame a little tighter
   return c;
+}
+
+bool coatReachBounds(pipeline::Pipeline& p, glm::vec3& lo, glm::vec3& hi) {
+  const TriMesh skin = p.skinTriMesh();
+  bool any = skin.bounds(lo, hi);
+  const coat::CoatFeathers& f = p.feathers();
+  const std::vector<double>& elevation = p.elevations();
+  const size_t n = std::min(f.size(), elevation.size());
+  struct Box {
+    glm::dvec3 lo{std::numeric_limits<double>::max()}, hi{-std::numeric_limits<double>::max()};
+  };
+  // Each present feather, placed as the mesher places it, from a coarse copy of its parameters: the same
+  // shaft, key barbs, angles and barb lengths with kBarbsPerVane barbs per vane. Barb curves lie inside
+  // their control polygons, so those points stand for the barbs between the sampled ones.
+  constexpr double kBarbsPerVane = 12;
+  const Box coat = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, 64), Box{},
+      [&](const tbb::blocked_range<size_t>& r, Box b) {
+        feather::FeatherCurves curves;
+        feather::GenerateOptions go;
+        go.shaftSegments = 8;
+        auto coarse = [&](const feather::FeatherParams& src) {
+          feather::FeatherParams q = src;
+          q.spacingBase = q.spacingTip = q.rachisLength / kBarbsPerVane;
+          return q;
+        };
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          if (!f.present[i]) continue;
+          feather::FeatherParams q = coarse(f.params[i]);
+          if (q.afterfeather) q.afterfeather = std::make_shared<const feather::FeatherParams>(coarse(*q.afterfeather));
+          feather::generateBarbs(q, curves, go);
+          const coat::FeatherFrame& fr = f.frames[i];
+          const auto pl = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, elevation[i]);
+          auto add = [&](const glm::vec3& local) {
+            const glm::dvec3 w = pl.origin + double(local.x) * pl.x + double(local.y) * pl.y + double(local.z) * pl.z;
+            b.lo = glm::min(b.lo, w);
+            b.hi = glm::max(b.hi, w);
+          };
+          for (const feather::ShaftCurve& sh : curves.shafts)
+            for (const glm::vec3& x : sh.points) add(x);
+          for (const glm::vec3& x : curves.cvs) add(x);
+        }
+        return b;
+      },
+      [](Box a, const Box& b) {
+        a.lo = glm::min(a.lo, b.lo);
+        a.hi = glm::max(a.hi, b.hi);
+        return a;
+      });
+  if (coat.lo.x <= coat.hi.x) {
+    if (any) {
+      lo = glm::min(lo, glm::vec3(coat.lo));
+      hi = glm::max(hi, glm::vec3(coat.hi));
+    } else {
+      lo = glm::vec3(coat.lo);
+      hi = glm::vec3(coat.hi);
+      any = true;
+    }
+  }
+  return any;
 }
 
 std::vector<Light> sceneLights(const pipeline::Scene& scene) {
@@ -312,8 +385,9 @@ void SceneView::markDirty() {
 
 Image SceneView::render(pipeline::Pipeline& p, int width, int height, const std::string& styleIn) {
   const std::string style = styleIn.empty() ? p.scene().render.style : styleIn;
-  const auto& coat = p.coatMesh();
   if (style == "scratchboard") {
+    // The CPU style draws the coat's mesh at the pipeline's levels (it sets none of its own).
+    const auto& coat = p.coatMesh();
     const TriMesh skin = p.skinTriMesh();
     ScratchboardSettings s;
     s.width = width;
@@ -321,14 +395,21 @@ Image SceneView::render(pipeline::Pipeline& p, int width, int height, const std:
     return renderScratchboard(coat.mesh, skin, sceneCamera(p.scene(), skin, coat.mesh, width, height),
                               sceneLights(p.scene()), s);
   }
-  // Screen-size LOD: an auto-framed camera frames the coat meshed at the uniform level (so a frame is
-  // the same whatever was meshed before it: `render --time T` equals that frame of `frames`), then each
-  // feather is meshed at its own level.
+  // Screen-size LOD: an auto-framed camera frames the skin and the coat's reach (coatReachBounds: the
+  // packed feathers, not their mesh), then each feather is meshed once, at its own level. The framing
+  // depends on the pack alone, so a frame is the same whatever was meshed before it (`render --time T`
+  // equals that frame of `frames`). At a fixed level the camera frames the coat's mesh, as it always did.
   const bool bySize = p.scene().render.lodByScreenSize;
-  if (bySize && p.scene().camera.autoFrame) p.setFeatherLods({});
-  const TriMesh skin = p.skinTriMesh();
-  const Camera cam = sceneCamera(p.scene(), skin, p.coatMesh().mesh, width, height);
-  p.setFeatherLods(bySize ? screenSizeLods(p, cam, width, height) : std::vector<double>{});
+  Camera cam;
+  if (!bySize) {
+    p.setFeatherLods({});
+    cam = sceneCamera(p.scene(), p.skinTriMesh(), p.coatMesh().mesh, width, height);
+  } else {
+    glm::vec3 lo(-1), hi(1);
+    if (p.scene().camera.autoFrame && !coatReachBounds(p, lo, hi)) lo = glm::vec3(-1), hi = glm::vec3(1);
+    cam = sceneCameraForBounds(p.scene(), lo, hi, width, height);
+    p.setFeatherLods(screenSizeLods(p, cam, width, height));
+  }
   impl_->sync(p);
   return impl_->renderer.renderImage(cam, sceneLights(p.scene()), sceneSettings(p.scene(), width, height));
 }

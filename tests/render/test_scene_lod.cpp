@@ -267,3 +267,112 @@ TEST(SceneLod, AStaticTimeStepRedoesNothing) {
     EXPECT_EQ(second.rgba, first.rgba);
   }
 }
+
+namespace {
+
+// coatScene with an auto-framed camera (looking along the explicit camera's view).
+pipeline::Scene autoFramedScene(bool bySize, double lod = 0.6) {
+  pipeline::Scene s = coatScene(bySize, lod);
+  s.camera.autoFrame = true;
+  s.camera.viewDir = glm::dvec3(-0.4, -0.6, -3.2);
+  return s;
+}
+
+}  // namespace
+
+// Levels by screen size are the default (#27), and what a render meshes follows the camera: the same coat
+// seen from 2.2 and from 12 units meshes far fewer triangles from afar, and never more than the scene's
+// render.lod (the cap) gives every feather.
+TEST(SceneLod, AFarCameraMeshesFewerTrianglesThanANearOne) {
+  EXPECT_TRUE(pipeline::Scene{}.render.lodByScreenSize) << "on by default";
+  auto trianglesFrom = [](float distance) {
+    pipeline::Scene s = coatScene(true);
+    s.camera.eye = glm::dvec3(cameraAt(distance).eye);
+    pipeline::Pipeline p(s);
+    SceneView view(context());
+    view.render(p, 320, 240);
+    return p.coatMesh().mesh.triangleCount();
+  };
+  const size_t nearTri = trianglesFrom(2.2f), farTri = trianglesFrom(12.0f);
+  pipeline::Pipeline uniform(coatScene(false));
+  const size_t cap = uniform.coatMesh().mesh.triangleCount();
+  std::printf("triangles meshed at 320x240: %zu from 2.2 units, %zu from 12, %zu at the uniform level\n", nearTri,
+              farTri, cap);
+  EXPECT_LE(nearTri, cap);
+  EXPECT_LT(farTri, nearTri / 2);
+}
+
+// The fixed level (render.lod_by_screen_size false, `--fixed-lod`) draws exactly what SceneView drew
+// before levels by screen size: every feather at render.lod, an auto-framed camera framing that coat's
+// mesh. Bit for bit, also after a render by screen size on the same pipeline.
+TEST(SceneLod, TheFixedLevelPathIsUnchangedBitForBit) {
+  for (const bool autoFrame : {false, true}) {
+    SCOPED_TRACE(autoFrame ? "auto-framed" : "explicit camera");
+    pipeline::Scene s = autoFrame ? autoFramedScene(false) : coatScene(false);
+    // The reference, drawn by hand the way SceneView::render did.
+    pipeline::Pipeline ref(s);
+    const pipeline::CoatMesh& coat = ref.coatMesh();
+    const TriMesh skin = ref.skinTriMesh();
+    Renderer r(context());
+    r.setMaterials(sceneMaterials(ref.scene(), coat));
+    r.setSkin(skin);
+    r.setCoat(coat.mesh, drawRanges(coat));
+    const Image expected = r.renderImage(sceneCamera(ref.scene(), skin, coat.mesh, 320, 240), sceneLights(ref.scene()),
+                                         sceneSettings(ref.scene(), 320, 240));
+
+    pipeline::Pipeline p(s);
+    SceneView view(context());
+    const Image fixed = view.render(p, 320, 240);
+    EXPECT_TRUE(p.featherLods().empty());
+    EXPECT_EQ(p.coatMesh().mesh.positions, coat.mesh.positions);
+    EXPECT_EQ(p.coatMesh().mesh.indices, coat.mesh.indices);
+    EXPECT_EQ(fixed.rgba, expected.rgba);
+    // By screen size, then fixed again: the levels are cleared and the same image comes back.
+    p.editScene(pipeline::Stage::Mesh, [](pipeline::Scene& sc) { sc.render.lodByScreenSize = true; });
+    const Image bySize = view.render(p, 320, 240);
+    EXPECT_FALSE(p.featherLods().empty());
+    EXPECT_NE(bySize.rgba, expected.rgba);
+    p.editScene(pipeline::Stage::Mesh, [](pipeline::Scene& sc) { sc.render.lodByScreenSize = false; });
+    EXPECT_EQ(view.render(p, 320, 240).rgba, expected.rgba);
+  }
+}
+
+// An auto-framed camera with levels by screen size frames the skin and the coat's reach from the packed
+// feathers (coatReachBounds), so the coat is meshed once, at its screen levels, never first at the uniform
+// level. The reach holds the coat's full-detail mesh and is barely larger.
+TEST(SceneLod, AutoFramingDoesNotMeshTheCoatFirst) {
+  using pipeline::Stage;
+  pipeline::Pipeline p(autoFramedScene(true));
+  glm::vec3 lo, hi;
+  ASSERT_TRUE(coatReachBounds(p, lo, hi));
+  EXPECT_EQ(p.evaluations(Stage::Mesh), 0u) << "the reach needs no mesh";
+  EXPECT_GT(p.evaluations(Stage::Pack), 0u);
+
+  pipeline::Pipeline full(autoFramedScene(false, 1.0));
+  glm::vec3 mlo, mhi, slo, shi;
+  ASSERT_TRUE(full.coatMesh().mesh.bounds(mlo, mhi));
+  ASSERT_TRUE(full.skinTriMesh().bounds(slo, shi));
+  mlo = glm::min(mlo, slo);
+  mhi = glm::max(mhi, shi);
+  const float diag = glm::length(mhi - mlo);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_LE(lo[k], mlo[k] + 0.01f * diag) << "axis " << k;
+    EXPECT_GE(hi[k], mhi[k] - 0.01f * diag) << "axis " << k;
+  }
+  EXPECT_LT(glm::length(hi - lo), 1.05f * diag);
+  std::printf("reach bounds diagonal %.4f, full-detail mesh and skin %.4f\n", double(glm::length(hi - lo)),
+              double(diag));
+
+  SceneView view(context());
+  view.render(p, 320, 240);
+  EXPECT_EQ(p.evaluations(Stage::Mesh), 1u) << "meshed once, at the screen levels";
+  const size_t meshed = p.coatMesh().mesh.triangleCount();
+  pipeline::Pipeline uniform(autoFramedScene(false));
+  EXPECT_LT(meshed, uniform.coatMesh().mesh.triangleCount());
+  // The camera framed the reach: the same as sceneCameraForBounds of it.
+  const Camera cam = sceneCameraForBounds(p.scene(), lo, hi, 320, 240);
+  EXPECT_EQ(screenSizeLods(p, cam, 320, 240), p.featherLods());
+  // Rendering again meshes nothing.
+  view.render(p, 320, 240);
+  EXPECT_EQ(p.evaluations(Stage::Mesh), 1u);
+}

@@ -17,8 +17,18 @@ struct FeatherParams;
 
 namespace pteryla::render {
 
-// Camera for the scene: explicit eye/target, or framing the posed skin's bounds (auto_frame).
+// Camera for the scene: explicit eye/target, or framing the bounds of the posed skin and the coat mesh
+// (auto_frame).
 Camera sceneCamera(const pipeline::Scene& scene, const TriMesh& skin, const TriMesh& coat, int width, int height);
+// The same from given bounds (lo, hi are read only for auto_frame).
+Camera sceneCameraForBounds(const pipeline::Scene& scene, const glm::vec3& lo, const glm::vec3& hi, int width,
+                            int height);
+// Bounds of the posed skin grown by the coat's reach, without meshing the coat: every present feather of
+// p.feathers() placed at its packed elevation from a coarse copy of its parameters (its shaft, and 12
+// barbs a vane as control polygons, which contain the barb curves). Pulls the pack stage, never the mesh
+// stage. What SceneView::render frames with screen-size levels of detail, so choosing the levels costs
+// no mesh of the coat at a uniform level. False when there is neither skin nor coat.
+bool coatReachBounds(pipeline::Pipeline& p, glm::vec3& lo, glm::vec3& hi);
 std::vector<Light> sceneLights(const pipeline::Scene& scene);
 RenderSettings sceneSettings(const pipeline::Scene& scene, int width, int height);
 // Renderer materials for the coat's feather types: colour texture from the feather file, else the
@@ -44,8 +54,10 @@ class SceneView {
   explicit SceneView(RenderContext& context);
   ~SceneView();
   // Uploads the pipeline's current skin and coat (when they changed) and renders an image.
-  // style: "" (the scene's), "shaded" or "scratchboard". With the scene's render.lod_by_screen_size,
-  // first sets the pipeline's per-feather levels of detail from the scene camera (screenSizeLods).
+  // style: "" (the scene's), "shaded" or "scratchboard". With the scene's render.lod_by_screen_size
+  // (the default), first sets the pipeline's per-feather levels of detail from the scene camera
+  // (screenSizeLods; an auto-framed camera frames coatReachBounds), so the coat is meshed once, at those
+  // levels; without it, clears them and an auto-framed camera frames the coat's mesh.
   Image render(pipeline::Pipeline& p, int width, int height, const std::string& style = "");
   // Draws into the current framebuffer (viewer); `camera` overrides the scene camera.
   void draw(pipeline::Pipeline& p, const Camera& camera, int width, int height);
