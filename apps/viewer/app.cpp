@@ -606,6 +606,8 @@ std::vector<float> App::viewKey() const {
 void App::renderView() {
   if (!doc_.hasScene() || !cameraReady_) return;
   const bool moving = cameraMoving();
+  // Levels of detail by screen size (render.lod_by_screen_size) follow the view at rest.
+  if (!moving) doc_.setPreviewView(camera_.camera(), viewPixels_.x, viewPixels_.y);
   // A time drawn before whose coat is not evaluated yet: its flipbook frame (app_timeline.cpp).
   if (!moving && showFlipbookFrame()) return;
   flipbookShown_ = false;

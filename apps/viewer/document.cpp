@@ -11,6 +11,7 @@
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/paths.hpp"
 #include "pteryla/pipeline/scene_stages.hpp"
+#include "pteryla/render/scene_view.hpp"
 #include "scene_edit.hpp"
 
 namespace pteryla::viewer {
@@ -66,7 +67,8 @@ void Document::reset(Scene scene, const std::string& path) {
   redo_.clear();
   gestureOpen_ = false;
   time_ = scene_.time;
-  lod_ = scene_.render.lod;
+  lod_ = scene_.render.lod;  // the preview's cap; levels by screen size follow render.lod_by_screen_size
+  meshedView_.reset();
   pipeline_ = std::make_unique<Pipeline>(scene_);
   pending_.reset();
   timeDirty_ = lodDirty_ = false;
@@ -181,6 +183,16 @@ void Document::setLod(double f) {
   if (running_) cancel_ = true;
 }
 
+bool Document::PreviewView::operator==(const PreviewView& o) const {
+  return camera.eye == o.camera.eye && camera.target == o.camera.target && camera.up == o.camera.up &&
+         camera.fovYDegrees == o.camera.fovYDegrees && width == o.width && height == o.height;
+}
+
+void Document::setPreviewView(const render::Camera& camera, int width, int height) {
+  if (width < 1 || height < 1) return;
+  view_ = PreviewView{camera, width, height};
+}
+
 void Document::cancel() {
   if (running_) cancel_ = true;
   halted_ = true;
@@ -190,7 +202,7 @@ void Document::resume() { halted_ = false; }
 
 bool Document::upToDate() const {
   return hasScene() && !running_ && !failed_ && !needEval_ && !pending_ && !timeDirty_ && !lodDirty_ && !checkWanted_ &&
-         !exportWanted_;
+         !exportWanted_ && (scene_.render.lodByScreenSize ? view_ : std::nullopt) == meshedView_;
 }
 
 JobProgress Document::progress() const {
@@ -232,6 +244,9 @@ void Document::update() {
   // Anything that left a stage dirty behind the Document's back is evaluated too (the GL view must
   // never pull a dirty pipeline on the UI thread).
   if (!needEval_ && !pending_ && pipeline_->dirty(Stage::Mesh)) needEval_ = true;
+  // Levels of detail by screen size follow the preview's view (and the scene's key, which no stage reads).
+  const std::optional<PreviewView> view = scene_.render.lodByScreenSize ? view_ : std::nullopt;
+  if (!(view == meshedView_)) needEval_ = true;
   if (!(needEval_ || pending_ || timeDirty_ || lodDirty_ || checkWanted_ || exportWanted_)) return;
   // Hand edits to the pipeline (the worker is idle).
   try {
@@ -242,6 +257,7 @@ void Document::update() {
     pipeline_->setTime(time_);
     pipeline_->setLod(lod_);
     timeDirty_ = lodDirty_ = false;
+    jobView_ = meshedView_ = view;
   } catch (const std::exception& e) {
     error_ = e.what();
     failed_ = true;
@@ -328,6 +344,9 @@ void Document::startJob(bool check) {
         work.groupNames = rest.groupNames;
         ++work.skinVersion;
       }
+      // Levels by screen size from the packed feathers (pulls the pack, not the mesh).
+      p.setFeatherLods(jobView_ ? render::screenSizeLods(p, jobView_->camera, jobView_->width, jobView_->height)
+                                : std::vector<double>{});
       const pipeline::CoatMesh& cm = p.coatMesh();
       const coat::CoatFeathers& cf = p.feathers();
       const std::vector<double>& elev = p.elevations();
@@ -376,6 +395,9 @@ void Document::startJob(bool check) {
       if (jobExport_) {
         ExportOutcome out;
         out.path = jobExport_->path;
+        // Exports carry every feather at the level of detail, not the preview's levels by screen size.
+        const std::vector<double> levels = p.featherLods();
+        p.setFeatherLods({});
         try {
           out.result = exchange::exportCoat(p, jobExport_->path, jobExport_->options);
         } catch (const Cancelled&) {
@@ -383,6 +405,7 @@ void Document::startJob(bool check) {
         } catch (const std::exception& e) {
           out.error = e.what();
         }
+        p.setFeatherLods(levels);
         p.coatMesh();  // a frame range moved the time; evaluate the viewer's frame again
         std::lock_guard<std::mutex> lock(mutex_);
         jobExportOutcome_ = std::move(out);

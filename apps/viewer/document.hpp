@@ -34,6 +34,7 @@
 #include "pteryla/exchange/coat_export.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
+#include "pteryla/render/camera.hpp"
 
 namespace pteryla::viewer {
 
@@ -120,6 +121,12 @@ class Document {
   double time() const { return time_; }
   void setLod(double fraction);  // (0, 1]
   double lod() const { return lod_; }
+  // The view the preview is drawn with (the viewer calls this when the camera is at rest). With the
+  // scene's render.lod_by_screen_size (default on) the preview meshes each feather at lod() times the
+  // fraction render::screenSizeLods gives it in this view, as `pteryla render` does, so lod() is the cap;
+  // a different view re-meshes (the mesh stage only). Without a view, or with the key false, every
+  // feather is meshed at lod().
+  void setPreviewView(const render::Camera& camera, int width, int height);
 
   // Call once per frame on the UI thread: collects a finished job, hands pending edits to the pipeline
   // and starts an evaluation when something is out of date. Never blocks on a running job.
@@ -180,6 +187,14 @@ class Document {
   bool gestureOpen_ = false;
   std::string lastLabel_;
   double time_ = 0, lod_ = 1;
+  struct PreviewView {
+    render::Camera camera;
+    int width = 0, height = 0;
+    bool operator==(const PreviewView& o) const;
+  };
+  std::optional<PreviewView> view_;        // the last view given (setPreviewView)
+  std::optional<PreviewView> meshedView_;  // the view of the last job's levels (none: every feather at lod_)
+  std::optional<PreviewView> jobView_;     // the running job's (the worker's copy)
 
   std::unique_ptr<pipeline::Pipeline> pipeline_;
   std::optional<pipeline::Stage> pending_;  // earliest stage to invalidate before the next job

@@ -512,8 +512,18 @@ ExportSummary Session::exportTo(const std::string& path, const ExportSettings& s
   const exchange::ExportOptions opt = exportOptions(path, settings);
   const bool hadFrame = m.frameValid;
   m.frameValid = false;
-  const exchange::ExportResult r =
-      m.reporting("the export", [&] { return exchange::exportCoat(*m.pipeline, path, opt); });
+  // An export carries every feather at lod(), also after a render set levels by screen size; the render's
+  // levels come back for the frame.
+  const std::vector<double> levels = m.pipeline->featherLods();
+  m.pipeline->setFeatherLods({});
+  exchange::ExportResult r;
+  try {
+    r = m.reporting("the export", [&] { return exchange::exportCoat(*m.pipeline, path, opt); });
+  } catch (...) {
+    m.pipeline->setFeatherLods(levels);
+    throw;
+  }
+  m.pipeline->setFeatherLods(levels);
   if (hadFrame) m.fillFrame();  // the export evaluated other times: point the views at this one again
   ExportSummary out;
   out.bytes = r.bytes;

@@ -209,6 +209,48 @@ TEST(Document, OnlyDownstreamStagesRerun) {
   EXPECT_EQ(evals(pipeline::Stage::Pose), poseMoult + 1);
 }
 
+// The preview meshes by screen size (render.lod_by_screen_size, on by default) once the viewer gives it
+// its view: every feather at the preview lod until then, far fewer triangles seen from afar (the mesh
+// stage alone re-runs), nothing re-run for the same view, and the preview lod everywhere again with the
+// key off.
+TEST(Document, PreviewLevelsFollowTheViewByScreenSize) {
+  Document d;
+  pipeline::Scene s = smallPatch();
+  s.render.lod = 1.0;
+  d.reset(s, "");
+  ASSERT_TRUE(d.waitIdle());
+  auto evals = [&](pipeline::Stage st) { return d.idlePipeline()->evaluations(st); };
+  auto triangles = [&] { return d.snapshot().coatTriangles; };
+  const size_t uniform = triangles();
+  EXPECT_TRUE(d.idlePipeline()->featherLods().empty());
+  const auto distribute = evals(pipeline::Stage::Pack), mesh = evals(pipeline::Stage::Mesh);
+  const glm::vec3 lo = d.snapshot().skinLo, hi = d.snapshot().skinHi;
+  render::Camera cam;
+  cam.eye = glm::vec3(0, 0, 1);
+  cam.frameBounds(lo, hi, 4.0f / 3.0f, 1.0f);
+  d.setPreviewView(cam, 320, 240);
+  EXPECT_FALSE(d.upToDate());
+  ASSERT_TRUE(d.waitIdle());
+  const size_t nearTri = triangles();
+  EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 1);
+  EXPECT_EQ(evals(pipeline::Stage::Pack), distribute);
+  EXPECT_EQ(d.idlePipeline()->featherLods().size(), d.idlePipeline()->feathers().size());
+  render::Camera far = cam;
+  far.eye = cam.target + 20.0f * (cam.eye - cam.target);
+  d.setPreviewView(far, 320, 240);
+  ASSERT_TRUE(d.waitIdle());
+  const size_t farTri = triangles();
+  EXPECT_LE(nearTri, uniform);
+  EXPECT_LT(farTri, nearTri / 2) << "near " << nearTri << ", far " << farTri;
+  d.setPreviewView(far, 320, 240);
+  ASSERT_TRUE(d.waitIdle());
+  EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 2);
+  d.edit("levels by screen size", [](pipeline::Scene& sc) { sc.render.lodByScreenSize = false; });
+  ASSERT_TRUE(d.waitIdle());
+  EXPECT_EQ(triangles(), uniform);
+  EXPECT_TRUE(d.idlePipeline()->featherLods().empty());
+}
+
 TEST(Document, StageErrorsAreReportedAndUndoRecovers) {
   Document d;
   d.reset(smallPatch(), "");
