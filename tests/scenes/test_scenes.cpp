@@ -69,8 +69,8 @@ double meanElevation(pipeline::Pipeline& p, uint32_t tract) {
 TEST(Scenes, TheThesisScenesAreBundled) {
   const auto names = bundledScenes();
   for (const char* n :
-       {"bird.json", "wing.json", "wing_flap.json", "moult.json", "moult_radial.json", "crest.json", "patch.json",
-        "patch_grid.json", "patch_hex.json", "patch_stretched.json", "sphere.json", "sphere_small.json",
+       {"bird.json", "bird_dense.json", "wing.json", "wing_flap.json", "moult.json", "moult_radial.json", "crest.json",
+        "patch.json", "patch_grid.json", "patch_hex.json", "patch_stretched.json", "sphere.json", "sphere_small.json",
         "sphere_large.json", "sphere_250_small.json", "sphere_250.json", "sphere_250_large.json"})
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
@@ -99,7 +99,9 @@ TEST(Scenes, EverySceneEvaluatesAndStaysAboveTheSkin) {
       far += glm::any(glm::lessThan(glm::dvec3(v), lo - longest)) ||
              glm::any(glm::greaterThan(glm::dvec3(v), hi + longest));
     EXPECT_EQ(far, 0u);
-    if (name == "wing.json") continue;
+    // The dense bird's full-detail mesh is about 13M triangles and minutes of draping: `pteryla check`
+    // measures its penetrations for the gallery (docs/gallery.md), not the suite.
+    if (name == "wing.json" || name == "bird_dense.json") continue;
     EXPECT_EQ(skinPenetrations(p), 0u) << "at t = " << p.time();
   }
 }
