@@ -256,6 +256,9 @@ const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOption
 
 void Pipeline::Impl::computeMesh() {
   report(progress, "mesh", 0);
+  // The coat at the levels it is meshed at, against the memory ceiling: the interpolate stage assumed the
+  // least a render by screen size meshes.
+  requireCoatMemory(coatNow.params, &coatNow.present, lod, &featherLods, "the coat's mesh", scene.file);
   CoatMeshInput in;
   in.coat = &coatNow;
   in.packedCoat = packedCoat;
@@ -581,9 +584,16 @@ QualityMetrics Pipeline::check() {
   } join{group, quit};
   group.run(beside);
 
-  // The independent checker (coat/check.hpp) on the coat at full geometry.
+  // The independent checker (coat/check.hpp) on the coat at full geometry: every feather, also after a
+  // render set levels by screen size (they are put back with the level when the check completes).
   const double savedLod = impl_->lod;
+  const std::vector<double> savedLevels = impl_->featherLods;
+  const auto restore = [&] {
+    setLod(savedLod);
+    setFeatherLods(savedLevels);
+  };
   setLod(1.0);
+  setFeatherLods({});
   const TriMesh& full = coatMesh().mesh;
   std::vector<uint32_t> tractFaces;
   for (const auto& t : impl_->tracts) tractFaces.insert(tractFaces.end(), t.faces.begin(), t.faces.end());
@@ -594,13 +604,13 @@ QualityMetrics Pipeline::check() {
   co.attribute = true;  // which feathers intersect or penetrate (the counts are the same either way)
   co.progress = part(0.5, 1);
   if (!co.progress("check", 0)) {
-    setLod(savedLod);
+    restore();
     return m;
   }
   coat::setFeatherBases(co, impl_->coatNow, impl_->packOptions.baseAllowance);
   const coat::CheckResult r = coat::check(impl_->posed, tractFaces, full, co);
   if (!r.complete) {
-    setLod(savedLod);
+    restore();
     return m;
   }
   join.wait();
@@ -651,7 +661,7 @@ QualityMetrics Pipeline::check() {
     im.lastUnpacked = std::move(unpacked);
   }
   end("check", 1);
-  setLod(savedLod);
+  restore();
   return m;
 }
 

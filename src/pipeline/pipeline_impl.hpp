@@ -46,6 +46,14 @@ struct TractSettings {
   std::string element;
 };
 
+// Memory of a coat's geometry at level `lod` (times featherLods[f] when it has one per feather), of the
+// present feathers (all when `present` is null), checked against the memory ceiling before meshing
+// (docs/limits.md): barbs on both vanes and afterfeathers, 16 triangles each, 200 bytes a triangle.
+// Throws pteryla::Error naming `file` and the feather with the most barbs; `what` opens the message.
+void requireCoatMemory(const std::vector<feather::FeatherParams>& params, const std::vector<uint8_t>* present,
+                       double lod, const std::vector<double>* featherLods, const std::string& what,
+                       const std::string& file);
+
 struct Pipeline::Impl {
   Scene scene;
   ProgressFn progress;

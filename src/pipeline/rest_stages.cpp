@@ -25,6 +25,7 @@ constexpr size_t kAutoCount = 3000;
 // Memory estimates checked against the ceiling (core/limits.hpp, docs/limits.md). Lower bounds from the
 // bird (3152 feathers, 1.29 M triangles at lod 0.6: 775 MB peak), so no scene that fits is refused.
 constexpr double kBytesPerFollicle = 32e3;
+
 constexpr double kTrianglesPerBarb = 16;
 constexpr double kBytesPerTriangle = 200;
 
@@ -390,30 +391,41 @@ void Pipeline::Impl::computeInterpolate() {
     else if (!coatRest.params[f].growth)
       coatRest.params[f].growth = sceneGrowth;
   }
-  // Memory of the coat's geometry before packing and meshing it: barbs on both vanes (and afterfeathers)
-  // at the current level of detail, about kTrianglesPerBarb triangles each.
+  // Memory of the coat's geometry before packing and meshing it, at the current level of detail; rendering
+  // by screen size, at the least a render meshes (every feather at kMinScreenLodFraction of it): the mesh
+  // stage checks again with the levels it is given.
+  const bool bySize = scene.render.lodByScreenSize;
+  requireCoatMemory(coatRest.params, nullptr, lod * (bySize ? kMinScreenLodFraction : 1.0), nullptr,
+                    bySize ? "the coat's geometry at its least level by screen size" : "the coat's geometry",
+                    scene.file);
+  report(progress, "interpolate", 1);
+}
+
+void requireCoatMemory(const std::vector<feather::FeatherParams>& params, const std::vector<uint8_t>* present,
+                       double lod, const std::vector<double>* featherLods, const std::string& what,
+                       const std::string& file) {
   double triangles = 0;
   size_t largest = 0;
   double largestBarbs = 0;
-  for (size_t f = 0; f < coatRest.size(); ++f) {
+  const bool perFeather = featherLods && featherLods->size() == params.size();
+  for (size_t f = 0; f < params.size(); ++f) {
+    if (present && f < present->size() && !(*present)[f]) continue;
     double barbs = 0;
-    for (const feather::FeatherParams* p = &coatRest.params[f]; p; p = p->afterfeather.get())
+    for (const feather::FeatherParams* p = &params[f]; p; p = p->afterfeather.get())
       barbs += 2.0 * p->rachisLength / std::max(std::min(p->spacingBase, p->spacingTip), 1e-300);
     if (barbs > largestBarbs) {
       largestBarbs = barbs;
       largest = f;
     }
-    triangles += barbs * kTrianglesPerBarb * lod;
+    triangles += barbs * kTrianglesPerBarb * lod * (perFeather ? (*featherLods)[f] : 1.0);
   }
-  if (!coatRest.params.empty()) {
-    const std::string name = coatRest.params[largest].name;
-    requireMemory(triangles * kBytesPerTriangle,
-                  "the coat's geometry (about " + std::to_string(static_cast<uint64_t>(std::min(triangles, 1e18))) +
-                      " triangles; up to " + std::to_string(static_cast<uint64_t>(std::min(largestBarbs, 1e18))) +
-                      " barbs per feather)",
-                  scene.file, name.empty() ? "feathers" : "feathers." + name);
-  }
-  report(progress, "interpolate", 1);
+  if (params.empty()) return;
+  const std::string name = params[largest].name;
+  requireMemory(triangles * kBytesPerTriangle,
+                what + " (about " + std::to_string(static_cast<uint64_t>(std::min(triangles, 1e18))) +
+                    " triangles; up to " + std::to_string(static_cast<uint64_t>(std::min(largestBarbs, 1e18))) +
+                    " barbs per feather)",
+                file, name.empty() ? "feathers" : "feathers." + name);
 }
 
 // Directions and ordering are read here, not with the tracts, so editing them re-orients and

@@ -11,6 +11,7 @@
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/json.hpp"
+#include "pteryla/core/limits.hpp"
 #include "pteryla/feather/io.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/render/osmesa_context.hpp"
@@ -375,4 +376,52 @@ TEST(SceneLod, AutoFramingDoesNotMeshTheCoatFirst) {
   // Rendering again meshes nothing.
   view.render(p, 320, 240);
   EXPECT_EQ(p.evaluations(Stage::Mesh), 1u);
+}
+
+// The memory ceiling counts what a render meshes: before packing, the least levels by screen size (a
+// tenth of render.lod), and before meshing, the levels the mesh is given. A coat refused at a fixed level
+// renders by screen size from afar; meshed at the uniform level instead, the mesh stage refuses it.
+TEST(SceneLod, TheMemoryCeilingCountsTheLevelsARenderMeshes) {
+  struct Ceiling {
+    double saved = memoryLimitBytes();
+    ~Ceiling() { setMemoryLimitBytes(saved); }
+  } restore;
+  pipeline::Scene farScene = coatScene(true);
+  farScene.camera.eye = glm::dvec3(cameraAt(12.0f).eye);
+  pipeline::Scene fixed = farScene;
+  fixed.render.lodByScreenSize = false;
+  const double uniformTriangles = double(pipeline::Pipeline(fixed).coatMesh().mesh.triangleCount());
+  // A ceiling of half the uniform coat's triangles at 200 bytes (the estimate's, docs/limits.md).
+  setMemoryLimitBytes(uniformTriangles * 200.0 / 2.0);
+  pipeline::Pipeline refused(fixed);
+  EXPECT_THROW(refused.coatMesh(), Error) << "at a fixed level";
+
+  pipeline::Pipeline p(farScene);
+  SceneView view(context());
+  EXPECT_NO_THROW(view.render(p, 320, 240));
+  EXPECT_LT(p.coatMesh().mesh.triangleCount(), 60000u);
+
+  pipeline::Pipeline uniform(farScene);
+  try {
+    uniform.coatMesh();  // no render: every feather at render.lod
+    ADD_FAILURE() << "the uniform mesh passed the ceiling";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("the coat's mesh"), std::string::npos) << e.what();
+    EXPECT_EQ(e.element(), "feathers.contour");
+  }
+}
+
+// The checker measures every feather at full detail, also after a render by screen size set levels on the
+// pipeline, and gives the levels back.
+TEST(SceneLod, TheCheckerMeshesEveryFeatherAfterARender) {
+  pipeline::Pipeline rendered(coatScene(true)), fresh(coatScene(true));
+  SceneView view(context());
+  view.render(rendered, 320, 240);
+  const std::vector<double> levels = rendered.featherLods();
+  ASSERT_FALSE(levels.empty());
+  const pipeline::QualityMetrics a = rendered.check(), b = fresh.check();
+  EXPECT_EQ(a.intersectingPairs, b.intersectingPairs);
+  EXPECT_EQ(a.skinPenetrations, b.skinPenetrations);
+  EXPECT_EQ(a.coverage, b.coverage);
+  EXPECT_EQ(rendered.featherLods(), levels);
 }

@@ -140,6 +140,10 @@ struct FrameReuse {
 // count) or "vertex v". Pipeline::setSkinPose calls it; so does a host that keeps a pose itself.
 void checkSkinPose(const coat::SkinMesh& rest, const std::vector<glm::dvec3>& positions);
 
+// The least fraction of the level of detail a feather gets by screen size (render::screenSizeLods; scene
+// render.lod_by_screen_size): what the memory estimate before packing assumes when rendering by size.
+inline constexpr double kMinScreenLodFraction = 0.1;
+
 class Pipeline {
  public:
   explicit Pipeline(Scene scene, ProgressFn progress = {});

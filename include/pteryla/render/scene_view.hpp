@@ -44,7 +44,7 @@ std::vector<FeatherDrawRange> drawRanges(const pipeline::CoatMesh& coat);
 // alpha mask repeats the barbs they stand for, so the look is kept. Hand the result to
 // Pipeline::setFeatherLods, which multiplies it with the scene's lod. Absent feathers get 1.
 std::vector<double> screenSizeLods(pipeline::Pipeline& p, const Camera& camera, int width, int height,
-                                   double pixelsPerBarb = 2.0, double minFraction = 0.1);
+                                   double pixelsPerBarb = 2.0, double minFraction = pipeline::kMinScreenLodFraction);
 
 Image renderFeatherImage(RenderContext& context, const feather::FeatherParams& params, const TriMesh& mesh, int width,
                          int height);
