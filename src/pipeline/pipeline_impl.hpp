@@ -38,6 +38,7 @@ struct TractSettings {
   double featherSpacings = 3.5;
   coat::RelaxOptions relax;
   std::vector<glm::dvec3> pinned;
+  std::vector<uint64_t> removed;  // "removed_follicles": ids dropped after relaxation (sorted, unique)
   coat::TractFeatherOptions feathers;
   std::shared_ptr<const feather::GrowthSchedule> growth;  // the tract's "growth" (null: none)
   std::string overlapGroup;      // "overlap_group": tracts of one group share one distribution where they overlap
@@ -142,6 +143,7 @@ struct Pipeline::Impl {
   void computeTracts();
   void computeDistribute();
   void redistributeOverlaps(uint64_t& nextId);
+  void removeFollicles();  // each tract's "removed_follicles", after relaxation
   void computeInterpolate();
   coat::TractParameterization boxParameterization(uint32_t tract) const;
   void computeDirections();

@@ -60,6 +60,30 @@ std::function<double(uint32_t, const glm::dvec3&)> densityFactorField(const Scen
   };
 }
 
+// A tract's "removed_follicles" (docs/scene-format.md): follicle ids, each a non-negative integer; sorted
+// and unique. Ids the distribution does not make are ignored (an earlier tract's count changed, say).
+std::vector<uint64_t> readRemovedFollicles(JsonReader& r) {
+  std::vector<uint64_t> out;
+  if (!r.has("removed_follicles")) {
+    r.allow("removed_follicles");
+    return out;
+  }
+  const Json& list = r.raw("removed_follicles");
+  if (!list.is_array()) r.fail("removed_follicles", "expected an array of follicle ids");
+  out.reserve(list.size());
+  for (size_t k = 0; k < list.size(); ++k) {
+    const Json& v = list[k];
+    const bool ok = v.is_number_unsigned() || (v.is_number_integer() && v.get<int64_t>() >= 0);
+    if (!ok)
+      throw Error("expected a follicle id (a non-negative integer), got " + v.dump(), r.file(),
+                  r.pathOf("removed_follicles") + "[" + std::to_string(k) + "]");
+    out.push_back(v.get<uint64_t>());
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 }  // namespace
 
 void Pipeline::Impl::computeSkin() {
@@ -189,6 +213,7 @@ void Pipeline::Impl::computeTracts() {
     } else {
       r.allow("pinned");
     }
+    t.removed = readRemovedFollicles(r);
     t.feathers = coat::parseTractFeatherOptions(r);
     if (r.has("growth")) {
       JsonReader g = r.object("growth");
@@ -238,7 +263,31 @@ void Pipeline::Impl::computeDistribute() {
     follicles.append(f);
   }
   redistributeOverlaps(nextId);
+  removeFollicles();
   report(progress, "distribute", 1);
+}
+
+// Each tract's "removed_follicles" leave the coat after relaxation and the overlap redistribution, so
+// the follicles that stay keep their places bit for bit: deleting a feather leaves a gap. A follicle
+// goes when its id is listed by the tract it belongs to.
+void Pipeline::Impl::removeFollicles() {
+  bool any = false;
+  for (const TractSettings& t : tractSettings) any = any || !t.removed.empty();
+  if (!any) return;
+  coat::Follicles kept;
+  kept.reserve(follicles.size());
+  for (size_t k = 0; k < follicles.size(); ++k) {
+    const std::vector<uint64_t>& gone = tractSettings[follicles.tract[k]].removed;
+    if (std::binary_search(gone.begin(), gone.end(), follicles.id[k])) continue;
+    kept.face.push_back(follicles.face[k]);
+    kept.bary.push_back(follicles.bary[k]);
+    kept.position.push_back(follicles.position[k]);
+    kept.normal.push_back(follicles.normal[k]);
+    kept.tract.push_back(follicles.tract[k]);
+    kept.pinned.push_back(follicles.pinned[k]);
+    kept.id.push_back(follicles.id[k]);
+  }
+  follicles = std::move(kept);
 }
 
 // Thesis 9.2.1: "if the tracts are the same feather type a more uniform distribution is typically desired.
