@@ -128,6 +128,8 @@ class App {
   // app_handles.cpp: hover, drag and select the scene's handles with the orbit tool (handles.hpp); true
   // when the mouse is on one (or dragging it), so the feather pick and the orbit leave it alone.
   bool handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed);
+  // Delete: the boxed handles and the boxed feathers' follicles, else the selected handle, else the
+  // selected feather's follicle (handles.hpp, removeHandles), one undo step.
   void deleteSelectedHandle();
   // Box selection (Ctrl + drag): fills view_.boxFeathers / boxFollicles from a rectangle in view pixels;
   // true when the mouse is boxing. frameBoxSelection frames the boxed feathers (false without any).

@@ -1,7 +1,8 @@
 // Handles with the orbit tool (docs/viewer.md, "Handles"; handles.hpp): the control, brush, styling vector,
 // key feather or pinned follicle nearest the mouse (within 8 pixels) is ringed with a readout; a press on
-// it selects it and a drag moves it over the skin (one edit on release); Delete removes the selected one.
-// Ctrl + drag boxes feathers (and shown follicles).
+// it selects it and a drag moves it over the skin (one edit on release); Delete removes the selected one,
+// or the selected feather's follicle. Ctrl + drag boxes feathers (and shown follicles); Delete then removes
+// the boxed handles and the boxed feathers' follicles.
 #include <imgui.h>
 
 #include <algorithm>
@@ -62,19 +63,31 @@ bool App::handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed) {
 }
 
 void App::deleteSelectedHandle() {
-  if (!view_.boxHandles.empty()) {  // a box selection: every boxed handle, one undo step
+  // A box selection: every boxed handle, and the follicles of the boxed feathers and follicles (their
+  // tracts' removed_follicles), as one undo step.
+  if (!view_.boxHandles.empty() || !view_.boxFeathers.empty() || !view_.boxFollicles.empty()) {
     const std::vector<Handle> hs = view_.boxHandles;
+    const std::vector<FollicleRef> fs = follicleRefs(doc_.snapshot(), view_.boxFeathers, view_.boxFollicles);
     view_.boxHandles.clear();
+    view_.boxFeathers.clear();
+    view_.boxFollicles.clear();
     view_.selectedHandle.reset();
     view_.hoveredHandle.reset();
-    guarded(*panels_, [&] { removeHandles(doc_, hs); });
+    guarded(*panels_, [&] { removeHandles(doc_, hs, fs); });
     return;
   }
-  if (!view_.selectedHandle) return;
-  const Handle h = *view_.selectedHandle;
-  view_.selectedHandle.reset();
-  view_.hoveredHandle.reset();
-  guarded(*panels_, [&] { removeHandle(doc_, h); });
+  if (view_.selectedHandle) {
+    const Handle h = *view_.selectedHandle;
+    view_.selectedHandle.reset();
+    view_.hoveredHandle.reset();
+    guarded(*panels_, [&] { removeHandle(doc_, h); });
+    return;
+  }
+  if (view_.selectedFeather >= 0) {  // the clicked feather: its follicle goes, leaving a gap
+    const std::vector<FollicleRef> fs = follicleRefs(doc_.snapshot(), {view_.selectedFeather}, {});
+    view_.selectedFeather = view_.hoveredFeather = -1;
+    guarded(*panels_, [&] { removeHandles(doc_, {}, fs); });
+  }
 }
 
 bool App::handleBox(const glm::vec2& mouse, bool overUi, bool leftPressed) {

@@ -95,6 +95,11 @@ void App::handleInput() {
     clickPending_ = false;
     view_.selectedFeather = snap.haveCoat ? featherAt(mouse) : -1;
     view_.selectedHandle.reset();
+    if (view_.selectedFeather >= 0) {  // a click replaces the box selection (Delete then means this feather)
+      view_.boxFeathers.clear();
+      view_.boxFollicles.clear();
+      view_.boxHandles.clear();
+    }
   }
   const bool anyDown = ImGui::IsMouseDown(ImGuiMouseButton_Left) || ImGui::IsMouseDown(ImGuiMouseButton_Right) ||
                        ImGui::IsMouseDown(ImGuiMouseButton_Middle);

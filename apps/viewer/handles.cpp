@@ -152,23 +152,52 @@ void removeHandle(Document& d, const Handle& h) {
   }
 }
 
-size_t removeHandles(Document& d, const std::vector<Handle>& hs) {
+std::vector<FollicleRef> follicleRefs(const Snapshot& s, const std::vector<int>& feathers,
+                                      const std::vector<int>& follicles) {
+  std::vector<FollicleRef> out;
+  auto add = [&](int f) {
+    if (f < 0 || size_t(f) >= s.follicleId.size() || size_t(f) >= s.follicleTract.size()) return;
+    const FollicleRef r{s.follicleTract[size_t(f)], s.follicleId[size_t(f)]};
+    if (std::find(out.begin(), out.end(), r) == out.end()) out.push_back(r);
+  };
+  for (int i : feathers)
+    if (i >= 0 && size_t(i) < s.featherFollicle.size()) add(int(s.featherFollicle[size_t(i)]));
+  for (int f : follicles) add(f);
+  return out;
+}
+
+size_t removeHandles(Document& d, const std::vector<Handle>& hs, const std::vector<FollicleRef>& follicles) {
   // The handles that still exist, removed from the back of each list so earlier indices stay valid.
   std::vector<Handle> live;
+  // The follicles not yet removed, of tracts the scene has (an empty list is the one whole-mesh tract).
+  std::vector<FollicleRef> fresh;
   {
     Scene probe = d.scene();
     for (const Handle& h : hs) {
       const Json* j = entry(probe, h);
       if (j && isHandle(*j, h.kind) && std::find(live.begin(), live.end(), h) == live.end()) live.push_back(h);
     }
+    const size_t tracts = std::max<size_t>(probe.tracts.size(), 1);
+    for (const FollicleRef& f : follicles) {
+      if (f.tract >= tracts || std::find(fresh.begin(), fresh.end(), f) != fresh.end()) continue;
+      bool listed = false;
+      if (f.tract < probe.tracts.size() && probe.tracts[f.tract].contains("removed_follicles"))
+        for (const Json& v : probe.tracts[f.tract]["removed_follicles"])
+          listed = listed || (v.is_number_integer() && v.get<uint64_t>() == f.id);
+      if (!listed) fresh.push_back(f);
+    }
   }
-  if (live.empty()) return 0;
+  if (live.empty() && fresh.empty()) return 0;
   std::sort(live.begin(), live.end(), [](const Handle& a, const Handle& b) {
     if (a.kind != b.kind) return a.kind < b.kind;
     if (a.tract != b.tract) return a.tract < b.tract;
     return a.index > b.index;
   });
-  d.edit("remove " + std::to_string(live.size()) + " handles", [&](Scene& s) {
+  const std::string label = !fresh.empty() && live.empty() ? "remove " + std::to_string(fresh.size()) + " feathers"
+                            : fresh.empty() ? "remove " + std::to_string(live.size()) + " handles"
+                                            : "remove " + std::to_string(live.size()) + " handles and " +
+                                                  std::to_string(fresh.size()) + " feathers";
+  d.edit(label, [&](Scene& s) {
     for (const Handle& h : live) {
       switch (h.kind) {
         case HandleKind::Control:
@@ -192,8 +221,10 @@ size_t removeHandles(Document& d, const std::vector<Handle>& hs) {
         }
       }
     }
+    if (s.tracts.empty() && !fresh.empty()) s.tracts = Json::array({Json{{"name", "all"}}});
+    for (const FollicleRef& f : fresh) s.tracts[f.tract]["removed_follicles"].push_back(f.id);
   });
-  return live.size();
+  return live.size() + fresh.size();
 }
 
 }  // namespace pteryla::viewer

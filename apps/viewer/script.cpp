@@ -393,14 +393,15 @@ const char* scriptHelp() {
   ui PANEL WIDGET [VALUE]        use a panel's widget as a user would (docs/viewer.md lists them)
   dialog open|save-as [PATH]     open the Open / Save As dialog (at PATH: its directory and file name)
   key enter|escape|tab|delete|k  press a key (Enter confirms a dialog's file name; Delete removes the
-                                 selected handle; K keys the selected joint or control)
+                                 box selection, else the selected handle, else the selected feather's
+                                 follicle; K keys the selected joint or control)
   selection                      print the selected feather (click one in the view) as JSON
   render-frames DIR FROM TO FPS [cancel-after N]   render frame k at FROM + k/FPS to DIR/frame_NNNN.png
                                  (scene size, LOD, camera); the next command waits until the frames are
                                  written (cancel-after N: the panel's Cancel once N are), then prints
                                  {"frames_written", "frames_total", "frames_status"}
   box-select X1 Y1 X2 Y2         box selection (as Ctrl + drag): feathers, handles, and follicles when shown
-                                 (then `key delete` removes the boxed handles as one undo step)
+                                 (then `key delete` removes the boxed handles and feathers as one undo step)
   box-selection                  print the boxed feathers, follicles and handles as JSON
   autosave                       write the recovery file now (the scene must have unsaved changes)
   crash                          end the process at once, without clean-up (tests recovery)

@@ -85,3 +85,46 @@ TEST(Handles, RemoveSeveralIsOneEditAndSkipsWhatIsGone) {
   EXPECT_EQ(sceneHandles(d.scene()).size(), 6u);
   EXPECT_EQ(removeHandles(d, {Handle{HandleKind::Brush, 0, 0, {}}}), 0u);  // nothing there: no edit
 }
+
+// Deleting feathers (Delete on a clicked or boxed feather): their follicles' ids go to their tracts'
+// removed_follicles, with the boxed handles, as one edit; follicles already removed make no edit.
+TEST(Handles, DeletingFeathersListsTheirFollicleIdsInOneEdit) {
+  Document d;
+  d.reset(smallPatch(), "");
+  d.edit("two tracts", [](pipeline::Scene& s) {
+    Json t = s.tracts[0];
+    t["name"] = "second";
+    t.erase("key_feathers");
+    t["feather"] = "contour";
+    s.tracts.push_back(t);
+  });
+  actions::addPinned(d, 0, {0.1, 0.05, 0.1});
+  d.endGesture();
+  Snapshot snap;  // three follicles (ids 40, 41 of tract 0; 90 of tract 1), feathers on 2, 0, 1
+  snap.follicleId = {40, 41, 90};
+  snap.follicleTract = {0, 0, 1};
+  snap.featherFollicle = {2, 0, 1};
+  // Feathers 0 and 1, follicle 0 again (once), an out-of-range feather and follicle (skipped).
+  const std::vector<FollicleRef> refs = follicleRefs(snap, {0, 1, 7, -1}, {0, 3});
+  ASSERT_EQ(refs.size(), 2u);
+  EXPECT_EQ(refs[0], (FollicleRef{1, 90}));
+  EXPECT_EQ(refs[1], (FollicleRef{0, 40}));
+
+  const Json before = sceneJson(d.scene());
+  const std::vector<Handle> pinned = {sceneHandles(d.scene()).back()};
+  ASSERT_EQ(pinned[0].kind, HandleKind::Pinned);
+  EXPECT_EQ(removeHandles(d, pinned, refs), 3u);
+  EXPECT_EQ(d.undoLabel(), "remove 1 handles and 2 feathers");
+  EXPECT_EQ(d.scene().tracts[0]["removed_follicles"], Json::array({40}));
+  EXPECT_EQ(d.scene().tracts[1]["removed_follicles"], Json::array({90}));
+  EXPECT_FALSE(d.scene().tracts[0].contains("pinned"));
+  d.endGesture();
+  // Again: both are listed already and the handle is gone, so nothing changes. A third follicle adds.
+  EXPECT_EQ(removeHandles(d, pinned, refs), 0u);
+  EXPECT_EQ(removeHandles(d, {}, {FollicleRef{0, 41}, FollicleRef{5, 1}}), 1u);  // tract 5 does not exist
+  EXPECT_EQ(d.scene().tracts[0]["removed_follicles"], Json::array({40, 41}));
+  ASSERT_TRUE(d.undo());
+  ASSERT_TRUE(d.undo());  // one step back restores the pinned follicle and both feathers
+  EXPECT_EQ(sceneJson(d.scene()), before);
+  ASSERT_TRUE(d.waitIdle()) << d.takeError().value_or("");
+}
