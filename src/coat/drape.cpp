@@ -606,13 +606,22 @@ struct DrapeCache::State {
   std::vector<FeatherMemo> feathers;
   std::vector<uint32_t> order;
   std::vector<PairMemo> pairs;
+  // The skin of the last drape and how many drapes in a row found it moved (drapeCoatMesh).
+  std::vector<glm::dvec3> lastSkin;
+  int skinMoves = 0;
+  bool keepAlways = false;  // keep every drape (drapeOverMature reads the mature coat's)
 };
 
 DrapeCache::DrapeCache() : state_(std::make_unique<State>()) {}
 DrapeCache::~DrapeCache() = default;
 DrapeCache::DrapeCache(DrapeCache&&) noexcept = default;
 DrapeCache& DrapeCache::operator=(DrapeCache&&) noexcept = default;
-void DrapeCache::clear() { state_ = std::make_unique<State>(); }
+void DrapeCache::clear() {
+  const bool keepAlways = state_->keepAlways;
+  state_ = std::make_unique<State>();
+  state_->keepAlways = keepAlways;
+}
+void DrapeCache::keepEveryDrape() { state_->keepAlways = true; }
 size_t DrapeCache::bytes() const {
   const State& s = *state_;
   size_t b = s.skin.positions.capacity() * sizeof(dvec3) * 3 + s.skin.faces.capacity() * 16 +
@@ -1625,8 +1634,21 @@ DrapeSpacing drapeSpacing(const SkinMesh& skin, const CoatFeathers& coat, const 
 
 DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeOptions& o,
                           DrapeCache& cache) {
+  DrapeCache::State& M = DrapeAccess::state(cache);
+  // A skin that moved at each of the last two drapes (an animated pose) leaves nothing a drape could
+  // reuse at the next, so none is kept until it holds still (the result is the same either way).
+  const bool moved = !M.lastSkin.empty() && M.lastSkin != skin.positions;
+  M.skinMoves = moved ? M.skinMoves + 1 : 0;
+  M.lastSkin = skin.positions;
+  const bool keep = M.keepAlways || M.skinMoves < 2;
+  if (!keep && (M.valid || !M.feathers.empty())) {
+    DrapeCache::State fresh;
+    fresh.lastSkin = std::move(M.lastSkin);
+    fresh.skinMoves = M.skinMoves;
+    M = std::move(fresh);
+  }
   try {
-    return drape(skin, coat, mesh, o, &DrapeAccess::state(cache));
+    return drape(skin, coat, mesh, o, keep ? &M : nullptr);
   } catch (...) {
     cache.clear();
     throw;

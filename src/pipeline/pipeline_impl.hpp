@@ -111,7 +111,11 @@ struct Pipeline::Impl {
   coat::PackResult matureFlat;
   CoatMesher matureMesher;
   TriMesh matureMesh;
-  coat::DrapeCache matureDrapeCache;
+  coat::DrapeCache matureDrapeCache = [] {
+    coat::DrapeCache c;
+    c.keepEveryDrape();
+    return c;
+  }();
   // What the mature drape was made from; an equal next one is not meshed or draped again.
   struct MatureDrapeKey {
     uint64_t generation = 0;

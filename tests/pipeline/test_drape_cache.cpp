@@ -312,3 +312,33 @@ TEST(DrapeCache, MoultFramesLieOverTheMatureCoat) {
   coat::DrapeCache empty;
   EXPECT_THROW(coat::drapeOverMature(skin, frame.feathers, m2, empty), Error);
 }
+
+// A skin that moves at every drape (an animated pose) makes the cache keep nothing, with the same
+// results; once the skin holds still, drapes are kept and reused again.
+TEST(DrapeCache, AMovingSkinIsNotKeptUntilItHoldsStill) {
+  pipeline::Pipeline p(pipeline::sceneFromJson(sphereJson(120), kSceneFile));
+  const coat::SkinMesh skin = p.posedSkin();
+  FlatCoat c;
+  c.feathers = p.feathers();
+  c.remesh();
+  coat::DrapeCache cache;
+  auto scaled = [&](double s) {
+    coat::SkinMesh m = skin;
+    for (auto& v : m.positions) v *= s;
+    return m;
+  };
+  drapeBoth(scaled(1.0), c, cache, "rest");
+  const size_t kept = cache.bytes();
+  drapeBoth(scaled(1.01), c, cache, "moved once");
+  EXPECT_GT(cache.bytes(), kept / 2);  // a single move still keeps the drape
+  drapeBoth(scaled(1.02), c, cache, "moved twice");
+  EXPECT_LT(cache.bytes(), kept / 4);  // moving every frame: nothing kept
+  drapeBoth(scaled(1.02), c, cache, "held still");
+  const coat::DrapeResult r = drapeBoth(scaled(1.02), c, cache, "still again");
+  EXPECT_EQ(r.stats.relaid, 0u);
+  // A cache told to keep every drape keeps through the moves.
+  coat::DrapeCache always;
+  always.keepEveryDrape();
+  for (double s : {1.0, 1.01, 1.02}) drapeBoth(scaled(s), c, always, "kept");
+  EXPECT_GT(always.bytes(), kept / 2);
+}

@@ -97,7 +97,10 @@ class DrapeCache {
   ~DrapeCache();
   DrapeCache(DrapeCache&&) noexcept;
   DrapeCache& operator=(DrapeCache&&) noexcept;
-  void clear();          // the next drape lays everything
+  void clear();  // the next drape lays everything
+  // A cache keeps nothing while the skin moves at every drape (an animated pose), unless told to keep
+  // every drape (the mature coat's cache, which drapeOverMature reads).
+  void keepEveryDrape();
   size_t bytes() const;  // roughly what the cache holds
 
   struct State;
