@@ -6,6 +6,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <unordered_map>
 
@@ -588,6 +589,91 @@ struct FeatherMemo {
   detail::Box readBox, writeBox;                   // where laying it read (the top's samples, the air) and wrote
 };
 
+// A coat mesh's vertices and triangles per feather (CSR, each feather's ascending), each one's place
+// among its feather's, and the draped feathers (those with vertices) in layer order.
+struct CoatLayout {
+  std::vector<uint32_t> first, verts, localVert;  // vertices: verts[first[i] .. first[i + 1])
+  std::vector<uint32_t> trisOf, tris, localTri;   // triangles: tris[trisOf[i] .. trisOf[i + 1])
+  std::vector<int64_t> rank;                      // place in `order`, -1 = not draped
+  std::vector<uint32_t> order;
+  // Throws Error for a featherId out of range.
+  CoatLayout(const CoatFeathers& coat, const TriMesh& mesh) {
+    const size_t n = coat.size(), nv = mesh.positions.size(), nt = mesh.triangleCount();
+    first.assign(n + 1, 0);
+    verts.resize(nv);
+    localVert.resize(nv);
+    for (uint32_t f : mesh.featherId) {
+      if (f >= n) throw Error("featherId " + std::to_string(f) + " out of range", {}, "featherId");
+      ++first[f + 1];
+    }
+    for (size_t i = 0; i < n; ++i) first[i + 1] += first[i];
+    {
+      std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+      for (uint32_t v = 0; v < nv; ++v) {
+        const uint32_t f = mesh.featherId[v];
+        localVert[v] = fill[f] - first[f];
+        verts[fill[f]++] = v;
+      }
+    }
+    rank.assign(n, -1);
+    for (uint32_t i : coat.layerOrder)
+      if (i < n && rank[i] < 0 && first[i + 1] > first[i]) {
+        rank[i] = static_cast<int64_t>(order.size());
+        order.push_back(i);
+      }
+    trisOf.assign(n + 1, 0);
+    tris.resize(nt);
+    localTri.resize(nt);
+    for (size_t t = 0; t < nt; ++t) ++trisOf[mesh.featherId[mesh.indices[3 * t]] + 1];
+    for (size_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
+    std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
+    for (size_t t = 0; t < nt; ++t) {
+      const uint32_t f = mesh.featherId[mesh.indices[3 * t]];
+      localTri[t] = fill[f] - trisOf[f];
+      tris[fill[f]++] = static_cast<uint32_t>(t);
+    }
+  }
+};
+
+// Is feather i of `mesh` (flat, as given to a drape) the one a memo was made from: the same vertices
+// (positions, normals, tangents where the mesh has them) and triangles, in the same order?
+bool sameFlat(const FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i) {
+  const uint32_t* vs = L.verts.data() + L.first[i];
+  const size_t cnt = L.first[i + 1] - L.first[i], tc = L.trisOf[i + 1] - L.trisOf[i];
+  const bool hasN = mesh.normals.size() == mesh.positions.size(), hasT = mesh.tangents.size() == mesh.positions.size();
+  if (m.flatPos.size() != cnt || m.flatTris.size() != 3 * tc) return false;
+  if ((hasN && m.flatNrm.size() != cnt) || (hasT && m.flatTan.size() != cnt)) return false;
+  for (size_t q = 0; q < cnt; ++q)
+    if (m.flatPos[q] != mesh.positions[vs[q]] || (hasN && m.flatNrm[q] != mesh.normals[vs[q]]) ||
+        (hasT && m.flatTan[q] != mesh.tangents[vs[q]]))
+      return false;
+  for (size_t q = 0; q < tc; ++q)
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t v = mesh.indices[3 * static_cast<size_t>(L.tris[L.trisOf[i] + q]) + c];
+      if (mesh.featherId[v] != i || m.flatTris[3 * q + c] != L.localVert[v]) return false;
+    }
+  return true;
+}
+
+// The drape's counts: draped feathers, overhanging nodes of their charts, and those that lost triangles
+// (`cut` per feather) or every triangle (`kept` none).
+void tally(DrapeResult& res, const std::vector<uint32_t>& order, const std::vector<size_t>& cut,
+           const std::vector<size_t>& kept, const std::function<const Chart&(uint32_t)>& chartOf) {
+  for (uint32_t i : order) {
+    ++res.stats.draped;
+    for (const Node& nd : chartOf(i).nodes) res.stats.overhangingNodes += nd.free && nd.active;
+    if (cut[i]) {
+      res.trimmed[i] = 1;
+      ++res.stats.trimmedFeathers;
+      res.stats.trimmedTriangles += cut[i];
+      if (!kept[i]) {
+        res.hidden[i] = 1;
+        ++res.stats.hiddenFeathers;
+      }
+    }
+  }
+}
+
 // A crossing pair of triangles, as feather and triangle within the feather.
 struct PairMemo {
   uint32_t fa, ta, fb, tb;
@@ -678,46 +764,16 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     if (M) *M = DrapeCache::State{};
     return res;
   }
-  // Vertices per feather (CSR).
-  std::vector<uint32_t> first(n + 1, 0), verts(nv);
-  for (uint32_t f : mesh.featherId) {
-    if (f >= n) throw Error("featherId " + std::to_string(f) + " out of range", {}, "featherId");
-    ++first[f + 1];
-  }
-  for (size_t i = 0; i < n; ++i) first[i + 1] += first[i];
-  std::vector<uint32_t> localVert(nv);  // a vertex's place among its feather's
-  {
-    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-    for (uint32_t v = 0; v < nv; ++v) {
-      const uint32_t f = mesh.featherId[v];
-      localVert[v] = fill[f] - first[f];
-      verts[fill[f]++] = v;
-    }
-  }
-  std::vector<int64_t> rank(n, -1);
-  std::vector<uint32_t> order;
-  for (uint32_t i : coat.layerOrder)
-    if (i < n && rank[i] < 0 && first[i + 1] > first[i]) {
-      rank[i] = static_cast<int64_t>(order.size());
-      order.push_back(i);
-    }
+  const CoatLayout L(coat, mesh);
+  const std::vector<uint32_t>&first = L.first, &verts = L.verts, &localVert = L.localVert;
+  const std::vector<uint32_t>&trisOf = L.trisOf, &tris = L.tris, &localTri = L.localTri;
+  const std::vector<int64_t>& rank = L.rank;
+  const std::vector<uint32_t>& order = L.order;
   if (order.empty()) {
     if (M) *M = DrapeCache::State{};
     return res;
   }
   const size_t nt = mesh.triangleCount();
-  std::vector<uint32_t> trisOf(n + 1, 0), tris(nt);  // triangles per feather (CSR)
-  for (size_t t = 0; t < nt; ++t) ++trisOf[mesh.featherId[mesh.indices[3 * t]] + 1];
-  for (size_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
-  std::vector<uint32_t> localTri(M ? nt : 0);  // a triangle's place among its feather's
-  {
-    std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
-    for (size_t t = 0; t < nt; ++t) {
-      const uint32_t f = mesh.featherId[mesh.indices[3 * t]];
-      if (M) localTri[t] = fill[f] - trisOf[f];
-      tris[fill[f]++] = static_cast<uint32_t>(t);
-    }
-  }
   // Progress after each step, at the share of the bird's drape done by then.
   auto step = [&](double f) { report(o.progress, "drape", f); };
   auto within = [&](double lo, double hi) -> ProgressFn {
@@ -778,7 +834,6 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
   if (usable) {
     detail::inArena(o.threads, [&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16), [&](const tbb::blocked_range<size_t>& r) {
-        std::vector<uint32_t> local;
         for (size_t i = r.begin(); i < r.end(); ++i) {
           const FeatherMemo& m = M->feathers[i];
           const bool laid = rank[i] >= 0;
@@ -788,21 +843,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
                                            m.calamusLength == p.calamusLength && m.totalLength == p.totalLength()));
           footChanged[i] = !sameFoot;
           if (!laid || !m.laid || !sameFoot || m.baseRadius != baseRadius(static_cast<uint32_t>(i))) continue;
-          const uint32_t* vs = verts.data() + first[i];
-          const size_t cnt = first[i + 1] - first[i];
-          if (m.flatPos.size() != cnt) continue;
-          bool same = true;
-          for (size_t q = 0; q < cnt && same; ++q) same = m.flatPos[q] == mesh.positions[vs[q]];
-          for (size_t q = 0; q < cnt && same && hasN; ++q) same = m.flatNrm[q] == mesh.normals[vs[q]];
-          for (size_t q = 0; q < cnt && same && hasT; ++q) same = m.flatTan[q] == mesh.tangents[vs[q]];
-          const size_t tc = trisOf[i + 1] - trisOf[i];
-          same = same && m.flatTris.size() == 3 * tc;
-          for (size_t q = 0; q < tc && same; ++q)
-            for (int c = 0; c < 3 && same; ++c) {
-              const uint32_t v = mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c];
-              same = mesh.featherId[v] == i && m.flatTris[3 * q + c] == localVert[v];
-            }
-          sameInput[i] = same;
+          sameInput[i] = sameFlat(m, mesh, L, static_cast<uint32_t>(i));
         }
       });
     });
@@ -858,19 +899,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
       });
     });
     res.stats.gap = M->gap;
-    for (uint32_t i : order) {
-      ++res.stats.draped;
-      for (const Node& nd : M->feathers[i].chart.nodes) res.stats.overhangingNodes += nd.free && nd.active;
-      if (cut[i]) {
-        res.trimmed[i] = 1;
-        ++res.stats.trimmedFeathers;
-        res.stats.trimmedTriangles += cut[i];
-        if (!kept[i]) {
-          res.hidden[i] = 1;
-          ++res.stats.hiddenFeathers;
-        }
-      }
-    }
+    tally(res, order, cut, kept, [&](uint32_t i) -> const Chart& { return M->feathers[i].chart; });
     res.stats.reused = order.size();
     M->order = order;
     M->valid = true;
@@ -1341,19 +1370,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     const uint32_t* tri = &mesh.indices[3 * t];
     if (tri[1] != tri[0] || tri[2] != tri[0]) ++kept[mesh.featherId[tri[0]]];
   }
-  for (uint32_t i : order) {
-    ++res.stats.draped;
-    for (const Node& nd : charts[i].nodes) res.stats.overhangingNodes += nd.free && nd.active;
-    if (cut[i]) {
-      res.trimmed[i] = 1;
-      ++res.stats.trimmedFeathers;
-      res.stats.trimmedTriangles += cut[i];
-      if (!kept[i]) {
-        res.hidden[i] = 1;
-        ++res.stats.hiddenFeathers;
-      }
-    }
-  }
+  tally(res, order, cut, kept, [&](uint32_t i) -> const Chart& { return charts[i]; });
   res.stats.relaid = relaid.size();
   res.stats.reused = order.size() - relaid.size();
   if (M) {
@@ -1429,28 +1446,12 @@ DrapeResult drapeOver(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& m
   res.hidden.assign(n, 0);
   res.stats.gap = M.gap;
   if (nv == 0) return res;
-  std::vector<uint32_t> first(n + 1, 0), verts(nv), localVert(nv);
-  for (uint32_t f : mesh.featherId) {
-    if (f >= n) throw Error("featherId " + std::to_string(f) + " out of range", {}, "featherId");
-    ++first[f + 1];
-  }
-  for (size_t i = 0; i < n; ++i) first[i + 1] += first[i];
-  {
-    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-    for (uint32_t v = 0; v < nv; ++v) {
-      const uint32_t f = mesh.featherId[v];
-      localVert[v] = fill[f] - first[f];
-      verts[fill[f]++] = v;
-    }
-  }
-  std::vector<int64_t> rank(n, -1);
-  std::vector<uint32_t> order;
-  for (uint32_t i : coat.layerOrder)
-    if (i < n && rank[i] < 0 && first[i + 1] > first[i]) {
-      if (!M.feathers[i].laid) throw Error("feather " + std::to_string(i) + " has no mature drape", {}, "mature");
-      rank[i] = static_cast<int64_t>(order.size());
-      order.push_back(i);
-    }
+  const CoatLayout L(coat, mesh);
+  const std::vector<uint32_t>&first = L.first, &verts = L.verts, &trisOf = L.trisOf, &tris = L.tris;
+  const std::vector<int64_t>& rank = L.rank;
+  const std::vector<uint32_t>& order = L.order;
+  for (uint32_t i : order)
+    if (!M.feathers[i].laid) throw Error("feather " + std::to_string(i) + " has no mature drape", {}, "mature");
   {
     // This frame's layers keep the mature coat's order.
     size_t k = 0;
@@ -1459,13 +1460,6 @@ DrapeResult drapeOver(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& m
     if (k != order.size()) throw Error("the frame's layer order differs from the mature coat's", {}, "layerOrder");
   }
   const size_t nt = mesh.triangleCount();
-  std::vector<uint32_t> trisOf(n + 1, 0), tris(nt);
-  for (size_t t = 0; t < nt; ++t) ++trisOf[mesh.featherId[mesh.indices[3 * t]] + 1];
-  for (size_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
-  {
-    std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
-    for (size_t t = 0; t < nt; ++t) tris[fill[mesh.featherId[mesh.indices[3 * t]]]++] = static_cast<uint32_t>(t);
-  }
   const bool hasN = mesh.normals.size() == nv, hasT = mesh.tangents.size() == nv;
   report(o.progress, "drape", 0);
   // Per feather: its flat mesh is the mature drape's (copied), else placed on its mature chart.
@@ -1479,15 +1473,7 @@ DrapeResult drapeOver(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& m
         const FeatherMemo& m = M.feathers[i];
         const uint32_t* vs = verts.data() + first[i];
         const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
-        bool same = m.flatPos.size() == cnt && m.flatTris.size() == 3 * tc && sameFrame(m.frame, coat.frames[i]);
-        for (size_t q = 0; q < cnt && same; ++q) same = m.flatPos[q] == mesh.positions[vs[q]];
-        for (size_t q = 0; q < cnt && same && hasN; ++q) same = m.flatNrm[q] == mesh.normals[vs[q]];
-        for (size_t q = 0; q < cnt && same && hasT; ++q) same = m.flatTan[q] == mesh.tangents[vs[q]];
-        for (size_t q = 0; q < tc && same; ++q)
-          for (int c = 0; c < 3 && same; ++c) {
-            const uint32_t v = mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c];
-            same = mesh.featherId[v] == i && m.flatTris[3 * q + c] == localVert[v];
-          }
+        const bool same = sameFrame(m.frame, coat.frames[i]) && sameFlat(m, mesh, L, i);
         if (same) {
           for (size_t l = 0; l < cnt; ++l) {
             const uint32_t v = vs[l];
@@ -1591,19 +1577,7 @@ DrapeResult drapeOver(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& m
   }
   for (size_t t = 0; t < nt; ++t)
     if (!isCut(mesh, t)) ++kept[mesh.featherId[mesh.indices[3 * t]]];
-  for (uint32_t i : order) {
-    ++res.stats.draped;
-    for (const Node& nd : M.feathers[i].chart.nodes) res.stats.overhangingNodes += nd.free && nd.active;
-    if (cut[i]) {
-      res.trimmed[i] = 1;
-      ++res.stats.trimmedFeathers;
-      res.stats.trimmedTriangles += cut[i];
-      if (!kept[i]) {
-        res.hidden[i] = 1;
-        ++res.stats.hiddenFeathers;
-      }
-    }
-  }
+  tally(res, order, cut, kept, [&](uint32_t i) -> const Chart& { return M.feathers[i].chart; });
   res.stats.relaid = placedList.size();
   res.stats.reused = order.size() - placedList.size();
   report(o.progress, "drape", 1);
