@@ -361,31 +361,33 @@ int behaviourIndex(const std::string& b) {
     if (b == kControlBehaviours[i]) return i;
   return -1;
 }
-bool keyedIn(const Json& ctl, const std::string& b) {
+}  // namespace
+
+bool controlKeyedIn(const Json& ctl, const std::string& attribute) {
   if (!ctl.contains("keys") || !ctl["keys"].is_array()) return false;
   for (const auto& k : ctl["keys"])
-    if (k.is_object() && k.contains(b)) return true;
+    if (k.is_object() && k.contains(attribute)) return true;
   return false;
 }
-Json& keyAt(Json& ctl, double time) {
+
+Json& controlKeyAt(Json& ctl, double time) {
   Json& keys = ctl["keys"];
   if (!keys.is_array()) keys = Json::array();
   for (auto& k : keys)
     if (k.is_object() && k.contains("t") && k["t"].is_number() && k["t"].get<double>() == time) return k;
   keys.push_back({{"t", time}});
-  std::sort(keys.begin(), keys.end(),
-            [](const Json& x, const Json& y) { return x.value("t", 0.0) < y.value("t", 0.0); });
+  std::stable_sort(keys.begin(), keys.end(),
+                   [](const Json& x, const Json& y) { return x.value("t", 0.0) < y.value("t", 0.0); });
   for (auto& k : keys)
     if (k.value("t", 0.0) == time) return k;
   return keys.back();
 }
-}  // namespace
 
 ControlNow controlAt(const Scene& s, size_t c, double time) {
   ControlNow out;
   if (c >= s.controls.size() || !s.controls[c].is_object()) return out;
   const Json& ctl = s.controls[c];
-  for (int i = 0; i < 5; ++i) out.keyed[i] = keyedIn(ctl, kControlBehaviours[i]);
+  for (int i = 0; i < 5; ++i) out.keyed[i] = controlKeyedIn(ctl, kControlBehaviours[i]);
   try {
     JsonReader r(ctl, s.file, "controls[" + std::to_string(c) + "]");
     const moult::ControlValues v = moult::controlValuesAt(moult::readControl(r), time);
@@ -407,8 +409,8 @@ void setControlValue(Document& d, size_t c, const std::string& behaviour, double
   d.edit(behaviour + " " + std::to_string(c), [&](Scene& s) {
     needControl(s, c);
     Json& ctl = s.controls[c];
-    if (keyedIn(ctl, behaviour))
-      keyAt(ctl, time)[behaviour] = value;
+    if (controlKeyedIn(ctl, behaviour))
+      controlKeyAt(ctl, time)[behaviour] = value;
     else
       ctl[behaviour] = value;
   });
@@ -427,7 +429,7 @@ void addControlKeyframe(Document& d, size_t c, double time) {
   d.edit("keyframe", [&](Scene& s) {
     needControl(s, c);
     Json& ctl = s.controls[c];
-    Json& k = keyAt(ctl, time);
+    Json& k = controlKeyAt(ctl, time);
     for (int i = 0; i < 5; ++i) {
       ctl.erase(kControlBehaviours[i]);  // a keyed behaviour has no constant
       k[kControlBehaviours[i]] = now.value[i];

@@ -100,6 +100,10 @@ void setBrdf(Document& d, double dSpacing, double hFloor);
 
 // JSON helpers.
 Json vec3Json(const glm::dvec3& v);
+// Whether a control's keys set `attribute` anywhere; the control's key at exactly `time`, made (and the
+// keys sorted by time, equal times in their order) when there is none.
+bool controlKeyedIn(const Json& ctl, const std::string& attribute);
+Json& controlKeyAt(Json& ctl, double time);
 glm::dvec3 jsonVec3(const Json& j, const glm::dvec3& def = glm::dvec3(0));
 
 }  // namespace pteryla::viewer::actions

@@ -22,27 +22,6 @@ void needControl(const Scene& s, size_t c) {
         s.file, "controls");
 }
 
-bool keyedIn(const Json& ctl, const char* attribute) {
-  if (!ctl.contains("keys") || !ctl["keys"].is_array()) return false;
-  for (const auto& k : ctl["keys"])
-    if (k.is_object() && k.contains(attribute)) return true;
-  return false;
-}
-
-// The control's key at exactly `time`, made (and the keys sorted by time) when there is none.
-Json& keyAt(Json& ctl, double time) {
-  Json& keys = ctl["keys"];
-  if (!keys.is_array()) keys = Json::array();
-  for (auto& k : keys)
-    if (k.is_object() && k.contains("t") && k["t"].is_number() && k["t"].get<double>() == time) return k;
-  keys.push_back({{"t", time}});
-  std::stable_sort(keys.begin(), keys.end(),
-                   [](const Json& x, const Json& y) { return x.value("t", 0.0) < y.value("t", 0.0); });
-  for (auto& k : keys)
-    if (k.value("t", 0.0) == time) return k;
-  return keys.back();
-}
-
 }  // namespace
 
 std::optional<ControlOffset> controlOffsetAt(const Scene& s, size_t c, double t) {
@@ -54,7 +33,7 @@ std::optional<ControlOffset> controlOffsetAt(const Scene& s, size_t c, double t)
     ControlOffset out;
     out.at = spec.at;
     out.offset = moult::controlValuesAt(spec, t).offset;
-    out.keyed = keyedIn(ctl, "offset");
+    out.keyed = actions::controlKeyedIn(ctl, "offset");
     return out;
   } catch (const std::exception&) {
     return std::nullopt;
@@ -67,8 +46,8 @@ void setControlOffset(Document& d, size_t c, const glm::dvec3& offset, double ti
   d.edit("offset " + std::to_string(c), [&](Scene& s) {
     needControl(s, c);
     Json& ctl = s.controls[c];
-    if (keyedIn(ctl, "offset"))
-      keyAt(ctl, time)["offset"] = actions::vec3Json(offset);
+    if (actions::controlKeyedIn(ctl, "offset"))
+      actions::controlKeyAt(ctl, time)["offset"] = actions::vec3Json(offset);
     else
       ctl["offset"] = actions::vec3Json(offset);
   });
@@ -82,7 +61,7 @@ void keyControlAll(Document& d, size_t c, double time) {
   d.edit("key control", [&](Scene& s) {
     needControl(s, c);
     Json& ctl = s.controls[c];
-    Json& k = keyAt(ctl, time);
+    Json& k = actions::controlKeyAt(ctl, time);
     for (int i = 0; i < 5; ++i) {
       ctl.erase(actions::kControlBehaviours[i]);  // a keyed attribute has no constant
       k[actions::kControlBehaviours[i]] = now.value[i];

@@ -194,8 +194,8 @@ size_t removeHandles(Document& d, const std::vector<Handle>& hs, const std::vect
     return a.index > b.index;
   });
   const std::string label = !fresh.empty() && live.empty() ? "remove " + std::to_string(fresh.size()) + " feathers"
-                            : fresh.empty() ? "remove " + std::to_string(live.size()) + " handles"
-                                            : "remove " + std::to_string(live.size()) + " handles and " +
+                            : fresh.empty()                ? "remove " + std::to_string(live.size()) + " handles"
+                                                           : "remove " + std::to_string(live.size()) + " handles and " +
                                                   std::to_string(fresh.size()) + " feathers";
   d.edit(label, [&](Scene& s) {
     for (const Handle& h : live) {

@@ -635,6 +635,25 @@ struct CoatLayout {
   }
 };
 
+// Sets inside[v] for the vertices of `feathers` only: 1 where the checker counts the vertex as under the
+// skin (verticesInsideSkin on those vertices alone; a vertex's test depends on it, its feather's base
+// and the skin). Throws Error if the progress callback stopped the test.
+void insideSkinFor(const SkinMesh& skin, const TriMesh& mesh, const CoatLayout& L,
+                   const std::vector<uint32_t>& feathers, const CheckOptions& co, std::vector<uint8_t>& inside) {
+  if (feathers.empty()) return;
+  TriMesh part;
+  std::vector<uint32_t> back;
+  for (uint32_t i : feathers)
+    for (uint32_t q = L.first[i]; q < L.first[i + 1]; ++q) {
+      back.push_back(L.verts[q]);
+      part.positions.push_back(mesh.positions[L.verts[q]]);
+      part.featherId.push_back(i);
+    }
+  const std::vector<uint8_t> in = verticesInsideSkin(skin, part, co);
+  if (in.size() != back.size()) throw Error("the drape was cancelled", {}, "drape");
+  for (size_t k = 0; k < back.size(); ++k) inside[back[k]] = in[k];
+}
+
 // Is feather i of `mesh` (flat, as given to a drape) the one a memo was made from: the same vertices
 // (positions, normals, tangents where the mesh has them) and triangles, in the same order?
 bool sameFlat(const FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i) {
@@ -1278,19 +1297,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
       for (uint32_t i : order)
         if (!laidNow[i])
           for (uint32_t q = first[i]; q < first[i + 1]; ++q) inside[verts[q]] = memo(i).inside[q - first[i]];
-      if (!relaid.empty()) {
-        TriMesh part;
-        std::vector<uint32_t> back;
-        for (uint32_t i : relaid)
-          for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
-            back.push_back(verts[q]);
-            part.positions.push_back(mesh.positions[verts[q]]);
-            part.featherId.push_back(i);
-          }
-        const std::vector<uint8_t> in = verticesInsideSkin(skin, part, co);
-        if (in.size() != back.size()) throw Error("the drape was cancelled", {}, "drape");
-        for (size_t k = 0; k < back.size(); ++k) inside[back[k]] = in[k];
-      }
+      insideSkinFor(skin, mesh, L, relaid, co, inside);
     }
     if (inside.size() != nv) throw Error("the drape was cancelled", {}, "drape");
   }
@@ -1525,17 +1532,7 @@ DrapeResult drapeOver(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& m
   if (!placedList.empty()) {
     CheckOptions co;
     setFeatherBases(co, coat, o.baseAllowance);
-    TriMesh part;
-    std::vector<uint32_t> back;
-    for (uint32_t i : placedList)
-      for (uint32_t q = first[i]; q < first[i + 1]; ++q) {
-        back.push_back(verts[q]);
-        part.positions.push_back(mesh.positions[verts[q]]);
-        part.featherId.push_back(i);
-      }
-    const std::vector<uint8_t> in = verticesInsideSkin(skin, part, co);
-    if (in.size() != back.size()) throw Error("the drape was cancelled", {}, "drape");
-    for (size_t k = 0; k < back.size(); ++k) inside[back[k]] = in[k];
+    insideSkinFor(skin, mesh, L, placedList, co, inside);
   }
   report(o.progress, "drape", 0.6);
   for (uint32_t v = 0; v < nv; ++v)
