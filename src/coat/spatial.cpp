@@ -58,13 +58,34 @@ void PointGrid::build(const glm::dvec3* points, size_t count, double cell) {
 
 namespace {
 
+// A float box: primitive boxes are rounded outward from the double geometry, so they and every union of
+// them (the nodes' bounds) contain it. Half the bytes of a double box to stream at every level of the
+// build; which tree comes out does not change any query's answer (docs/architecture.md).
+struct FBox {
+  glm::vec3 lo{std::numeric_limits<float>::infinity()};
+  glm::vec3 hi{-std::numeric_limits<float>::infinity()};
+  void add(const glm::vec3& p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  void add(const FBox& b) {
+    lo = glm::min(lo, b.lo);
+    hi = glm::max(hi, b.hi);
+  }
+  double area() const {
+    if (lo.x > hi.x) return 0;
+    const glm::dvec3 d = glm::dvec3(hi) - glm::dvec3(lo);
+    return 2 * (d.x * d.y + d.y * d.z + d.z * d.x);
+  }
+};
+
 // A primitive's bounds, kept in slot order and partitioned in place (sequential memory at every level).
 // Its centroid is the box centre, recomputed where needed (the same arithmetic, a smaller record).
 struct PrimInfo {
-  Box box;
+  FBox box;
   uint32_t id;
-  double centroid(int axis) const { return 0.5 * (box.lo[axis] + box.hi[axis]); }
-  glm::dvec3 centroid() const { return 0.5 * (box.lo + box.hi); }
+  float centroid(int axis) const { return 0.5f * (box.lo[axis] + box.hi[axis]); }
+  glm::vec3 centroid() const { return 0.5f * (box.lo + box.hi); }
 };
 
 constexpr int kBins = 16;
@@ -78,7 +99,7 @@ constexpr uint32_t kParallelBuild = 8192;
 // A node's primitive bounds and centroid bounds. Unions of boxes are exact (min / max), so bounds a
 // parent gathered from its bins are the very values a pass over the child's primitives would give.
 struct NodeBounds {
-  Box bounds, centroids;
+  FBox bounds, centroids;
 };
 
 struct Builder {
@@ -99,14 +120,11 @@ struct Builder {
         nb.centroids.add(info[i].centroid());
       }
     }
-    const Box& bounds = nb.bounds;
-    const Box& cb = nb.centroids;
+    const FBox& bounds = nb.bounds;
+    const FBox& cb = nb.centroids;
     for (int k = 0; k < 3; ++k) {
-      nodes[ni].lo[k] = static_cast<float>(bounds.lo[k]);
-      nodes[ni].hi[k] = static_cast<float>(bounds.hi[k]);
-      // Round outward so float bounds contain the double geometry.
-      nodes[ni].lo[k] = std::nextafter(nodes[ni].lo[k], -std::numeric_limits<float>::infinity());
-      nodes[ni].hi[k] = std::nextafter(nodes[ni].hi[k], std::numeric_limits<float>::infinity());
+      nodes[ni].lo[k] = bounds.lo[k];  // the primitives' boxes are rounded outward already
+      nodes[ni].hi[k] = bounds.hi[k];
     }
     const uint32_t count = end - begin;
     auto makeLeaf = [&] {
@@ -115,7 +133,7 @@ struct Builder {
       return ni;
     };
     if (count <= kLeafSize) return makeLeaf();
-    const glm::dvec3 ext = cb.hi - cb.lo;
+    const glm::dvec3 ext = glm::dvec3(cb.hi) - glm::dvec3(cb.lo);
     int axis = 0;
     if (ext.y > ext[axis]) axis = 1;
     if (ext.z > ext[axis]) axis = 2;
@@ -124,7 +142,7 @@ struct Builder {
     NodeBounds childBounds[2];
     bool childKnown = false;
     if (ext[axis] > 0 && depth < kMaxSahDepth) {
-      Box binBox[kBins], binCentroids[kBins];
+      FBox binBox[kBins], binCentroids[kBins];
       uint32_t binCount[kBins] = {};
       const double scale = kBins / ext[axis];
       auto binOf = [&](const PrimInfo& p) {
@@ -139,7 +157,7 @@ struct Builder {
       }
       double rightArea[kBins];
       uint32_t rightCount[kBins];
-      Box acc;
+      FBox acc;
       uint32_t cnt = 0;
       for (int b = kBins - 1; b > 0; --b) {
         acc.add(binBox[b]);
@@ -147,7 +165,7 @@ struct Builder {
         rightArea[b] = acc.area();
         rightCount[b] = cnt;
       }
-      Box left;
+      FBox left;
       uint32_t lc = 0;
       double best = std::numeric_limits<double>::infinity();
       int bestB = -1;
@@ -240,13 +258,27 @@ void TriangleBvh::buildNodes(size_t triangleCount) {
     for (size_t t = r.begin(); t < r.end(); ++t) {
       PrimInfo& pi = info[t];
       pi.id = static_cast<uint32_t>(t);
-      for (int c = 0; c < 3; ++c) pi.box.add(vertex(static_cast<uint32_t>(t), c));
+      Box box;
+      for (int c = 0; c < 3; ++c) box.add(vertex(static_cast<uint32_t>(t), c));
+      for (int a = 0; a < 3; ++a) {
+        // Rounded outward, so the float box contains the double triangle.
+        pi.box.lo[a] = std::nextafter(static_cast<float>(box.lo[a]), -std::numeric_limits<float>::infinity());
+        pi.box.hi[a] = std::nextafter(static_cast<float>(box.hi[a]), std::numeric_limits<float>::infinity());
+      }
     }
   });
   nodes_.reserve(2 * triangleCount / kLeafSize + 1);
   Builder{info}.build(0, static_cast<uint32_t>(triangleCount), 0, nodes_);
   prims_.resize(triangleCount);
-  for (size_t k = 0; k < triangleCount; ++k) prims_[k] = info[k].id;
+  primBoxes_.resize(triangleCount);
+  for (size_t k = 0; k < triangleCount; ++k) {
+    prims_[k] = info[k].id;
+    PrimBox& pb = primBoxes_[k];
+    for (int a = 0; a < 3; ++a) {
+      pb.lo[a] = info[k].box.lo[a];
+      pb.hi[a] = info[k].box.hi[a];
+    }
+  }
 }
 
 void TriangleBvh::setGroups(const uint32_t* groupOfTriangle) {
@@ -270,20 +302,9 @@ void TriangleBvh::setGroups(const uint32_t* groupOfTriangle) {
 }
 
 void TriangleBvh::makePrimBoxes() {
-  // Each slot's own box (float, rounded outward) for the pair traversal's filter: only pair queries use
-  // it, so it is made here rather than with every BVH.
-  primBoxes_.resize(prims_.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, prims_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k < r.end(); ++k) {
-      Box box;
-      for (int c = 0; c < 3; ++c) box.add(vertex(prims_[k], c));
-      PrimBox& pb = primBoxes_[k];
-      for (int a = 0; a < 3; ++a) {
-        pb.lo[a] = std::nextafter(static_cast<float>(box.lo[a]), -std::numeric_limits<float>::infinity());
-        pb.hi[a] = std::nextafter(static_cast<float>(box.hi[a]), std::numeric_limits<float>::infinity());
-      }
-    }
-  });
+  // The build keeps each slot's own box (float, rounded outward): the pair traversal's filter and the
+  // nearest search's per-triangle bound.
+  PTERYLA_CHECK(primBoxes_.size() == prims_.size(), "primitive boxes are made by the build");
 }
 
 std::vector<std::pair<uint32_t, uint32_t>> TriangleBvh::pairTasks(size_t minTasks) const {
@@ -337,6 +358,15 @@ inline __attribute__((always_inline)) double boxDist2(const TriangleBvh::Node& n
   return d2;
 }
 
+inline __attribute__((always_inline)) double primBoxDist2(const TriangleBvh::PrimBox& n, const glm::dvec3& p) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double v = p[k] < n.lo[k] ? n.lo[k] - p[k] : (p[k] > n.hi[k] ? p[k] - n.hi[k] : 0.0);
+    d2 += v * v;
+  }
+  return d2;
+}
+
 }  // namespace
 
 int64_t TriangleBvh::nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& bary, double& dist2) const {
@@ -360,6 +390,8 @@ int64_t TriangleBvh::nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& b
     if (nd > bestD) continue;
     if (n.count > 0) {
       for (uint32_t k = 0; k < n.count; ++k) {
+        // The triangle's box is farther than the best so far: so is the triangle (the box contains it).
+        if (primBoxDist2(primBoxes_[n.first + k], p) > bestD) continue;
         const uint32_t t = prims_[n.first + k];
         glm::dvec3 b;
         const glm::dvec3 q = closestPointOnTriangle(p, vertex(t, 0), vertex(t, 1), vertex(t, 2), &b);

@@ -111,6 +111,9 @@ double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a
 // BVH over triangles given as positions + index triples (float, like TriMesh).
 class TriangleBvh {
  public:
+  struct PrimBox {  // a triangle's box, float, rounded outward (it contains the triangle)
+    float lo[3], hi[3];
+  };
   struct Node {
     float lo[3], hi[3];
     uint32_t first;  // leaf: first primitive slot; inner: right child (left child = this + 1)
@@ -219,9 +222,6 @@ class TriangleBvh {
   int64_t nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& bary, double& dist2) const;
 
  private:
-  struct PrimBox {
-    float lo[3], hi[3];
-  };
   static float area(const Node& n) {
     const float dx = n.hi[0] - n.lo[0], dy = n.hi[1] - n.lo[1], dz = n.hi[2] - n.lo[2];
     return dx * dy + dy * dz + dz * dx;
