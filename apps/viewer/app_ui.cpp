@@ -1,5 +1,6 @@
-// Menu bar, the panel column and the dialogs: open, save as (asks before replacing a file), unsaved
-// changes on quit or open (Save / Discard / Cancel), errors from any stage (the viewer keeps running).
+// Menu bar, the panel column, keyboard shortcuts and the Scene JSON, Help and scratchboard windows; every
+// body runs guarded (guardedUi), so an exception goes to the error modal (dialogs.hpp) and the frame
+// ends cleanly.
 #include <imgui.h>
 #include <imgui_internal.h>
 #include <imgui_stdlib.h>
@@ -20,12 +21,6 @@
 #include "scene_edit.hpp"
 
 namespace pteryla::viewer {
-
-void App::showError(const std::string& message) {
-  if (scripted()) std::fprintf(stderr, "pteryla-viewer: error: %s\n", message.c_str());
-  errors_.push_back(message);
-  if (popupToOpen_.empty()) popupToOpen_ = "Error";
-}
 
 namespace {
 
@@ -53,105 +48,28 @@ void App::guardedUi(const char* what, const std::function<void()>& body) {
     body();
   } catch (const std::exception& e) {
     recoverImGuiStack(windows);
-    showError(std::string(what) + ": " + e.what());
+    dialogs_.showError(std::string(what) + ": " + e.what());
   } catch (...) {
     recoverImGuiStack(windows);
-    showError(std::string(what) + ": unknown error");
+    dialogs_.showError(std::string(what) + ": unknown error");
   }
-}
-
-void App::requestOpen(const std::string& path) {
-  if (doc_.modified()) {
-    pending_ = Pending::Open;
-    pendingPath_ = path;
-    popupToOpen_ = "Unsaved changes";
-    return;
-  }
-  openNow(path);
-}
-
-void App::openNow(const std::string& path) {
-  try {
-    doc_.open(path);
-  } catch (const std::exception& e) {
-    openPath_ = path;  // the Open dialog starts there, to fix the name or pick another file
-    showError(e.what());
-    return;
-  }
-  remember(path);
-  // Forget the previous scene's view.
-  renderer_->setSkin(TriMesh{});
-  renderer_->setCoat(TriMesh{}, {});
-  navReady_ = false;
-  syncedResult_ = ~0ull;
-  uploadedSkin_ = 0;
-  meshEvals_ = ~0ull;
-  ++uploadVersion_;
-  cameraReady_ = cameraFramedCoat_ = false;
-  materialsStale_ = true;
-  view_.selectedTract = 0;
-  view_.selectedControl = view_.selectedVector = view_.selectedFollicle = view_.selectedJoint = -1;
-  view_.tool = Tool::Orbit;
-  view_.playing = false;
-  fitTimeRange();
-}
-
-void App::fitTimeRange() {
-  view_.timeStart = 0.0f;
-  view_.timeEnd = 10.0f;
-  if (!doc_.hasScene()) return;
-  if (const auto span = sceneTimeSpan(doc_.scene())) {
-    view_.timeStart = float(std::min(0.0, span->first));
-    view_.timeEnd = float(std::max(span->second, span->first + 1.0));
-  }
-  view_.timeEnd = std::max(view_.timeEnd, float(doc_.time()));
-  view_.timeStart = std::min(view_.timeStart, float(doc_.time()));
-}
-
-void App::requestSave() {
-  if (!doc_.hasScene()) return;
-  if (doc_.path().empty()) {
-    requestSaveAs();
-    return;
-  }
-  try {
-    doc_.save();
-    afterSave();
-  } catch (const std::exception& e) {
-    showError(e.what());
-  }
-}
-
-void App::requestSaveAs() {
-  if (!doc_.hasScene()) return;
-  saveAsPath_ =
-      doc_.path().empty() ? (std::filesystem::current_path() / (doc_.scene().name + ".json")).string() : doc_.path();
-  popupToOpen_ = "Save scene as";
-}
-
-// After a successful save: carry on with what the unsaved-changes dialog was asked to do.
-void App::afterSave() {
-  if (pending_ == Pending::Quit) {
-    quit_ = true;
-  } else if (pending_ == Pending::Open) {
-    openNow(pendingPath_);
-  }
-  pending_ = Pending::None;
 }
 
 void App::buildUi() {
-  guardedUi("render frames", [&] { frameRenderStep(); });
+  guardedUi("render frames", [&] {
+    if (frames_.step(*context_)) inputSeen_ = true;  // keep drawing while frames are made
+  });
   guardedUi("menu", [&] { menuBar(); });
   menuHeight_ = ImGui::GetFrameHeight();
   if (!view_.hidePanels) panelColumn();
-  guardedUi("status bar", [&] { drawStatusBar(*panels_, kStatusHeight); });
+  guardedUi("status bar", [&] { drawStatusBar(panels_, kStatusHeight); });
   if (view_.showDesigner && doc_.hasScene())
-    guardedUi("Feather designer", [&] { designer_.draw(*panels_, &view_.showDesigner); });
+    guardedUi("Feather designer", [&] { designer_.draw(panels_, &view_.showDesigner); });
   if (view_.showJsonInspector && doc_.hasScene()) guardedUi("Scene JSON", [&] { sceneJsonWindow(); });
   if (view_.showHelp) guardedUi("Help", [&] { helpWindow(); });
   if (doc_.hasScene() && doc_.scene().render.style == "scratchboard")
     guardedUi("Scratchboard preview", [&] { scratchboardWindow(); });
-  if (doc_.hasScene() && view_.colourBy != ColourBy::Material) guardedUi("legend", [&] { legendWindow(); });
+  if (doc_.hasScene() && view_.colourBy != ColourBy::Material) guardedUi("legend", [&] { viewport_.legendWindow(); });
   if (doc_.hasScene() && view_.hoveredHandle && !view_.handleDragging && !ImGui::GetIO().WantCaptureMouse) {
     ImGui::BeginTooltip();
     ImGui::TextUnformatted(handleReadout(doc_.scene(), *view_.hoveredHandle).c_str());
@@ -170,7 +88,7 @@ void App::buildUi() {
     ImGui::TextUnformatted(readoutText(featherReadout(doc_.snapshot(), view_.hoveredFeather)).c_str());
     ImGui::EndTooltip();
   }
-  guardedUi("dialog", [&] { dialogs(); });
+  guardedUi("dialog", [&] { dialogs_.draw(); });
   // Keyboard shortcuts (when no text field has the keyboard).
   ImGuiIO& io = ImGui::GetIO();
   if (!io.WantCaptureKeyboard) {
@@ -182,11 +100,11 @@ void App::buildUi() {
         doc_.undo();
     }
     if (ctrl && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Y))) doc_.redo();
-    if (ctrl && ImGui::IsKeyPressed('S')) requestSave();
-    if (ctrl && ImGui::IsKeyPressed('O')) popupToOpen_ = "Open scene";
-    if (!ctrl && ImGui::IsKeyPressed('F')) frameSelection();
-    if (!ctrl && ImGui::IsKeyPressed('A')) frameAll();
-    if (!ctrl && ImGui::IsKeyPressed('K') && doc_.hasScene()) keySelected();
+    if (ctrl && ImGui::IsKeyPressed('S')) dialogs_.requestSave();
+    if (ctrl && ImGui::IsKeyPressed('O')) dialogs_.showOpen();
+    if (!ctrl && ImGui::IsKeyPressed('F') && !input_.frameBoxSelection()) viewport_.frameSelection();
+    if (!ctrl && ImGui::IsKeyPressed('A')) viewport_.frameAll();
+    if (!ctrl && ImGui::IsKeyPressed('K') && doc_.hasScene()) input_.keySelected();
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space))) view_.playing = !view_.playing;
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
       if (view_.tool == Tool::Orbit) {  // Esc: end the tool, then the selection
@@ -200,7 +118,7 @@ void App::buildUi() {
       view_.tool = Tool::Orbit;
     }
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Tab))) view_.hidePanels = !view_.hidePanels;
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete)) && doc_.hasScene()) deleteSelectedHandle();
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete)) && doc_.hasScene()) input_.deleteSelected();
   }
   // Releasing the mouse ends a gesture: the next slider drag is a new undo step.
   if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) doc_.endGesture();
@@ -209,21 +127,20 @@ void App::buildUi() {
 void App::menuBar() {
   if (!ImGui::BeginMainMenuBar()) return;
   if (ImGui::BeginMenu("File")) {
-    if (ImGui::MenuItem("Open...", "Ctrl+O")) popupToOpen_ = "Open scene";
+    if (ImGui::MenuItem("Open...", "Ctrl+O")) dialogs_.showOpen();
     if (ImGui::BeginMenu("Open Recent")) {
-      if (ImGui::IsWindowAppearing()) recent_.load();
-      if (recent_.list().empty()) ImGui::TextDisabled("no recent files");
-      for (const auto& r : recent_.list())
-        if (ImGui::MenuItem(r.c_str())) requestOpen(r);
+      if (ImGui::IsWindowAppearing()) dialogs_.recent().load();
+      if (dialogs_.recent().list().empty()) ImGui::TextDisabled("no recent files");
+      for (const auto& r : dialogs_.recent().list())
+        if (ImGui::MenuItem(r.c_str())) dialogs_.requestOpen(r);
       ImGui::EndMenu();
     }
-    if (ImGui::MenuItem("Save", "Ctrl+S", false, doc_.hasScene())) requestSave();
-    if (ImGui::MenuItem("Save As...", nullptr, false, doc_.hasScene())) requestSaveAs();
+    if (ImGui::MenuItem("Save", "Ctrl+S", false, doc_.hasScene())) dialogs_.requestSave();
+    if (ImGui::MenuItem("Save As...", nullptr, false, doc_.hasScene())) dialogs_.requestSaveAs();
     ImGui::Separator();
     if (ImGui::MenuItem("Quit")) {
       if (doc_.modified()) {
-        pending_ = Pending::Quit;
-        popupToOpen_ = "Unsaved changes";
+        dialogs_.confirmQuit();
       } else {
         quit_ = true;
       }
@@ -263,15 +180,15 @@ void App::panelColumn() {
   if (!view_.hidePanels) view_.panelWidth = ImGui::GetWindowWidth();
   if (!doc_.hasScene()) {
     ImGui::TextWrapped("No scene. Open a scene file (.json) or a bare mesh (.obj, .ply, .off, .stl).");
-    if (ImGui::Button("Open...")) popupToOpen_ = "Open scene";
-    if (ImGui::IsWindowAppearing()) recent_.load();
-    if (!recent_.list().empty()) ImGui::TextDisabled("Recent:");
-    for (const auto& r : recent_.list())
-      if (ImGui::Selectable(r.c_str())) requestOpen(r);
+    if (ImGui::Button("Open...")) dialogs_.showOpen();
+    if (ImGui::IsWindowAppearing()) dialogs_.recent().load();
+    if (!dialogs_.recent().list().empty()) ImGui::TextDisabled("Recent:");
+    for (const auto& r : dialogs_.recent().list())
+      if (ImGui::Selectable(r.c_str())) dialogs_.requestOpen(r);
     ImGui::End();
     return;
   }
-  PanelContext& ctx = *panels_;
+  PanelContext& ctx = panels_;
   // Scripts can open and close headers (panelRequests); a request applies once.
   auto header = [&](const char* name, bool defaultOpen) {
     auto it = view_.panelRequests.find(name);
@@ -300,130 +217,10 @@ void App::panelColumn() {
     const Snapshot& s = doc_.snapshot();
     for (size_t i = 0; i < pipeline::kStageCount; ++i)
       ImGui::Text("%-12s %8.3f s", pipeline::stageName(pipeline::Stage(i)), s.stageSeconds[i]);
-    ImGui::Text("%-12s %8.3f s", "view render", lastRenderSeconds_);
+    ImGui::Text("%-12s %8.3f s", "view render", viewport_.lastRenderSeconds());
   }
   view_.panelRequests.clear();
   ImGui::End();
-}
-
-void App::dialogs() {
-  if (!popupToOpen_.empty()) {
-    ImGui::OpenPopup(popupToOpen_.c_str());
-    popupToOpen_.clear();
-  }
-  const ImVec2 centre = ImGui::GetMainViewport()->GetCenter();
-
-  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
-  if (ImGui::BeginPopupModal("Error", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
-    for (const auto& e : errors_) {
-      ImGui::PushTextWrapPos(640.0f);
-      ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", e.c_str());
-      ImGui::PopTextWrapPos();
-    }
-    ImGui::TextDisabled("The viewer keeps the scene as it is; undo the last edit or fix the value.");
-    if (ImGui::Button("OK")) {
-      errors_.clear();
-      ImGui::CloseCurrentPopup();
-    }
-    if (doc_.canUndo()) {
-      ImGui::SameLine();
-      if (ImGui::Button(("Undo " + doc_.undoLabel()).c_str())) {
-        doc_.undo();
-        errors_.clear();
-        ImGui::CloseCurrentPopup();
-      }
-    }
-    ImGui::EndPopup();
-  }
-
-  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
-  if (ImGui::BeginPopupModal("Recover unsaved work", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
-    if (offered_) {
-      const std::string what = offered_->scenePath.empty() ? std::string("an untitled scene") : offered_->scenePath;
-      ImGui::Text("Unsaved changes to %s were autosaved (%s UTC).", what.c_str(), offered_->savedAt.c_str());
-      ImGui::TextDisabled("%s", offered_->file.c_str());
-      ImGui::Text("Restore them? The scene file is not changed until you save.");
-      if (ImGui::Button("Restore")) {
-        ImGui::CloseCurrentPopup();
-        try {
-          restoreOffered();
-          fitTimeRange();
-        } catch (const std::exception& e) {
-          showError(std::string("restore failed (the recovery file is kept): ") + e.what());
-        }
-      }
-      ImGui::SameLine();
-      if (ImGui::Button("Discard")) {
-        ImGui::CloseCurrentPopup();
-        removeRecovery(offered_->file);
-        offered_.reset();
-      }
-    } else {
-      ImGui::CloseCurrentPopup();
-    }
-    ImGui::EndPopup();
-  }
-
-  openDialog();
-  saveAsDialog();
-
-  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
-  if (ImGui::BeginPopupModal("Replace file?", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
-    ImGui::Text("%s exists.", saveAsPath_.c_str());
-    ImGui::Text("Replace it with this scene?");
-    if (ImGui::Button("Replace")) {
-      ImGui::CloseCurrentPopup();
-      try {
-        doc_.saveAs(saveAsPath_, true);
-        remember(saveAsPath_);
-        afterSave();
-      } catch (const std::exception& e) {
-        pending_ = Pending::None;
-        showError(e.what());
-      }
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Cancel")) {
-      pending_ = Pending::None;
-      ImGui::CloseCurrentPopup();
-    }
-    ImGui::EndPopup();
-  }
-
-  ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
-  if (ImGui::BeginPopupModal("Unsaved changes", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
-    ImGui::Text("The scene has unsaved changes.");
-    if (ImGui::Button("Save")) {
-      ImGui::CloseCurrentPopup();
-      if (doc_.path().empty()) {
-        requestSaveAs();  // continues with the pending action after saving
-      } else {
-        try {
-          doc_.save();
-          afterSave();
-        } catch (const std::exception& e) {
-          pending_ = Pending::None;
-          showError(e.what());
-        }
-      }
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Discard")) {
-      ImGui::CloseCurrentPopup();
-      autosave_.discard();  // the user threw the changes away: no recovery for them
-      if (pending_ == Pending::Quit)
-        quit_ = true;
-      else if (pending_ == Pending::Open)
-        openNow(pendingPath_);
-      pending_ = Pending::None;
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Cancel")) {
-      pending_ = Pending::None;
-      ImGui::CloseCurrentPopup();
-    }
-    ImGui::EndPopup();
-  }
 }
 
 void App::sceneJsonWindow() {
@@ -442,7 +239,7 @@ void App::sceneJsonWindow() {
       keepPaintedDensity(doc_.scene(), next);
       doc_.edit("scene JSON", [&](pipeline::Scene& s) { s = next; });
     } catch (const std::exception& e) {
-      showError(e.what());
+      dialogs_.showError(e.what());
     }
   }
   ImGui::End();
@@ -477,8 +274,8 @@ void App::scratchboardWindow() {
     try {
       pipeline::Pipeline& p = *doc_.idlePipeline();
       render::ScratchboardSettings ss;
-      ss.width = std::max(64, fbSize_.x / 2);
-      ss.height = std::max(64, fbSize_.y / 2);
+      ss.width = std::max(64, viewport_.framebufferSize().x / 2);
+      ss.height = std::max(64, viewport_.framebufferSize().y / 2);
       const render::Image img = render::renderScratchboard(p.coatMesh().mesh, p.skinTriMesh(), camera_.camera(),
                                                            render::sceneLights(doc_.scene()), ss);
       if (!scratchTexture_) scratchTexture_ = std::make_unique<render::ImageTexture>(*context_);

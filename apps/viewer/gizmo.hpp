@@ -1,6 +1,6 @@
 #pragma once
 // Gizmos in the 3D view (docs/viewer.md, "Gizmos"): the math and the scene edits behind them, with no GL
-// and no ImGui (unit-tested in tests/viewer; app_gizmo.cpp draws and drags them).
+// and no ImGui (unit-tested in tests/viewer; input_gizmo.cpp draws and drags them).
 //   - A selected expressive control shows its offset (docs/controls.md: the displacement that `direction`
 //     follows, that `aim` points at, and that drives the `dynamic` chain) as an arrow from its placement
 //     to placement + offset, with three axis handles at the tip. Dragging a handle moves the offset along
@@ -84,7 +84,7 @@ Json axisAngleJson(const glm::dquat& q);
 // skeleton section or for a joint out of range.
 void keyJointRotation(Document& d, const moult::Skeleton& skeleton, size_t joint, double time, const glm::dquat& local);
 
-// What the app draws and drags this frame (app_gizmo.cpp): the selected control's offset arrow (control
+// What the app draws and drags this frame (input_gizmo.cpp): the selected control's offset arrow (control
 // < 0: none) and the skeleton posed at the current time (rig null: no skeleton).
 struct GizmoGeometry {
   int control = -1;

@@ -37,13 +37,13 @@ enum class Tool {
   AddControl,    // click on the skin: expressive control
   Pin,           // click on the skin: pinned follicle in the selected tract
   PaintFaces,    // drag on the skin: add / remove faces of the selected tract, or (de)select faces
-  PaintDensity,  // drag on the skin: the follicle density map (app_paint.cpp)
+  PaintDensity,  // drag on the skin: the follicle density map (input_paint.cpp)
 };
 
 // What the face brush does (Tool::PaintFaces).
 enum class FacePaint { Add, Remove, Select, Deselect };
 
-// A panel widget a script drives (`ui PANEL WIDGET [VALUE]`, app_script.cpp): the panel checks
+// A panel widget a script drives (`ui PANEL WIDGET [VALUE]`, script_session.cpp): the panel checks
 // uiRequested() next to the ImGui widget and acts exactly as when the user uses it, so a scripted session
 // runs the panel's own code (not only the action behind it).
 struct UiRequest {
@@ -64,7 +64,7 @@ struct ViewState {
   int selectedFollicle = -1;
   int selectedControl = -1;
   int selectedVector = -1;
-  // Skeleton joints (app_gizmo.cpp, panels_skeleton.cpp): drawn at their posed pivots; the selected one
+  // Skeleton joints (input_gizmo.cpp, panels_skeleton.cpp): drawn at their posed pivots; the selected one
   // shows rotation rings. The rig is the scene's skeleton section parsed (cached).
   bool showJoints = true;
   int selectedJoint = -1, hoveredJoint = -1;
@@ -79,7 +79,7 @@ struct ViewState {
   float controlRadius = 0.2f;
   float combRadius = 0.0f;  // reach of a new styling vector over a body axis, scene units (0 = a tenth of the axis)
   float biasSigma = 0.2f, biasStretch = 1.5f;
-  // Painting (app_paint.cpp, panels_paint.cpp, overlays_paint.cpp). Brush radius in scene units (set
+  // Painting (input_paint.cpp, panels_paint.cpp, overlays_paint.cpp). Brush radius in scene units (set
   // from the skin size on load). A stroke is previewed and committed as one edit on release.
   FacePaint facePaint = FacePaint::Add;
   float paintRadius = 0.1f;
@@ -91,7 +91,7 @@ struct ViewState {
   bool brushVisible = false;         // the paint brush is over the skin
   glm::vec3 brushAt{0};
   bool showDensity = true;  // painted density factors on the skin
-  // Handles (app_handles.cpp): the point under the mouse, the one clicked (Delete removes it), and
+  // Handles (input_handles.cpp): the point under the mouse, the one clicked (Delete removes it), and
   // where a dragged one would go.
   std::optional<Handle> hoveredHandle, selectedHandle;
   bool handleDragging = false;
@@ -104,7 +104,7 @@ struct ViewState {
   int hoveredFollicle = -1;        // with follicles shown and no feather or handle under the mouse (readout)
   bool boxActive = false;
   glm::vec2 boxFrom{0.0f}, boxTo{0.0f};
-  // Frame rendering (Scene panel, app_frames.cpp): a request the app picks up, its progress and outcome.
+  // Frame rendering (Scene panel, frame_render.cpp): a request the app picks up, its progress and outcome.
   struct FrameRequest {
     std::string dir;
     double from = 0, to = 1, fps = 24;
@@ -123,7 +123,7 @@ struct ViewState {
   float timeStart = 0.0f, timeEnd = 10.0f, timeStep = 1.0f / 24.0f;
   bool loop = true;
   // Playback runs at playFps frames a second of wall time: a frame that is not ready when the next is
-  // due is dropped (app_timeline.cpp). Frames drawn before are shown from the flipbook at once.
+  // due is dropped (timeline.cpp). Frames drawn before are shown from the flipbook at once.
   float playFps = 24.0f;
   int flipbookMB = 512;  // memory for the flipbook of drawn frames
   // While the time slider is dragged the coat is evaluated at scrubLod (when lower than the preview

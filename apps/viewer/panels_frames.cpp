@@ -1,5 +1,5 @@
 // The Scene panel's "Render frames" section: the timeline range (or any) rendered to DIR/frame_NNNN.png
-// in the background with progress and Cancel (app_frames.cpp does the work).
+// in the background with progress and Cancel (frame_render.cpp does the work).
 #include <imgui.h>
 #include <imgui_stdlib.h>
 

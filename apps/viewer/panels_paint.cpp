@@ -1,7 +1,7 @@
 // Painting sections of the Tracts and Follicles panels (docs/viewer.md, "Painting"): the face brush
 // (add to / remove from the selected tract, or (de)select faces) with "new tract from selection", and
 // the follicle density brush with its factor, radius and strength. The strokes themselves are
-// app_paint.cpp's; every widget is scriptable with `ui PANEL WIDGET [VALUE]`.
+// input_paint.cpp's; every widget is scriptable with `ui PANEL WIDGET [VALUE]`.
 #include <imgui.h>
 #include <imgui_stdlib.h>
 

@@ -1,15 +1,15 @@
-// Colour-by view modes (colour_by.hpp) on the renderer: flat palette materials and per-feather ranges.
+// Colour-by view modes (colour_by.hpp) on the renderer: flat palette materials, per-feather ranges, the legend.
 #include <imgui.h>
 
 #include <algorithm>
 
-#include "app.hpp"
+#include "viewport.hpp"
 #include "pteryla/render/pattern.hpp"
 #include "pteryla/render/scene_view.hpp"
 
 namespace pteryla::viewer {
 
-bool App::updateColouring() {
+bool Viewport::updateColouring() {
   const Snapshot& s = doc_.snapshot();
   const auto& m = doc_.metrics();
   const std::vector<uint64_t> key = {uint64_t(view_.colourBy), doc_.resultVersion(), m ? 1u : 0u,
@@ -36,7 +36,8 @@ bool App::updateColouring() {
   return true;
 }
 
-std::vector<render::FeatherDrawRange> App::drawRangesFor(const std::vector<pipeline::CoatDrawRange>& ranges) const {
+std::vector<render::FeatherDrawRange> Viewport::drawRangesFor(
+    const std::vector<pipeline::CoatDrawRange>& ranges) const {
   pipeline::CoatMesh rangesOnly;
   rangesOnly.ranges = ranges;
   if (view_.colourBy != ColourBy::Material && !colouring_.legend.empty())
@@ -45,7 +46,7 @@ std::vector<render::FeatherDrawRange> App::drawRangesFor(const std::vector<pipel
   return render::drawRanges(rangesOnly);
 }
 
-std::vector<render::FeatherMaterial> App::paletteMaterials() const {
+std::vector<render::FeatherMaterial> Viewport::paletteMaterials() const {
   static const render::Image alpha = render::generateBarbAlpha(render::BarbAlphaParams{});
   std::vector<render::FeatherMaterial> out;
   for (const LegendEntry& e : colouring_.legend) {
@@ -65,7 +66,7 @@ std::vector<render::FeatherMaterial> App::paletteMaterials() const {
 
 namespace pteryla::viewer {
 
-void App::legendWindow() {
+void Viewport::legendWindow() {
   ImGui::SetNextWindowPos(ImVec2(view_.viewOrigin.x + 10.0f, view_.viewOrigin.y + float(view_.viewSize.y) - 10.0f),
                           ImGuiCond_Always, ImVec2(0.0f, 1.0f));
   ImGui::SetNextWindowBgAlpha(0.75f);

@@ -8,8 +8,9 @@
 #include <cstdio>
 #include <iostream>
 
-#include "app.hpp"
-#include "glfw_context.hpp"
+#include "timeline.hpp"
+
+#include "scene_edit.hpp"
 
 namespace pteryla::viewer {
 
@@ -19,16 +20,36 @@ double wallSeconds() {
 }
 }  // namespace
 
-std::vector<float> App::flipbookKey(double lod) const {
-  std::vector<float> k = viewKey();
-  if (k.size() > 14) k.erase(k.begin() + 14);  // the upload counter: the time and the scene stand for it
+void fitTimeRange(const Document& doc, ViewState& view) {
+  view.timeStart = 0.0f;
+  view.timeEnd = 10.0f;
+  if (!doc.hasScene()) return;
+  if (const auto span = sceneTimeSpan(doc.scene())) {
+    view.timeStart = float(std::min(0.0, span->first));
+    view.timeEnd = float(std::max(span->second, span->first + 1.0));
+  }
+  view.timeEnd = std::max(view.timeEnd, float(doc.time()));
+  view.timeStart = std::min(view.timeStart, float(doc.time()));
+}
+
+void Timeline::playFor(double seconds) {
+  view_.playing = true;
+  playClock_.stop();
+  play_.seconds = seconds;
+  play_.until = 1;  // (set to the end when the clock starts)
+}
+
+std::vector<float> Timeline::flipbookKey(double lod) const {
+  std::vector<float> k = viewport_.viewKey();
+  if (k.size() > Viewport::kUploadKeyIndex)
+    k.erase(k.begin() + Viewport::kUploadKeyIndex);  // the upload counter: the time and the scene stand for it
   k.push_back(float(lod));
   k.push_back(float(doc_.changeCount()));
   k.push_back(float(static_cast<int>(view_.colourBy)));
   return k;
 }
 
-void App::advancePlayback() {
+void Timeline::advance() {
   if (!doc_.hasScene()) return;
   // An edit (or undo) makes every frame drawn before stale.
   if (doc_.changeCount() != flipbookChanges_) {
@@ -73,8 +94,8 @@ void App::advancePlayback() {
   }
   // The frame asked for last is on screen once it is evaluated, its coat uploaded and the view drawn
   // (renderView, which also keeps it in the flipbook); only then is the next one asked for.
-  if (play_.awaitingResult && doc_.upToDate() && doc_.time() == displayTime_ && doc_.resultVersion() == syncedResult_ &&
-      drawnResult_ == syncedResult_) {
+  if (play_.awaitingResult && doc_.upToDate() && doc_.time() == displayTime_ &&
+      doc_.resultVersion() == viewport_.syncedResult() && viewport_.drawnResult() == viewport_.syncedResult()) {
     play_.awaitingResult = false;
     ++play_.shown;
     ++play_.evaluated;
@@ -109,14 +130,14 @@ void App::advancePlayback() {
 
 // One step of filling the flipbook: once the frame asked for is evaluated and drawn (renderView stores
 // it), ask for the next frame of the range that is not in the flipbook; at the end, go back.
-void App::advanceCacheFill() {
+void Timeline::advanceCacheFill() {
   const FrameGrid grid{view_.timeStart, view_.timeEnd, view_.timeStep};
   const int64_t n = grid.last() + 1;
   if (doc_.failed() || view_.flipbookMB <= 0) {
     fill_.active = false;
     return;
   }
-  if (!doc_.upToDate() || doc_.resultVersion() != syncedResult_) return;  // evaluating or not drawn yet
+  if (!doc_.upToDate() || doc_.resultVersion() != viewport_.syncedResult()) return;  // evaluating or not drawn yet
   const std::vector<float> key = flipbookKey(doc_.lod());
   if (doc_.time() != grid.time(fill_.next) || !flipbook_.contains(doc_.time(), key)) {
     // The frame asked for is evaluated but not drawn yet (renderView stores it this frame), unless it
@@ -142,35 +163,33 @@ void App::advanceCacheFill() {
   doc_.setTime(grid.time(fill_.next));
 }
 
-bool App::showFlipbookFrame() {
+bool Timeline::showFlipbookFrame() {
   const double shown = view_.playing ? displayTime_ : doc_.time();
-  const bool live = doc_.upToDate() && doc_.resultVersion() == syncedResult_ && shown == doc_.time();
+  const bool live = doc_.upToDate() && doc_.resultVersion() == viewport_.syncedResult() && shown == doc_.time();
   if (live) return false;
   const double lod = view_.scrubSavedLod > 0 ? view_.scrubSavedLod : doc_.lod();
   const render::Image* img = flipbook_.find(shown, flipbookKey(lod));
   if (!img && lod != doc_.lod()) img = flipbook_.find(shown, flipbookKey(doc_.lod()));
   if (!img) return false;
-  if (!flipbookShown_ || flipbookShownTime_ != shown || viewImage_.width != img->width ||
-      viewImage_.height != img->height) {
-    if (!viewTexture_) viewTexture_ = std::make_unique<render::ImageTexture>(*context_);
-    viewImage_ = *img;
-    viewTexture_->upload(viewImage_);
+  const render::Image& onScreen = viewport_.image();
+  if (!flipbookShown_ || flipbookShownTime_ != shown || onScreen.width != img->width ||
+      onScreen.height != img->height) {
+    viewport_.showImage(*img);
     flipbookShown_ = true;
     flipbookShownTime_ = shown;
-    lastViewKey_.clear();  // the live view is rendered again when the evaluation catches up
   }
   return true;
 }
 
-void App::storeFlipbookFrame() {
-  if (view_.flipbookMB <= 0 || viewImage_.empty()) return;
-  if (!doc_.upToDate() || doc_.resultVersion() != syncedResult_) return;
-  flipbook_.store(doc_.time(), flipbookKey(doc_.lod()), viewImage_);
+void Timeline::storeFlipbookFrame() {
+  if (view_.flipbookMB <= 0 || viewport_.image().empty()) return;
+  if (!doc_.upToDate() || doc_.resultVersion() != viewport_.syncedResult()) return;
+  flipbook_.store(doc_.time(), flipbookKey(doc_.lod()), viewport_.image());
   view_.flipbookFrames = flipbook_.size();
   view_.flipbookBytes = flipbook_.bytes();
 }
 
-void App::finishPlayReport() {
+void Timeline::finishPlayReport() {
   const double seconds = std::max(1e-9, wallSeconds() - play_.startWall);
   // Frames the clock passed: every one of them was due once; those not shown were dropped.
   const size_t due = size_t(std::floor(seconds * double(view_.playFps))) + 1;

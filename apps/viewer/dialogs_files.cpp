@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "app.hpp"
+#include "dialogs.hpp"
 
 namespace pteryla::viewer {
 namespace {
@@ -70,12 +70,12 @@ std::optional<std::string> nameField(FileBrowser& b, std::string& name, const ch
 
 }  // namespace
 
-void App::remember(const std::string& path) {
-  if (scripted()) return;  // scripts (and tests) leave the user's recent files alone
+void Dialogs::remember(const std::string& path) {
+  if (options_.scripted) return;  // scripts (and tests) leave the user's recent files alone
   recent_.add(path);
 }
 
-void App::openDialog() {
+void Dialogs::openDialog() {
   const ImVec2 centre = ImGui::GetMainViewport()->GetCenter();
   ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
   if (!ImGui::BeginPopupModal("Open scene", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) return;
@@ -114,7 +114,7 @@ void App::openDialog() {
   ImGui::EndPopup();
 }
 
-void App::saveAsNow(const std::string& path) {
+void Dialogs::saveAsNow(const std::string& path) {
   saveAsPath_ = path;
   try {
     if (doc_.saveAs(path, false)) {
@@ -129,7 +129,7 @@ void App::saveAsNow(const std::string& path) {
   }
 }
 
-void App::saveAsDialog() {
+void Dialogs::saveAsDialog() {
   const ImVec2 centre = ImGui::GetMainViewport()->GetCenter();
   ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
   if (!ImGui::BeginPopupModal("Save scene as", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) return;

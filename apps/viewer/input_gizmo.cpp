@@ -12,7 +12,7 @@
 
 #include <glm/geometric.hpp>
 
-#include "app.hpp"
+#include "input.hpp"
 #include "gizmo.hpp"
 #include "overlays.hpp"
 #include "picking.hpp"
@@ -47,7 +47,7 @@ double unitsPerPixel(const render::Camera& cam, const glm::dvec3& p, int viewHei
 
 }  // namespace
 
-GizmoGeometry App::gizmoGeometry() {
+GizmoGeometry ViewportInput::gizmoGeometry() {
   GizmoGeometry g;
   if (!doc_.hasScene()) return g;
   const Snapshot& snap = doc_.snapshot();
@@ -83,7 +83,7 @@ static glm::dvec3 offsetTip(const GizmoGeometry& g, bool dragging, const glm::dv
   return g.at + (dragging ? preview : g.offset);
 }
 
-glm::dvec3 App::ringPoint(const GizmoGeometry& g, int joint, int axis, int k) const {
+glm::dvec3 ViewportInput::ringPoint(const GizmoGeometry& g, int joint, int axis, int k) const {
   const glm::dvec3 n = g.joints.parentFrame[size_t(joint)] * glm::dvec3(axis == 0, axis == 1, axis == 2);
   glm::dvec3 u, v;
   planeBasis(n, u, v);
@@ -91,7 +91,7 @@ glm::dvec3 App::ringPoint(const GizmoGeometry& g, int joint, int axis, int k) co
   return g.joints.pivot[size_t(joint)] + g.ringRadius * (std::cos(a) * u + std::sin(a) * v);
 }
 
-bool App::handleGizmo(const glm::vec2& mouse, bool overUi, bool leftPressed) {
+bool ViewportInput::handleGizmo(const glm::vec2& mouse, bool overUi, bool leftPressed) {
   const render::Camera& cam = camera_.camera();
   const Ray ray = pixelRay(cam, mouse, view_.viewSize);
   const glm::dvec3 ro(ray.origin), rd(glm::normalize(glm::dvec3(ray.direction)));
@@ -117,9 +117,9 @@ bool App::handleGizmo(const glm::vec2& mouse, bool overUi, bool leftPressed) {
     if (gizmoMoved_) {
       if (gizmoRing_ && g.rig && gizmoJoint_ >= 0 && size_t(gizmoJoint_) < g.joints.local.size()) {
         const glm::dquat turned = turnLocal(g.joints.local[size_t(gizmoJoint_)], gizmoAxis_, gizmoDegrees_);
-        guarded(*panels_, [&] { keyJointRotation(doc_, g.rig->skeleton, size_t(gizmoJoint_), doc_.time(), turned); });
+        guarded(panels_, [&] { keyJointRotation(doc_, g.rig->skeleton, size_t(gizmoJoint_), doc_.time(), turned); });
       } else if (!gizmoRing_ && g.control >= 0) {
-        guarded(*panels_, [&] { setControlOffset(doc_, size_t(g.control), gizmoPreview_, doc_.time()); });
+        guarded(panels_, [&] { setControlOffset(doc_, size_t(g.control), gizmoPreview_, doc_.time()); });
       }
       doc_.endGesture();
     }
@@ -214,17 +214,17 @@ bool App::handleGizmo(const glm::vec2& mouse, bool overUi, bool leftPressed) {
   return true;
 }
 
-void App::keySelected() {
+void ViewportInput::keySelected() {
   const GizmoGeometry g = gizmoGeometry();
   if (g.rig && view_.selectedJoint >= 0) {
     const size_t j = size_t(view_.selectedJoint);
-    guarded(*panels_, [&] { keyJointRotation(doc_, g.rig->skeleton, j, doc_.time(), g.joints.local[j]); });
+    guarded(panels_, [&] { keyJointRotation(doc_, g.rig->skeleton, j, doc_.time(), g.joints.local[j]); });
   } else if (g.control >= 0) {
-    guarded(*panels_, [&] { keyControlAll(doc_, size_t(g.control), doc_.time()); });
+    guarded(panels_, [&] { keyControlAll(doc_, size_t(g.control), doc_.time()); });
   }
 }
 
-void App::drawGizmos(ImDrawList* dl) {
+void ViewportInput::drawGizmos(ImDrawList* dl) {
   const GizmoGeometry g = gizmoGeometry();
   const Projector proj{camera_.camera(), view_.viewSize, view_.viewOrigin};
   const glm::vec2 o = view_.viewOrigin, e = o + glm::vec2(view_.viewSize);
@@ -299,7 +299,7 @@ void App::drawGizmos(ImDrawList* dl) {
 
 // The script's `gizmo-drag`: the press and release points of a drag on the gizmo, in view pixels, as a
 // user would make it (the drag itself then runs through handleGizmo like a real mouse).
-bool App::gizmoDragPoints(bool ring, int axis, double amount, glm::vec2& from, glm::vec2& to) {
+bool ViewportInput::gizmoDragPoints(bool ring, int axis, double amount, glm::vec2& from, glm::vec2& to) {
   const GizmoGeometry g = gizmoGeometry();
   const render::Camera& cam = camera_.camera();
   if (!ring) {

@@ -9,14 +9,14 @@
 #include <filesystem>
 #include <thread>
 
-#include "app.hpp"
+#include "frame_render.hpp"
 #include "glfw_context.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/render/scene_view.hpp"
 
 namespace pteryla::viewer {
 
-struct App::FrameRender {
+struct FrameRenderer::Job {
   ViewState::FrameRequest request;
   size_t count = 0, next = 0;
   std::unique_ptr<pipeline::Pipeline> pipe;
@@ -25,7 +25,7 @@ struct App::FrameRender {
   std::atomic<bool> done{false}, cancel{false};
   std::string error;
   int width = 0, height = 0;
-  ~FrameRender() {
+  ~Job() {
     cancel = true;
     if (worker.joinable()) worker.join();
   }
@@ -44,12 +44,16 @@ struct App::FrameRender {
   }
 };
 
-void App::frameRenderStep() {
+FrameRenderer::FrameRenderer(Document& doc, ViewState& view) : doc_(doc), view_(view) {}
+
+FrameRenderer::~FrameRenderer() = default;
+
+bool FrameRenderer::step(GlfwContext& context) {
   if (view_.frameCancel) {
     view_.frameCancel = false;
-    if (frames_) frames_->cancel = true;
+    if (job_) job_->cancel = true;
   }
-  if (view_.frameRequest && !frames_ && doc_.hasScene()) {
+  if (view_.frameRequest && !job_ && doc_.hasScene()) {
     const ViewState::FrameRequest rq = *view_.frameRequest;
     view_.frameRequest.reset();
     if (rq.dir.empty() || !(rq.fps > 0) || !(rq.to >= rq.from) || !std::isfinite(rq.from) || !std::isfinite(rq.to))
@@ -57,7 +61,7 @@ void App::frameRenderStep() {
     std::error_code ec;
     std::filesystem::create_directories(rq.dir, ec);
     if (ec) throw Error("cannot create the directory: " + ec.message(), rq.dir);
-    auto job = std::make_shared<FrameRender>();
+    auto job = std::make_unique<Job>();
     job->request = rq;
     job->count = size_t(std::floor((rq.to - rq.from) * rq.fps + 1e-9)) + 1;
     const pipeline::Scene& s = doc_.scene();
@@ -66,26 +70,26 @@ void App::frameRenderStep() {
     auto* jp = job.get();
     job->pipe = std::make_unique<pipeline::Pipeline>(s, [jp](const std::string&, double) { return !jp->cancel; });
     job->pipe->setLod(s.render.lod);
-    job->view = std::make_unique<render::SceneView>(*context_);
-    frames_ = std::move(job);
+    job->view = std::make_unique<render::SceneView>(context);
+    job_ = std::move(job);
     view_.framesRunning = true;
     view_.framesDone = 0;
-    view_.framesTotal = frames_->count;
+    view_.framesTotal = job_->count;
     view_.framesStatus.clear();
-    frames_->evaluate(0);
+    job_->evaluate(0);
   }
-  if (!frames_ || !frames_->done) return;
-  FrameRender& f = *frames_;
+  if (!job_ || !job_->done) return false;
+  Job& f = *job_;
   f.worker.join();
   auto finish = [&](const std::string& status) {
     view_.framesStatus = status;
     view_.framesRunning = false;
-    context_->makeCurrent();
-    frames_.reset();
+    context.makeCurrent();
+    job_.reset();
   };
   if (f.cancel) {
     finish("cancelled after " + std::to_string(f.next) + " of " + std::to_string(f.count) + " frames");
-    return;
+    return false;
   }
   if (!f.error.empty()) {
     const std::string e = f.error;
@@ -96,7 +100,7 @@ void App::frameRenderStep() {
   std::snprintf(name, sizeof name, "frame_%04zu.png", f.next);
   const std::string path = (std::filesystem::path(f.request.dir) / name).string();
   try {
-    context_->makeCurrent();
+    context.makeCurrent();
     f.view->markDirty();  // a new time: upload the coat and its materials afresh
     render::saveImage(path, f.view->render(*f.pipe, f.width, f.height));
   } catch (const std::exception& e) {
@@ -105,12 +109,12 @@ void App::frameRenderStep() {
   }
   ++f.next;
   view_.framesDone = f.next;
-  inputSeen_ = true;  // keep drawing while frames are made
   if (f.next < f.count) {
     f.evaluate(f.next);
-    return;
+    return true;
   }
   finish(std::to_string(f.count) + " frames written to " + f.request.dir);
+  return true;
 }
 
 }  // namespace pteryla::viewer

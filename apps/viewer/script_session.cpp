@@ -1,6 +1,6 @@
-// --script sessions: one command per frame, each once the previous evaluation is complete, so the
-// window keeps drawing (and the result is the same however long a stage takes). Any error ends the
-// session with exit code 2.
+// --script sessions (script_session.hpp): one command per frame, each once the previous evaluation is
+// complete, so the window keeps drawing (and the result is the same however long a stage takes). Any
+// error ends the session with exit code 2.
 #include <imgui.h>
 
 #include <cstdio>
@@ -8,14 +8,40 @@
 #include <iostream>
 
 #include "actions.hpp"
-#include "app.hpp"
+#include "script_session.hpp"
 #include "overlays.hpp"
 #include "paint.hpp"
 #include "pteryla/core/error.hpp"
 
 namespace pteryla::viewer {
 
-glm::vec2 App::scriptPoint(const ScriptCommand& c, size_t arg) const {
+void ScriptSession::load() {
+  if (!file_.empty()) script_ = loadScript(file_);
+}
+
+void ScriptSession::feedInput() {
+  if (fakeMouseNext_ < fakeMouse_.size()) {
+    // Scripted mouse: overrides what the GLFW backend read from the (headless) pointer.
+    const FakeMouse& m = fakeMouse_[fakeMouseNext_++];
+    ImGuiIO& io = ImGui::GetIO();
+    io.MousePos = ImVec2(view_.viewOrigin.x + m.pos.x, view_.viewOrigin.y + m.pos.y);
+    for (int b = 0; b < 3; ++b) io.MouseDown[b] = m.down[b];
+    if (fakeMouseNext_ == fakeMouse_.size()) {
+      fakeMouse_.clear();
+      fakeMouseNext_ = 0;
+    }
+  }
+  if (fakeKeysNext_ < fakeKeys_.size()) {
+    const auto [key, down] = fakeKeys_[fakeKeysNext_++];
+    ImGui::GetIO().KeysDown[key] = down;
+    if (fakeKeysNext_ == fakeKeys_.size()) {
+      fakeKeys_.clear();
+      fakeKeysNext_ = 0;
+    }
+  }
+}
+
+glm::vec2 ScriptSession::scriptPoint(const ScriptCommand& c, size_t arg) const {
   glm::vec2 p;
   for (int k = 0; k < 2; ++k) {
     std::string s = c.args.at(arg + size_t(k));
@@ -23,7 +49,7 @@ glm::vec2 App::scriptPoint(const ScriptCommand& c, size_t arg) const {
     if (percent) s.pop_back();
     ScriptCommand one = c;
     one.args = {s};
-    const double v = scriptNumber(one, 0, options_.script);
+    const double v = scriptNumber(one, 0, file_);
     p[k] = percent ? float(v / 100.0) * float(k == 0 ? view_.viewSize.x : view_.viewSize.y) : float(v);
   }
   return p;
@@ -38,25 +64,24 @@ static double positiveArg(const ScriptCommand& c, size_t arg, const std::string&
   return v;
 }
 
-void App::scriptStep() {
-  if (quit_) return;
-  if (!fakeMouse_.empty()) return;  // a scripted click or drag is being played
-  if (!fakeKeys_.empty()) return;   // a scripted key is being pressed
-  if (doc_.failed()) return;        // frame() reports the error and fails the script
-  if (shotWanted_) return;          // a screenshot is waiting for its frame
+void ScriptSession::step() {
+  if (!fakeMouse_.empty()) return;                 // a scripted click or drag is being played
+  if (!fakeKeys_.empty()) return;                  // a scripted key is being pressed
+  if (doc_.failed()) return;                       // frame() reports the error and fails the script
+  if (host_.viewport.screenshotPending()) return;  // a screenshot is waiting for its frame
   if (view_.ui.pending) {
     // A `ui` command waits for its panel to take the request (the header opens on the same frame).
     view_.panelRequests[view_.ui.panel] = 1;
     if (++view_.ui.frames > 30)
-      fail(options_.script + ": ui: no widget '" + view_.ui.widget +
-               (view_.ui.value.empty() ? "" : " " + view_.ui.value) + "' in the panel '" + view_.ui.panel + "'",
-           2);
+      host_.fail(file_ + ": ui: no widget '" + view_.ui.widget + (view_.ui.value.empty() ? "" : " " + view_.ui.value) +
+                     "' in the panel '" + view_.ui.panel + "'",
+                 2);
     return;
   }
-  if (std::chrono::steady_clock::now() < scriptSleepUntil_) return;
-  if (view_.playing && play_.until > 0) return;           // `play S` runs
-  if (view_.cacheRangeRequested || fill_.active) return;  // `cache-range` runs
-  if (view_.frameRequest || view_.framesRunning) {        // render-frames: wait until they are written
+  if (std::chrono::steady_clock::now() < sleepUntil_) return;
+  if (host_.timeline.scriptedPlayRunning()) return;                   // `play S` runs
+  if (view_.cacheRangeRequested || host_.timeline.filling()) return;  // `cache-range` runs
+  if (view_.frameRequest || view_.framesRunning) {                    // render-frames: wait until they are written
     if (cancelFramesAfter_ >= 0 && view_.framesRunning && view_.framesDone >= size_t(cancelFramesAfter_)) {
       // `cancel-after N`: press the Scene panel's Cancel once N frames are written.
       cancelFramesAfter_ = -1;
@@ -74,51 +99,52 @@ void App::scriptStep() {
                      .dump()
               << std::endl;
   }
-  if (scriptWaitFrames_ > 0) {
-    --scriptWaitFrames_;
+  if (waitFrames_ > 0) {
+    --waitFrames_;
     return;
   }
   if (doc_.hasScene() && !doc_.upToDate()) {
-    if (doc_.halted()) fail("script: the evaluation was stopped", 2);
+    if (doc_.halted()) host_.fail("script: the evaluation was stopped", 2);
     return;
   }
   if (awaitingMetrics_) {
     awaitingMetrics_ = false;
     if (!doc_.metrics()) {
-      fail(options_.script + ": the checker produced no metrics", 2);
+      host_.fail(file_ + ": the checker produced no metrics", 2);
       return;
     }
     std::cout << metricsJson(*doc_.metrics()) << std::endl;
   }
-  if (scriptNext_ >= script_.size()) return;  // done: stay open (interactive) unless the script quit
-  const ScriptCommand& c = script_[scriptNext_++];
-  const std::string& file = options_.script;
+  if (next_ >= script_.size()) return;  // done: stay open (interactive) unless the script quit
+  run(script_[next_++]);
+}
+
+void ScriptSession::run(const ScriptCommand& c) {
+  const std::string& file = file_;
   auto positive = [&](const ScriptCommand& cmd, size_t arg) { return positiveArg(cmd, arg, file); };
   try {
     if (c.verb == "quit") {
       needArgs(c, 0, 0, "quit", file);
-      quit_ = true;
+      host_.quit();
     } else if (c.verb == "screenshot" || c.verb == "screenshot-window") {
       needArgs(c, 1, 1, c.verb + " PATH", file);
-      shotPath_ = c.args[0];
-      shotWanted_ = true;
-      shotWithUi_ = c.verb == "screenshot-window";
+      host_.viewport.requestScreenshot(c.args[0], c.verb == "screenshot-window");
     } else if (c.verb == "orbit") {
       needArgs(c, 2, 2, "orbit YAW_DEG PITCH_DEG", file);
       camera_.orbit(float(scriptNumber(c, 0, file)) * 0.01745329252f, float(scriptNumber(c, 1, file)) * 0.01745329252f);
-      cameraMoved_ = true;
+      host_.viewport.noteCameraMoved();
     } else if (c.verb == "zoom") {
       needArgs(c, 1, 1, "zoom FACTOR", file);
       const double f = scriptNumber(c, 0, file);
       if (!(f > 0)) throw Error("zoom factor must be positive", file, "line " + std::to_string(c.line));
       camera_.zoom(float(f));
-      cameraMoved_ = true;
+      host_.viewport.noteCameraMoved();
     } else if (c.verb == "panel") {
       needArgs(c, 2, 2, "panel NAME|* open|closed", file);
       if (c.args[1] != "open" && c.args[1] != "closed")
         throw Error("usage: panel NAME|* open|closed", file, "line " + std::to_string(c.line));
       view_.panelRequests[c.args[0]] = c.args[1] == "open" ? 1 : 0;
-      scriptWaitFrames_ = 1;
+      waitFrames_ = 1;
     } else if (c.verb == "show") {
       needArgs(c, 2, 2, "show WHAT on|off", file);
       const std::string& w = c.args[0];
@@ -152,21 +178,19 @@ void App::scriptStep() {
                     file, "line " + std::to_string(c.line));
       else
         *flag = on;
-      scriptWaitFrames_ = 1;
+      waitFrames_ = 1;
     } else if (c.verb == "dialog") {
       needArgs(c, 1, 2, "dialog open|save-as [PATH]", file);
       const std::string path = c.args.size() > 1 ? c.args[1] : "";
       if (c.args[0] == "open") {
-        if (!path.empty()) openPath_ = path;
-        popupToOpen_ = "Open scene";
+        host_.dialogs.showOpen(path);
       } else if (c.args[0] == "save-as") {
         if (!doc_.hasScene()) throw Error("dialog save-as: no scene is open", file, "line " + std::to_string(c.line));
-        requestSaveAs();
-        if (!path.empty()) saveAsPath_ = path;
+        host_.dialogs.requestSaveAs(path);
       } else {
         throw Error("usage: dialog open|save-as [PATH]", file, "line " + std::to_string(c.line));
       }
-      scriptWaitFrames_ = 2;
+      waitFrames_ = 2;
     } else if (c.verb == "key") {
       needArgs(c, 1, 1, "key enter|escape|tab|delete|k", file);
       const std::string& k = c.args[0];
@@ -181,7 +205,7 @@ void App::scriptStep() {
       const int index = k == "k" ? int('K') : ImGui::GetKeyIndex(key);
       fakeKeys_ = {{index, true}, {index, false}};
       fakeKeysNext_ = 0;
-      scriptWaitFrames_ = 2;
+      waitFrames_ = 2;
     } else if (c.verb == "click" || c.verb == "drag") {
       // View pixels from the view's top-left corner, or percentages of the view ("50%").
       if (c.verb == "click")
@@ -218,7 +242,7 @@ void App::scriptStep() {
       if ((what != "offset" && what != "joint") || ax.size() != 1 || ax[0] < 'x' || ax[0] > 'z')
         throw Error("usage: gizmo-drag offset|joint x|y|z AMOUNT", file, "line " + std::to_string(c.line));
       glm::vec2 a, b;
-      if (!gizmoDragPoints(what == "joint", ax[0] - 'x', scriptNumber(c, 2, file), a, b))
+      if (!host_.input.gizmoDragPoints(what == "joint", ax[0] - 'x', scriptNumber(c, 2, file), a, b))
         throw Error(what == "joint" ? "gizmo-drag: no joint is selected (ui Skeleton select NAME)"
                                     : "gizmo-drag: no control is selected (ui \"Expressive controls\" select NAME)",
                     file, "line " + std::to_string(c.line));
@@ -283,7 +307,7 @@ void App::scriptStep() {
     } else if (c.verb == "box-select") {
       // What Ctrl + drag from (X1, Y1) to (X2, Y2) boxes.
       needArgs(c, 4, 4, "box-select X1 Y1 X2 Y2", file);
-      boxSelect(scriptPoint(c, 0), scriptPoint(c, 2));
+      host_.input.boxSelect(scriptPoint(c, 0), scriptPoint(c, 2));
     } else if (c.verb == "box-selection") {
       needArgs(c, 0, 0, "box-selection", file);
       Json handles = Json::array();
@@ -343,7 +367,7 @@ void App::scriptStep() {
       const double secs = scriptNumber(c, 0, file);
       if (!(secs >= 0 && secs <= 3600))
         throw Error("sleep: seconds must be in [0, 3600]", file, "line " + std::to_string(c.line));
-      scriptSleepUntil_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(long(secs * 1000.0));
+      sleepUntil_ = std::chrono::steady_clock::now() + std::chrono::milliseconds(long(secs * 1000.0));
     } else if (c.verb == "play") {
       needArgs(c, 1, 2, "play SECONDS [FPS]", file);
       const double secs = scriptNumber(c, 0, file);
@@ -356,10 +380,7 @@ void App::scriptStep() {
         view_.playFps = float(fps);
       }
       if (!doc_.hasScene()) throw Error("play: no scene is open", file, "line " + std::to_string(c.line));
-      view_.playing = true;
-      playClock_.stop();
-      play_.seconds = secs;
-      play_.until = 1;  // (set to the end when the clock starts)
+      host_.timeline.playFor(secs);
     } else if (c.verb == "range") {
       needArgs(c, 2, 4, "range T0 T1 [STEP [loop|once]]", file);
       const double t0 = scriptNumber(c, 0, file), t1 = scriptNumber(c, 1, file);
@@ -377,10 +398,10 @@ void App::scriptStep() {
       needArgs(c, 0, 0, "cache-range", file);
       if (!doc_.hasScene()) throw Error("cache-range: no scene is open", file, "line " + std::to_string(c.line));
       view_.cacheRangeRequested = true;
-      scriptWaitFrames_ = 2;
+      waitFrames_ = 2;
     } else if (c.verb == "autosave") {
       needArgs(c, 0, 0, "autosave", file);
-      const std::string written = autosave_.saveNow(doc_);
+      const std::string written = host_.dialogs.autosaveNow();
       std::fprintf(stderr, "pteryla-viewer: autosaved %s\n", written.c_str());
     } else if (c.verb == "crash") {
       // Test hook: the process ends at once, as in a crash (no clean-up, no save, the recovery file stays).
@@ -401,10 +422,10 @@ void App::scriptStep() {
       std::cout << j.dump() << std::endl;
     } else if (c.verb == "frame") {
       needArgs(c, 0, 0, "frame", file);
-      frameAll();
+      host_.viewport.frameAll();
     } else if (c.verb == "frames") {
       needArgs(c, 1, 1, "frames N", file);
-      scriptWaitFrames_ = int(scriptNumber(c, 0, file));
+      waitFrames_ = int(scriptNumber(c, 0, file));
     } else if (c.verb == "check") {
       needArgs(c, 0, 0, "check", file);
       if (!doc_.hasScene()) throw Error("no scene is open", file, "line " + std::to_string(c.line));
@@ -412,13 +433,14 @@ void App::scriptStep() {
       awaitingMetrics_ = true;
     } else if (c.verb == "load") {
       needArgs(c, 1, 1, "load PATH", file);
-      openNow(c.args[0]);
-      if (!errors_.empty()) throw Error(errors_.back(), file, "line " + std::to_string(c.line));
+      host_.dialogs.openNow(c.args[0]);
+      if (!host_.dialogs.errors().empty())
+        throw Error(host_.dialogs.errors().back(), file, "line " + std::to_string(c.line));
     } else {
       runDocumentCommand(doc_, c, file, std::cout);
     }
   } catch (const std::exception& e) {
-    fail(e.what(), 2);
+    host_.fail(e.what(), 2);
   }
 }
 

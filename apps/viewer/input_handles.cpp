@@ -10,12 +10,12 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
-#include "app.hpp"
+#include "input.hpp"
 #include "picking.hpp"
 
 namespace pteryla::viewer {
 
-bool App::handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed) {
+bool ViewportInput::handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed) {
   const render::Camera& cam = camera_.camera();
   if (handleDrag_) {
     if (glm::length(mouse - handleStart_) > 3.0f) handleMoved_ = true;
@@ -31,7 +31,7 @@ bool App::handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed) {
     view_.handleDragging = false;
     if (handleMoved_ && handleOnSkin_ && view_.selectedHandle) {
       const Handle h = *view_.selectedHandle;
-      guarded(*panels_, [&] { moveHandle(doc_, h, glm::dvec3(view_.handlePreview)); });
+      guarded(panels_, [&] { moveHandle(doc_, h, glm::dvec3(view_.handlePreview)); });
       doc_.endGesture();
     }
     return true;
@@ -50,7 +50,7 @@ bool App::handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed) {
     view_.selectedHandle = handles[size_t(k)];
     view_.selectedFeather = -1;
     view_.boxHandles.clear();  // Delete now means this handle
-    // A control shows its offset gizmo (app_gizmo.cpp); any other handle hides it.
+    // A control shows its offset gizmo (input_gizmo.cpp); any other handle hides it.
     view_.selectedControl = handles[size_t(k)].kind == HandleKind::Control ? int(handles[size_t(k)].index) : -1;
     view_.selectedJoint = -1;
     view_.handlePreview = handles[size_t(k)].at;
@@ -62,7 +62,7 @@ bool App::handleHandles(const glm::vec2& mouse, bool overUi, bool leftPressed) {
   return true;
 }
 
-void App::deleteSelectedHandle() {
+void ViewportInput::deleteSelected() {
   // A box selection: every boxed handle, and the follicles of the boxed feathers and follicles (their
   // tracts' removed_follicles), as one undo step.
   if (!view_.boxHandles.empty() || !view_.boxFeathers.empty() || !view_.boxFollicles.empty()) {
@@ -73,24 +73,24 @@ void App::deleteSelectedHandle() {
     view_.boxFollicles.clear();
     view_.selectedHandle.reset();
     view_.hoveredHandle.reset();
-    guarded(*panels_, [&] { removeHandles(doc_, hs, fs); });
+    guarded(panels_, [&] { removeHandles(doc_, hs, fs); });
     return;
   }
   if (view_.selectedHandle) {
     const Handle h = *view_.selectedHandle;
     view_.selectedHandle.reset();
     view_.hoveredHandle.reset();
-    guarded(*panels_, [&] { removeHandle(doc_, h); });
+    guarded(panels_, [&] { removeHandle(doc_, h); });
     return;
   }
   if (view_.selectedFeather >= 0) {  // the clicked feather: its follicle goes, leaving a gap
     const std::vector<FollicleRef> fs = follicleRefs(doc_.snapshot(), {view_.selectedFeather}, {});
     view_.selectedFeather = view_.hoveredFeather = -1;
-    guarded(*panels_, [&] { removeHandles(doc_, {}, fs); });
+    guarded(panels_, [&] { removeHandles(doc_, {}, fs); });
   }
 }
 
-bool App::handleBox(const glm::vec2& mouse, bool overUi, bool leftPressed) {
+bool ViewportInput::handleBox(const glm::vec2& mouse, bool overUi, bool leftPressed) {
   if (view_.boxActive) {
     view_.boxTo = mouse;
     if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) return true;
@@ -104,7 +104,7 @@ bool App::handleBox(const glm::vec2& mouse, bool overUi, bool leftPressed) {
   return true;
 }
 
-void App::boxSelect(const glm::vec2& a, const glm::vec2& b) {
+void ViewportInput::boxSelect(const glm::vec2& a, const glm::vec2& b) {
   const glm::vec2 lo = glm::min(a, b), hi = glm::max(a, b);
   const render::Camera& cam = camera_.camera();
   const Snapshot& s = doc_.snapshot();
@@ -140,7 +140,7 @@ void App::boxSelect(const glm::vec2& a, const glm::vec2& b) {
   view_.selectedHandle.reset();
 }
 
-bool App::frameBoxSelection() {
+bool ViewportInput::frameBoxSelection() {
   const Snapshot& s = doc_.snapshot();
   glm::vec3 lo(1e30f), hi(-1e30f);
   bool any = false;
@@ -152,8 +152,7 @@ bool App::frameBoxSelection() {
     any = true;
   }
   if (!any) return false;
-  camera_.frame(lo, hi, float(view_.viewSize.x) / float(view_.viewSize.y));
-  cameraMoved_ = true;
+  viewport_.frameBox(lo, hi);
   return true;
 }
 

@@ -7,7 +7,7 @@
 #include <glm/geometric.hpp>
 
 #include "actions.hpp"
-#include "app.hpp"
+#include "input.hpp"
 #include "overlays.hpp"
 #include "picking.hpp"
 
@@ -27,9 +27,13 @@ bool rayPlane(const Ray& r, const glm::vec3& p, const glm::vec3& n, glm::vec3& o
 
 }  // namespace
 
-void App::handleInput() {
+bool ViewportInput::cameraMoving() const {
+  return dragging_ || std::chrono::steady_clock::now() - lastWheel_ < std::chrono::milliseconds(300);
+}
+
+void ViewportInput::handle() {
   ImGuiIO& io = ImGui::GetIO();
-  if (!doc_.hasScene() || !cameraReady_) return;
+  if (!doc_.hasScene() || !viewport_.cameraReady()) return;
   const glm::vec2 mouse = glm::vec2(io.MousePos.x, io.MousePos.y) - view_.viewOrigin;  // view pixels
   const float h = float(view_.viewSize.y);
   const bool inView =
@@ -38,7 +42,7 @@ void App::handleInput() {
   if (!overUi && io.MouseWheel != 0.0f) {
     lastWheel_ = std::chrono::steady_clock::now();
     camera_.zoom(std::pow(0.88f, io.MouseWheel));
-    cameraMoved_ = true;
+    viewport_.noteCameraMoved();
   }
   updateBrushHover(mouse, overUi);
   const bool leftPressed = ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !overUi;
@@ -113,18 +117,18 @@ void App::handleInput() {
   if (ImGui::IsMouseDown(ImGuiMouseButton_Right) || ImGui::IsMouseDown(ImGuiMouseButton_Middle) ||
       (ImGui::IsMouseDown(ImGuiMouseButton_Left) && io.KeyShift)) {
     camera_.panPixels(delta, h);
-    cameraMoved_ = true;
+    viewport_.noteCameraMoved();
   } else if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
     camera_.orbitPixels(delta, h);
-    cameraMoved_ = true;
+    viewport_.noteCameraMoved();
   }
 }
 
-bool App::handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse) {
+bool ViewportInput::handleTool(bool pressed, bool down, bool released, const glm::vec2& mouse) {
   const Snapshot& snap = doc_.snapshot();
   const render::Camera& cam = camera_.camera();
   const Ray ray = pixelRay(cam, mouse, view_.viewSize);
-  PanelContext& ctx = *panels_;
+  PanelContext& ctx = panels_;
   auto tractIndex = [&] { return size_t(std::max(view_.selectedTract, 0)); };
   if (view_.tool == Tool::PaintFaces || view_.tool == Tool::PaintDensity)
     return handlePaint(pressed, down, released, mouse);

@@ -8,13 +8,13 @@
 #include <glm/geometric.hpp>
 
 #include "actions.hpp"
-#include "app.hpp"
+#include "input.hpp"
 #include "paint.hpp"
 #include "picking.hpp"
 
 namespace pteryla::viewer {
 
-void App::updateBrushHover(const glm::vec2& mouse, bool overUi) {
+void ViewportInput::updateBrushHover(const glm::vec2& mouse, bool overUi) {
   const bool paintTool = view_.tool == Tool::PaintFaces || view_.tool == Tool::PaintDensity;
   view_.brushVisible = false;
   if (!paintTool || (overUi && !view_.painting)) return;
@@ -26,7 +26,7 @@ void App::updateBrushHover(const glm::vec2& mouse, bool overUi) {
   view_.brushAt = hit->point;
 }
 
-bool App::handlePaint(bool pressed, bool down, bool released, const glm::vec2& mouse) {
+bool ViewportInput::handlePaint(bool pressed, bool down, bool released, const glm::vec2& mouse) {
   const Snapshot& snap = doc_.snapshot();
   const auto hit = raycast(snap.skin, pixelRay(camera_.camera(), mouse, view_.viewSize));
   if (pressed) {
@@ -51,7 +51,7 @@ bool App::handlePaint(bool pressed, bool down, bool released, const glm::vec2& m
   return true;
 }
 
-void App::paintDab(const glm::vec3& at) {
+void ViewportInput::paintDab(const glm::vec3& at) {
   // A dab where the mouse is, once it moved a quarter of the radius (holding still does not pile up).
   const float r = view_.paintRadius;
   if (dabbed_ && glm::length(at - lastDab_) < 0.25f * r) return;
@@ -63,10 +63,10 @@ void App::paintDab(const glm::vec3& at) {
     densityDab(view_.strokeDensity, *strokeSkin_, strokePosed_, at, r, view_.densityValue, view_.densityStrength);
 }
 
-void App::commitStroke() {
+void ViewportInput::commitStroke() {
   toolDrag_ = false;
   view_.painting = false;
-  PanelContext& ctx = *panels_;
+  PanelContext& ctx = panels_;
   if (view_.tool == Tool::PaintFaces && !view_.strokeFaces.empty()) {
     switch (view_.facePaint) {
       case FacePaint::Select:

@@ -1,0 +1,72 @@
+#pragma once
+// Timeline playback in the viewer (issue #26, item 3; timeline.cpp): playback at the timeline's frame rate
+// in wall time (a frame not ready when the next is due is dropped, so playback never lags behind the
+// clock), the flipbook of drawn frames (playback.hpp: a time drawn before, with the same view and scene,
+// shows at once when it is played or scrubbed to again, while its coat is evaluated behind it), and
+// filling the flipbook over the range ("Cache range"). It reads the 3D view (Viewport) and sets the
+// document's time; the Timeline panel (panels_time.cpp) talks to it through ViewState.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "document.hpp"
+#include "panels.hpp"
+#include "playback.hpp"
+#include "viewport.hpp"
+
+namespace pteryla::viewer {
+
+// The timeline range from the scene's keys and moult windows (and the document's time).
+void fitTimeRange(const Document& doc, ViewState& view);
+
+class Timeline {
+ public:
+  Timeline(Document& doc, ViewState& view, Viewport& viewport) : doc_(doc), view_(view), viewport_(viewport) {}
+
+  // Once per frame, before the view is drawn: the playback clock, the frame it asks for, the cache fill.
+  void advance();
+  // Shows a flipbook frame instead of rendering (a time whose coat is not evaluated yet); false: none.
+  bool showFlipbookFrame();
+  void liveViewShown() { flipbookShown_ = false; }
+  // The view just rendered, complete and at rest, for its time.
+  void storeFlipbookFrame();
+
+  // A scripted `play S`: plays for S seconds, then prints what the playback showed (JSON on stdout).
+  void playFor(double seconds);
+  bool scriptedPlayRunning() const { return view_.playing && play_.until > 0; }
+  bool filling() const { return fill_.active; }
+
+ private:
+  // The flipbook's key of the 3D view at a level of detail: what the image depends on besides the time.
+  std::vector<float> flipbookKey(double lod) const;
+  void advanceCacheFill();
+  void finishPlayReport();  // `play S`: prints what the playback showed
+
+  Document& doc_;
+  ViewState& view_;
+  Viewport& viewport_;
+  // Playback: the clock, what it showed, and the flipbook.
+  PlaybackClock playClock_;
+  Flipbook flipbook_;
+  double displayTime_ = 0;      // the time on screen while playing (a flipbook frame may run ahead)
+  bool flipbookShown_ = false;  // the view texture holds a flipbook frame (of flipbookShownTime_)
+  double flipbookShownTime_ = 0;
+  uint64_t flipbookChanges_ = 0;  // the document's change count the flipbook's frames belong to
+  // Filling the flipbook over the timeline range (Timeline panel "Cache range", script `cache-range`):
+  // the next frame to draw, and the time to return to.
+  struct CacheFill {
+    bool active = false;
+    int64_t next = 0;
+    double returnTo = 0;
+    size_t drawn = 0;
+  } fill_;
+  struct PlayStats {
+    double startWall = 0, until = 0;  // until > 0: a scripted `play S` ends then
+    double seconds = 0;               // `play S`: S (until is set when the clock starts)
+    int64_t lastDue = -1, firstDue = -1;
+    size_t due = 0, shown = 0, fromCache = 0, evaluated = 0;
+    bool awaitingResult = false;
+  } play_;
+};
+
+}  // namespace pteryla::viewer
