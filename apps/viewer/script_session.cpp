@@ -41,6 +41,22 @@ void ScriptSession::feedInput() {
   }
 }
 
+void ScriptSession::queueMouse(const glm::vec2& a, const glm::vec2& b, int button, int steps) {
+  FakeMouse m;
+  m.pos = a;
+  fakeMouse_.push_back(m);  // hover
+  m.down[button] = true;
+  fakeMouse_.push_back(m);  // press
+  for (int i = 1; i <= steps; ++i) {
+    m.pos = a + (b - a) * (float(i) / float(steps));
+    fakeMouse_.push_back(m);
+  }
+  m.down[button] = false;
+  fakeMouse_.push_back(m);  // release
+  fakeMouse_.push_back(m);
+  fakeMouseNext_ = 0;
+}
+
 glm::vec2 ScriptSession::scriptPoint(const ScriptCommand& c, size_t arg) const {
   glm::vec2 p;
   for (int k = 0; k < 2; ++k) {
@@ -220,19 +236,7 @@ void ScriptSession::run(const ScriptCommand& c) {
         if (button < 0) throw Error("button must be left, right or middle", file, "line " + std::to_string(c.line));
       }
       const int steps = c.args.size() > 5 ? int(scriptNumber(c, 5, file)) : 8;
-      FakeMouse m;
-      m.pos = a;
-      fakeMouse_.push_back(m);  // hover
-      m.down[button] = true;
-      fakeMouse_.push_back(m);  // press
-      for (int i = 1; c.verb == "drag" && i <= std::max(steps, 1); ++i) {
-        m.pos = a + (b - a) * (float(i) / float(std::max(steps, 1)));
-        fakeMouse_.push_back(m);
-      }
-      m.down[button] = false;
-      fakeMouse_.push_back(m);  // release
-      fakeMouse_.push_back(m);
-      fakeMouseNext_ = 0;
+      queueMouse(a, b, button, c.verb == "drag" ? std::max(steps, 1) : 0);
     } else if (c.verb == "gizmo-drag") {
       // A drag on the gizmo as a user makes it: press on the offset's axis handle (or on the selected
       // joint's ring, where it is widest on screen) and release AMOUNT scene units (or degrees) further.
@@ -246,19 +250,7 @@ void ScriptSession::run(const ScriptCommand& c) {
         throw Error(what == "joint" ? "gizmo-drag: no joint is selected (ui Skeleton select NAME)"
                                     : "gizmo-drag: no control is selected (ui \"Expressive controls\" select NAME)",
                     file, "line " + std::to_string(c.line));
-      FakeMouse m;
-      m.pos = a;
-      fakeMouse_.push_back(m);  // hover
-      m.down[0] = true;
-      fakeMouse_.push_back(m);  // press
-      for (int i = 1; i <= 8; ++i) {
-        m.pos = a + (b - a) * (float(i) / 8.0f);
-        fakeMouse_.push_back(m);
-      }
-      m.down[0] = false;
-      fakeMouse_.push_back(m);  // release
-      fakeMouse_.push_back(m);
-      fakeMouseNext_ = 0;
+      queueMouse(a, b, 0, 8);
     } else if (c.verb == "tool" && !c.args.empty() && c.args[0] == "paint-faces") {
       needArgs(c, 1, 3, "tool paint-faces [add|remove|select|deselect [RADIUS]]", file);
       if (c.args.size() > 1) {

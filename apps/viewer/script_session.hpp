@@ -52,6 +52,8 @@ class ScriptSession {
  private:
   void run(const ScriptCommand& c);
   glm::vec2 scriptPoint(const ScriptCommand& c, size_t arg) const;
+  // A hover and a press at a, `steps` moves to b (0: a click), a release: one mouse state a frame.
+  void queueMouse(const glm::vec2& a, const glm::vec2& b, int button, int steps);
 
   std::string file_;
   ScriptHost host_;
