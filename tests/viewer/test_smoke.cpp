@@ -12,6 +12,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include "fixtures.hpp"
 #include "viewer_run.hpp"
@@ -339,4 +340,62 @@ TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
   EXPECT_EQ(cached["frames_evaluated"].get<int>(), 0) << r.out;
   EXPECT_GE(cached["frames_from_flipbook"].get<int>(), 10) << r.out;
   EXPECT_GE(cached["fps_shown"].get<double>(), 5.0) << r.out;
+}
+
+// --screenshot (no script): the panels are hidden so the capture is the whole width of the window, the
+// run ends by itself once the evaluated view is drawn, and the same scene gives the same bits again
+// (App::captureScreenshot and Viewport::capture).
+TEST(ViewerSmoke, TheScreenshotOptionCapturesTheWholeWidthAndQuits) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found";
+  const std::string dir = viewer_test::scratchDir("screenshot_option");
+  const std::string scene = "\"" + viewer_test::dataPath("scenes/patch.json") + "\"";
+  std::vector<render::Image> shots;
+  for (int run = 0; run < 2; ++run) {
+    const std::string shot = dir + "/shot" + std::to_string(run) + ".png";
+    const ViewerRun r =
+        runViewer(scene + " --lod 0.2 --size 800x600 --frames 4 --screenshot \"" + shot + "\"", dir + "/err.txt");
+    ASSERT_EQ(r.code, 0) << slurp(dir + "/err.txt");
+    EXPECT_NE(slurp(dir + "/err.txt").find("wrote " + shot), std::string::npos);
+    shots.push_back(render::loadImage(shot));
+  }
+  const render::Image& img = shots[0];
+  EXPECT_EQ(img.width, 800) << "the panels were not hidden";
+  EXPECT_GT(img.height, 500);  // the window less the menu and status bars
+  EXPECT_LT(img.height, 600);
+  const uint8_t bg[3] = {img.rgba[0], img.rgba[1], img.rgba[2]};
+  EXPECT_GT(render::coveredFraction(img, bg, 8), 0.02) << "nothing drawn over the background";
+  EXPECT_EQ(shots[0].rgba, shots[1].rgba) << "the same scene captured twice differs";
+}
+
+// --benchmark-orbit N: waits for the evaluation, turns the camera in its passes and prints one JSON
+// object whose numbers fit together, then quits with 0 (OrbitBenchmark).
+TEST(ViewerSmoke, TheOrbitBenchmarkPrintsItsPassesAndQuits) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found";
+  const std::string dir = viewer_test::scratchDir("orbit_benchmark");
+  const ViewerRun r =
+      runViewer("\"" + viewer_test::dataPath("scenes/patch.json") + "\" --lod 0.2 --size 800x600 --benchmark-orbit 6",
+                dir + "/err.txt");
+  ASSERT_EQ(r.code, 0) << slurp(dir + "/err.txt");
+  const std::vector<Json> lines = viewer_test::jsonLines(r.out);
+  ASSERT_EQ(lines.size(), 1u) << r.out;
+  const Json& b = lines[0];
+  EXPECT_EQ(b["orbit_frames"], 6);
+  for (const char* k : {"fps", "fps_navigation", "fps_moving_full_coat", "fps_moving", "seconds"})
+    EXPECT_GT(b[k].get<double>(), 0.0) << k;
+  EXPECT_GT(b["feathers"].get<int>(), 0);
+  const size_t coat = b["coat_triangles"].get<size_t>();
+  EXPECT_GT(coat, 0u);
+  EXPECT_GT(b["drawn_triangles"].get<size_t>(), 0u);
+  EXPECT_LE(b["drawn_triangles"].get<size_t>(), coat);
+  EXPECT_LE(b["navigation_triangles"].get<size_t>(), coat);
+  // The view right of the panel column, between the menu and status bars.
+  EXPECT_GT(b["width"].get<int>(), 0);
+  EXPECT_LT(b["width"].get<int>(), 800);
+  EXPECT_GT(b["height"].get<int>(), 500);
+  EXPECT_NEAR(b["lod"].get<double>(), 0.2, 1e-9);
+  // What an interactive orbit draws is one of the two measured passes.
+  const std::string moving = b["moving_coat"];
+  ASSERT_TRUE(moving == "full" || moving == "navigation") << moving;
+  EXPECT_EQ(b["fps_moving"].get<double>(),
+            b[moving == "full" ? "fps_moving_full_coat" : "fps_navigation"].get<double>());
 }
