@@ -32,10 +32,6 @@ void Viewport::releaseGl() {
   navRenderer_.reset();
 }
 
-std::unique_ptr<render::ImageTexture> Viewport::makeTexture() const {
-  return std::make_unique<render::ImageTexture>(*context_);
-}
-
 void Viewport::clearWindow(int fbw, int fbh, const glm::vec3& colour) { renderer_->clearWindow(fbw, fbh, colour); }
 
 void Viewport::layout(glm::ivec2 windowSize, glm::ivec2 fbSize, float menuHeight) {

@@ -70,11 +70,8 @@ class Viewport {
   size_t navigationTriangles() const { return navTriangles_; }
   size_t navigationStride() const { return navStride_; }
   const render::Renderer& renderer() const { return *renderer_; }
-  // Clears the window (ImGui draws over it) and reads it back.
+  // Clears the window (ImGui draws over it).
   void clearWindow(int fbw, int fbh, const glm::vec3& colour);
-  render::Image readWindow(int fbw, int fbh) { return renderer_->readPixels(fbw, fbh); }
-  // A new render::ImageTexture in the window's context (other windows' images).
-  std::unique_ptr<render::ImageTexture> makeTexture() const;
 
   // Camera: ready once the skin arrived; moved by the user (then the coat is not framed on arrival).
   bool cameraReady() const { return cameraReady_; }
