@@ -201,7 +201,7 @@ int App::run() {
     std::fprintf(stderr, "pteryla-viewer: %s\n", e.what());
     return 1;
   }
-  fpsStart_ = started_ = std::chrono::steady_clock::now();
+  pacing_.start(std::chrono::steady_clock::now());
   while (!quit_) {
     try {
       frame();
@@ -217,8 +217,8 @@ int App::run() {
     if (glfwWindowShouldClose(window_)) quit_ = true;
   }
   if (options_.quitAfter > 0)
-    std::printf("{\"frames_drawn\": %d, \"frames_skipped\": %ld, \"seconds\": %.3f}\n", framesDrawn_, framesSkipped_,
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count());
+    std::printf("{\"frames_drawn\": %d, \"frames_skipped\": %ld, \"seconds\": %.3f}\n", pacing_.framesDrawn(),
+                pacing_.framesSkipped(), pacing_.seconds(std::chrono::steady_clock::now()));
   // Saved (or never changed): the recovery file is not needed any more. Unsaved work keeps it.
   dialogs_.finish();
   return exitCode_;
@@ -246,10 +246,9 @@ void App::frame() {
   if (active)
     glfwPollEvents();
   else
-    glfwWaitEventsTimeout(settleFrames_ > 0 ? 0.02 : 0.5);  // 0.5 s: autosave and --quit-after still tick
+    glfwWaitEventsTimeout(pacing_.settling() ? 0.02 : 0.5);  // 0.5 s: autosave and --quit-after still tick
   const auto workStart = std::chrono::steady_clock::now();
-  if (options_.quitAfter > 0 && std::chrono::duration<double>(workStart - started_).count() >= options_.quitAfter)
-    quit_ = true;
+  if (options_.quitAfter > 0 && pacing_.seconds(workStart) >= options_.quitAfter) quit_ = true;
 
   doc_.update();
   if (auto e = doc_.takeError()) {
@@ -263,22 +262,7 @@ void App::frame() {
   if (script_.active() && !quit_) script_.step();
   if (quit_) return;
   // Nothing happened and the last frames settled: draw nothing (the window keeps its last image).
-  if (active || inputSeen_ || doc_.busy() || dialogs_.wantsToShow()) settleFrames_ = kSettleFrames;
-  inputSeen_ = false;
-  if (settleFrames_ == 0) {
-    ++framesSkipped_;
-    if (!view_.idle) {
-      view_.idle = true;
-      fpsFrames_ = 0;
-      fpsWorkMs_ = 0;
-    }
-    return;
-  }
-  --settleFrames_;
-  if (view_.idle) {
-    view_.idle = false;
-    fpsStart_ = workStart;
-  }
+  if (!pacing_.shouldDraw(active || doc_.busy() || dialogs_.wantsToShow(), workStart)) return;
 
   int w = 0, h = 0, fw = 0, fh = 0;
   glfwGetWindowSize(window_, &w, &h);
@@ -319,24 +303,9 @@ void App::frame() {
     captureScreenshot(fw, fh, false);
   }
   glfwSwapBuffers(window_);
-  ++framesDrawn_;
-  fpsWorkMs_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - workStart).count();
-  updateFps();
+  pacing_.frameDrawn(workStart, std::chrono::steady_clock::now());
   // --screenshot: the capture above happened once the evaluation was complete; then quit.
   if (!options_.screenshot.empty() && !viewport_.screenshotPending() && !script_.active()) quit_ = true;
-}
-
-void App::updateFps() {
-  ++fpsFrames_;
-  const auto now = std::chrono::steady_clock::now();
-  const double s = std::chrono::duration<double>(now - fpsStart_).count();
-  if (s >= 0.5) {
-    view_.fps = static_cast<float>(fpsFrames_ / s);
-    view_.frameMs = static_cast<float>(fpsWorkMs_ / fpsFrames_);
-    fpsFrames_ = 0;
-    fpsWorkMs_ = 0;
-    fpsStart_ = now;
-  }
 }
 
 bool App::cameraMoving() const {
@@ -358,7 +327,8 @@ void App::renderView() {
 
 void App::captureScreenshot(int fbw, int fbh, bool afterUi) {
   // --screenshot waits for its frame count (--frames).
-  const bool waitFrames = framesDrawn_ + 1 < options_.frames && !options_.screenshot.empty() && !script_.active();
+  const bool waitFrames =
+      pacing_.framesDrawn() + 1 < options_.frames && !options_.screenshot.empty() && !script_.active();
   const Viewport::Capture c = viewport_.capture(fbw, fbh, afterUi, waitFrames);
   if (c.status == Viewport::Capture::NotEvaluated) {
     if (scripted())

@@ -9,7 +9,8 @@
 //   ScriptSession  script_session.hpp  --script: commands, scripted mouse and keys
 //   OrbitBenchmark orbit_benchmark.hpp --benchmark-orbit
 //   FrameRenderer  frame_render.hpp    Render frames (the timeline range to PNGs)
-//   app.cpp     window, main loop, redraw on demand, frame rate, screenshots
+//   FramePacing    frame_pacing.hpp    redraw on demand, the frame rate
+//   app.cpp     window, main loop, screenshots
 //   app_ui.cpp  menu bar, the panel column, keyboard shortcuts, the JSON, help and scratchboard windows
 #include <chrono>
 #include <functional>
@@ -20,6 +21,7 @@
 #include "camera_controller.hpp"
 #include "dialogs.hpp"
 #include "document.hpp"
+#include "frame_pacing.hpp"
 #include "frame_render.hpp"
 #include "input.hpp"
 #include "orbit_benchmark.hpp"
@@ -63,7 +65,7 @@ class App {
 
   // Called by GLFW callbacks.
   void onCloseRequested();
-  void noteInput() { inputSeen_ = true; }
+  void noteInput() { pacing_.noteInput(); }
 
  private:
   // app.cpp
@@ -73,7 +75,6 @@ class App {
   bool cameraMoving() const;  // a drag, a wheel zoom, the orbit benchmark or the forced navigation view
   void renderView();
   void captureScreenshot(int fbw, int fbh, bool afterUi);
-  void updateFps();
   void fail(const std::string& message, int code);
   void reportError(const std::string& message, int code);  // scripted: fail, else the error modal
   void endFrameAfterError();  // an exception left an ImGui frame open: close it so the next one starts cleanly
@@ -114,19 +115,7 @@ class App {
 
   bool quit_ = false;
   int exitCode_ = 0;
-  int framesDrawn_ = 0;
-  // Measurement.
-  std::chrono::steady_clock::time_point fpsStart_;
-  int fpsFrames_ = 0;
-  double fpsWorkMs_ = 0;  // work (not waiting) of the frames counted since fpsStart_
-  // Redraw on demand: a frame is drawn while something happens (input, evaluation, playback, scripts,
-  // a dialog to show) and for kSettleFrames after it; otherwise the loop waits for events and draws
-  // nothing.
-  static constexpr int kSettleFrames = 3;
-  bool inputSeen_ = true;
-  int settleFrames_ = kSettleFrames;
-  long framesSkipped_ = 0;
-  std::chrono::steady_clock::time_point started_;
+  FramePacing pacing_{view_};  // redraw on demand, frame rate
 };
 
 }  // namespace pteryla::viewer

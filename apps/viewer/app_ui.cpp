@@ -57,7 +57,7 @@ void App::guardedUi(const char* what, const std::function<void()>& body) {
 
 void App::buildUi() {
   guardedUi("render frames", [&] {
-    if (frames_.step(*context_)) inputSeen_ = true;  // keep drawing while frames are made
+    if (frames_.step(*context_)) pacing_.noteInput();  // keep drawing while frames are made
   });
   guardedUi("menu", [&] { menuBar(); });
   menuHeight_ = ImGui::GetFrameHeight();
