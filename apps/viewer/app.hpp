@@ -12,7 +12,6 @@
 //   FramePacing    frame_pacing.hpp    redraw on demand, the frame rate
 //   app.cpp     window, main loop, screenshots
 //   app_ui.cpp  menu bar, the panel column, keyboard shortcuts, the JSON, help and scratchboard windows
-#include <chrono>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -26,13 +25,12 @@
 #include "input.hpp"
 #include "orbit_benchmark.hpp"
 #include "panels.hpp"
+#include "pteryla/render/image_texture.hpp"
 #include "script_session.hpp"
 #include "timeline.hpp"
 #include "viewport.hpp"
 
 struct GLFWwindow;
-
-#include "pteryla/render/image_texture.hpp"
 
 namespace pteryla::viewer {
 

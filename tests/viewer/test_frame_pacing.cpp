@@ -17,13 +17,18 @@ int drawnOf(FramePacing& p, int n, Clock::time_point t) {
   return drawn;
 }
 
+// A loop that starts at t0.
+class FramePacingTest : public ::testing::Test {
+ protected:
+  FramePacingTest() { p.start(t0); }
+  ViewState view;
+  FramePacing p{view};
+  const Clock::time_point t0 = Clock::now();
+};
+
 }  // namespace
 
-TEST(FramePacing, AfterActivityItDrawsTheSettleFramesThenNothing) {
-  ViewState view;
-  FramePacing p(view);
-  const Clock::time_point t0 = Clock::now();
-  p.start(t0);
+TEST_F(FramePacingTest, AfterActivityItDrawsTheSettleFramesThenNothing) {
   EXPECT_TRUE(p.settling());
   // The first frames are drawn (start-up counts as input), then kSettleFrames in all, then none.
   EXPECT_EQ(drawnOf(p, 10, t0), FramePacing::kSettleFrames);
@@ -32,11 +37,7 @@ TEST(FramePacing, AfterActivityItDrawsTheSettleFramesThenNothing) {
   EXPECT_FALSE(p.settling());  // the loop may now wait long for events
 }
 
-TEST(FramePacing, ABusyLoopDrawsEveryFrameAndNeverIdles) {
-  ViewState view;
-  FramePacing p(view);
-  const Clock::time_point t0 = Clock::now();
-  p.start(t0);
+TEST_F(FramePacingTest, ABusyLoopDrawsEveryFrameAndNeverIdles) {
   for (int i = 0; i < 50; ++i) EXPECT_TRUE(p.shouldDraw(true, t0 + milliseconds(i)));
   EXPECT_FALSE(view.idle);
   EXPECT_EQ(p.framesSkipped(), 0);
@@ -45,11 +46,7 @@ TEST(FramePacing, ABusyLoopDrawsEveryFrameAndNeverIdles) {
   EXPECT_TRUE(view.idle);
 }
 
-TEST(FramePacing, InputWakesAnIdleLoopForTheSettleFrames) {
-  ViewState view;
-  FramePacing p(view);
-  const Clock::time_point t0 = Clock::now();
-  p.start(t0);
+TEST_F(FramePacingTest, InputWakesAnIdleLoopForTheSettleFrames) {
   drawnOf(p, 10, t0);
   ASSERT_TRUE(view.idle);
   p.noteInput();
@@ -59,11 +56,7 @@ TEST(FramePacing, InputWakesAnIdleLoopForTheSettleFrames) {
   EXPECT_TRUE(view.idle);
 }
 
-TEST(FramePacing, TheFrameRateCountsDrawnFramesAndTheirWorkOverHalfASecond) {
-  ViewState view;
-  FramePacing p(view);
-  const Clock::time_point t0 = Clock::now();
-  p.start(t0);
+TEST_F(FramePacingTest, TheFrameRateCountsDrawnFramesAndTheirWorkOverHalfASecond) {
   // A frame every 60 ms, 10 ms of work each: the rate is published once half a second has passed.
   int k = 0;
   for (; view.fps == 0.0f && k < 100; ++k) {
@@ -78,11 +71,7 @@ TEST(FramePacing, TheFrameRateCountsDrawnFramesAndTheirWorkOverHalfASecond) {
   EXPECT_NEAR(p.seconds(t0 + milliseconds(1500)), 1.5, 1e-9);
 }
 
-TEST(FramePacing, TimeSpentIdleIsNotCountedInTheFrameRate) {
-  ViewState view;
-  FramePacing p(view);
-  const Clock::time_point t0 = Clock::now();
-  p.start(t0);
+TEST_F(FramePacingTest, TimeSpentIdleIsNotCountedInTheFrameRate) {
   // Three frames, then the loop idles for ten seconds.
   for (int i = 0; i < 3; ++i) {
     const Clock::time_point start = t0 + milliseconds(i);
