@@ -294,3 +294,57 @@ TEST(ViewerRobust, QueuedRestEditsKeepTheCoatAndItsMaterialsTogether) {
   EXPECT_EQ(err.find("materials are set"), std::string::npos) << err;
   EXPECT_TRUE(std::filesystem::exists(dir + "/after.png")) << err;
 }
+
+// File > Quit with unsaved changes asks (Dialogs::confirmQuit): Save writes the scene and quits, Discard
+// quits leaving the file and removing the recovery file, Cancel keeps the viewer running with the work
+// (and its recovery file). The script clicks the menu and the dialog's buttons where they are drawn in
+// a 1000x700 window (menu bar over a 420-pixel panel column: clicks are relative to the 3D view); a
+// command after the dialog tells whether the viewer was still running.
+TEST(ViewerRobust, QuitWithUnsavedChangesAsksThenSavesDiscardsOrCancels) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_quit_asks");
+  const std::string recoveryDir = dir + "/state/pteryla/recovery";
+  const pipeline::Scene start = viewer_test::smallPatch();
+  ASSERT_NE(start.tracts[0]["count"], 31);
+  struct Answer {
+    const char* button;
+    int x;  // view pixels (the dialog is centred in the window)
+  };
+  for (const Answer a : {Answer{"save", -8}, Answer{"discard", 47}, Answer{"cancel", 107}}) {
+    SCOPED_TRACE(a.button);
+    const std::string scene = dir + "/" + a.button + ".json", script = dir + "/" + a.button + ".txt";
+    std::filesystem::remove_all(dir + "/state");
+    pipeline::saveScene(scene, start);
+    const std::string original = slurp(scene);
+    std::ofstream(script) << "count 0 31\n"
+                             "wait\n"
+                             "autosave\n"
+                             "click -395 -10\n"  // File
+                             "frames 2\n"
+                             "click -395 86\n"  // Quit
+                             "frames 3\n"
+                          << "screenshot-window " << dir << "/" << a.button << "_asks.png\n"
+                          << "click " << a.x << " 349\n"
+                          << "frames 3\n"
+                             "selection\n"  // printed only when the viewer is still running
+                             "quit\n";
+    const ViewerRun r = runViewer("\"" + scene + "\" --lod 0.2 --size 1000x700 --script \"" + script + "\"",
+                                  dir + "/" + a.button + "_stderr.txt", stateEnv(dir));
+    const std::string err = slurp(dir + "/" + a.button + "_stderr.txt");
+    ASSERT_EQ(r.code, 0) << err;
+    const bool running = viewer_test::jsonLines(r.out).size() == 1;
+    if (std::string(a.button) == "save") {
+      EXPECT_FALSE(running) << "Save quits (did the menu or the dialog move? see save_asks.png)";
+      EXPECT_EQ(pipeline::loadScene(scene).tracts[0]["count"], 31) << "Save writes the scene";
+      EXPECT_EQ(filesIn(recoveryDir), 0u) << "a saved scene leaves no recovery file";
+    } else if (std::string(a.button) == "discard") {
+      EXPECT_FALSE(running) << "Discard quits";
+      EXPECT_EQ(slurp(scene), original) << "Discard never writes the scene";
+      EXPECT_EQ(filesIn(recoveryDir), 0u) << "discarded work is not offered for recovery";
+    } else {
+      EXPECT_TRUE(running) << "Cancel keeps the viewer running";
+      EXPECT_EQ(slurp(scene), original);
+      EXPECT_EQ(filesIn(recoveryDir), 1u) << "the unsaved work keeps its recovery file";
+    }
+  }
+}
