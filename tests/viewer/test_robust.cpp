@@ -6,6 +6,7 @@
 // unsaved work autosaved to the recovery file must come back after a crash.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -346,5 +347,47 @@ TEST(ViewerRobust, QuitWithUnsavedChangesAsksThenSavesDiscardsOrCancels) {
       EXPECT_EQ(slurp(scene), original);
       EXPECT_EQ(filesIn(recoveryDir), 1u) << "the unsaved work keeps its recovery file";
     }
+  }
+}
+
+// Save As onto an existing file asks "Replace file?" (Dialogs::saveAsNow): nothing is written until
+// Replace; Cancel leaves the file as it was. The dialog is centred in the 1000x700 window and as wide
+// as its longest line (the default font is 7 pixels a character, 8 pixels of padding each side); its
+// buttons are clicked there (view pixels: the 3D view starts 420 pixels right, 19 down).
+TEST(ViewerRobust, SaveAsOntoAnExistingFileAsksBeforeReplacingIt) {
+  NEED_XVFB();
+  const std::string dir = viewer_test::scratchDir("robust_replace");
+  const std::string scene = dir + "/groom.json";
+  pipeline::saveScene(scene, viewer_test::smallPatch());
+  for (const bool replace : {true, false}) {
+    SCOPED_TRACE(replace ? "replace" : "cancel");
+    const std::string name = replace ? "replace" : "cancel_";  // the same length: the same dialog
+    const std::string target = dir + "/" + name + ".json", script = dir + "/" + name + ".txt";
+    std::ofstream(target) << "{}\n";
+    const int width = 16 + 7 * int(std::max(target.size() + 8, size_t(27)));
+    if (width > 900) GTEST_SKIP() << "the build directory's path is too long for the dialog to fit the window";
+    const int left = 500 - width / 2 - 420;
+    std::ofstream(script) << "count 0 31\n"
+                             "wait\n"
+                          << "dialog save-as " << target << "\n"
+                          << "key enter\n"
+                             "frames 3\n"
+                          << "screenshot-window " << dir << "/" << name << "_asks.png\n"
+                          << "click " << left + (replace ? 36 : 98) << " 358\n"
+                          << "frames 3\n"
+                             "selection\n"
+                             "quit\n";
+    const ViewerRun r = runViewer("\"" + scene + "\" --lod 0.2 --size 1000x700 --script \"" + script + "\"",
+                                  dir + "/" + name + "_stderr.txt", stateEnv(dir));
+    const std::string err = slurp(dir + "/" + name + "_stderr.txt");
+    ASSERT_EQ(r.code, 0) << err;
+    EXPECT_EQ(viewer_test::jsonLines(r.out).size(), 1u) << "the viewer keeps running after either answer";
+    if (replace) {
+      ASSERT_NE(slurp(target), "{}\n") << "Replace writes the file (did the dialog move? see replace_asks.png)";
+      EXPECT_EQ(pipeline::loadScene(target).tracts[0]["count"], 31);
+    } else {
+      EXPECT_EQ(slurp(target), "{}\n") << "Cancel leaves the existing file alone";
+    }
+    EXPECT_NE(pipeline::loadScene(scene).tracts[0]["count"], 31) << "Save As never writes the old file";
   }
 }
