@@ -322,7 +322,9 @@ void App::renderView() {
   // A time drawn before whose coat is not evaluated yet: its flipbook frame (timeline.cpp).
   if (!moving && timeline_.showFlipbookFrame()) return;
   timeline_.liveViewShown();
-  if (viewport_.render(moving, bench_.fixedPass())) timeline_.storeFlipbookFrame();
+  const Viewport::Drawn drawn = viewport_.render(moving, bench_.fixedPass(), view_.playing);
+  if (drawn == Viewport::Drawn::Full || drawn == Viewport::Drawn::Playback)
+    timeline_.storeFlipbookFrame(drawn == Viewport::Drawn::Playback);
 }
 
 void App::captureScreenshot(int fbw, int fbh, bool afterUi) {

@@ -145,6 +145,10 @@ struct ViewState {
   // axis) and stretched; full resolution as soon as it stops. 1 = off.
   int navigationScale = 2;
   bool navigationChanged = false;
+  // Fast playback: while the timeline plays, each new frame is drawn like a moving view (1/navigationScale
+  // of the resolution, no multisampling, every feather): drawing, not evaluating, is most of a played
+  // frame on llvmpipe. A paused frame is drawn again at full quality. Off: played frames at full quality.
+  bool fastPlayback = true;
   bool forceNavigation = false;  // draw the navigation coat even at rest (script: show navigation on)
   // Adaptive navigation: while the camera moves, keep drawing every feather (at 1/navigationScale) as
   // long as such a frame renders within fullCoatBudgetMs; the navigation coat only when slower.

@@ -162,6 +162,11 @@ void drawViewPanel(PanelContext& ctx) {
   ImGui::SetNextItemWidth(60);
   ImGui::SliderInt("1/res", &v.navigationScale, 1, 4);
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("while the camera moves, render the view at 1/N of its resolution");
+  ImGui::Checkbox("Fast playback", &v.fastPlayback);
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "while the timeline plays, draw each new frame at 1/res without multisampling; full quality when "
+        "paused");
   if (ImGui::Button("Frame all (A)")) ctx.app.frameAll();
   ImGui::SameLine();
   static std::string shot = "screenshot.png";

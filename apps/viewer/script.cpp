@@ -405,7 +405,7 @@ const char* scriptHelp() {
   box-selection                  print the boxed feathers, follicles and handles as JSON
   autosave                       write the recovery file now (the scene must have unsaved changes)
   crash                          end the process at once, without clean-up (tests recovery)
-  show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin|navigation|problems|keys|vectors|brushes|controls|joints on|off
+  show designer|json|help|panels|follicles|directions|tract|wireframe|coat|skin|navigation|problems|keys|vectors|brushes|controls|joints|fast-playback on|off
 )";
 }
 

@@ -167,30 +167,31 @@ void ScriptSession::run(const ScriptCommand& c) {
       if (c.args[1] != "on" && c.args[1] != "off")
         throw Error("usage: show WHAT on|off", file, "line " + std::to_string(c.line));
       const bool on = c.args[1] == "on";
-      bool* flag = w == "designer"     ? &view_.showDesigner
-                   : w == "json"       ? &view_.showJsonInspector
-                   : w == "help"       ? &view_.showHelp
-                   : w == "panels"     ? nullptr
-                   : w == "follicles"  ? &view_.showFollicles
-                   : w == "directions" ? &view_.showDirections
-                   : w == "tract"      ? &view_.showTract
-                   : w == "wireframe"  ? &view_.wireframe
-                   : w == "coat"       ? &view_.showCoat
-                   : w == "skin"       ? &view_.showSkin
-                   : w == "navigation" ? &view_.forceNavigation
-                   : w == "problems"   ? &view_.showProblems
-                   : w == "keys"       ? &view_.showKeys
-                   : w == "vectors"    ? &view_.showVectors
-                   : w == "brushes"    ? &view_.showBrushes
-                   : w == "controls"   ? &view_.showControls
-                   : w == "joints"     ? &view_.showJoints
-                                       : nullptr;
+      bool* flag = w == "designer"        ? &view_.showDesigner
+                   : w == "json"          ? &view_.showJsonInspector
+                   : w == "help"          ? &view_.showHelp
+                   : w == "panels"        ? nullptr
+                   : w == "follicles"     ? &view_.showFollicles
+                   : w == "directions"    ? &view_.showDirections
+                   : w == "tract"         ? &view_.showTract
+                   : w == "wireframe"     ? &view_.wireframe
+                   : w == "coat"          ? &view_.showCoat
+                   : w == "skin"          ? &view_.showSkin
+                   : w == "navigation"    ? &view_.forceNavigation
+                   : w == "problems"      ? &view_.showProblems
+                   : w == "keys"          ? &view_.showKeys
+                   : w == "vectors"       ? &view_.showVectors
+                   : w == "brushes"       ? &view_.showBrushes
+                   : w == "controls"      ? &view_.showControls
+                   : w == "joints"        ? &view_.showJoints
+                   : w == "fast-playback" ? &view_.fastPlayback
+                                          : nullptr;
       if (w == "panels")
         view_.hidePanels = !on;
       else if (!flag)
         throw Error("unknown view item '" + w +
                         "' (designer, json, help, panels, follicles, directions, tract, wireframe, coat, skin, "
-                        "navigation, problems, keys, vectors, brushes, controls, joints)",
+                        "navigation, problems, keys, vectors, brushes, controls, joints, fast-playback)",
                     file, "line " + std::to_string(c.line));
       else
         *flag = on;

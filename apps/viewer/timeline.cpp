@@ -39,14 +39,23 @@ void Timeline::playFor(double seconds) {
   play_.until = 1;  // (set to the end when the clock starts)
 }
 
-std::vector<float> Timeline::flipbookKey(double lod) const {
+std::vector<float> Timeline::flipbookKey(double lod, bool fast) const {
   std::vector<float> k = viewport_.viewKey();
   if (k.size() > Viewport::kUploadKeyIndex)
     k.erase(k.begin() + Viewport::kUploadKeyIndex);  // the upload counter: the time and the scene stand for it
   k.push_back(float(lod));
   k.push_back(float(doc_.changeCount()));
   k.push_back(float(static_cast<int>(view_.colourBy)));
+  if (fast) {  // the fast playback quality: its resolution
+    k.push_back(1.0f);
+    k.push_back(float(std::clamp(view_.navigationScale, 1, 8)));
+  }
   return k;
+}
+
+const render::Image* Timeline::findFrame(double t, double lod) {
+  if (const render::Image* img = flipbook_.find(t, flipbookKey(lod))) return img;
+  return view_.playing && view_.fastPlayback ? flipbook_.find(t, flipbookKey(lod, true)) : nullptr;
 }
 
 void Timeline::advance() {
@@ -111,7 +120,7 @@ void Timeline::advance() {
   if (*due == play_.lastDue) return;
   if (doc_.failed()) return stop();
   const double t = grid.time(*due);
-  if (flipbook_.contains(t, flipbookKey(doc_.lod()))) {
+  if (findFrame(t, doc_.lod())) {
     play_.lastDue = *due;
     displayTime_ = t;
     play_.awaitingResult = false;  // an evaluation still running is overtaken
@@ -168,8 +177,8 @@ bool Timeline::showFlipbookFrame() {
   const bool live = doc_.upToDate() && doc_.resultVersion() == viewport_.syncedResult() && shown == doc_.time();
   if (live) return false;
   const double lod = view_.scrubSavedLod > 0 ? view_.scrubSavedLod : doc_.lod();
-  const render::Image* img = flipbook_.find(shown, flipbookKey(lod));
-  if (!img && lod != doc_.lod()) img = flipbook_.find(shown, flipbookKey(doc_.lod()));
+  const render::Image* img = findFrame(shown, lod);
+  if (!img && lod != doc_.lod()) img = findFrame(shown, doc_.lod());
   if (!img) return false;
   const render::Image& onScreen = viewport_.image();
   if (!flipbookShown_ || flipbookShownTime_ != shown || onScreen.width != img->width ||
@@ -181,10 +190,11 @@ bool Timeline::showFlipbookFrame() {
   return true;
 }
 
-void Timeline::storeFlipbookFrame() {
+void Timeline::storeFlipbookFrame(bool fast) {
+  if (fast) ++play_.drawnFast;
   if (view_.flipbookMB <= 0 || viewport_.image().empty()) return;
   if (!doc_.upToDate() || doc_.resultVersion() != viewport_.syncedResult()) return;
-  flipbook_.store(doc_.time(), flipbookKey(doc_.lod()), viewport_.image());
+  flipbook_.store(doc_.time(), flipbookKey(doc_.lod(), fast), viewport_.image());
   view_.flipbookFrames = flipbook_.size();
   view_.flipbookBytes = flipbook_.bytes();
 }
@@ -204,9 +214,10 @@ void Timeline::finishPlayReport() {
     std::snprintf(buf, sizeof buf,
                   "{\"play_seconds\": %.3f, \"fps_target\": %.2f, \"frames_due\": %zu, \"frames_shown\": %zu, "
                   "\"frames_evaluated\": %zu, \"frames_from_flipbook\": %zu, \"fps_shown\": %.2f, "
-                  "\"flipbook_frames\": %zu, \"flipbook_mb\": %.1f}",
+                  "\"frames_drawn_fast\": %zu, \"flipbook_frames\": %zu, \"flipbook_mb\": %.1f}",
                   seconds, double(view_.playFps), due, play_.shown, play_.evaluated, play_.fromCache,
-                  double(play_.shown) / seconds, flipbook_.size(), double(flipbook_.bytes()) / (1 << 20));
+                  double(play_.shown) / seconds, play_.drawnFast, flipbook_.size(),
+                  double(flipbook_.bytes()) / (1 << 20));
     std::cout << buf << std::endl;
     play_.until = 0;
     play_.seconds = 0;

@@ -28,8 +28,8 @@ class Timeline {
   // Shows a flipbook frame instead of rendering (a time whose coat is not evaluated yet); false: none.
   bool showFlipbookFrame();
   void liveViewShown() { flipbookShown_ = false; }
-  // The view just rendered, complete and at rest, for its time.
-  void storeFlipbookFrame();
+  // The view just rendered, complete and at rest (or `fast`: at the fast playback quality), for its time.
+  void storeFlipbookFrame(bool fast = false);
 
   // A scripted `play S`: plays for S seconds, then prints what the playback showed (JSON on stdout).
   void playFor(double seconds);
@@ -37,8 +37,11 @@ class Timeline {
   bool filling() const { return fill_.active; }
 
  private:
-  // The flipbook's key of the 3D view at a level of detail: what the image depends on besides the time.
-  std::vector<float> flipbookKey(double lod) const;
+  // The flipbook's key of the 3D view at a level of detail: what the image depends on besides the time
+  // (`fast`: drawn at the fast playback quality, ViewState::fastPlayback).
+  std::vector<float> flipbookKey(double lod, bool fast = false) const;
+  // A frame of time t at this level of detail: at full quality, or while playing also a fast one.
+  const render::Image* findFrame(double t, double lod);
   void advanceCacheFill();
   void finishPlayReport();  // `play S`: prints what the playback showed
 
@@ -65,6 +68,7 @@ class Timeline {
     double seconds = 0;               // `play S`: S (until is set when the clock starts)
     int64_t lastDue = -1, firstDue = -1;
     size_t due = 0, shown = 0, fromCache = 0, evaluated = 0;
+    size_t drawnFast = 0;  // views drawn at the fast playback quality
     bool awaitingResult = false;
   } play_;
 };

@@ -254,7 +254,7 @@ void Viewport::showImage(const render::Image& image) {
   lastViewKey_.clear();  // the live view is rendered again when the evaluation catches up
 }
 
-bool Viewport::render(bool moving, int benchPass) {
+Viewport::Drawn Viewport::render(bool moving, int benchPass, bool playing) {
   // A new coat or view size invalidates the measured full-coat time (adaptive navigation).
   const float fullKey[3] = {float(uploadVersion_), float(viewPixels_.x), float(viewPixels_.y)};
   if (!std::equal(fullKey, fullKey + 3, movingFullKey_)) {
@@ -266,14 +266,17 @@ bool Viewport::render(bool moving, int benchPass) {
                                    : useNavigationCoat(view_.forceNavigation, view_.adaptiveNavigation, movingFullMs_,
                                                        view_.fullCoatBudgetMs);
   const bool nav = navReady_ && view_.fastNavigation && moving && navRenderer_ && navChoice;
+  // Playing at rest: every feather, drawn as cheaply as a moving view is (below).
+  const bool fastPlay = playing && !moving && view_.fastPlayback;
   // While moving, fewer pixels as well: the coat's fragments cost as much as its triangles on llvmpipe.
-  const int scale = moving && view_.fastNavigation ? std::clamp(view_.navigationScale, 1, 8) : 1;
+  const int scale = (moving && view_.fastNavigation) || fastPlay ? std::clamp(view_.navigationScale, 1, 8) : 1;
   std::vector<float> key = viewKey();
   key.push_back(nav ? 1.0f : 0.0f);
   key.push_back(float(scale));
+  key.push_back(fastPlay ? 1.0f : 0.0f);
   if (key == lastViewKey_ && viewTexture_ && viewTexture_->id()) {
     drawnResult_ = syncedResult_;  // the view on screen shows the synced result
-    return false;
+    return Drawn::Nothing;
   }
   render::Renderer& renderer = nav ? *navRenderer_ : *renderer_;
   const pipeline::Scene& scene = doc_.scene();
@@ -282,7 +285,8 @@ bool Viewport::render(bool moving, int benchPass) {
   settings.drawSkin = view_.showSkin;
   settings.drawCoat = view_.showCoat;
   settings.wireframe = view_.wireframe;  // also turns off shadows and sub-pixel culling
-  if (moving) settings.msaaSamples = 0;  // multisampling costs most of a frame on llvmpipe: only at rest
+  // Multisampling costs most of a frame on llvmpipe: only at rest (and not for fast playback).
+  if (moving || fastPlay) settings.msaaSamples = 0;
   // The navigation coat shows every k-th feather: colour the skin like the coat looked (the mean of
   // the last full view) so the body reads as feathered rather than bare while the camera moves.
   if (nav && navSkinColor_.x >= 0.0f) settings.skinColor = navSkinColor_;
@@ -306,7 +310,8 @@ bool Viewport::render(bool moving, int benchPass) {
   }
   lastViewKey_ = std::move(key);
   drawnResult_ = syncedResult_;
-  return !nav && !moving && scale == 1;
+  if (fastPlay) return Drawn::Playback;
+  return !nav && !moving && scale == 1 ? Drawn::Full : Drawn::Reduced;
 }
 
 void Viewport::requestScreenshot(const std::string& path, bool withUi) {

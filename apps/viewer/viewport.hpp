@@ -48,8 +48,15 @@ class Viewport {
 
   // Renders the 3D view into its texture when what it shows changed. `moving`: the camera moves (draw at
   // lower cost); `benchPass` fixes the coat drawn (orbit benchmark: 0 navigation, 1 full coat, else the
-  // usual choice). Returns true when it rendered the full coat at rest at full resolution.
-  bool render(bool moving, int benchPass);
+  // usual choice); `playing`: the timeline plays (with ViewState::fastPlayback, every feather at the moving
+  // view's resolution and without multisampling). Returns what it drew.
+  enum class Drawn {
+    Nothing,   // the view was up to date
+    Reduced,   // a moving view (the navigation coat or fewer pixels)
+    Playback,  // every feather, at the fast playback quality
+    Full,      // every feather at rest at full resolution and quality
+  };
+  Drawn render(bool moving, int benchPass, bool playing = false);
   // Shows an image instead (a flipbook frame); the live view is rendered again when asked next.
   void showImage(const render::Image& image);
   const render::Image& image() const { return viewImage_; }

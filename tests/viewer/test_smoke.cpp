@@ -342,6 +342,39 @@ TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
   EXPECT_GE(cached["fps_shown"].get<double>(), 5.0) << r.out;
 }
 
+// #26: fast playback draws each played frame like a moving view (fewer pixels, no multisampling), and
+// the paused frame at full quality again; off, every played frame is drawn at full quality.
+TEST(ViewerSmoke, FastPlaybackDrawsPlayedFramesCheaplyAndThePausedFrameInFull) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("smoke_fast_play");
+  for (const bool fast : {true, false}) {
+    SCOPED_TRACE(fast);
+    const std::string script = dir + "/s.txt", shot = dir + (fast ? "/fast.png" : "/full.png");
+    std::ofstream(script) << "count 0 25\ncount 1 25\ncount 2 25\n"
+                          << "show fast-playback " << (fast ? "on" : "off") << "\n"
+                          << "time 3\nwait\nrange 3 4 0.05 loop\nplay 2 24\ntime 3.5\nwait\nscreenshot " << shot
+                          << "\nquit\n";
+    const ViewerRun r = runViewer(
+        "\"" + viewer_test::dataPath("scenes/moult.json") + "\" --lod 0.2 --size 800x600 --script \"" + script + "\"",
+        dir + "/stderr.txt");
+    ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
+    const std::vector<Json> lines = viewer_test::jsonLines(r.out);
+    ASSERT_EQ(lines.size(), 1u) << r.out;
+    const Json& play = lines[0];
+    ASSERT_GE(play["frames_evaluated"].get<int>(), 1) << r.out;
+    if (fast)
+      EXPECT_GE(play["frames_drawn_fast"].get<int>(), play["frames_evaluated"].get<int>()) << r.out;
+    else
+      EXPECT_EQ(play["frames_drawn_fast"].get<int>(), 0) << r.out;
+  }
+  // The paused view is drawn at full resolution and quality either way: the same image.
+  const render::Image a = render::loadImage(dir + "/fast.png"), b = render::loadImage(dir + "/full.png");
+  ASSERT_FALSE(a.empty());
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.height, b.height);
+  EXPECT_EQ(a.rgba, b.rgba);
+}
+
 // --screenshot (no script): the panels are hidden so the capture is the whole width of the window, the
 // run ends by itself once the evaluated view is drawn, and the same scene gives the same bits again
 // (App::captureScreenshot and Viewport::capture).
