@@ -170,11 +170,28 @@ class TriangleBvh {
   template <class F>
   void overlappingPairs(const TriangleBvh& other, F&& f) const {
     if (nodes_.empty() || other.nodes_.empty()) return;
-    std::vector<std::pair<uint32_t, uint32_t>> stack;
-    if (boxesOverlap(nodes_[0].lo, nodes_[0].hi, other.nodes_[0].lo, other.nodes_[0].hi)) stack.emplace_back(0, 0);
-    while (!stack.empty()) {
-      const auto [a, b] = stack.back();
-      stack.pop_back();
+    // Called once per pair of meeting feathers: the stack lives on the call's own stack (a pop pushes at
+    // most two, so it stays near the two trees' depths), in a vector only past that.
+    constexpr size_t kLocal = 128;
+    std::pair<uint32_t, uint32_t> local[kLocal];
+    size_t top = 0;
+    std::vector<std::pair<uint32_t, uint32_t>> spill;
+    auto push = [&](uint32_t x, uint32_t y) {
+      if (top < kLocal)
+        local[top++] = {x, y};
+      else
+        spill.emplace_back(x, y);
+    };
+    if (boxesOverlap(nodes_[0].lo, nodes_[0].hi, other.nodes_[0].lo, other.nodes_[0].hi)) push(0, 0);
+    while (top > 0 || !spill.empty()) {
+      std::pair<uint32_t, uint32_t> ab;
+      if (!spill.empty()) {
+        ab = spill.back();
+        spill.pop_back();
+      } else {
+        ab = local[--top];
+      }
+      const auto [a, b] = ab;
       const Node &na = nodes_[a], &nb = other.nodes_[b];
       if (na.count > 0 && nb.count > 0) {
         for (uint32_t i = 0; i < na.count; ++i) {
@@ -190,10 +207,10 @@ class TriangleBvh {
       const bool splitA = nb.count > 0 || (na.count == 0 && area(na) >= area(nb));
       if (splitA) {
         for (uint32_t c : {a + 1, na.first})
-          if (boxesOverlap(nodes_[c].lo, nodes_[c].hi, nb.lo, nb.hi)) stack.emplace_back(c, b);
+          if (boxesOverlap(nodes_[c].lo, nodes_[c].hi, nb.lo, nb.hi)) push(c, b);
       } else {
         for (uint32_t c : {b + 1, nb.first})
-          if (boxesOverlap(na.lo, na.hi, other.nodes_[c].lo, other.nodes_[c].hi)) stack.emplace_back(a, c);
+          if (boxesOverlap(na.lo, na.hi, other.nodes_[c].lo, other.nodes_[c].hi)) push(a, c);
       }
     }
   }
