@@ -59,13 +59,12 @@ glm::dvec3 placePoint(const FeatherFrame& f, double e, const glm::dvec3& p) {
   return f.origin + placeDirection(f, e, p);
 }
 
-using namespace packing;
+namespace packing {
 
-PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options,
-                const PackConstraints& constraints) {
+PackResult packAll(Context& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
-  checkInput(coat, options, constraints);
-  Context ctx(skin, coat, options, constraints);
+  const PackOptions& options = ctx.opt;
+  checkInput(ctx.coat, options, ctx.constraints);
   PackResult res;
   detail::inArena(options.threads, [&] {
     setup(ctx);
@@ -77,18 +76,17 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
   return res;
 }
 
-PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& prev,
-                  const std::vector<uint32_t>& changed, const PackOptions& options,
-                  const PackConstraints& constraints) {
+PackResult repackFrom(Context& ctx, const PackResult& prev, const std::vector<uint32_t>& changed) {
   const auto t0 = std::chrono::steady_clock::now();
-  checkInput(coat, options, constraints);
+  const CoatFeathers& coat = ctx.coat;
+  const PackOptions& options = ctx.opt;
+  checkInput(coat, options, ctx.constraints);
   const size_t n = coat.size();
   // The previous result must describe the same feathers in the same order.
   if (prev.elevation.size() != n || prev.pointOffset.size() != n + 1 || prev.packedKeys.keyOffset.size() != n + 1 ||
       prev.order != presentInLayerOrder(coat) || changed.size() * 2 > n)
-    return pack(skin, coat, options, constraints);
+    return packAll(ctx);
   const std::vector<uint8_t> isChanged = changedMask(changed, n);
-  Context ctx(skin, coat, options, constraints);
   PackResult res;
   detail::inArena(options.threads, [&] {
     setup(ctx);
@@ -135,11 +133,12 @@ PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResu
   return res;
 }
 
-PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& base,
-                    const std::vector<uint32_t>& changed, const PackOptions& options,
-                    const PackConstraints& constraints) {
+PackResult packOverBase(Context& ctx, const PackResult& base, const std::vector<uint32_t>& changed) {
   const auto t0 = std::chrono::steady_clock::now();
-  checkInput(coat, options, constraints);
+  const SkinMesh& skin = ctx.skin;
+  const CoatFeathers& coat = ctx.coat;
+  const PackOptions& options = ctx.opt;
+  checkInput(coat, options, ctx.constraints);
   const size_t n = coat.size();
   auto present = [&](uint32_t i) { return coat.present.empty() || coat.present[i] != 0; };
   if (base.elevation.size() != n || base.pointOffset.size() != n + 1 || base.groupOffset.size() != n + 1 ||
@@ -156,14 +155,9 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
     throw Error("packOver: the coat's present feathers are not packed in the base pack in the same layer order", {},
                 "base");
   const std::vector<uint8_t> isChanged = changedMask(changed, n);
-  if (options.skin && !skin.faces.empty()) {
-    const auto& sd = base.skinSamples;
-    if (!sd || sd->skinPositions.size() != skin.positions.size() ||
-        std::memcmp(sd->skinPositions.data(), skin.positions.data(), skin.positions.size() * sizeof(dvec3)) != 0)
-      throw Error("packOver: the skin differs from the one the base pack was packed on", {}, "base");
-  }
+  if (options.skin && !skin.faces.empty() && !packedOnSkin(base, skin, options))
+    throw Error("packOver: the skin differs from the one the base pack was packed on", {}, "base");
 
-  Context ctx(skin, coat, options, constraints);
   PackResult res;
   detail::inArena(options.threads, [&] {
     beginContext(ctx, order);
@@ -215,6 +209,8 @@ PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackRe
   return res;
 }
 
+}  // namespace packing
+
 std::vector<uint32_t> changedFeathers(const CoatFeathers& a, const CoatFeathers& b, const std::vector<double>& fa,
                                       const std::vector<double>& fb) {
   PTERYLA_CHECK_EQ(a.size(), b.size(), "changedFeathers needs coats of equal size");
@@ -228,7 +224,7 @@ std::vector<uint32_t> changedFeathers(const CoatFeathers& a, const CoatFeathers&
     d = d || !bitsEq(ageA, ageB);
     const uint8_t pa = a.present.empty() ? 1 : a.present[i], pb = b.present.empty() ? 1 : b.present[i];
     d = d || pa != pb;
-    const double ea = fa.empty() ? kNaN : fa[i], eb = fb.empty() ? kNaN : fb[i];
+    const double ea = fa.empty() ? packing::kNaN : fa[i], eb = fb.empty() ? packing::kNaN : fb[i];
     d = d || !(bitsEq(ea, eb) || (std::isnan(ea) && std::isnan(eb)));
     if (d) out.push_back(i);
   }

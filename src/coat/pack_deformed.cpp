@@ -85,11 +85,13 @@ void keepMoved(const PackResult& ref, PackResult& res, Output& out, uint32_t i, 
 
 }  // namespace
 
-PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const SkinMesh& refSkin,
-                        const std::vector<FeatherFrame>& refFrames, const PackResult& ref, double tolerance,
-                        const PackOptions& options, const PackConstraints& constraints, DeformedPackStats* report) {
+PackResult packing::packDeformedFrom(Context& ctx, const SkinMesh& refSkin, const std::vector<FeatherFrame>& refFrames,
+                                     const PackResult& ref, double tolerance, DeformedPackStats* report) {
   const auto t0 = std::chrono::steady_clock::now();
-  checkInput(coat, options, constraints);
+  const SkinMesh& skin = ctx.skin;
+  const CoatFeathers& coat = ctx.coat;
+  const PackOptions& options = ctx.opt;
+  checkInput(coat, options, ctx.constraints);
   const size_t n = coat.size();
   if (!(tolerance >= 0) || !std::isfinite(tolerance))
     throw Error("the pose tolerance must be a finite number >= 0, got " + std::to_string(tolerance), {},
@@ -109,12 +111,11 @@ PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const Sk
   DeformedPackStats& st = report ? *report : local;
   st = DeformedPackStats{};
   if (tolerance == 0 || !refUsable || options.captureFields) {
-    PackResult r = pack(skin, coat, options, constraints);
+    PackResult r = packAll(ctx);
     st.repacked = r.stats.recomputed;
     return r;
   }
 
-  Context ctx(skin, coat, options, constraints);
   PackResult res;
   detail::inArena(options.threads, [&] {
     setup(ctx);

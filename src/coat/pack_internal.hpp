@@ -35,8 +35,12 @@ struct PackSkinSamples {
   std::vector<glm::dvec3, UninitializedAllocator<glm::dvec3>> pts, normal;
   std::vector<float, UninitializedAllocator<float>> rho, cone;
   PointGrid grid;
-  double maxRho = 0;                      // largest patch radius
-  std::vector<glm::dvec3> skinPositions;  // the skin they were sampled from (packOver checks it)
+  double maxRho = 0;  // largest patch radius
+  // What they were built from (packing::samplesFitSkin): the skin's positions, faces and face normals,
+  // the sample spacing and the grid cell.
+  std::vector<glm::dvec3> skinPositions, skinFaceNormals;
+  std::vector<std::array<uint32_t, 3>> skinFaces;
+  double spacing = 0, cell = 0;
 };
 }  // namespace detail
 
@@ -209,6 +213,8 @@ struct Context {
   }
   // Skin samples (built by setup, or a base pack's for packOver); null without skin.
   std::shared_ptr<const detail::PackSkinSamples> skinData;
+  // Samples setup may take instead of building them, when they fit (coat::Packer's cache, a seed's).
+  std::array<std::shared_ptr<const detail::PackSkinSamples>, 2> reusable;
   std::vector<double> fixed;
   std::vector<double> minElevation;  // per feather (PackConstraints; NaN = none); empty = none
   std::vector<double> shaftBand;     // per feather (PackConstraints; NaN = PackOptions::shaftBand); empty = none
@@ -298,7 +304,15 @@ void checkInput(const CoatFeathers& c, const PackOptions& o, const PackConstrain
 void buildReachClasses(Context& ctx, const std::vector<double>& radius, double med);
 void buildDependencies(Context& ctx, const std::vector<uint32_t>& items, const std::vector<double>& radius,
                        size_t grain);
+// ctx.skinData: one of ctx.reusable when it fits the skin and the spacing, else built.
 void buildSkinSamples(Context& ctx, double medReach);
+// The samples were built from this skin's positions, faces and face normals (bit for bit).
+bool samplesFitSkin(const detail::PackSkinSamples& sd, const SkinMesh& skin);
+// `r` was packed against this skin with these options' use of it: with samples of this skin when the
+// options pack against the skin, without samples when they do not.
+bool packedOnSkin(const PackResult& r, const SkinMesh& skin, const PackOptions& o);
+// PackOptions equal field for field, threads aside (the results are the same bits at any thread count).
+bool sameKnobs(const PackOptions& a, const PackOptions& b);
 // The styling constraints and the layer order (ctx.order, ctx.pos) of a pack.
 void beginContext(Context& ctx, std::vector<uint32_t> order);
 // Everything a full pack needs before its feathers: beginContext over the present feathers, feather-local
@@ -350,6 +364,14 @@ void layoutKeys(size_t n, PackedKeyBarbs& K, Count&& count, CvCount&& cvCount) {
   K.cvs.clear();
   K.cvs.resize(K.cvOffset.back());  // huge pages, uninitialised (UninitializedAllocator)
 }
+
+// ---- pack.cpp, pack_deformed.cpp: the packs over a Context made by coat::Packer (packer.cpp), which
+// sets its reusable samples; each checks its input and throws Error as the free function does.
+PackResult packAll(Context& ctx);
+PackResult repackFrom(Context& ctx, const PackResult& prev, const std::vector<uint32_t>& changed);
+PackResult packOverBase(Context& ctx, const PackResult& base, const std::vector<uint32_t>& changed);
+PackResult packDeformedFrom(Context& ctx, const SkinMesh& refSkin, const std::vector<FeatherFrame>& refFrames,
+                            const PackResult& ref, double tolerance, DeformedPackStats* stats);
 
 // ------------------------------------------------------------------ scheduling (pack.cpp, pack_deformed.cpp)
 

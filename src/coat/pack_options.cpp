@@ -5,6 +5,7 @@
 
 #include "pteryla/coat/pack.hpp"
 #include "pteryla/core/error.hpp"
+#include "pack_internal.hpp"
 
 namespace pteryla::coat {
 
@@ -83,6 +84,21 @@ Json packingSettingsToJson(const PackingSettings& settings) {
     j["styling"] = a;
   }
   return j;
+}
+
+// A field added to PackOptions must be compared here (the size tells).
+static_assert(sizeof(PackOptions) == 152, "compare the new PackOptions field in packing::sameKnobs");
+
+bool packing::sameKnobs(const PackOptions& a, const PackOptions& b) {
+  return a.method == b.method && a.drapeMaxSlopeDeg == b.drapeMaxSlopeDeg && a.clearance == b.clearance &&
+         a.skinClearance == b.skinClearance && a.minElevation == b.minElevation && a.maxElevation == b.maxElevation &&
+         a.conflictElevation == b.conflictElevation && a.openingAge == b.openingAge &&
+         a.baseAllowance == b.baseAllowance && a.shaftBand == b.shaftBand && a.keyBarbsPerVane == b.keyBarbsPerVane &&
+         a.barbSamples == b.barbSamples && a.shaftSamples == b.shaftSamples && a.heightFieldBins == b.heightFieldBins &&
+         a.barbFieldBins == b.barbFieldBins && a.maxFlatten == b.maxFlatten &&
+         a.keepBarbArcLength == b.keepBarbArcLength && a.maxBarbLift == b.maxBarbLift &&
+         a.elevateBarbs == b.elevateBarbs && a.extendShaft == b.extendShaft && a.skin == b.skin &&
+         a.skinSampleSpacing == b.skinSampleSpacing && a.captureFields == b.captureFields;
 }
 
 PackOptions withDefaultSampling(PackOptions o) {

@@ -191,14 +191,38 @@ void setup(Context& ctx) {
 }
 
 // Skin samples (9.1.2: the surface under the feather, including neighbouring polygons).
+bool samplesFitSkin(const detail::PackSkinSamples& sd, const SkinMesh& skin) {
+  auto same = [](const auto& a, const auto& b) {
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0);
+  };
+  return same(sd.skinPositions, skin.positions) && same(sd.skinFaces, skin.faces) &&
+         same(sd.skinFaceNormals, skin.faceNormals);
+}
+
+bool packedOnSkin(const PackResult& r, const SkinMesh& skin, const PackOptions& o) {
+  if (!(o.skin && !skin.faces.empty())) return r.skinSamples == nullptr;
+  return r.skinSamples && samplesFitSkin(*r.skinSamples, skin);
+}
+
 void buildSkinSamples(Context& ctx, double medReach) {
   const PackOptions& o = ctx.opt;
   ctx.skinData.reset();
   if (o.skin && !ctx.skin.faces.empty()) {
+    const double h = o.skinSampleSpacing > 0 ? o.skinSampleSpacing : 0.1 * medReach;
+    const double cell = std::max(0.2 * medReach, 2 * h);
+    // Samples of this skin at this spacing are the same bits however often they are built.
+    for (const auto& r : ctx.reusable)
+      if (r && r->spacing == h && r->cell == cell && samplesFitSkin(*r, ctx.skin)) {
+        ctx.skinData = r;
+        return;
+      }
     auto data = std::make_shared<detail::PackSkinSamples>();
     detail::PackSkinSamples& sd = *data;
     sd.skinPositions = ctx.skin.positions;
-    const double h = o.skinSampleSpacing > 0 ? o.skinSampleSpacing : 0.1 * medReach;
+    sd.skinFaces = ctx.skin.faces;
+    sd.skinFaceNormals = ctx.skin.faceNormals;
+    sd.spacing = h;
+    sd.cell = cell;
     // Every used vertex once, points along each edge once (the face with the lower index, or the only
     // face, owns it), and interior points of each face; counts from the edge/face size and spacing h.
     const SkinMesh& sk = ctx.skin;
@@ -321,7 +345,7 @@ void buildSkinSamples(Context& ctx, double medReach) {
         }
       });
     };
-    tbb::parallel_invoke([&] { sd.grid.build(sd.pts.data(), sd.pts.size(), std::max(0.2 * medReach, 2 * h)); },
+    tbb::parallel_invoke([&] { sd.grid.build(sd.pts.data(), sd.pts.size(), cell); },
                          patches);
     for (float r : sd.rho) sd.maxRho = std::max(sd.maxRho, static_cast<double>(r));
     ctx.skinData = std::move(data);
