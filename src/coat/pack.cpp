@@ -91,6 +91,11 @@ PackResult repackFrom(Context& ctx, const PackResult& prev, const std::vector<ui
   detail::inArena(options.threads, [&] {
     setup(ctx);
     layoutResult(ctx, localSources(ctx), nullptr, res);
+    // Clearances and the median reach (which sizes the skin samples) are resolved over the whole coat: when
+    // the changes moved them, every feather packs against other values than it did in `prev`.
+    auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; };
+    const bool resolvedAlike = same(ctx.clearance, prev.clearance) && same(ctx.skinClearance, prev.skinClearance) &&
+                               same(ctx.medianReach, prev.medianReach);
     // Feathers whose old packed points (previous bounds) touch i's footprint: a changed feather that
     // moved away must still dirty what it used to cover.
     std::vector<uint8_t> touched(n, 0);
@@ -111,7 +116,7 @@ PackResult repackFrom(Context& ctx, const PackResult& prev, const std::vector<ui
     std::vector<uint8_t> outChanged(n, 0);
     Run run(res);
     schedule(ctx, ctx.order, nullptr, options.threads, [&](uint32_t i) {
-      bool dirty = isChanged[i] || touched[i];
+      bool dirty = !resolvedAlike || isChanged[i] || touched[i];
       for (uint32_t k = ctx.depOff[i]; k < ctx.depOff[i + 1] && !dirty; ++k) dirty = outChanged[ctx.deps[k]] != 0;
       const uint32_t cnt = res.pointOffset[i + 1] - res.pointOffset[i];
       const bool sameShape =

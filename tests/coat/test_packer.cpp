@@ -141,6 +141,29 @@ TEST(Packer, CachedSamplesAndResultAreDroppedWhenTheSkinOrOptionsChange) {
   expectSameBits(bare, pack(s.skin, s.coat, o));
 }
 
+TEST(Packer, RepackIsAFullPackWhenTheChangesMoveTheResolvedClearance) {
+  // The first half of the feathers (rounded down) have a narrower rachis: the median width, and with it
+  // the automatic clearance, is the wider one. Narrowing a few more moves it, and every feather packs
+  // against the new clearance.
+  Sphere s;
+  const size_t n = s.coat.size();
+  for (size_t i = n / 2; i < n; ++i) s.coat.params[i].rachisWidth *= 1.5;
+  PackOptions o;
+  o.threads = 2;
+  const PackResult before = pack(s.skin, s.coat, o);
+  CoatFeathers edited = s.coat;
+  std::vector<uint32_t> changed;
+  for (uint32_t i = static_cast<uint32_t>(n / 2); changed.size() < 12; ++i) {
+    edited.params[i].rachisWidth = s.coat.params[0].rachisWidth;
+    changed.push_back(i);
+  }
+  const PackResult fresh = pack(s.skin, edited, o);
+  ASSERT_NE(fresh.clearance, before.clearance);
+  const PackResult inc = repack(s.skin, edited, before, changed, o);
+  EXPECT_EQ(inc.clearance, fresh.clearance);
+  expectSameBits(inc, fresh);
+}
+
 TEST(Packer, PackOverTakesTheBasesSamplesAndChecksItsSkin) {
   const Sphere s;
   PackOptions o;
