@@ -90,7 +90,7 @@ struct Pipeline::Impl {
   std::vector<double> packGrownAge;   // per feather, the age packCoat's parameters are grown to (empty = none)
   TimeState timeState;
   std::vector<double> fixedElevation;
-  const coat::PackResult* packed = nullptr;        // timeState.frame.result once packed
+  const coat::PackResult* packed = nullptr;        // timeState.frame.result() once packed
   const coat::CoatFeathers* packedCoat = nullptr;  // the coat `packed` was packed from (coatNow or packCoat)
   // Draped packing (packing.method "drape"): the pack stage lays nothing (every elevation 0, `flatPack`)
   // and the mesh stage drapes the assembled mesh; `drape` is its last result.

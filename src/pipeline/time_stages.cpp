@@ -161,7 +161,7 @@ const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative
     incremental = true;
     changedCount = 0;
     recomputed = 0;
-    return memo.result;  // same inputs, same pack
+    return memo.result();  // same inputs, same pack
   }
   const bool deformed = posedSkin(posed, skin, coat);
   if (!memo.exact || deformed) changed.reset();
@@ -176,10 +176,16 @@ const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative
   }
   incremental = seed != nullptr;
   changedCount = changed ? changed->size() : coat.size();
-  coat::PackResult result;
+  coat::Packer& packer = memo.packer;
+  packer.use(skin, options);
   bool exact = true;
   if (seed) {
-    result = changed->empty() ? seed->result : coat::repack(skin, coat, seed->result, *changed, options, constraints);
+    if (seed == &memo)
+      packer.repack(coat, *changed, constraints);
+    else if (changed->empty())
+      packer.assign(seed->result());  // the same inputs as the seed's: its pack
+    else
+      packer.repackFrom(seed->result(), coat, *changed, constraints);
     exact = seed->exact;
   } else if (deformed) {
     PoseReference& ref = *posed->ref;
@@ -189,7 +195,7 @@ const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative
         packWithMemo(*posed->refMemo, nullptr, *posed->rest, referenceCoat(coat, ref), options, constraints, generation,
                      packing, refIncremental, refChanged, refRecomputed, grownAge);
     coat::DeformedPackStats ds;
-    result = coat::packDeformed(skin, coat, *posed->rest, ref.frames, base, ref.tolerance, options, constraints, &ds);
+    packer.packDeformed(coat, *posed->rest, ref.frames, base, ref.tolerance, constraints, &ds);
     exact = false;
     if (posed->report) {
       ++posed->report->deformedPacks;
@@ -197,11 +203,11 @@ const coat::PackResult& packWithMemo(PackMemo& memo, const PackMemo* alternative
       posed->report->poseRepacked += ds.repacked;
     }
   } else {
-    result = coat::pack(skin, coat, options, constraints);
+    packer.pack(coat, constraints);
   }
-  recomputed = result.stats.recomputed;
-  memo.remember(skin, coat, options, constraints, generation, packing, std::move(result), grownAge, exact);
-  return memo.result;
+  recomputed = packer.result().stats.recomputed;
+  memo.remember(skin, coat, options, constraints, generation, packing, grownAge, exact);
+  return memo.result();
 }
 
 }  // namespace
@@ -232,7 +238,7 @@ std::optional<std::vector<uint32_t>> PackMemo::changes(const coat::SkinMesh& ski
 
 void PackMemo::remember(const coat::SkinMesh& skinNow, const coat::CoatFeathers& coat, const coat::PackOptions& options,
                         const coat::PackConstraints& constraints, uint64_t gen, const Json& packingNow,
-                        coat::PackResult&& r, const std::vector<double>& grownAgeNow, bool isExact) {
+                        const std::vector<double>& grownAgeNow, bool isExact) {
   const size_t n = coat.size();
   valid = true;
   exact = isExact;
@@ -249,7 +255,6 @@ void PackMemo::remember(const coat::SkinMesh& skinNow, const coat::CoatFeathers&
     fixed[i] = fixedAt(constraints, i);
   }
   grownAge = grownAgeNow;
-  result = std::move(r);
   static std::atomic<uint64_t> versions{0};
   version = ++versions;
 }
@@ -372,14 +377,14 @@ const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh&
       state.moultFrame.changes(posed, coat, options, constraints, state.generation, scene.packing, grownAge);
   if (diff && diff->empty() && state.moultBaseVersion == state.frame.version) {
     r.moultRecomputed = 0;
-    return state.moultFrame.result;
+    return state.moultFrame.result();
   }
-  coat::PackResult result = coat::packOver(posed, coat, base, changed, options, constraints);
-  r.moultRecomputed = result.stats.recomputed;
+  coat::Packer& packer = state.moultFrame.packer;
+  packer.use(posed, options);
+  r.moultRecomputed = packer.packOver(base, coat, changed, constraints).stats.recomputed;
   state.moultBaseVersion = state.frame.version;
-  state.moultFrame.remember(posed, coat, options, constraints, state.generation, scene.packing, std::move(result),
-                            grownAge);
-  return state.moultFrame.result;
+  state.moultFrame.remember(posed, coat, options, constraints, state.generation, scene.packing, grownAge);
+  return state.moultFrame.result();
 }
 
 }  // namespace pteryla::pipeline

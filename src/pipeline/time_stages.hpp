@@ -11,6 +11,7 @@
 #include "pteryla/coat/coat_feathers.hpp"
 #include "pteryla/coat/follicles.hpp"
 #include "pteryla/coat/pack.hpp"
+#include "pteryla/coat/packer.hpp"
 #include "pteryla/coat/parameterize.hpp"
 #include "pteryla/coat/skin.hpp"
 #include "pteryla/feather/bend.hpp"
@@ -22,11 +23,13 @@
 
 namespace pteryla::pipeline {
 
-// A pack and the inputs it was computed from, so a later frame can repack incrementally
-// (coat::repack, bit-identical to a full pack) when only some feathers' packing inputs changed: same
-// rest state (generation), same "packing" section, same posed skin; the frames, presence, opened/unopened
-// class (the only way the packer reads a feather's age: PackOptions::openingAge) and fixed elevations
-// are compared per feather.
+// A packer (coat::Packer: the pack, and the skin samples it keeps while the skin is unchanged) and the
+// inputs its pack was computed from, so a later frame can repack incrementally (Packer::repack,
+// bit-identical to a full pack) when only some feathers' packing inputs changed: same rest state
+// (generation), same "packing" section, same posed skin; the frames, presence, opened/unopened class (the
+// only way the packer reads a feather's age: PackOptions::openingAge) and fixed elevations are compared
+// per feather. Which feathers changed is the memo's to say (it knows how the pipeline grew them); whether
+// the pack and the samples still fit the skin and the options is the packer's.
 struct PackMemo {
   bool valid = false;
   uint64_t generation = 0;       // Pipeline rest-state generation the inputs belong to
@@ -38,13 +41,14 @@ struct PackMemo {
   // Per feather, the age its packing parameters were grown to (1 = the rest parameters); empty = all 1.
   // Within a rest state a feather's packing parameters are a function of this age.
   std::vector<double> grownAge;
-  coat::PackResult result;
-  uint64_t version = 0;  // changes whenever `result` is replaced (remember)
+  coat::Packer packer;
+  uint64_t version = 0;  // changes whenever the packer's result is replaced (remember)
   // The result is the full pack of its inputs (pack() or repack() from one), so it can seed a repack. A
   // posed frame's pack (packDeformed, or a repack seeded by one) is not: it is reused only for the very
   // same inputs, so that no frame's result depends on the frames evaluated before it.
   bool exact = true;
 
+  const coat::PackResult& result() const { return packer.result(); }
   void clear() { *this = PackMemo{}; }
   // Feathers whose packing input differs from the memo's, or nullopt when the memo cannot seed a repack
   // (empty, other rest state, options, skin or feather count).
@@ -54,13 +58,13 @@ struct PackMemo {
                                                const coat::PackOptions& options,
                                                const coat::PackConstraints& constraints, uint64_t generation,
                                                const Json& packing, const std::vector<double>& grownAge = {}) const;
-  // Stores `result` with the inputs it was packed from.
+  // Records the inputs the packer's new result was packed from.
   void remember(const coat::SkinMesh& skin, const coat::CoatFeathers& coat, const coat::PackOptions& options,
                 const coat::PackConstraints& constraints, uint64_t generation, const Json& packing,
-                coat::PackResult&& result, const std::vector<double>& grownAge = {}, bool exact = true);
+                const std::vector<double>& grownAge = {}, bool exact = true);
 };
 
-// Posed frames (a skeleton moving the skin) pack with coat::packDeformed from a reference pack: the same
+// Posed frames (a skeleton moving the skin) pack with Packer::packDeformed from a reference pack: the same
 // coat on the rest skin, with the frames it would have at rest (evaluated on the rest skin, styled as the
 // scene styles them; expressive controls' turns are left out and so count as motion). Kept while the
 // rest state and the "packing" section are unchanged.
@@ -162,7 +166,7 @@ void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, co
 void applyChains(const Scene& scene, double t, const coat::Follicles& follicles, const moult::ControlBinding& binding,
                  TimeState& state, const coat::CoatFeathers& coat);
 
-// The frame's pack (state.frame.result): an incremental repack (bit-identical to a full pack,
+// The frame's pack (state.frame.result()): an incremental repack (bit-identical to a full pack,
 // coat/pack.hpp) from whichever remembered pack differs in fewer feathers, the previous frame's pack or
 // this frame's natural pack (which differs in the raised feathers only); a full pack when neither fits.
 // grownAge: per feather, the age `coat`'s parameters were grown to (PackMemo::grownAge; empty = all 1).
@@ -176,9 +180,9 @@ bool moulting(const coat::CoatFeathers& coat);
 // parameters copied from `coat` once per rest state (coat's parameters must be the rest ones).
 const coat::CoatFeathers& matureCoat(const coat::CoatFeathers& coat, TimeState& state);
 
-// A moult frame's pack (state.moultFrame.result): the mature coat (every feather present, with its rest
+// A moult frame's pack (state.moultFrame.result()): the mature coat (every feather present, with its rest
 // parameters, same frames and fixed elevations) is packed as packFrame packs a frame without a moult
-// (into state.frame), then the lost and growing feathers of `coat` are packed over it (coat::packOver):
+// (into state.frame), then the lost and growing feathers of `coat` are packed over it (Packer::packOver):
 // mature feathers keep their pose, so a lost feather leaves a gap and a growing one fills in under the
 // feathers over it. Reused when neither the mature pack nor this frame's lost/growing feathers changed.
 const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed,
