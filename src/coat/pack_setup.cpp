@@ -345,8 +345,7 @@ void buildSkinSamples(Context& ctx, double medReach) {
         }
       });
     };
-    tbb::parallel_invoke([&] { sd.grid.build(sd.pts.data(), sd.pts.size(), cell); },
-                         patches);
+    tbb::parallel_invoke([&] { sd.grid.build(sd.pts.data(), sd.pts.size(), cell); }, patches);
     for (float r : sd.rho) sd.maxRho = std::max(sd.maxRho, static_cast<double>(r));
     ctx.skinData = std::move(data);
   }

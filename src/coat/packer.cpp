@@ -66,8 +66,7 @@ const PackResult& Packer::packOver(const PackResult& base, const CoatFeathers& c
 
 const PackResult& Packer::packDeformed(const CoatFeathers& coat, const SkinMesh& refSkin,
                                        const std::vector<FeatherFrame>& refFrames, const PackResult& ref,
-                                       double tolerance, const PackConstraints& constraints,
-                                       DeformedPackStats* stats) {
+                                       double tolerance, const PackConstraints& constraints, DeformedPackStats* stats) {
   PTERYLA_CHECK(skin_ != nullptr, "Packer::packDeformed needs a skin (Packer::use)");
   Context ctx(*skin_, coat, options_, constraints);
   ctx.reusable = {samples_, nullptr};
@@ -92,35 +91,38 @@ void Packer::clear() {
 
 // ------------------------------------------------------------------ the free functions
 
+namespace {
+// A Packer used once: `call` packs with it, the result is handed out.
+template <class Call>
+PackResult once(const SkinMesh& skin, const PackOptions& options, Call&& call) {
+  Packer p(skin, options);
+  call(p);
+  return p.release();
+}
+}  // namespace
+
 PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOptions& options,
                 const PackConstraints& constraints) {
-  Packer p(skin, options);
-  p.pack(coat, constraints);
-  return p.release();
+  return once(skin, options, [&](Packer& p) { p.pack(coat, constraints); });
 }
 
 PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& previous,
                   const std::vector<uint32_t>& changed, const PackOptions& options,
                   const PackConstraints& constraints) {
-  Packer p(skin, options);
-  p.repackFrom(previous, coat, changed, constraints);
-  return p.release();
+  return once(skin, options, [&](Packer& p) { p.repackFrom(previous, coat, changed, constraints); });
 }
 
 PackResult packOver(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& base,
                     const std::vector<uint32_t>& changed, const PackOptions& options,
                     const PackConstraints& constraints) {
-  Packer p(skin, options);
-  p.packOver(base, coat, changed, constraints);
-  return p.release();
+  return once(skin, options, [&](Packer& p) { p.packOver(base, coat, changed, constraints); });
 }
 
 PackResult packDeformed(const SkinMesh& skin, const CoatFeathers& coat, const SkinMesh& refSkin,
                         const std::vector<FeatherFrame>& refFrames, const PackResult& ref, double tolerance,
                         const PackOptions& options, const PackConstraints& constraints, DeformedPackStats* stats) {
-  Packer p(skin, options);
-  p.packDeformed(coat, refSkin, refFrames, ref, tolerance, constraints, stats);
-  return p.release();
+  return once(skin, options,
+              [&](Packer& p) { p.packDeformed(coat, refSkin, refFrames, ref, tolerance, constraints, stats); });
 }
 
 }  // namespace pteryla::coat

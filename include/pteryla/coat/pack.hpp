@@ -43,7 +43,7 @@
 namespace pteryla::coat {
 
 namespace detail {
-struct PackSkinSamples;  // the skin samples of a pack (pack.cpp), shared with packOver
+struct PackSkinSamples;  // the skin samples of a pack (pack_setup.cpp), kept by coat::Packer, shared with packOver
 }
 
 // How the pipeline lays the coat (pack() itself is always the height-field method):
@@ -225,9 +225,12 @@ struct PackResult {
   // The automatic values this pack resolved (the options' own values when they were given): scene-unit
   // clearances and the median feather reach that sizes the skin sample spacing. packOver packs with them.
   double clearance = 0, skinClearance = 0, medianReach = 0;
-  // The skin samples (and their patches) this pack used, for packOver on the same skin.
+  // The skin samples (and their patches) this pack used, for packOver and coat::Packer on the same skin.
   std::shared_ptr<const detail::PackSkinSamples> skinSamples;
 };
+
+// The free functions below are a coat::Packer (packer.hpp) used once. A caller that packs one skin again
+// and again holds a Packer instead: it keeps the skin samples and its last result while they fit.
 
 // Packs every present feather of `coat` (in coat.layerOrder, or index order when it is empty) against
 // the feathers packed before it and the skin. Throws Error for inconsistent input (array sizes, indices).
@@ -239,7 +242,9 @@ PackResult pack(const SkinMesh& skin, const CoatFeathers& coat, const PackOption
 // dependency chain reaches a changed feather are recomputed; the result equals pack() bit for bit. Falls
 // back to a full pack when the layer order or feather count changed. The skin, the options and the
 // constraints (other than fixed elevations, whose changes belong in `changed`) must be those `previous`
-// was packed with; after a skin deformation every frame changes: call pack().
+// was packed with (a `previous` packed on another skin gives a full pack); after a skin deformation every
+// frame changes: call pack(). When the changes move the clearances or the median reach resolved over the
+// whole coat, every feather is recomputed.
 PackResult repack(const SkinMesh& skin, const CoatFeathers& coat, const PackResult& previous,
                   const std::vector<uint32_t>& changed, const PackOptions& options = {},
                   const PackConstraints& constraints = {});
