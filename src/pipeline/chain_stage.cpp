@@ -73,35 +73,34 @@ moult::ChainDrive makeDrive(const moult::ControlSpec& control, const moult::Skin
 
 }  // namespace
 
-void applyChains(const Scene& scene, double t, const coat::Follicles& follicles, const moult::ControlBinding& binding,
-                 TimeState& state, const coat::CoatFeathers& coat) {
+void applyChains(const ControlSettings& settings, const InputKey& controlsKey, double t,
+                 const coat::Follicles& follicles, const moult::ControlBinding& binding, TimeState& state,
+                 const coat::CoatFeathers& coat) {
+  const std::vector<moult::ControlSpec>& controls = settings.controls;
   state.bends.clear();
   state.chainSteps = 0;
   state.chainCount = 0;
   const coat::SkinMesh* rest = state.rest;
-  const bool anyDynamic = std::any_of(state.controls.begin(), state.controls.end(), dynamicControl);
+  const bool anyDynamic = std::any_of(controls.begin(), controls.end(), dynamicControl);
   if (!anyDynamic || !rest) {
     state.chains.clear();
     state.chainFollicles.clear();
-    state.chainsKey = Json();
+    state.chainsKey = InputKey{};
     return;
   }
-  // The simulators (and their checkpoints) stay valid while their inputs do.
-  const Json key = {{"file", scene.file},
-                    {"controls", scene.controls},
-                    {"tracts", state.controlsKey.value("tracts", Json())},
-                    {"rig", state.drivingRig ? state.rigKey : Json()},
-                    {"generation", state.generation},
-                    {"follicles", follicles.size()}};
-  if (key != state.chainsKey || state.chains.size() != state.controls.size()) {
+  // The simulators (and their checkpoints) stay valid while their inputs do: the controls and the tract
+  // names they resolve, the skeleton driving them (none: 0, 0), the rest state and the follicles.
+  InputKey key = controlsKey;
+  key.add(state.drivingRig ? state.drivingRigKey : InputKey{0, 0}).add({state.generation, follicles.size()});
+  if (key != state.chainsKey || state.chains.size() != controls.size()) {
     state.chains.clear();
-    state.chains.resize(state.controls.size());
-    state.chainFollicles.assign(state.controls.size(), {});
+    state.chains.resize(controls.size());
+    state.chainFollicles.assign(controls.size(), {});
     for (size_t f = 0; f < binding.control.size(); ++f)
       if (binding.control[f] >= 0 && binding.weight[f] > 0)
         state.chainFollicles[static_cast<size_t>(binding.control[f])].push_back(static_cast<uint32_t>(f));
-    for (size_t c = 0; c < state.controls.size(); ++c) {
-      const moult::ControlSpec& cs = state.controls[c];
+    for (size_t c = 0; c < controls.size(); ++c) {
+      const moult::ControlSpec& cs = controls[c];
       if (!dynamicControl(cs) || state.chainFollicles[c].empty()) continue;
       state.chains[c] =
           std::make_unique<moult::ChainSim>(cs.springFrequency, cs.springDamping, cs.chainSegments,
@@ -111,11 +110,11 @@ void applyChains(const Scene& scene, double t, const coat::Follicles& follicles,
   }
   // Per follicle: its control's chain and its index there.
   std::vector<std::pair<int32_t, uint32_t>> slot(follicles.size(), {-1, 0});
-  std::vector<std::vector<glm::dvec3>> lags(state.controls.size());
-  std::vector<double> dynamic(state.controls.size(), 0.0);
-  for (size_t c = 0; c < state.controls.size(); ++c) {
+  std::vector<std::vector<glm::dvec3>> lags(controls.size());
+  std::vector<double> dynamic(controls.size(), 0.0);
+  for (size_t c = 0; c < controls.size(); ++c) {
     if (!state.chains[c]) continue;
-    dynamic[c] = std::clamp(state.controls[c].dynamic.scalarAt(t), 0.0, 1.0);
+    dynamic[c] = std::clamp(controls[c].dynamic.scalarAt(t), 0.0, 1.0);
     if (!(dynamic[c] > 0)) continue;
     state.chains[c]->lags(t, lags[c]);
     state.chainSteps += state.chains[c]->lastSteps();
@@ -131,7 +130,7 @@ void applyChains(const Scene& scene, double t, const coat::Follicles& follicles,
     if (c < 0) continue;
     const size_t ci = static_cast<size_t>(c);
     const double s = dynamic[ci] * binding.weight[f];
-    const size_t n = static_cast<size_t>(state.controls[ci].chainSegments);
+    const size_t n = static_cast<size_t>(controls[ci].chainSegments);
     feather::ShaftBend& b = state.bends[i];
     b.length = coat.params[i].totalLength();
     b.offset.resize(n);

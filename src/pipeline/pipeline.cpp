@@ -85,20 +85,24 @@ void Pipeline::Impl::computePose() {
     timeState.rest = &rest;
     timeState.posedMoved = true;
     timeState.drivingRig = nullptr;
-    posedGeneration = 0;
+    timeState.drivingRigKey = InputKey{};
+    posedKey = InputKey{};
   } else {
+    const size_t vertices = rest.vertexCount();
+    const moult::SkinRig* rig = settings.skeleton(scene, vertices);
     // poseSkin wants `posed` as a copy of `rest` and touches it only when the pose moves the skin.
-    if (posedGeneration != restGeneration()) posed = rest;
-    poseSkin(scene, time, rest, posed, timeState);
-    posedGeneration = timeState.posedMoved ? 0 : restGeneration();
+    if (posedKey != restKey()) posed = rest;
+    posedKey = InputKey{};
+    poseSkin(rig, settings.skeletonKey(vertices), time, rest, posed, timeState);
+    if (!timeState.posedMoved) posedKey = restKey();
   }
   posedFollicles = follicles;
   coat::updateFollicleGeometry(posed, posedFollicles);
   // Rest data (params, follicles, layer order) is copied once per rest state; the time stages rewrite
   // frames, ages and presence every frame.
-  if (coatNowGeneration != restGeneration()) {
+  if (coatNowKey != restKey()) {
     coatNow = coatRest;
-    coatNowGeneration = restGeneration();
+    coatNowKey = restKey();
   }
   coat::evaluateFrames(posed, posedFollicles, directions, coatNow);
 }
@@ -106,16 +110,14 @@ void Pipeline::Impl::computePose() {
 void Pipeline::Impl::computeAges() {
   coatNow.age.assign(coatNow.size(), 1.0);
   coatNow.present.assign(coatNow.size(), 1);
-  featherAges(scene, time, params, posedFollicles, timeState, coatNow);
+  const auto& moult = settings.moult(scene);
+  featherAges(moult, restKey().add(settings.moultKey()), time, params, posedFollicles, timeState, coatNow);
 }
 
 // Packing options (and their styling selections) are read here so a packing edit only repacks.
 void Pipeline::Impl::computeControls() {
-  coat::PackingSettings packing;
-  if (!scene.packing.empty()) {
-    JsonReader r(scene.packing, scene.file, "packing");
-    packing = coat::parsePackingSettings(r);
-  }
+  const coat::PackingSettings& packing = settings.packing(scene);
+  timeState.packKey = restKey().add(settings.packingKey());
   packOptions = packing.options;
   moultOver = packing.moultOver;
   fixedElevation.assign(coatNow.size(), std::nan(""));
@@ -139,20 +141,19 @@ void Pipeline::Impl::computeControls() {
   // Posed frames pack from the rest pose's pack (packDeformed): the frames the coat has at rest, styled.
   PoseReference& pr = timeState.poseRef;
   pr.tolerance = packing.poseTolerance;
-  if (timeState.posedMoved && pr.tolerance > 0 &&
-      (!pr.valid || pr.generation != restGeneration() || pr.packing != scene.packing)) {
+  if (timeState.posedMoved && pr.tolerance > 0 && pr.key != timeState.packKey) {
     coat::CoatFeathers c = coatRest;
     coat::evaluateFrames(rest, follicles, directions, c);
     if (!packing.styling.empty()) coat::applyStyling(c, packing.styling, {});
     pr.frames = std::move(c.frames);
     pr.coat = coat::CoatFeathers{};  // referenceCoat copies the new frames in
-    pr.generation = restGeneration();
-    pr.packing = scene.packing;
+    pr.key = timeState.packKey;
     pr.natural.clear();
     pr.frame.clear();
-    pr.valid = true;
   }
-  applyControls(scene, time, posed, posedFollicles, timeState, coatNow, constraints, fixedElevation);
+  const ControlSettings& controls = settings.controls(scene);
+  applyControls(controls, settings.controlsKey(), packing, time, posed, posedFollicles, timeState, coatNow, constraints,
+                fixedElevation);
   constraints.fixedElevation = fixedElevation;
 }
 
@@ -197,12 +198,12 @@ void Pipeline::Impl::computePack() {
     // A moult frame: the mature coat is packed as a frame without a moult would be, and the lost and
     // growing feathers are packed over it (docs/moult.md). With "moult_pack": "full" the frame is
     // repacked like any other (below).
-    packed = &packMoultFrame(scene, posed, matureCoat(coatNow, timeState), *packInput, o, constraints, timeState,
-                             packGrownAge);
+    packed =
+        &packMoultFrame(posed, matureCoat(coatNow, timeState), *packInput, o, constraints, timeState, packGrownAge);
     packedCoat = packInput;
   } else {
     // Repacks incrementally from the last frame's pack or this frame's natural pack when it can.
-    packed = &packFrame(scene, posed, *packInput, o, constraints, timeState, packGrownAge);
+    packed = &packFrame(posed, *packInput, o, constraints, timeState, packGrownAge);
     packedCoat = packInput;
   }
   report(progress, "pack", 1);
@@ -214,14 +215,14 @@ bool Pipeline::Impl::MatureDrapeKey::operator==(const MatureDrapeKey& o) const {
              return x.origin == y.origin && x.normal == y.normal && x.tangent == y.tangent && x.binormal == y.binormal;
            });
   };
-  return generation == o.generation && lod == o.lod && gap == o.gap && spacing == o.spacing && maxSlope == o.maxSlope &&
+  return rest == o.rest && lod == o.lod && gap == o.gap && spacing == o.spacing && maxSlope == o.maxSlope &&
          baseAllowance == o.baseAllowance && featherLods == o.featherLods && sameFrames(frames, o.frames) &&
          skin == o.skin;
 }
 
 const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOptions& o) {
-  const uint64_t generation = restGeneration();
-  if (drapeRef && drapeRef->generation == generation && drapeRef->lod == lod && drapeRef->gap == o.gap &&
+  const InputKey key = restKey();
+  if (drapeRef && drapeRef->rest == key && drapeRef->lod == lod && drapeRef->gap == o.gap &&
       drapeRef->maxSlope == o.maxSlope && drapeRef->baseAllowance == o.baseAllowance &&
       drapeRef->featherLods == featherLods)
     return drapeRef->spacing;
@@ -243,7 +244,7 @@ const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOption
   TriMesh restMesh;
   mesher.update(in, restMesh);
   DrapeReference r;
-  r.generation = generation;
+  r.rest = key;
   r.lod = lod;
   r.gap = o.gap;
   r.maxSlope = o.maxSlope;
@@ -292,8 +293,15 @@ void Pipeline::Impl::computeMesh() {
       // while the skin and the controls do not move; the frame's feathers are copied from it or placed
       // on their mature charts.
       const coat::CoatFeathers& mature = matureCoat(coatNow, timeState);
-      MatureDrapeKey key{timeState.generation, lod,         dopt.gap,      dopt.spacing,   dopt.maxSlope,
-                         dopt.baseAllowance,   featherLods, mature.frames, posed.positions};
+      MatureDrapeKey key{InputKey{timeState.generation},
+                         lod,
+                         dopt.gap,
+                         dopt.spacing,
+                         dopt.maxSlope,
+                         dopt.baseAllowance,
+                         featherLods,
+                         mature.frames,
+                         posed.positions};
       const bool bent = std::any_of(timeState.bends.begin(), timeState.bends.end(),
                                     [](const feather::ShaftBend& b) { return !b.rigid(); });
       if (bent || !matureDrapeKey || !(*matureDrapeKey == key)) {
@@ -368,6 +376,7 @@ Pipeline::Pipeline(Scene scene, ProgressFn progress) : impl_(std::make_unique<Im
   impl_->progress = std::move(progress);
   impl_->time = impl_->scene.time;
   impl_->lod = impl_->scene.render.lod;
+  impl_->settings.update(impl_->scene);
   impl_->build();
 }
 
@@ -382,26 +391,14 @@ const Scene& Pipeline::scene() const { return impl_->scene; }
 void Pipeline::editScene(Stage from, const std::function<void(Scene&)>& edit) {
   edit(impl_->scene);
   defaultTracts(impl_->scene);
+  impl_->settings.update(impl_->scene);
   invalidate(from);
 }
 void Pipeline::invalidate(Stage from) { impl_->graph.invalidate(impl_->id(from)); }
 void Pipeline::setProgress(ProgressFn progress) { impl_->progress = std::move(progress); }
 
-// Whether the time stages read the time (poseSkin: a skeleton; featherAges: a moult; applyControls:
-// controls). Conservative: any such section counts, even one that turns out to be disabled.
-namespace {
-bool timeMattersIn(const Scene& scene) {
-  auto nonEmpty = [](const Json& j) {
-    return !j.is_null() && !(j.is_object() && j.empty()) && !(j.is_array() && j.empty());
-  };
-  if (nonEmpty(scene.skeleton) || nonEmpty(scene.controls) || nonEmpty(scene.moult)) return true;
-  for (const Json& t : scene.tracts)
-    if (t.is_object() && t.contains("moult") && t.at("moult") != Json(false)) return true;
-  return false;
-}
-}  // namespace
-
-bool Pipeline::Impl::timeMatters() const { return timeMattersIn(scene); }
+// Whether the time stages read the time (SceneSettings::readsTime: a skeleton, a moult or controls).
+bool Pipeline::Impl::timeMatters() const { return settings.readsTime(); }
 
 void Pipeline::setTime(double t) {
   if (!std::isfinite(t)) throw Error("time must be a finite number", "", "--time");
@@ -410,7 +407,7 @@ void Pipeline::setTime(double t) {
   // Only stages that depend on time: the skin pose and everything after it, and only when something in
   // the scene reads the time. A scene with no skeleton, moult or controls is the same coat at every
   // time, so scrubbing its timeline (a host's frame change) costs nothing.
-  if (timeMattersIn(impl_->scene)) impl_->graph.invalidate(impl_->id(Stage::Pose));
+  if (impl_->settings.readsTime()) impl_->graph.invalidate(impl_->id(Stage::Pose));
 }
 double Pipeline::time() const { return impl_->time; }
 

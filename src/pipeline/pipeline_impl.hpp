@@ -23,29 +23,11 @@
 #include "pteryla/coat/tracts.hpp"
 #include "pteryla/feather/growth.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
+#include "scene_settings.hpp"
 #include "stage_graph.hpp"
 #include "time_stages.hpp"
 
 namespace pteryla::pipeline {
-
-// Per-tract settings the pipeline reads itself (the rest of a tract object belongs to coat parsers).
-struct TractSettings {
-  coat::Tract tract;
-  double density = 0;  // follicles per unit area (0: use count)
-  size_t count = 0;
-  bool autoScale = false;   // scale feathers so their length is ~featherSpacings x follicle spacing
-  double featherScale = 1;  // explicit scale factor
-  double featherSpacings = 3.5;
-  coat::RelaxOptions relax;
-  std::vector<glm::dvec3> pinned;
-  std::vector<uint64_t> removed;  // "removed_follicles": ids dropped after relaxation (sorted, unique)
-  coat::TractFeatherOptions feathers;
-  std::shared_ptr<const feather::GrowthSchedule> growth;  // the tract's "growth" (null: none)
-  std::string overlapGroup;      // "overlap_group": tracts of one group share one distribution where they overlap
-  std::optional<uint64_t> seed;  // "seed": this tract's own follicle seed (else derived from the scene's)
-  double area = 0;
-  std::string element;
-};
 
 // Memory of a coat's geometry at level `lod` (times featherLods[f] when it has one per feather), of the
 // present feathers (all when `present` is null), checked against the memory ceiling before meshing
@@ -57,6 +39,7 @@ void requireCoatMemory(const std::vector<feather::FeatherParams>& params, const 
 
 struct Pipeline::Impl {
   Scene scene;
+  SceneSettings settings;  // the scene's sections, typed (updated with every edit of `scene`)
   ProgressFn progress;
   double time = 0, lod = 1;
   std::vector<double> featherLods;  // per feather, multiplies lod (empty: 1 for all)
@@ -100,7 +83,7 @@ struct Pipeline::Impl {
   // A timeline's drape takes its gap and sample spacing from the rest coat, mature and whole, meshed at
   // the same level of detail (drapeReference): a moult or a pose does not change them frame to frame.
   struct DrapeReference {
-    uint64_t generation = 0;
+    InputKey rest;
     double lod = 0, gap = 0, maxSlope = 0, baseAllowance = 0;
     std::vector<double> featherLods;
     coat::DrapeSpacing spacing;
@@ -118,7 +101,7 @@ struct Pipeline::Impl {
   }();
   // What the mature drape was made from; an equal next one is not meshed or draped again.
   struct MatureDrapeKey {
-    uint64_t generation = 0;
+    InputKey rest;
     double lod = 0, gap = 0, spacing = 0, maxSlope = 0, baseAllowance = 0;
     std::vector<double> featherLods;
     std::vector<coat::FeatherFrame> frames;
@@ -129,10 +112,11 @@ struct Pipeline::Impl {
   const coat::DrapeSpacing& drapeReference(const coat::DrapeOptions& options);
   CoatMesh mesh;
   CoatMesher mesher;  // mesh.mesh is its last result
-  // Caches of time-stage results are stamped with the rest state they were made from: the number of
-  // evaluations of the directions stage, downstream of every rest stage (restGeneration()).
-  uint64_t coatNowGeneration = 0;  // generation coatNow was copied from coatRest at
-  uint64_t posedGeneration = 0;    // generation `posed` is an untouched copy of `rest` at (0 = not)
+  // Caches of time-stage results are keyed by the rest state they were made from (restKey(): the number
+  // of evaluations of the directions stage, downstream of every rest stage) and the settings sections
+  // they read (SceneSettings revisions): one InputKey each.
+  InputKey coatNowKey;  // the rest state coatNow was copied from coatRest at
+  InputKey posedKey;    // the rest state `posed` is an untouched copy of `rest` at (empty: it is not)
   // check(): the last unpacked proxy coat and its intersecting pair count. The unpacked coat comes from
   // the input alone, so checks after edits that leave it as it was (packing, pose-free edits, LOD)
   // reuse the count instead of searching the same mesh again.
@@ -141,6 +125,7 @@ struct Pipeline::Impl {
 
   static StageGraph::Id id(Stage s) { return static_cast<StageGraph::Id>(s); }
   uint64_t restGeneration() const { return graph.evaluations(id(Stage::Directions)); }
+  InputKey restKey() const { return {restGeneration()}; }
 
   void build();
   void computeSkin();

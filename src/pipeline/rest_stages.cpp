@@ -19,13 +19,7 @@ namespace pteryla::pipeline {
 
 namespace {
 
-// Follicles of a tract with neither count nor density, times its share of the mesh area: 3,000 lets the
-// small parts of real meshes (fingers, ears, fins) carry their own feathers (issue #22, docs/packing.md).
-constexpr size_t kAutoCount = 3000;
-// Memory estimates checked against the ceiling (core/limits.hpp, docs/limits.md). Lower bounds from the
-// bird (3152 feathers, 1.29 M triangles at lod 0.6: 775 MB peak), so no scene that fits is refused.
-constexpr double kBytesPerFollicle = 32e3;
-
+// Memory estimates checked against the ceiling (core/limits.hpp, docs/limits.md).
 constexpr double kTrianglesPerBarb = 16;
 constexpr double kBytesPerTriangle = 200;
 
@@ -58,30 +52,6 @@ std::function<double(uint32_t, const glm::dvec3&)> densityFactorField(const Scen
     const auto& t = mesh->faces[face];
     return b.x * double((*f)[t[0]]) + b.y * double((*f)[t[1]]) + b.z * double((*f)[t[2]]);
   };
-}
-
-// A tract's "removed_follicles" (docs/scene-format.md): follicle ids, each a non-negative integer; sorted
-// and unique. Ids the distribution does not make are ignored (an earlier tract's count changed, say).
-std::vector<uint64_t> readRemovedFollicles(JsonReader& r) {
-  std::vector<uint64_t> out;
-  if (!r.has("removed_follicles")) {
-    r.allow("removed_follicles");
-    return out;
-  }
-  const Json& list = r.raw("removed_follicles");
-  if (!list.is_array()) r.fail("removed_follicles", "expected an array of follicle ids");
-  out.reserve(list.size());
-  for (size_t k = 0; k < list.size(); ++k) {
-    const Json& v = list[k];
-    const bool ok = v.is_number_unsigned() || (v.is_number_integer() && v.get<int64_t>() >= 0);
-    if (!ok)
-      throw Error("expected a follicle id (a non-negative integer), got " + v.dump(), r.file(),
-                  r.pathOf("removed_follicles") + "[" + std::to_string(k) + "]");
-    out.push_back(v.get<uint64_t>());
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
 }
 
 }  // namespace
@@ -135,97 +105,9 @@ void Pipeline::Impl::computeTracts() {
   // The scene's growth schedule (docs/growth.md), read with the tracts: feathers whose file and tract
   // give none grow and wear by it.
   sceneGrowth.reset();
-  if (!scene.growth.empty()) {
-    JsonReader g(scene.growth, scene.file, "growth");
-    sceneGrowth = std::make_shared<const feather::GrowthSchedule>(feather::readGrowthSchedule(g));
-  }
-  std::vector<coat::Tract> earlier;
-  const double meshArea = rest.totalArea();
-  double plannedFollicles = 0;
-  for (size_t i = 0; i < scene.tracts.size(); ++i) {
-    const std::string where = "tracts[" + std::to_string(i) + "]";
-    JsonReader r(scene.tracts[i], scene.file, where);
-    TractSettings t;
-    t.element = where;
-    t.tract = coat::readTract(r, rest, earlier);
-    // Names are how ordering, directions and controls refer to tracts (docs/tracts.md: unique).
-    for (const coat::Tract& e : earlier)
-      if (e.name == t.tract.name) r.fail("name", "duplicate tract name '" + e.name + "'");
-    earlier.push_back(t.tract);
-    const double area = coat::tractArea(rest, t.tract);
-    if (r.has("count")) {
-      t.count = static_cast<size_t>(r.integer("count", 0, 2000000));
-      r.allow("density");
-    } else if (r.has("density")) {
-      if (!r.json().at("density").is_number()) r.fail("density", "expected a number of follicles per unit area");
-      t.density = r.number("density", 0.0, 1e9);
-    } else {
-      r.allow("density");
-      t.count = static_cast<size_t>(std::lround(kAutoCount * area / std::max(meshArea, 1e-300)));
-    }
-    // Memory before distributing: every follicle becomes a feather (frames, pack data, mesh).
-    const double follicles = t.count ? double(t.count) : t.density * area;
-    plannedFollicles += follicles;
-    requireMemory(
-        plannedFollicles * kBytesPerFollicle,
-        "the coat of about " + std::to_string(static_cast<uint64_t>(std::min(plannedFollicles, 1e18))) + " follicles",
-        scene.file,
-        where + (t.count            ? ".count"
-                 : r.has("density") ? ".density"
-                                    : ""));
-    if (r.has("feather_scale") && r.json().at("feather_scale").is_string()) {
-      if (r.string("feather_scale") != "auto") r.fail("feather_scale", "expected a positive number or \"auto\"");
-      t.autoScale = true;
-    } else {
-      // Without a feather_scale, feathers are sized from the follicle spacing, on any mesh.
-      t.autoScale = !r.has("feather_scale");
-      t.featherScale = r.number("feather_scale", 1.0, 1e-6, 1e6);
-    }
-    t.featherSpacings = r.number("feather_spacings", t.featherSpacings, 0.1, 100.0);
-    t.area = area;
-    t.overlapGroup = r.string("overlap_group", "");
-    if (r.has("seed")) t.seed = r.seed("seed", 0);
-    t.relax.iterations = 40;
-    if (r.has("relax")) {
-      JsonReader rr = r.object("relax");
-      t.relax.iterations = static_cast<int>(rr.integer("iterations", t.relax.iterations, 0, 100000));
-      t.relax.overRelaxation = rr.number("over_relaxation", t.relax.overRelaxation, 1.0, 1.99);
-      t.relax.fixBoundary = rr.boolean("fix_boundary", t.relax.fixBoundary);
-      for (auto& b : rr.objects("bias")) {
-        coat::BiasVector v;
-        v.origin = b.vec3("at");
-        v.direction = b.vec3("direction");
-        v.sigma = b.number("sigma", 0.0, 0.0, 1e9);
-        v.stretch = b.number("stretch", v.stretch, 1.0, 10.0);
-        v.densityGain = b.number("density_gain", 0.0, 0.0, 100.0);
-        b.finish();
-        t.relax.bias.push_back(v);
-      }
-      rr.finish();
-    } else {
-      r.allow("relax");
-    }
-    if (r.has("pinned")) {
-      for (auto& p : r.objects("pinned")) {
-        t.pinned.push_back(p.vec3("at"));
-        p.finish();
-      }
-    } else {
-      r.allow("pinned");
-    }
-    t.removed = readRemovedFollicles(r);
-    t.feathers = coat::parseTractFeatherOptions(r);
-    if (r.has("growth")) {
-      JsonReader g = r.object("growth");
-      t.growth = std::make_shared<const feather::GrowthSchedule>(feather::readGrowthSchedule(g));
-    } else {
-      r.allow("growth");
-    }
-    r.allow("moult");  // read by the time stages
-    r.finish();
-    tracts.push_back(t.tract);
-    tractSettings.push_back(std::move(t));
-  }
+  sceneGrowth = settings.growth(scene);
+  tractSettings = settings.tracts(scene, rest, graph.evaluations(id(Stage::Skin)));
+  for (const TractSettings& t : tractSettings) tracts.push_back(t.tract);
 }
 
 void Pipeline::Impl::computeDistribute() {
@@ -495,13 +377,9 @@ void Pipeline::Impl::computeDirections() {
     orderOptions.method = coat::OrderMethod::Axis;
     orderOptions.axis = {a, b};
   }
-  if (!scene.directions.empty()) {
-    JsonReader r(scene.directions, scene.file, "directions");
-    directionOptions = coat::parseDirections(r);
-  }
-  if (!scene.ordering.empty()) {
-    JsonReader r(scene.ordering, scene.file, "ordering");
-    orderOptions = coat::parseOrdering(r);
+  if (const coat::DirectionOptions* d = settings.directions(scene)) directionOptions = *d;
+  if (const coat::OrderOptions* o = settings.ordering(scene)) {
+    orderOptions = *o;
   } else if (!scene.directions.empty() && directionOptions.field.axis.size() >= 2) {
     // A scene that gives a body axis and no ordering is layered along that axis (roof tiles from the tail).
     orderOptions.method = coat::OrderMethod::Axis;

@@ -1,6 +1,7 @@
-// Scene file reading and writing (docs/scene-format.md). Every section is checked here with the strict
-// JsonReader so unknown keys and bad values fail at load with their key path; module-specific
-// sections are validated by the module parsers that the pipeline also uses (scene_sections.cpp).
+// Scene file reading and writing (docs/scene-format.md). The scene's own keys are checked here with the
+// strict JsonReader so unknown keys and bad values fail at load with their key path; the module sections
+// are checked for their types and their paths resolved (scene_sections.cpp), and read by their modules'
+// parsers when the pipeline first needs them (scene_settings.cpp; tracts in the tracts stage).
 #include "pteryla/pipeline/scene.hpp"
 
 #include <charconv>

@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "scene_sections.hpp"
+
 namespace pteryla::pipeline {
 
 const std::vector<SectionStage>& sectionStages() {
@@ -30,9 +32,6 @@ const std::vector<SectionStage>& sectionStages() {
   return table;
 }
 
-namespace {
-
-// What row `row` compares of a scene's JSON form.
 Json sectionValue(const Json& scene, const SectionStage& row) {
   const auto it = scene.find(row.key);
   const Json section = it == scene.end() ? Json() : *it;
@@ -50,8 +49,6 @@ Json sectionValue(const Json& scene, const SectionStage& row) {
         if (e.is_object()) e.erase(other.subKey);
   return out;
 }
-
-}  // namespace
 
 std::optional<Stage> earliestChangedStage(const Scene& before, const Scene& after) {
   if (before.fromBareMesh != after.fromBareMesh) return Stage::Skin;  // a bare mesh implies directions and scales

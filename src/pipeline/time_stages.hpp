@@ -1,8 +1,8 @@
 #pragma once
 // The time-dependent stages of the pipeline (thesis Ch.8 + AnimFur): skin pose, feather ages (moult)
 // and expressive controls. Each is a pure function of (scene, t) and the rest-state results, so any
-// time can be evaluated in any order. The work is done by src/moult; these hooks parse the scene's
-// sections (strictly: unknown keys are errors with their key path) and cache what they parsed.
+// time can be evaluated in any order. The work is done by src/moult; these hooks take the scene's typed
+// settings (scene_settings.hpp) and keep what outlives a frame, keyed by what it was made from.
 #include <memory>
 #include <optional>
 #include <string>
@@ -19,21 +19,19 @@
 #include "pteryla/moult/controls.hpp"
 #include "pteryla/moult/schedule.hpp"
 #include "pteryla/moult/skinning.hpp"
-#include "pteryla/pipeline/scene.hpp"
+#include "scene_settings.hpp"
 
 namespace pteryla::pipeline {
 
 // A packer (coat::Packer: the pack, and the skin samples it keeps while the skin is unchanged) and the
 // inputs its pack was computed from, so a later frame can repack incrementally (Packer::repack,
-// bit-identical to a full pack) when only some feathers' packing inputs changed: same rest state
-// (generation), same "packing" section, same posed skin; the frames, presence, opened/unopened class (the
-// only way the packer reads a feather's age: PackOptions::openingAge) and fixed elevations are compared
-// per feather. Which feathers changed is the memo's to say (it knows how the pipeline grew them); whether
-// the pack and the samples still fit the skin and the options is the packer's.
+// bit-identical to a full pack) when only some feathers' packing inputs changed: same key (the rest state
+// and the "packing" section), same posed skin; the frames, presence, opened/unopened class (the only way
+// the packer reads a feather's age: PackOptions::openingAge) and fixed elevations are compared per
+// feather. Which feathers changed is the memo's to say (it knows how the pipeline grew them); whether the
+// pack and the samples still fit the skin and the options is the packer's.
 struct PackMemo {
-  bool valid = false;
-  uint64_t generation = 0;       // Pipeline rest-state generation the inputs belong to
-  Json packing;                  // the scene's "packing" section the options were parsed from
+  InputKey key;                  // TimeState::packKey of the inputs (empty: nothing remembered)
   std::vector<glm::dvec3> skin;  // posed skin positions
   std::vector<coat::FeatherFrame> frames;
   std::vector<uint8_t> present, unopened;
@@ -51,27 +49,25 @@ struct PackMemo {
   const coat::PackResult& result() const { return packer.result(); }
   void clear() { *this = PackMemo{}; }
   // Feathers whose packing input differs from the memo's, or nullopt when the memo cannot seed a repack
-  // (empty, other rest state, options, skin or feather count).
-  // The styling's constraints follow from the "packing" section and the rest state; fixed elevations are
-  // compared per feather.
+  // (empty, another key, skin or feather count).
+  // The options and the styling's constraints follow from the key (the "packing" section and the rest
+  // state); fixed elevations are compared per feather.
   std::optional<std::vector<uint32_t>> changes(const coat::SkinMesh& skin, const coat::CoatFeathers& coat,
                                                const coat::PackOptions& options,
-                                               const coat::PackConstraints& constraints, uint64_t generation,
-                                               const Json& packing, const std::vector<double>& grownAge = {}) const;
+                                               const coat::PackConstraints& constraints, const InputKey& key,
+                                               const std::vector<double>& grownAge = {}) const;
   // Records the inputs the packer's new result was packed from.
   void remember(const coat::SkinMesh& skin, const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                const coat::PackConstraints& constraints, uint64_t generation, const Json& packing,
+                const coat::PackConstraints& constraints, const InputKey& key,
                 const std::vector<double>& grownAge = {}, bool exact = true);
 };
 
 // Posed frames (a skeleton moving the skin) pack with Packer::packDeformed from a reference pack: the same
 // coat on the rest skin, with the frames it would have at rest (evaluated on the rest skin, styled as the
-// scene styles them; expressive controls' turns are left out and so count as motion). Kept while the
-// rest state and the "packing" section are unchanged.
+// scene styles them; expressive controls' turns are left out and so count as motion). Kept while its key
+// (the rest state and the "packing" section) is unchanged.
 struct PoseReference {
-  bool valid = false;
-  uint64_t generation = 0;
-  Json packing;
+  InputKey key;                            // empty: not set up
   double tolerance = 0;                    // PackingSettings::poseTolerance (0: posed frames pack in full)
   std::vector<coat::FeatherFrame> frames;  // per feather, at rest
   coat::CoatFeathers coat;                 // scratch: the coat being packed, with `frames`
@@ -91,47 +87,40 @@ struct PackReport {
   size_t deformedPacks = 0, poseMoved = 0, poseRepacked = 0;
 };
 
-// Parsed time settings, cached across frames. Each cache remembers the JSON it was parsed from and is
-// re-parsed when that changes (scene edits), so the cache never changes a result.
+// What the time stages keep across frames. Each cache is keyed by what it was made from (InputKey) and
+// made again when that changes (scene edits, a new rest state), so a cache never changes a result.
 struct TimeState {
   // The rest skin of the last poseSkin call (control bindings are made at rest).
   const coat::SkinMesh* rest = nullptr;
 
-  // Skeleton ("skeleton" section).
-  Json rigKey;                                 // {file, section, vertex count} the rig was read for
-  std::optional<moult::SkinRig> rig;           // empty: no skeleton
+  // Skeleton (SceneSettings::skeleton).
   bool posedMoved = false;                     // the last pose moved the skin
   const moult::SkinRig* drivingRig = nullptr;  // the skeleton posing the skin this frame (null: none)
+  InputKey drivingRigKey;                      // its SceneSettings::skeletonKey (empty: none)
 
-  // Moult ("moult" section and per-tract "moult" overrides).
-  Json moultKey;
-  bool moultParsed = false;
-  std::vector<std::optional<moult::MoultOptions>> moultOptions;  // per tract
-  moult::MoultStats moultStats;                                  // of the last evaluation
-  // The plan depends only on rest data and the moult sections: kept while both are unchanged.
+  // Moult (SceneSettings::moult).
+  moult::MoultStats moultStats;  // of the last evaluation
+  // The plan depends only on rest data and the moult sections: kept while its key (the rest state and
+  // SceneSettings::moultKey) is unchanged.
   std::optional<moult::CoatMoultPlan> moultPlan;
-  uint64_t moultPlanGeneration = 0;
+  InputKey moultPlanKey;
 
-  // Controls ("controls" array) and the packing options they need for natural elevations.
-  Json controlsKey;
-  bool controlsParsed = false;
-  std::vector<moult::ControlSpec> controls;
-  std::vector<std::vector<uint32_t>> controlTracts;  // per control: tract indices (empty = any)
-  coat::PackingSettings packing;
+  // Controls (SceneSettings::controls).
   moult::ControlResult controlResult;  // of the last evaluation (its natural pack lives in `natural`)
 
   // Dynamic chains (moult/chain.hpp): one simulator per control with a dynamic behaviour, over the
-  // follicles bound to it, kept with its checkpoints while `chainsKey` (controls, skeleton, rest state)
-  // is unchanged. Their lags at the frame's time bend the bound feathers (`bends`, per feather; empty:
-  // rigid), which the mesh stage applies.
-  Json chainsKey;
+  // follicles bound to it, kept with its checkpoints while `chainsKey` (controls, tract names, the driving
+  // skeleton, the rest state, the follicle count) is unchanged. Their lags at the frame's time bend the
+  // bound feathers (`bends`, per feather; empty: rigid), which the mesh stage applies.
+  InputKey chainsKey;
   std::vector<std::unique_ptr<moult::ChainSim>> chains;  // per control (null: not dynamic)
   std::vector<std::vector<uint32_t>> chainFollicles;     // per control: the simulated follicles
   std::vector<feather::ShaftBend> bends;
   size_t chainSteps = 0, chainCount = 0;  // of the last evaluation: grid steps integrated, chains simulated
 
   // Packs remembered across frames (see PackMemo): the controls' natural pack and the frame's pack.
-  uint64_t generation = 0;  // set by the pipeline: changes whenever the rest state changes
+  uint64_t generation = 0;  // set by the pipeline: the rest state's revision (changes with it)
+  InputKey packKey;         // set by the pipeline: the rest state and the "packing" section of this frame
   PackMemo natural, frame;
   // Moult frames: the lost and growing feathers packed over `frame` (which then holds the mature coat's
   // pack) and the version of `frame` it was packed over.
@@ -140,37 +129,44 @@ struct TimeState {
   // The coat as it would be without the moult (matureCoat): what a moult frame's pack and the controls'
   // natural pack in a moult frame pack. Its rest parameters are copied once per rest state.
   coat::CoatFeathers mature;
-  uint64_t matureGeneration = 0;
+  InputKey matureKey;
   bool naturalThisFrame = false;  // `natural` holds the pack of the current frame without raises
   PoseReference poseRef;          // set up by the pipeline for posed frames
   coat::PackResult flatNatural;   // a draped coat's "natural pack": every elevation 0 (no pack is made)
   PackReport packReport;
 };
 
-// posed = rest deformed by the scene's skeleton at time t (identity without a skeleton). `posed` comes
-// in as a copy of `rest`; it is only touched (skinned, geometry recomputed) when the pose moves it.
-void poseSkin(const Scene& scene, double t, const coat::SkinMesh& rest, coat::SkinMesh& posed, TimeState& state);
-// Sets coat.age / coat.present from the scene's moult settings at time t (all mature without).
-void featherAges(const Scene& scene, double t, const std::vector<coat::TractParameterization>& params,
-                 const coat::Follicles& follicles, TimeState& state, coat::CoatFeathers& coat);
-// Expressive controls at time t: lifted feathers get fixed elevations (NaN = free) and directions;
-// feathers under a dynamic control get state.bends.
+// posed = rest deformed by the skeleton `rig` (SceneSettings::skeleton, its key `rigKey`) at time t
+// (identity without one). `posed` comes in as a copy of `rest`; it is only touched (skinned, geometry
+// recomputed) when the pose moves it.
+void poseSkin(const moult::SkinRig* rig, const InputKey& rigKey, double t, const coat::SkinMesh& rest,
+              coat::SkinMesh& posed, TimeState& state);
+// Sets coat.age / coat.present from the per-tract moult options (SceneSettings::moult) at time t (all
+// mature without). `planKey`: what the moult plan is made from (the rest state and the moult sections).
+void featherAges(const std::vector<std::optional<moult::MoultOptions>>& options, const InputKey& planKey, double t,
+                 const std::vector<coat::TractParameterization>& params, const coat::Follicles& follicles,
+                 TimeState& state, coat::CoatFeathers& coat);
+// Expressive controls (SceneSettings::controls, their key `controlsKey`) at time t: lifted feathers get
+// fixed elevations (NaN = free) and directions; feathers under a dynamic control get state.bends.
+// `packing`: the scene's packing settings (the natural pack's options and moult rule).
 // `constraints`: the styling's (its fixedElevation is ignored: `fixedElevation` stands for it).
-void applyControls(const Scene& scene, double t, const coat::SkinMesh& posed, const coat::Follicles& follicles,
-                   TimeState& state, coat::CoatFeathers& coat, const coat::PackConstraints& constraints,
+void applyControls(const ControlSettings& controls, const InputKey& controlsKey, const coat::PackingSettings& packing,
+                   double t, const coat::SkinMesh& posed, const coat::Follicles& follicles, TimeState& state,
+                   coat::CoatFeathers& coat, const coat::PackConstraints& constraints,
                    std::vector<double>& fixedElevation);
 
 // The dynamic controls' chains at time t (called by applyControls with its binding): state.bends, per
 // feather of `coat`, the shaft bend of every present feather bound to a dynamic control (scaled by the
 // control's dynamic value times the binding weight); empty elsewhere.
-void applyChains(const Scene& scene, double t, const coat::Follicles& follicles, const moult::ControlBinding& binding,
-                 TimeState& state, const coat::CoatFeathers& coat);
+void applyChains(const ControlSettings& controls, const InputKey& controlsKey, double t,
+                 const coat::Follicles& follicles, const moult::ControlBinding& binding, TimeState& state,
+                 const coat::CoatFeathers& coat);
 
 // The frame's pack (state.frame.result()): an incremental repack (bit-identical to a full pack,
 // coat/pack.hpp) from whichever remembered pack differs in fewer feathers, the previous frame's pack or
 // this frame's natural pack (which differs in the raised feathers only); a full pack when neither fits.
 // grownAge: per feather, the age `coat`'s parameters were grown to (PackMemo::grownAge; empty = all 1).
-const coat::PackResult& packFrame(const Scene& scene, const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
+const coat::PackResult& packFrame(const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
                                   const coat::PackOptions& options, const coat::PackConstraints& constraints,
                                   TimeState& state, const std::vector<double>& grownAge = {});
 
@@ -185,9 +181,9 @@ const coat::CoatFeathers& matureCoat(const coat::CoatFeathers& coat, TimeState& 
 // (into state.frame), then the lost and growing feathers of `coat` are packed over it (Packer::packOver):
 // mature feathers keep their pose, so a lost feather leaves a gap and a growing one fills in under the
 // feathers over it. Reused when neither the mature pack nor this frame's lost/growing feathers changed.
-const coat::PackResult& packMoultFrame(const Scene& scene, const coat::SkinMesh& posed,
-                                       const coat::CoatFeathers& mature, const coat::CoatFeathers& coat,
-                                       const coat::PackOptions& options, const coat::PackConstraints& constraints,
-                                       TimeState& state, const std::vector<double>& grownAge);
+const coat::PackResult& packMoultFrame(const coat::SkinMesh& posed, const coat::CoatFeathers& mature,
+                                       const coat::CoatFeathers& coat, const coat::PackOptions& options,
+                                       const coat::PackConstraints& constraints, TimeState& state,
+                                       const std::vector<double>& grownAge);
 
 }  // namespace pteryla::pipeline
