@@ -352,9 +352,7 @@ void Session::setFixedElevations(const std::vector<uint64_t>& follicleKeys, cons
                     std::to_string(elevations.size()),
                 "", "elevations");
   if (!follicleKeys.empty()) {
-    const Json packing = m.pipeline->scene().packing.is_null() ? Json::object() : m.pipeline->scene().packing;
-    JsonReader r(packing, m.pipeline->scene().file, "packing");  // the reader keeps a reference
-    if (coat::parsePackingSettings(r).options.method == coat::PackMethod::Drape)
+    if (m.pipeline->packingSettings().options.method == coat::PackMethod::Drape)
       throw Error("fixed elevations need a packed coat (packing height_field): a draped coat is laid along the skin",
                   "", "packing");
   }

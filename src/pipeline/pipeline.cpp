@@ -388,6 +388,7 @@ Pipeline::Pipeline(Scene scene, coat::SkinMesh skin, ProgressFn progress)
 Pipeline::~Pipeline() = default;
 
 const Scene& Pipeline::scene() const { return impl_->scene; }
+const coat::PackingSettings& Pipeline::packingSettings() { return impl_->settings.packing(impl_->scene); }
 void Pipeline::editScene(Stage from, const std::function<void(Scene&)>& edit) {
   edit(impl_->scene);
   defaultTracts(impl_->scene);

@@ -31,6 +31,7 @@ struct SkinMesh;
 struct Tract;
 struct Follicles;
 struct CoatFeathers;
+struct PackingSettings;
 }  // namespace pteryla::coat
 
 namespace pteryla::pipeline {
@@ -155,6 +156,9 @@ class Pipeline {
   Pipeline& operator=(const Pipeline&) = delete;
 
   const Scene& scene() const;
+  // The scene's "packing" section as the pipeline reads it (parsed once per edit of the section; defaults
+  // when it is empty). Throws pteryla::Error with the scene file and key path when it is malformed.
+  const coat::PackingSettings& packingSettings();
   // Edits the scene and dirties `from` and everything downstream of it.
   void editScene(Stage from, const std::function<void(Scene&)>& edit);
   void invalidate(Stage from);
