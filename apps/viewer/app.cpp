@@ -321,6 +321,9 @@ void App::renderView() {
   if (!moving) doc_.setPreviewView(camera_.camera(), viewport_.pixels().x, viewport_.pixels().y);
   // A time drawn before whose coat is not evaluated yet: its flipbook frame (timeline.cpp).
   if (!moving && timeline_.showFlipbookFrame()) return;
+  // Playing, with the frame shown not evaluated yet: keep the image on screen (drawing the last coat again
+  // would show a stale frame and cost a frame's drawing).
+  if (!moving && timeline_.awaitingPlayedFrame()) return;
   timeline_.liveViewShown();
   const Viewport::Drawn drawn = viewport_.render(moving, bench_.fixedPass(), view_.playing);
   if (drawn == Viewport::Drawn::Full || drawn == Viewport::Drawn::Playback)

@@ -172,6 +172,12 @@ void Timeline::advanceCacheFill() {
   doc_.setTime(grid.time(fill_.next));
 }
 
+bool Timeline::awaitingPlayedFrame() const {
+  if (!view_.playing) return false;
+  const bool live = doc_.upToDate() && doc_.resultVersion() == viewport_.syncedResult() && displayTime_ == doc_.time();
+  return !live && !viewport_.image().empty();
+}
+
 bool Timeline::showFlipbookFrame() {
   const double shown = view_.playing ? displayTime_ : doc_.time();
   const bool live = doc_.upToDate() && doc_.resultVersion() == viewport_.syncedResult() && shown == doc_.time();

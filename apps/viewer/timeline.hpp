@@ -28,6 +28,8 @@ class Timeline {
   // Shows a flipbook frame instead of rendering (a time whose coat is not evaluated yet); false: none.
   bool showFlipbookFrame();
   void liveViewShown() { flipbookShown_ = false; }
+  // Playing, and the time on screen is not the evaluated, uploaded coat's yet (its evaluation runs).
+  bool awaitingPlayedFrame() const;
   // The view just rendered, complete and at rest (or `fast`: at the fast playback quality), for its time.
   void storeFlipbookFrame(bool fast = false);
 
