@@ -349,16 +349,9 @@ double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a
 
 namespace {
 
-inline __attribute__((always_inline)) double boxDist2(const TriangleBvh::Node& n, const glm::dvec3& p) {
-  double d2 = 0;
-  for (int k = 0; k < 3; ++k) {
-    const double v = p[k] < n.lo[k] ? n.lo[k] - p[k] : (p[k] > n.hi[k] ? p[k] - n.hi[k] : 0.0);
-    d2 += v * v;
-  }
-  return d2;
-}
-
-inline __attribute__((always_inline)) double primBoxDist2(const TriangleBvh::PrimBox& n, const glm::dvec3& p) {
+// Squared distance from p to a float box (a node's or a triangle's: lo[3], hi[3]); 0 inside.
+template <class B>
+inline __attribute__((always_inline)) double boxDist2(const B& n, const glm::dvec3& p) {
   double d2 = 0;
   for (int k = 0; k < 3; ++k) {
     const double v = p[k] < n.lo[k] ? n.lo[k] - p[k] : (p[k] > n.hi[k] ? p[k] - n.hi[k] : 0.0);
@@ -391,7 +384,7 @@ int64_t TriangleBvh::nearest(const glm::dvec3& p, double maxDist2, glm::dvec3& b
     if (n.count > 0) {
       for (uint32_t k = 0; k < n.count; ++k) {
         // The triangle's box is farther than the best so far: so is the triangle (the box contains it).
-        if (primBoxDist2(primBoxes_[n.first + k], p) > bestD) continue;
+        if (boxDist2(primBoxes_[n.first + k], p) > bestD) continue;
         const uint32_t t = prims_[n.first + k];
         glm::dvec3 b;
         const glm::dvec3 q = closestPointOnTriangle(p, vertex(t, 0), vertex(t, 1), vertex(t, 2), &b);

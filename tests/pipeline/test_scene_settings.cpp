@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../moult/wing_scene.hpp"
 #include "frames.hpp"
 #include "pteryla/coat/skin.hpp"
 #include "pteryla/core/error.hpp"
@@ -30,30 +31,19 @@ const std::string kSceneFile = std::string(PTERYLA_DATA_DIR) + "/scenes/scene_se
 // The wing with every typed section: two tracts, a moult, a skeleton, a control, growth, directions,
 // ordering and packing.
 Scene wingScene() {
-  return pipeline::sceneFromJson(Json::parse(R"({
-    "pteryla": 1,
-    "seed": 5,
+  Json j = moult_test::wingScene();  // two tracts, directions, height-field packing
+  j.update(Json::parse(R"({
     "time": 5,
-    "mesh": "../meshes/wing.obj",
-    "feathers": {"contour": "../feathers/contour.json"},
-    "tracts": [
-      {"name": "coverts", "groups": ["coverts"], "count": 90, "feather_scale": "auto",
-       "feather_spacings": 1.5, "relax": {"iterations": 5}},
-      {"name": "remiges", "groups": ["remiges_base"], "count": 40, "feather_scale": "auto",
-       "feather_spacings": 1.5, "relax": {"iterations": 5}}
-    ],
     "growth": {"ramps": [{"parameter": "shaft_length", "start": 0, "end": 0.6}]},
-    "directions": {"axis": [[0, 0, -0.2], [2, 0, 0.4]]},
     "ordering": {"method": "tracts", "tracts": ["remiges", "coverts"]},
-    "packing": {"method": "height_field"},
     "moult": {"start": 0, "duration": 10, "window": 0.25, "sequence": "centre_out", "gap": 0.1, "seed": 3},
     "skeleton": {"file": "../meshes/wing.skeleton.json", "keys": [
       {"joint": "elbow", "t": 0, "rotation": [0, 0, 1, 0]}, {"joint": "elbow", "t": 10, "rotation": [0, 0, 1, 30]}]},
     "controls": [{"name": "raise", "tracts": ["coverts"], "at": [0.9, 0.1, 0.0], "radius": 0.35,
                   "keys": [{"t": 0, "lift": 0}, {"t": 8, "lift": 1}]}],
     "render": {"lod": 0.2}
-  })"),
-                                 kSceneFile);
+  })"));
+  return pipeline::sceneFromJson(j, kSceneFile);
 }
 
 constexpr size_t kSections = size_t(Section::Packing) + 1;
