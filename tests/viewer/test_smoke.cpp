@@ -253,13 +253,9 @@ TEST(ViewerSmoke, ScenePanelSeedOrderingAndExport) {
                         << "ui Scene export " << glb << "\nwait\nframes 3\n"
                         << "screenshot-window " << dir << "/scene_panel.png\n"
                         << "save " << saved << "\nquit\n";
-  // Under the sanitizers, LeakSanitizer's stop-the-world tracer crashes at this run's exit about half the
-  // time ("Tracer caught signal 11 ... LeakSanitizer has encountered a fatal error", no leak reported),
-  // after every command has run. Leaks are checked here by ASan's other viewer runs; this one checks
-  // memory errors only.
   const ViewerRun r = runViewer(
       "\"" + viewer_test::dataPath("scenes/patch.json") + "\" --lod 0.3 --size 1000x700 --script \"" + script + "\"",
-      dir + "/stderr.txt", "ASAN_OPTIONS=detect_leaks=0");
+      dir + "/stderr.txt");
   ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
   const pipeline::Scene s = pipeline::loadScene(saved);
   EXPECT_EQ(s.seed, 4242u);

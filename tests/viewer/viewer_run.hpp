@@ -40,10 +40,21 @@ inline std::string slurp(const std::string& path) {
 // shell inside xvfb-run and read from there: xvfb-run's status is not the program's when its own
 // clean-up of the temporary Xauthority directory races a program that ends within a second or two
 // (it then exits 5 even though the viewer exited 0 or 2). `env` ("NAME=value ...") is set for the viewer.
+// Under AddressSanitizer the viewer runs without LeakSanitizer's exit-time check: its tracer itself
+// crashed at the viewer's exit in about half the runs of some scripted sessions ("Tracer caught signal 11
+// ... LeakSanitizer has encountered a fatal error", after every command had run and with no leak
+// reported; sessions 19 and 20), which failed the test for the sanitizer's fault. The Document, the
+// script, the handles and the other viewer parts keep their leak checks in the in-process viewer tests.
+inline std::string viewerSanitizerEnv() {
+  const char* asan = std::getenv("ASAN_OPTIONS");
+  if (!asan) return "";
+  return "ASAN_OPTIONS='" + std::string(asan) + ":detect_leaks=0' ";
+}
+
 inline ViewerRun runViewer(const std::string& args, const std::string& errFile, const std::string& env = "") {
   const std::string statusFile = errFile + ".status";
   std::remove(statusFile.c_str());
-  const std::string inner = (env.empty() ? "" : "env " + env + " ") + "\"" + std::string(PTERYLA_VIEWER_EXE) + "\" " +
+  const std::string inner = "env " + viewerSanitizerEnv() + env + " \"" + std::string(PTERYLA_VIEWER_EXE) + "\" " +
                             args + " 2>\"" + errFile + "\"; echo $? >\"" + statusFile + "\"";
   std::string quoted;  // `inner` inside single quotes for sh -c
   for (char c : inner) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
