@@ -215,12 +215,7 @@ DrapeResult drapeOver(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& m
   for (uint32_t v = 0; v < nv; ++v)
     if (inside[v]) bad[v] = 1;
   std::vector<size_t> kept(n, 0), cut(n, 0);
-  auto collapse = [&](size_t t) {
-    uint32_t* tri = &mesh.indices[3 * t];
-    if (tri[1] == tri[0] && tri[2] == tri[0]) return;
-    tri[1] = tri[2] = tri[0];
-    ++cut[mesh.featherId[tri[0]]];
-  };
+  auto collapse = [&](size_t t) { collapseTriangle(mesh, t, cut); };
   for (size_t t = 0; t < nt; ++t) {
     const uint32_t* tri = &mesh.indices[3 * t];
     if (overFollicle[t] || bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) collapse(t);

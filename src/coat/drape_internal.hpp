@@ -98,6 +98,15 @@ inline bool isCut(const TriMesh& mesh, size_t t) {
   return tri[1] == tri[0] && tri[2] == tri[0];
 }
 
+// Collapses triangle t of `mesh` (its corners onto the first: it meets nothing and draws nothing) and
+// counts it in cut[its feather]; a triangle collapsed already is left as it is.
+inline void collapseTriangle(TriMesh& mesh, size_t t, std::vector<size_t>& cut) {
+  uint32_t* tri = &mesh.indices[3 * t];
+  if (tri[1] == tri[0] && tri[2] == tri[0]) return;
+  tri[1] = tri[2] = tri[0];
+  ++cut[mesh.featherId[tri[0]]];
+}
+
 // The crossing pairs of live triangles (t < u, as t << 32 | u) with at least one changed triangle: the
 // pair search over the live triangles of every feather whose live bounds meet those of a feather with a
 // changed live triangle. A pair's test depends on its two triangles alone (and which comes first in the

@@ -58,8 +58,8 @@ struct PackMemo {
                                                const std::vector<double>& grownAge = {}) const;
   // Records the inputs the packer's new result was packed from.
   void remember(const coat::SkinMesh& skin, const coat::CoatFeathers& coat, const coat::PackOptions& options,
-                const coat::PackConstraints& constraints, const InputKey& key,
-                const std::vector<double>& grownAge = {}, bool exact = true);
+                const coat::PackConstraints& constraints, const InputKey& key, const std::vector<double>& grownAge = {},
+                bool exact = true);
 };
 
 // Posed frames (a skeleton moving the skin) pack with Packer::packDeformed from a reference pack: the same
