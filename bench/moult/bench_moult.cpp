@@ -64,7 +64,7 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   size_t k = 0;
   double packChanged = 0, packRecomputed = 0, naturalRecomputed = 0, meshRegenerated = 0, meshReused = 0,
          incremental = 0, moultChanged = 0, moultRecomputed = 0, poseMoved = 0, poseRepacked = 0, drapeRelaid = 0,
-         drapeReused = 0;
+         drapeReused = 0, drapeCarriedMoved = 0;
   p->resetTimings();
   for (auto _ : state) {
     p->setTime(consecutive ? 4.0 + double(++k) / 24.0 : times[k++ % 8]);
@@ -82,6 +82,7 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
     poseRepacked += double(r.poseRepacked);
     drapeRelaid += double(r.drapeRelaid);
     drapeReused += double(r.drapeReused);
+    drapeCarriedMoved += double(r.drapeCarriedMoved);
   }
   const auto& c = p->feathers();
   size_t absent = 0, growing = 0;
@@ -118,6 +119,8 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   // Draped coats: feathers the drape laid again, and those whose draped vertices it copied.
   state.counters["drape_relaid"] = drapeRelaid / n;
   state.counters["drape_reused"] = drapeReused / n;
+  // Posed frames of a draped coat carried from the rest pose's drape: feathers the pose moved.
+  state.counters["drape_carried_moved"] = drapeCarriedMoved / n;
 }
 
 void BM_FrameBirdScene(benchmark::State& state) {
@@ -142,6 +145,30 @@ void BM_FrameBirdScene(benchmark::State& state) {
 BENCHMARK(BM_FrameBirdScene)
     ->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})
     ->ArgNames({"skeleton", "controls", "scrub"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
+
+// The draped bird moulting with its wings bending, scrubbed: posed frames carried from the rest pose's drape
+// (packing.posed_drape "carry", the default) against a full drape of every posed frame ("full"), in one
+// run (issue #26).
+void BM_FrameBirdPosedDrape(benchmark::State& state) {
+  const std::string path = kData + "/scenes/bird.json";
+  if (!fileExists(path)) {
+    state.SkipWithError("data/scenes/bird.json not found");
+    return;
+  }
+  pipeline::Scene s = pipeline::loadScene(path);
+  if (s.moult.empty()) s.moult = moultSection();
+  s.skeleton = birdWings();
+  if (!s.packing.is_object()) s.packing = Json::object();
+  s.packing["posed_drape"] = state.range(0) ? "carry" : "full";
+  runFrames(state, std::move(s), true);
+}
+BENCHMARK(BM_FrameBirdPosedDrape)
+    ->Arg(0)
+    ->Arg(1)
+    ->ArgName("carry")
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MeasureProcessCPUTime();

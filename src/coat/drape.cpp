@@ -74,7 +74,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
   // The last drape can be reused where the skin, the options and the layers' relative order are the same.
   bool usable = M && M->valid && M->feathers.size() == n && M->gapOption == o.gap && M->spacingOption == o.spacing &&
                 M->maxSlope == o.maxSlope && M->baseAllowance == o.baseAllowance && M->gridAlong == o.gridAlong &&
-                M->gridAcross == o.gridAcross && sameSkin(M->skin, skin);
+                M->gridAcross == o.gridAcross && !M->carried && sameSkin(M->skin, skin);
   if (usable) {
     // Feathers in both layer orders keep their relative order.
     size_t k = 0;
@@ -92,6 +92,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     M->valid = false;  // until this drape completes
     if (!usable) {
       M->feathers.assign(n, FeatherMemo{});
+      M->carried = false;
       M->pairs.clear();
       M->top.reset();
       M->skin = skin;
@@ -700,6 +701,24 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
 DrapeResult drapeOverMature(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeCache& mature,
                             const DrapeOptions& o) {
   return drapeOver(skin, coat, mesh, DrapeAccess::state(mature), o);
+}
+
+DrapeResult drapeCarried(const SkinMesh& rest, const SkinMesh& posed, const CoatFeathers& coat, TriMesh& mesh,
+                         const DrapeCache& reference, const DrapeOptions& o, DrapeCache* out) {
+  if (out == &reference) throw Error("the carried drape cannot be kept in its own reference", {}, "reference");
+  DrapeCache::State* W = nullptr;
+  if (out) {
+    W = &DrapeAccess::state(*out);
+    const bool keepAlways = W->keepAlways;
+    *W = DrapeCache::State{};
+    W->keepAlways = keepAlways;
+  }
+  try {
+    return carry(rest, posed, coat, mesh, DrapeAccess::state(reference), o, W);
+  } catch (...) {
+    if (out) out->clear();
+    throw;
+  }
 }
 
 DrapeSpacing drapeSpacing(const SkinMesh& skin, const CoatFeathers& coat, const TriMesh& mesh, const DrapeOptions& o) {

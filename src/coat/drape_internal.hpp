@@ -220,6 +220,10 @@ bool sameRange(const std::vector<T>& a, const T* b, size_t count) {
   return a.size() == count && std::equal(a.begin(), a.end(), b);
 }
 
+// drapeCarried (drape.hpp): the posed frame from the rest pose's drape R; with `out`, keeps it there.
+DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeathers& coat, TriMesh& mesh,
+                  const DrapeCache::State& R, const DrapeOptions& o, DrapeCache::State* out);
+
 // drapeOverMature (drape.hpp), over the mature coat's drape M.
 DrapeResult drapeOver(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeCache::State& M,
                       const DrapeOptions& o);
@@ -243,6 +247,9 @@ struct DrapeCache::State {
   std::vector<glm::dvec3> lastSkin;
   int skinMoves = 0;
   bool keepAlways = false;  // keep every drape (drapeOverMature reads the mature coat's)
+  // Carried from a rest pose's drape (drapeCarried): its charts were not marched on this skin, so a drape
+  // lays everything again rather than reuse them.
+  bool carried = false;
 };
 
 struct DrapeAccess {

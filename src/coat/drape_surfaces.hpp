@@ -36,6 +36,11 @@ struct Node {
   uint8_t ok = 0;      // the chart reached the skin here
   uint8_t active = 0;  // next to feather material
   uint8_t free = 0;    // past the skin's edge: the feather goes straight on (c is not on the skin)
+  // The skin point the node was marched to (a free node: the last one before the edge), as face and
+  // barycentric weights of its second and third corners; -1 = none (the follicle itself). A posed frame
+  // carries the node with that point (drapeCarried).
+  int32_t face = -1;
+  double bu = 0, bv = 0;
 };
 
 struct Chart {
@@ -111,6 +116,9 @@ class Surface {
     if (f < 0) return overhang();
     to.c = pointAt(skin_, static_cast<uint32_t>(f), bary);
     to.n = normalAt(skin_, static_cast<uint32_t>(f), bary);
+    to.face = static_cast<int32_t>(f);
+    to.bu = bary.y;
+    to.bv = bary.z;
     // The skin curves away under the feather more tightly than the feather bends: a radius of curvature
     // along the step under kStiffness x its length (angle turned > step / radius).
     const double turn = std::acos(std::clamp(glm::dot(to.n, from.n), -1.0, 1.0));

@@ -44,6 +44,7 @@ PackingSettings parsePackingSettings(JsonReader& r) {
   o.threads = static_cast<int>(r.integer("threads", 0, 0, 1024));
   settings.moultOver = r.oneOf("moult_pack", "over", {"over", "full"}) == "over";
   settings.poseTolerance = r.number("pose_tolerance", settings.poseTolerance, 0.0, 1.0);
+  settings.carryPosedDrape = r.oneOf("posed_drape", "carry", {"carry", "full"}) == "carry";
   for (JsonReader& s : r.objects("styling")) settings.styling.push_back(parseStyleSelection(s));
   r.finish();
   return settings;
@@ -78,6 +79,8 @@ Json packingSettingsToJson(const PackingSettings& settings) {
   if (o.threads != d.threads) j["threads"] = o.threads;
   if (settings.moultOver != PackingSettings().moultOver) j["moult_pack"] = settings.moultOver ? "over" : "full";
   if (settings.poseTolerance != PackingSettings().poseTolerance) j["pose_tolerance"] = settings.poseTolerance;
+  if (settings.carryPosedDrape != PackingSettings().carryPosedDrape)
+    j["posed_drape"] = settings.carryPosedDrape ? "carry" : "full";
   if (!settings.styling.empty()) {
     Json a = Json::array();
     for (const auto& s : settings.styling) a.push_back(styleSelectionToJson(s));

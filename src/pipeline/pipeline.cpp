@@ -120,6 +120,7 @@ void Pipeline::Impl::computeControls() {
   timeState.packKey = restKey().add(settings.packingKey());
   packOptions = packing.options;
   moultOver = packing.moultOver;
+  carryPosedDrape = packing.carryPosedDrape;
   fixedElevation.assign(coatNow.size(), std::nan(""));
   constraints = coat::PackConstraints{};
   // Styling is resolved here, once per frame, into fixed elevations, frames and the packer's constraints.
@@ -141,7 +142,8 @@ void Pipeline::Impl::computeControls() {
   // Posed frames pack from the rest pose's pack (packDeformed): the frames the coat has at rest, styled.
   PoseReference& pr = timeState.poseRef;
   pr.tolerance = packing.poseTolerance;
-  if (timeState.posedMoved && pr.tolerance > 0 && pr.key != timeState.packKey) {
+  const bool carries = packing.carryPosedDrape && packing.options.method == coat::PackMethod::Drape;
+  if (timeState.posedMoved && (pr.tolerance > 0 || carries) && pr.key != timeState.packKey) {
     coat::CoatFeathers c = coatRest;
     coat::evaluateFrames(rest, follicles, directions, c);
     if (!packing.styling.empty()) coat::applyStyling(c, packing.styling, {});
@@ -217,7 +219,7 @@ bool Pipeline::Impl::MatureDrapeKey::operator==(const MatureDrapeKey& o) const {
   };
   return rest == o.rest && lod == o.lod && gap == o.gap && spacing == o.spacing && maxSlope == o.maxSlope &&
          baseAllowance == o.baseAllowance && featherLods == o.featherLods && sameFrames(frames, o.frames) &&
-         skin == o.skin;
+         skin == o.skin && carried == o.carried;
 }
 
 const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOptions& o) {
@@ -255,6 +257,36 @@ const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOption
   return drapeRef->spacing;
 }
 
+coat::DrapeResult Pipeline::Impl::carryFromRest(const coat::CoatFeathers& c, const CoatMeshInput& in,
+                                                TriMesh& posedMesh, const coat::DrapeOptions& o,
+                                                coat::DrapeCache* out) {
+  // The coat at rest: this frame's feathers with the pose reference's frames, meshed and draped over the
+  // rest skin (the mesher and the cache keep what did not change since the last frame).
+  RestDrape& R = restDrape;
+  coat::CoatFeathers& rc = R.coat;
+  rc.follicle = c.follicle;
+  rc.tract = c.tract;
+  if (rc.params != c.params) rc.params = c.params;
+  rc.frames = timeState.poseRef.frames;
+  rc.age = c.age;
+  rc.present = c.present;
+  rc.layerOrder = c.layerOrder;
+  CoatMeshInput rin = in;
+  rin.coat = &rc;
+  rin.packedCoat = &rc;
+  R.mesher.update(rin, R.mesh);
+  R.mesher.keepIndices(R.mesh);
+  coat::DrapeOptions ro = o;
+  const ProgressFn whole = o.progress;
+  ro.progress = [whole](const std::string& s, double f) { return !whole || whole(s, 0.8 * f); };
+  coat::drapeCoatMesh(rest, rc, R.mesh, ro, R.cache);
+  coat::DrapeOptions po = o;
+  po.progress = [whole](const std::string& s, double f) { return !whole || whole(s, 0.8 + 0.2 * f); };
+  coat::DrapeResult r = coat::drapeCarried(rest, posed, c, posedMesh, R.cache, po, out);
+  carried = r.stats.relaid;
+  return r;
+}
+
 void Pipeline::Impl::computeMesh() {
   report(progress, "mesh", 0);
   // The coat at the levels it is meshed at, against the memory ceiling: the interpolate stage assumed the
@@ -269,6 +301,7 @@ void Pipeline::Impl::computeMesh() {
   in.bends = &timeState.bends;
   mesher.update(in, mesh.mesh);
   drape = coat::DrapeResult{};
+  carried.reset();
   if (packOptions.method == coat::PackMethod::Drape) {
     mesher.keepIndices(mesh.mesh);
     coat::DrapeOptions dopt;
@@ -287,6 +320,12 @@ void Pipeline::Impl::computeMesh() {
       dopt.gap = ref.gap;
       dopt.spacing = ref.spacing;
     }
+    // A posed frame is carried from the rest pose's drape (docs/moult.md, "Posed frames"), unless the
+    // frames move by more than the skin: controls turn feathers, a dynamic chain bends shafts.
+    const bool bent = std::any_of(timeState.bends.begin(), timeState.bends.end(),
+                                  [](const feather::ShaftBend& b) { return !b.rigid(); });
+    const bool carry = carryPosedDrape && timeState.posedMoved && !bent &&
+                       timeState.poseRef.frames.size() == coatNow.size() && settings.controls(scene).controls.empty();
     if (moultOver && moulting(coatNow)) {
       // A moult frame over the mature coat (docs/moult.md): the mature coat (every feather present and
       // mature) is meshed and draped by a mesher and a drape cache of its own, which reuse everything
@@ -301,9 +340,8 @@ void Pipeline::Impl::computeMesh() {
                          dopt.baseAllowance,
                          featherLods,
                          mature.frames,
-                         posed.positions};
-      const bool bent = std::any_of(timeState.bends.begin(), timeState.bends.end(),
-                                    [](const feather::ShaftBend& b) { return !b.rigid(); });
+                         posed.positions,
+                         carry};
       if (bent || !matureDrapeKey || !(*matureDrapeKey == key)) {
         matureDrapeKey.reset();
         matureFlat = coat::PackResult{};
@@ -320,7 +358,10 @@ void Pipeline::Impl::computeMesh() {
           report(progress, "mesh", 0.1 + 0.8 * f);
           return true;
         };
-        coat::drapeCoatMesh(posed, mature, matureMesh, mopt, matureDrapeCache);
+        if (carry)
+          carryFromRest(mature, min, matureMesh, mopt, &matureDrapeCache);
+        else
+          coat::drapeCoatMesh(posed, mature, matureMesh, mopt, matureDrapeCache);
         if (!bent) matureDrapeKey = std::move(key);
       }
       dopt.progress = [this](const std::string&, double f) {
@@ -328,6 +369,8 @@ void Pipeline::Impl::computeMesh() {
         return true;
       };
       drape = coat::drapeOverMature(posed, coatNow, mesh.mesh, matureDrapeCache, dopt);
+    } else if (carry) {
+      drape = carryFromRest(coatNow, in, mesh.mesh, dopt, nullptr);
     } else {
       drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt, drapeCache);
     }
@@ -698,6 +741,8 @@ FrameReuse Pipeline::frameReuse() const {
   r.meshReused = impl_->mesher.reused();
   r.drapeRelaid = impl_->drape.stats.relaid;
   r.drapeReused = impl_->drape.stats.reused;
+  r.drapeCarried = impl_->carried.has_value();
+  r.drapeCarriedMoved = impl_->carried ? *impl_->carried : 0;
   return r;
 }
 

@@ -68,6 +68,7 @@ struct Pipeline::Impl {
   coat::PackConstraints constraints;  // the frame's per-feather constraints: fixedElevation below, and
                                       // the styling's minimum elevations and shaft bands
   bool moultOver = true;              // PackingSettings::moultOver
+  bool carryPosedDrape = true;        // PackingSettings::carryPosedDrape
   coat::CoatFeathers coatNow;         // at the current time: posed frames, ages, presence
   coat::CoatFeathers packCoat;        // coatNow with growing feathers as grown (the pack input when any grows)
   std::vector<double> packGrownAge;   // per feather, the age packCoat's parameters are grown to (empty = none)
@@ -106,9 +107,30 @@ struct Pipeline::Impl {
     std::vector<double> featherLods;
     std::vector<coat::FeatherFrame> frames;
     std::vector<glm::dvec3> skin;
+    bool carried = false;  // carried from the rest pose's drape (packing.posed_drape)
     bool operator==(const MatureDrapeKey& o) const;
   };
   std::optional<MatureDrapeKey> matureDrapeKey;
+  // Posed frames of a draped coat are carried from the rest pose's drape (coat::drapeCarried): the coat
+  // (or the mature coat of a moult frame) with its rest frames, meshed and draped over the rest skin by a
+  // mesher and a drape cache of their own. The cache reuses what did not change from frame to frame.
+  struct RestDrape {
+    coat::CoatFeathers coat;  // with the pose reference's frames
+    coat::PackResult flat;
+    CoatMesher mesher;
+    TriMesh mesh;
+    coat::DrapeCache cache = [] {
+      coat::DrapeCache c;
+      c.keepEveryDrape();
+      return c;
+    }();
+  };
+  RestDrape restDrape;
+  std::optional<size_t> carried;  // this frame's mesh stage carried a drape: the feathers it placed
+  // Drapes `coat` (this frame's frames, meshed flat into `posedMesh`) by carrying its rest pose's drape;
+  // with `out`, keeps the carried drape there. `in` is the frame's mesh input with `coat` in it.
+  coat::DrapeResult carryFromRest(const coat::CoatFeathers& coat, const CoatMeshInput& in, TriMesh& posedMesh,
+                                  const coat::DrapeOptions& o, coat::DrapeCache* out);
   const coat::DrapeSpacing& drapeReference(const coat::DrapeOptions& options);
   CoatMesh mesh;
   CoatMesher mesher;  // mesh.mesh is its last result

@@ -497,6 +497,7 @@ TEST(Pack, FlatPatchFeathersRestJustAboveTheSkin) {
 TEST(PackOptionsJson, ParsesAndRejects) {
   const Json j = Json::parse(R"({
     "clearance": 0.002, "max_elevation_deg": 80, "key_barbs_per_vane": 7, "threads": 2, "moult_pack": "full",
+    "posed_drape": "full",
     "styling": [
       {"select": "ids", "ids": [1, 2, 3], "elevation_deg": 40},
       {"select": "sphere", "center": [1, 0, 0], "radius": 0.3, "elevation_deg": 30},
@@ -509,6 +510,8 @@ TEST(PackOptionsJson, ParsesAndRejects) {
   EXPECT_NEAR(o.maxElevation, 80 * feather::kPi / 180, 1e-12);
   EXPECT_EQ(o.keyBarbsPerVane, 7);
   EXPECT_FALSE(settings.moultOver);
+  EXPECT_FALSE(settings.carryPosedDrape);
+  EXPECT_TRUE(PackingSettings().carryPosedDrape);  // carried unless asked
   ASSERT_EQ(settings.styling.size(), 3u);
   EXPECT_EQ(settings.styling[0].ids, (std::vector<uint32_t>{1, 2, 3}));
   EXPECT_EQ(settings.styling[1].kind, StyleKind::Sphere);
@@ -533,6 +536,7 @@ TEST(PackOptionsJson, ParsesAndRejects) {
   fails(R"({"clearence": 1})", "clearence");
   fails(R"({"key_barbs_per_vane": 1})", "key_barbs_per_vane");
   fails(R"({"moult_pack": "partial"})", "moult_pack");
+  fails(R"({"posed_drape": "rigid"})", "posed_drape");
   fails(R"({"styling": [{"select": "ids", "ids": [1.5], "elevation_deg": 3}]})", "ids");
   fails(R"({"styling": [{"select": "blob", "elevation_deg": 3}]})", "select");
   fails(R"({"styling": [{"select": "sphere", "center": [0,0,0], "radius": 1}]})", "elevation_deg");

@@ -9,12 +9,14 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
 
 #include "coat_mesher.hpp"
 #include "frames.hpp"
 #include "pteryla/coat/check.hpp"
 #include "pteryla/coat/drape.hpp"
 #include "pteryla/coat/pack.hpp"
+#include "pteryla/coat/skin.hpp"
 #include "pteryla/core/error.hpp"
 #include "pteryla/pipeline/pipeline.hpp"
 #include "pteryla/pipeline/scene.hpp"
@@ -85,6 +87,48 @@ coat::DrapeResult drapeBoth(const coat::SkinMesh& skin, const FlatCoat& c, coat:
   expectSameDrape(withCache, r, without, fresh, what);
   EXPECT_EQ(r.stats.relaid + r.stats.reused, r.stats.draped) << what;
   return r;
+}
+
+// A triangle the drape removed (its corners collapsed onto the first).
+bool collapsed(const TriMesh& m, size_t t) {
+  const uint32_t* tri = &m.indices[3 * t];
+  return tri[1] == tri[0] && tri[2] == tri[0];
+}
+
+// Vertices of live (not collapsed) triangles under the skin, as the checker counts them.
+size_t liveVerticesUnderSkin(const coat::SkinMesh& skin, const TriMesh& m, const coat::CoatFeathers& feathers) {
+  coat::CheckOptions co;
+  coat::setFeatherBases(co, feathers, coat::DrapeOptions{}.baseAllowance);
+  const std::vector<uint8_t> inside = coat::verticesInsideSkin(skin, m, co);
+  size_t under = 0;
+  for (size_t t = 0; t < m.triangleCount(); ++t)
+    if (!collapsed(m, t))
+      for (int c = 0; c < 3; ++c) under += inside[m.indices[3 * t + c]];
+  return under;
+}
+
+// How far the coat stands off the skin: the 90th percentile of the distances from its live vertices (every
+// 7th) to the skin.
+double standOff(const coat::SkinMesh& skin, const TriMesh& m) {
+  std::vector<uint8_t> live(m.positions.size(), 0);
+  for (size_t t = 0; t < m.triangleCount(); ++t)
+    if (!collapsed(m, t))
+      for (int c = 0; c < 3; ++c) live[m.indices[3 * t + c]] = 1;
+  std::vector<double> d;
+  for (size_t v = 0; v < m.positions.size(); v += 7) {
+    if (!live[v]) continue;
+    const glm::dvec3 p(m.positions[v]);
+    double best = 1e300;
+    for (const auto& f : skin.faces) {
+      const glm::dvec3 q =
+          coat::closestPointOnTriangle(p, skin.positions[f[0]], skin.positions[f[1]], skin.positions[f[2]]);
+      best = std::min(best, glm::length(q - p));
+    }
+    d.push_back(best);
+  }
+  if (d.empty()) return 0;
+  std::nth_element(d.begin(), d.begin() + d.size() * 9 / 10, d.end());
+  return d[d.size() * 9 / 10];
 }
 
 // Turns feather i's frame about its normal by `radians`.
@@ -293,16 +337,7 @@ TEST(DrapeCache, MoultFramesLieOverTheMatureCoat) {
 
   // The guarantees: nothing crosses, no live vertex under the skin.
   EXPECT_TRUE(coat::intersectingTrianglePairs(m).empty());
-  coat::CheckOptions co;
-  coat::setFeatherBases(co, frame.feathers, coat::DrapeOptions{}.baseAllowance);
-  const std::vector<uint8_t> inside = coat::verticesInsideSkin(skin, m, co);
-  size_t under = 0;
-  for (size_t t = 0; t < m.triangleCount(); ++t) {
-    const uint32_t* tri = &m.indices[3 * t];
-    if (tri[1] == tri[0] && tri[2] == tri[0]) continue;
-    for (int c = 0; c < 3; ++c) under += inside[tri[c]];
-  }
-  EXPECT_EQ(under, 0u);
+  EXPECT_EQ(liveVerticesUnderSkin(skin, m, frame.feathers), 0u);
 
   // Another skin than the mature drape's is an error, not a wrong coat.
   coat::SkinMesh other = skin;
@@ -341,4 +376,162 @@ TEST(DrapeCache, AMovingSkinIsNotKeptUntilItHoldsStill) {
   always.keepEveryDrape();
   for (double s : {1.0, 1.01, 1.02}) drapeBoth(scaled(s), c, always, "kept");
   EXPECT_GT(always.bytes(), kept / 2);
+}
+
+// Posed frames carried from the rest pose's drape (coat::drapeCarried, packing.posed_drape "carry").
+
+// The rest skin carries to itself: every feather copied, the reference drape's bits.
+TEST(DrapeCarry, TheRestPoseCarriesToItself) {
+  pipeline::Pipeline p(pipeline::sceneFromJson(sphereJson(120), kSceneFile));
+  const coat::SkinMesh skin = p.posedSkin();
+  FlatCoat c;
+  c.feathers = p.feathers();
+  c.remesh();
+  coat::DrapeCache cache;
+  TriMesh draped = c.mesh;
+  const coat::DrapeResult ref = coat::drapeCoatMesh(skin, c.feathers, draped, {}, cache);
+  TriMesh m = c.mesh;
+  coat::DrapeCache kept;
+  const coat::DrapeResult r = coat::drapeCarried(skin, skin, c.feathers, m, cache, {}, &kept);
+  EXPECT_TRUE(sameMesh(m, draped));
+  EXPECT_EQ(r.stats.relaid, 0u);
+  EXPECT_EQ(r.stats.reused, ref.stats.draped);
+  EXPECT_EQ(r.trimmed, ref.trimmed);
+  // What it kept is a drape a moult can be laid over: the same coat over it is the same mesh.
+  TriMesh over = c.mesh;
+  coat::drapeOverMature(skin, c.feathers, over, kept);
+  EXPECT_TRUE(sameMesh(over, draped));
+  // A reference of another skin or coat is an error, not a wrong coat.
+  coat::SkinMesh other = skin;
+  other.positions[0] *= 1.01;
+  TriMesh m2 = c.mesh;
+  EXPECT_THROW(coat::drapeCarried(other, other, c.feathers, m2, cache), Error);
+  coat::DrapeCache empty;
+  EXPECT_THROW(coat::drapeCarried(skin, skin, c.feathers, m2, empty), Error);
+  EXPECT_THROW(coat::drapeCarried(skin, skin, c.feathers, m2, cache, {}, &cache), Error);
+}
+
+// A rigid motion of the skin and the follicles carries every feather rigidly: each live vertex is the
+// rest drape's moved, to rounding, and the guarantees hold on the moved skin.
+TEST(DrapeCarry, ARigidMotionCarriesEveryFeatherRigidly) {
+  pipeline::Pipeline p(pipeline::sceneFromJson(sphereJson(120), kSceneFile));
+  const coat::SkinMesh skin = p.posedSkin();
+  FlatCoat c;
+  c.feathers = p.feathers();
+  c.remesh();
+  coat::DrapeCache cache;
+  TriMesh draped = c.mesh;
+  coat::drapeCoatMesh(skin, c.feathers, draped, {}, cache);
+  const double a = 0.7;
+  const glm::dmat3 R(std::cos(a), std::sin(a), 0, -std::sin(a), std::cos(a), 0, 0, 0, 1);
+  const glm::dvec3 shift(0.3, -0.2, 0.5);
+  coat::SkinMesh moved = skin;
+  for (auto& v : moved.positions) v = R * v + shift;
+  coat::recomputeGeometry(moved);
+  FlatCoat mc;
+  mc.feathers = c.feathers;
+  for (coat::FeatherFrame& F : mc.feathers.frames) {
+    F.origin = R * F.origin + shift;
+    F.normal = R * F.normal;
+    F.tangent = R * F.tangent;
+    F.binormal = R * F.binormal;
+  }
+  mc.remesh();
+  TriMesh m = mc.mesh;
+  const coat::DrapeResult r = coat::drapeCarried(skin, moved, mc.feathers, m, cache);
+  EXPECT_EQ(r.stats.reused, 0u);  // every feather moved
+  ASSERT_EQ(m.positions.size(), draped.positions.size());
+  size_t live = 0, off = 0, liveBoth = 0;
+  std::vector<uint8_t> liveDraped(draped.positions.size(), 0), liveNow(m.positions.size(), 0);
+  for (size_t t = 0; t < m.triangleCount(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      if (!collapsed(draped, t)) liveDraped[draped.indices[3 * t + k]] = 1;
+      if (!collapsed(m, t)) liveNow[m.indices[3 * t + k]] = 1;
+    }
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    live += liveNow[v];
+    if (!liveNow[v] || !liveDraped[v]) continue;
+    ++liveBoth;
+    const glm::dvec3 want = R * glm::dvec3(draped.positions[v]) + shift;
+    off += glm::length(glm::dvec3(m.positions[v]) - want) > 1e-5 ? 1 : 0;
+  }
+  EXPECT_GT(liveBoth, live * 99 / 100);  // rounding may flip a test at a touching pair, no more
+  EXPECT_EQ(off, 0u);
+  EXPECT_TRUE(coat::intersectingTrianglePairs(m).empty());
+  EXPECT_EQ(liveVerticesUnderSkin(moved, m, mc.feathers), 0u);
+}
+
+// Through the pipeline: a host bends a cap of the draped sphere up (rigid cap, bending band). Whatever was
+// evaluated before, a posed frame (pose, time) is the same bits as a fresh evaluation of it, with a
+// moult too; only feathers the pose moved are placed again; the guarantees hold at every pose.
+TEST(DrapeCarry, PosedFramesEqualFreshEvaluationAndKeepTheGuarantees) {
+  for (const bool moult : {false, true}) {
+    SCOPED_TRACE(moult ? "moult" : "no moult");
+    Json j = sphereJson(150);
+    if (moult)
+      j["moult"] = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "sequence": "centre_out", "gap": 0,
+                                   "seed": 3})");
+    const pipeline::Scene scene = pipeline::sceneFromJson(j, kSceneFile);
+    pipeline::Pipeline scrub(scene);
+    scrub.setLod(0.2);
+    const coat::SkinMesh rest = scrub.restSkin();
+    // The cap above y0 turns about the x axis through (0, y0, 0) by `angle` and rises by as much, blended
+    // in over a band (a stretching neck under a rigidly moving head).
+    auto pose = [&](double angle) {
+      std::vector<glm::dvec3> out = rest.positions;
+      const double y0 = 0.2, band = 0.5;
+      for (auto& q : out) {
+        if (q.y <= y0) continue;
+        const double u = std::min(1.0, (q.y - y0) / band), w = angle * u * u * (3 - 2 * u);
+        const double y = q.y - y0, z = q.z;
+        q.y = y0 + std::cos(w) * y - std::sin(w) * z + w;  // and lifted by the angle's measure
+        q.z = std::sin(w) * y + std::cos(w) * z;
+      }
+      return out;
+    };
+    const std::pair<double, double> frames[] = {{0.3, 4.0}, {0.5, 4.0}, {0.5, 4.1}, {0.0, 4.0}, {0.3, 4.0}, {0.5, 2.0}};
+    size_t carried = 0;
+    for (const auto& [angle, t] : frames) {
+      SCOPED_TRACE("angle " + std::to_string(angle) + " t " + std::to_string(t));
+      scrub.setSkinPose(pose(angle));
+      scrub.setTime(t);
+      const pipeline_test::Frame f = pipeline_test::grab(scrub);
+      const pipeline::FrameReuse r = scrub.frameReuse();
+      // (A moult frame whose pose and mature coat were draped before reuses that drape.)
+      carried += r.drapeCarried ? 1 : 0;
+      if (r.drapeCarried && angle > 0) {
+        EXPECT_GT(r.drapeCarriedMoved, 0u);
+        EXPECT_LT(r.drapeCarriedMoved, scrub.feathers().size() * 3 / 4);  // the lower part did not move
+      }
+      EXPECT_TRUE(coat::intersectingTrianglePairs(f.mesh).empty());
+      EXPECT_EQ(liveVerticesUnderSkin(scrub.posedSkin(), f.mesh, scrub.feathers()), 0u);
+      pipeline::Pipeline fresh(scene);
+      fresh.setLod(0.2);
+      fresh.setSkinPose(pose(angle));
+      fresh.setTime(t);
+      pipeline_test::expectIdentical(f, pipeline_test::grab(fresh), t);
+    }
+    EXPECT_GE(carried, 4u);
+    // "posed_drape": "full" drapes the posed coat whole, another coat with the same guarantees.
+    Json full = j;
+    full["packing"]["posed_drape"] = "full";
+    pipeline::Pipeline whole(pipeline::sceneFromJson(full, kSceneFile));
+    whole.setLod(0.2);
+    whole.setSkinPose(pose(0.5));
+    whole.setTime(4.0);
+    const pipeline_test::Frame g = pipeline_test::grab(whole);
+    EXPECT_FALSE(whole.frameReuse().drapeCarried);
+    EXPECT_TRUE(coat::intersectingTrianglePairs(g.mesh).empty());
+    // The carried coat lies on the bent skin as closely as the full drape's (its feathers went with the
+    // skin), and keeps about as many triangles.
+    scrub.setSkinPose(pose(0.5));
+    scrub.setTime(4.0);
+    const pipeline_test::Frame c = pipeline_test::grab(scrub);
+    const coat::SkinMesh bent = scrub.posedSkin();
+    EXPECT_LT(standOff(bent, c.mesh), 1.1 * standOff(bent, g.mesh));
+    size_t liveCarried = 0, liveFull = 0;
+    for (size_t t = 0; t < c.mesh.triangleCount(); ++t) liveCarried += collapsed(c.mesh, t) ? 0 : 1;
+    for (size_t t = 0; t < g.mesh.triangleCount(); ++t) liveFull += collapsed(g.mesh, t) ? 0 : 1;
+    EXPECT_GT(liveCarried, liveFull * 9 / 10);
+  }
 }

@@ -129,6 +129,20 @@ DrapeResult drapeCoatMesh(const SkinMesh& skin, const CoatFeathers& coat, TriMes
 DrapeResult drapeOverMature(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh, const DrapeCache& mature,
                             const DrapeOptions& options = {});
 
+// A posed frame's drape carried from the rest pose's (issue #26, docs/moult.md "Posed frames"):
+// `reference` holds the last drape of this coat with its rest frames over `rest`; `coat` has this frame's
+// frames over `posed` (the rest skin's mesh moved) and `mesh` is meshed flat from them. Every chart node
+// moves with the skin point it was marched to, so a rigidly moving part of the skin carries its feathers
+// rigidly and a bending part bends them with it; the feathers are placed on their carried charts. The
+// drape's guarantees are enforced on the posed skin as a drape enforces them: material over a later
+// follicle, vertices under the skin and the lower triangle of every crossing pair are trimmed. A feather
+// whose skin, frame and flat mesh did not move is copied from the reference. The result depends on the
+// reference, the posed skin and the frame's coat only. With `out`, the carried drape is kept there
+// (drapeOverMature can lay a moult over it; a later drapeCoatMesh with it lays everything). Throws Error
+// when the reference is not a drape of this coat's feathers in this layer order over `rest`.
+DrapeResult drapeCarried(const SkinMesh& rest, const SkinMesh& posed, const CoatFeathers& coat, TriMesh& mesh,
+                         const DrapeCache& reference, const DrapeOptions& options = {}, DrapeCache* out = nullptr);
+
 // The gap and sample spacing drapeCoatMesh would use with `options` (their "auto" values from this coat's
 // charts, or the options' own). A timeline fixes them from its rest coat, so that a moult or a pose does
 // not change them frame to frame (a change lays the whole coat again, DrapeCache).

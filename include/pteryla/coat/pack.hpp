@@ -106,6 +106,9 @@ struct PackingSettings {
   // Posed frames (a skeleton moving the skin): packDeformed from the rest-pose pack with this tolerance, a
   // fraction of the clearance; 0 = pack every posed frame in full (docs/packing.md, "pose_tolerance").
   double poseTolerance = 0.25;
+  // Posed frames of a draped coat: true = carried from the rest pose's drape (drapeCarried: every feather
+  // moves with the skin under it), false = draped in full on the posed skin (docs/packing.md, "posed_drape").
+  bool carryPosedDrape = true;
 };
 
 // One binned height field along an axis: h[b] is the largest height seen in [origin + b cell,

@@ -1,0 +1,416 @@
+// A posed frame's drape carried from the rest pose's drape (drapeCarried, drape.hpp; issue #26).
+//
+// A skeleton or a host moves the skin every frame, and laying the whole coat again (drape.cpp) costs the
+// coat's whole drape each frame. Here each feather keeps the chart it was laid on at rest, and every
+// chart node moves with the skin point it was marched to (Node::face): where the skin moves rigidly the
+// feather moves rigidly with it, where it bends the feather bends with it, as a groom bound to the skin
+// does (MPC's mesh-driven feathers, ../shared/reference/how-others-lay-feathers.md). The drape's
+// guarantees are then enforced as the drape enforces them, on the posed skin: material over a later
+// follicle, vertices under the skin and the lower triangle of every crossing pair are trimmed. What did
+// not move (skin, frame and flat mesh the same bits) is copied with what depends on it only.
+#include "drape_internal.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace pteryla::coat::draping {
+
+using glm::dvec3;
+
+namespace {
+
+// An orthonormal frame of face f (columns: first edge, normal x edge, normal).
+glm::dmat3 faceFrame(const SkinMesh& s, size_t f) {
+  const auto& t = s.faces[f];
+  const dvec3 a = s.positions[t[0]], b = s.positions[t[1]], c = s.positions[t[2]];
+  dvec3 e1 = b - a;
+  const double l = glm::length(e1);
+  e1 = l > 0 ? e1 / l : dvec3(1, 0, 0);
+  dvec3 n = glm::cross(b - a, c - a);
+  const double ln = glm::length(n);
+  n = ln > 0 ? n / ln : s.faceNormals[f];
+  n = glm::normalize(n - glm::dot(n, e1) * e1);
+  return glm::dmat3(e1, glm::cross(n, e1), n);
+}
+
+glm::dmat3 frameBasis(const FeatherFrame& F) { return glm::dmat3(F.tangent, F.binormal, F.normal); }
+
+// What a carried chart needs of a laid one: its grid and nodes (not what laying it gathered).
+Chart chartShape(const Chart& c) {
+  Chart out;
+  out.x0 = c.x0;
+  out.y0 = c.y0;
+  out.hx = c.hx;
+  out.hy = c.hy;
+  out.diag = c.diag;
+  out.nx = c.nx;
+  out.ny = c.ny;
+  out.ramp = c.ramp;
+  out.scale = c.scale;
+  out.material = c.material;
+  out.fine = c.fine;
+  out.nodes = c.nodes;
+  out.active = c.active;
+  return out;
+}
+
+}  // namespace
+
+DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeathers& coat, TriMesh& mesh,
+                  const DrapeCache::State& R, const DrapeOptions& o, DrapeCache::State* out) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t n = coat.size(), nv = mesh.positions.size();
+  if (mesh.featherId.size() != nv) throw Error("the coat mesh needs one featherId per vertex", {}, "featherId");
+  if (coat.frames.size() != n || coat.params.size() != n)
+    throw Error("the coat needs one frame and one parameter set per feather", {}, "frames");
+  if (!R.valid) throw Error("the rest pose's coat has not been draped", {}, "reference");
+  if (R.feathers.size() != n)
+    throw Error(
+        "the rest pose's drape has " + std::to_string(R.feathers.size()) + " feathers, this frame " + std::to_string(n),
+        {}, "reference");
+  if (!sameSkin(R.skin, rest)) throw Error("the rest pose's coat was draped over another skin", {}, "reference");
+  if (posed.faces != rest.faces || posed.positions.size() != rest.positions.size() ||
+      posed.vertexNormals.size() != rest.vertexNormals.size())
+    throw Error("the posed skin is not the rest skin's mesh", {}, "skin");
+  DrapeResult res;
+  res.elevation.assign(n, 0.0);
+  res.trimmed.assign(n, 0);
+  res.hidden.assign(n, 0);
+  res.stats.gap = R.gap;
+  const CoatLayout L(coat, mesh);
+  const std::vector<uint32_t>&first = L.first, &verts = L.verts, &trisOf = L.trisOf, &tris = L.tris;
+  const std::vector<int64_t>& rank = L.rank;
+  const std::vector<uint32_t>& order = L.order;
+  if (order != R.order) throw Error("the frame's layer order differs from the rest pose's drape", {}, "layerOrder");
+  for (uint32_t i : order)
+    if (!R.feathers[i].laid) throw Error("feather " + std::to_string(i) + " has no rest drape", {}, "reference");
+  const size_t nt = mesh.triangleCount();
+  const bool hasN = mesh.normals.size() == nv, hasT = mesh.tangents.size() == nv;
+  report(o.progress, "drape", 0);
+
+  // Faces the pose moved (a corner or its normal), with the rotation that takes each from rest to posed.
+  const size_t nf = rest.faces.size();
+  std::vector<uint8_t> movedFace(nf, 0);
+  std::vector<glm::dmat3> turn(nf, glm::dmat3(1.0));
+  std::vector<uint32_t> movedIdx;  // the moved faces' corners, for the under-skin test below
+  for (size_t f = 0; f < nf; ++f) {
+    const auto& t = rest.faces[f];
+    for (int c = 0; c < 3; ++c)
+      if (rest.positions[t[c]] != posed.positions[t[c]] || rest.vertexNormals[t[c]] != posed.vertexNormals[t[c]])
+        movedFace[f] = 1;
+    if (!movedFace[f]) continue;
+    turn[f] = faceFrame(posed, f) * glm::transpose(faceFrame(rest, f));
+    movedIdx.insert(movedIdx.end(), t.begin(), t.end());
+  }
+
+  // Per feather: its chart carried by the skin, and whether anything of it moved.
+  std::vector<Chart> charts(n);
+  std::vector<uint8_t> placed(n, 0);
+  std::vector<glm::vec3> surfacePoint(nv);
+  std::vector<uint8_t> bad(nv, 0), inside(nv, 0), overFollicle(nt, 0);
+  if (out) {
+    // The flat inputs, before placing moves them (drapeOverMature compares its frame's flat feathers).
+    out->feathers.assign(n, FeatherMemo{});
+  }
+  detail::inArena(o.threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) {
+        const uint32_t i = order[k];
+        const FeatherMemo& m = R.feathers[i];
+        const FeatherFrame& F = coat.frames[i];
+        Chart& C = charts[i];
+        C = chartShape(m.chart);
+        bool moved = !sameFrame(m.frame, F);
+        // The follicle's motion carries what was marched to no skin point (the follicle's own node).
+        const glm::dmat3 footTurn = frameBasis(F) * glm::transpose(frameBasis(m.frame));
+        for (Node& nd : C.nodes) {
+          if (nd.face < 0) {
+            if (!moved) continue;
+            nd.c = F.origin + footTurn * (nd.c - m.frame.origin);
+            nd.n = footTurn * nd.n;
+            nd.t = footTurn * nd.t;
+            continue;
+          }
+          const auto f = static_cast<size_t>(nd.face);
+          if (f >= nf) throw Error("a chart node's face is out of range", {}, "reference");
+          if (!movedFace[f]) continue;
+          moved = true;
+          const glm::dvec3 bary(1 - nd.bu - nd.bv, nd.bu, nd.bv);
+          const glm::dmat3& Rf = turn[f];
+          const dvec3 p = pointAt(rest, static_cast<uint32_t>(f), bary),
+                      q = pointAt(posed, static_cast<uint32_t>(f), bary);
+          if (nd.free) {
+            // Past the skin's edge: straight on from the last skin point, turned with its face.
+            nd.c = q + Rf * (nd.c - p);
+            nd.n = Rf * nd.n;
+            nd.t = Rf * nd.t;
+            continue;
+          }
+          nd.c = q + Rf * (nd.c - p);
+          nd.n = normalAt(posed, static_cast<uint32_t>(f), bary);
+          const dvec3 t = Rf * nd.t;
+          const dvec3 tp = t - glm::dot(t, nd.n) * nd.n;
+          const double tl = glm::length(tp);
+          nd.t = tl > 1e-12 ? tp / tl : t;
+        }
+        const uint32_t* vs = verts.data() + first[i];
+        const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
+        const bool same = !moved && sameFlat(m, mesh, L, i);
+        if (out) {
+          FeatherMemo& w = out->feathers[i];
+          if (same) {
+            w.flatPos = m.flatPos;
+            w.flatNrm = m.flatNrm;
+            w.flatTan = m.flatTan;
+            w.flatTris = m.flatTris;
+          } else {
+            w.flatPos.resize(cnt);
+            w.flatNrm.resize(hasN ? cnt : 0);
+            w.flatTan.resize(hasT ? cnt : 0);
+            for (size_t l = 0; l < cnt; ++l) {
+              w.flatPos[l] = mesh.positions[vs[l]];
+              if (hasN) w.flatNrm[l] = mesh.normals[vs[l]];
+              if (hasT) w.flatTan[l] = mesh.tangents[vs[l]];
+            }
+            w.flatTris.resize(3 * tc);
+            for (size_t q = 0; q < tc; ++q)
+              for (int c = 0; c < 3; ++c)
+                w.flatTris[3 * q + c] = L.localVert[mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c]];
+          }
+        }
+        if (same) {
+          for (size_t l = 0; l < cnt; ++l) {
+            const uint32_t v = vs[l];
+            mesh.positions[v] = m.pos[l];
+            if (hasN) mesh.normals[v] = m.nrm[l];
+            if (hasT) mesh.tangents[v] = m.tan[l];
+            surfacePoint[v] = m.surface[l];
+            bad[v] = m.bad[l];
+            inside[v] = m.inside[l];
+          }
+          for (size_t q = 0; q < tc; ++q) overFollicle[tris[trisOf[i] + q]] = m.overFollicle[q];
+          res.elevation[i] = m.elevation;
+        } else {
+          placed[i] = 1;
+          res.elevation[i] = placeOnChart(C, F, mesh, vs, cnt, hasN, hasT, surfacePoint, bad);
+        }
+      }
+    });
+  });
+  report(o.progress, "drape", 0.3);
+
+  // Copied feathers whose trims or under-skin test the pose can change are tested again (`changed`, with
+  // the placed ones): a later follicle that moved near one's surface, moved skin near its vertices.
+  std::vector<uint8_t> changed(placed);
+  std::vector<uint32_t> movedFeet;
+  for (uint32_t j : order)
+    if (!sameFrame(R.feathers[j].frame, coat.frames[j])) movedFeet.push_back(j);
+  detail::TriangleBvh movedRest, movedPosed;
+  if (!movedIdx.empty()) {
+    movedRest.build(rest.positions.data(), movedIdx.data(), movedIdx.size() / 3);
+    movedPosed.build(posed.positions.data(), movedIdx.data(), movedIdx.size() / 3);
+  }
+  std::vector<uint8_t> retrim(n, 0);
+  detail::inArena(o.threads, [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) {
+        const uint32_t i = order[k];
+        if (placed[i]) continue;
+        const FeatherMemo& m = R.feathers[i];
+        for (uint32_t j : movedFeet) {
+          if (rank[j] <= static_cast<int64_t>(k)) continue;
+          const double rz = R.feathers[j].rootZone * (1 + 1e-6) + 1e-9;
+          auto near = [&](const dvec3& g) {
+            return g.x >= m.box.lo.x - rz && g.y >= m.box.lo.y - rz && g.z >= m.box.lo.z - rz &&
+                   g.x <= m.box.hi.x + rz && g.y <= m.box.hi.y + rz && g.z <= m.box.hi.z + rz;
+          };
+          if (near(R.feathers[j].frame.origin) || near(coat.frames[j].origin)) {
+            retrim[i] = 1;
+            break;
+          }
+        }
+        if (movedIdx.empty() || changed[i]) continue;
+        // The nearest skin point of a vertex lies within its height over its chart point and half a chart
+        // cell; moved skin (at rest or posed) that close can change which side of the skin it is on.
+        const double cell = 0.5 * m.chart.diag;
+        for (uint32_t q = first[i]; q < first[i + 1] && !changed[i]; ++q) {
+          const uint32_t l = q - first[i];
+          if (m.bad[l]) continue;
+          const dvec3 p(m.pos[l]);
+          const double rr = glm::length(p - dvec3(m.surface[l])) + cell;
+          dvec3 bary;
+          double d2 = 0;
+          if (movedRest.nearest(p, rr * rr, bary, d2) >= 0 || movedPosed.nearest(p, rr * rr, bary, d2) >= 0)
+            changed[i] = 1;
+        }
+      }
+    });
+  });
+  std::vector<uint32_t> trimList, insideList;
+  for (uint32_t i : order) {
+    if (placed[i] || retrim[i]) {
+      trimList.push_back(i);
+      changed[i] = 1;
+      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) overFollicle[tris[q]] = 0;
+    }
+    if (changed[i]) insideList.push_back(i);
+  }
+  {
+    std::vector<dvec3> origins;
+    std::vector<double> rootZone(n, 0.0);
+    double reachMax = 0;
+    for (uint32_t i : order) {
+      origins.push_back(coat.frames[i].origin);
+      rootZone[i] = R.feathers[i].rootZone;
+      reachMax = std::max(reachMax, rootZone[i]);
+    }
+    detail::PointGrid grid;
+    grid.build(origins, std::max(reachMax, 1e-12));
+    const RootZones zones{order, coat, rootZone, reachMax, grid};
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, trimList.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<LaterZone> later;
+        for (size_t z = r.begin(); z < r.end(); ++z) {
+          const uint32_t i = trimList[z];
+          trimOverFollicles(zones, static_cast<size_t>(rank[i]), mesh, tris.data() + trisOf[i],
+                            trisOf[i + 1] - trisOf[i], surfacePoint, bad, overFollicle, later);
+        }
+      });
+    });
+  }
+  if (!insideList.empty()) {
+    CheckOptions co;
+    setFeatherBases(co, coat, o.baseAllowance);
+    insideSkinFor(posed, mesh, L, insideList, co, inside);
+  }
+  report(o.progress, "drape", 0.6);
+  // Keep what drapeOverMature reads of this drape before trimming moves vertices.
+  if (out)
+    for (uint32_t i : order) {
+      FeatherMemo& w = out->feathers[i];
+      const size_t cnt = first[i + 1] - first[i];
+      w.pos.resize(cnt);
+      w.nrm.resize(hasN ? cnt : 0);
+      w.tan.resize(hasT ? cnt : 0);
+      w.surface.resize(cnt);
+      w.bad.resize(cnt);
+      w.inside.resize(cnt);
+      for (size_t l = 0; l < cnt; ++l) {
+        const uint32_t v = verts[first[i] + l];
+        w.pos[l] = mesh.positions[v];
+        if (hasN) w.nrm[l] = mesh.normals[v];
+        if (hasT) w.tan[l] = mesh.tangents[v];
+        w.surface[l] = surfacePoint[v];
+        w.bad[l] = bad[v];
+        w.inside[l] = inside[v];
+      }
+      const size_t tc = trisOf[i + 1] - trisOf[i];
+      w.overFollicle.resize(tc);
+      for (size_t q = 0; q < tc; ++q) w.overFollicle[q] = overFollicle[tris[trisOf[i] + q]];
+    }
+  for (uint32_t v = 0; v < nv; ++v)
+    if (inside[v]) bad[v] = 1;
+  std::vector<size_t> kept(n, 0), cut(n, 0);
+  auto collapse = [&](size_t t) { collapseTriangle(mesh, t, cut); };
+  for (size_t t = 0; t < nt; ++t) {
+    const uint32_t* tri = &mesh.indices[3 * t];
+    if (overFollicle[t] || bad[tri[0]] || bad[tri[1]] || bad[tri[2]]) collapse(t);
+  }
+  for (uint32_t v = 0; v < nv; ++v)
+    if (bad[v] && rank[mesh.featherId[v]] >= 0) mesh.positions[v] = glm::vec3(coat.frames[mesh.featherId[v]].origin);
+  // Crossing pairs: the rest drape's pairs of two unchanged feathers' live triangles, and those of the
+  // changed feathers' triangles searched here.
+  std::vector<uint64_t> pairs;
+  for (const PairMemo& pm : R.pairs) {
+    if (rank[pm.fa] < 0 || rank[pm.fb] < 0 || changed[pm.fa] || changed[pm.fb]) continue;
+    const uint32_t t = tris[trisOf[pm.fa] + pm.ta], u = tris[trisOf[pm.fb] + pm.tb];
+    if (isCut(mesh, t) || isCut(mesh, u)) continue;
+    pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
+  }
+  {
+    std::vector<uint8_t> changedTri(nt, 0);
+    for (uint32_t i : order)
+      if (changed[i])
+        for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) changedTri[tris[q]] = 1;
+    const std::vector<uint64_t> found = pairsWithChanged(mesh, order, trisOf, tris, changedTri, {});
+    pairs.insert(pairs.end(), found.begin(), found.end());
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<uint8_t> preCut;
+  if (out) {
+    preCut.resize(nt);
+    for (size_t t = 0; t < nt; ++t) preCut[t] = isCut(mesh, t) ? 1 : 0;
+  }
+  for (uint64_t pr : pairs) {
+    const size_t t = pr >> 32, u = pr & 0xffffffffu;
+    const uint32_t ft = mesh.featherId[mesh.indices[3 * t]], fu = mesh.featherId[mesh.indices[3 * u]];
+    collapse(rank[ft] < rank[fu] ? t : u);
+  }
+  for (size_t t = 0; t < nt; ++t)
+    if (!isCut(mesh, t)) ++kept[mesh.featherId[mesh.indices[3 * t]]];
+  tally(res, order, cut, kept, [&](uint32_t i) -> const Chart& { return charts[i]; });
+  size_t placedCount = 0;
+  for (uint32_t i : order) placedCount += placed[i];
+  res.stats.relaid = placedCount;
+  res.stats.reused = order.size() - placedCount;
+  if (out) {
+    DrapeCache::State& W = *out;
+    W.skin = posed;
+    W.surface = std::make_unique<Surface>(W.skin);
+    W.gapOption = R.gapOption;
+    W.spacingOption = R.spacingOption;
+    W.maxSlope = R.maxSlope;
+    W.baseAllowance = R.baseAllowance;
+    W.gridAlong = R.gridAlong;
+    W.gridAcross = R.gridAcross;
+    W.gap = R.gap;
+    W.spacing = R.spacing;
+    W.airRadius = R.airRadius;
+    W.top.reset();
+    W.order = order;
+    W.carried = true;
+    for (uint32_t i : order) {
+      const FeatherMemo& m = R.feathers[i];
+      FeatherMemo& w = W.feathers[i];
+      w.laid = true;
+      w.frame = coat.frames[i];
+      w.rachisWidth = m.rachisWidth;
+      w.calamusLength = m.calamusLength;
+      w.totalLength = m.totalLength;
+      w.baseRadius = m.baseRadius;
+      w.shrink = m.shrink;
+      w.scale = m.scale;
+      w.flatEdge = m.flatEdge;
+      w.reach = m.reach;
+      w.rootZone = m.rootZone;
+      w.elevation = res.elevation[i];
+      w.chart = std::move(charts[i]);
+      const size_t tc = trisOf[i + 1] - trisOf[i];
+      w.preCut.resize(tc);
+      w.cut.resize(tc);
+      for (size_t q = 0; q < tc; ++q) {
+        w.preCut[q] = preCut[tris[trisOf[i] + q]];
+        w.cut[q] = isCut(mesh, tris[trisOf[i] + q]) ? 1 : 0;
+      }
+    }
+    W.pairs.clear();
+    for (uint64_t pr : pairs) {
+      const uint32_t t = static_cast<uint32_t>(pr >> 32), u = static_cast<uint32_t>(pr & 0xffffffffu);
+      const uint32_t ft = mesh.featherId[mesh.indices[3 * static_cast<size_t>(t)]],
+                     fu = mesh.featherId[mesh.indices[3 * static_cast<size_t>(u)]];
+      W.pairs.push_back({ft, L.localTri[t], fu, L.localTri[u]});
+    }
+    W.valid = true;
+  }
+  report(o.progress, "drape", 1);
+  res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+}  // namespace pteryla::coat::draping
