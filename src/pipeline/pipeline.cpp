@@ -156,6 +156,10 @@ void Pipeline::Impl::computeControls() {
   const ControlSettings& controls = settings.controls(scene);
   applyControls(controls, settings.controlsKey(), packing, time, posed, posedFollicles, timeState, coatNow, constraints,
                 fixedElevation);
+  // A carried drape's reference turns with the controls as the frame does, at rest.
+  restTurned.clear();
+  if (carries && timeState.posedMoved && !controls.controls.empty() && pr.frames.size() == coatNow.size())
+    restTurned = restTurnedFrames(controls, packing.options, time, rest, follicles, coatNow, pr.frames, constraints);
   constraints.fixedElevation = fixedElevation;
 }
 
@@ -267,7 +271,7 @@ coat::DrapeResult Pipeline::Impl::carryFromRest(const coat::CoatFeathers& c, con
   rc.follicle = c.follicle;
   rc.tract = c.tract;
   if (rc.params != c.params) rc.params = c.params;
-  rc.frames = timeState.poseRef.frames;
+  rc.frames = restTurned.empty() ? timeState.poseRef.frames : restTurned;
   rc.age = c.age;
   rc.present = c.present;
   rc.layerOrder = c.layerOrder;
@@ -320,12 +324,12 @@ void Pipeline::Impl::computeMesh() {
       dopt.gap = ref.gap;
       dopt.spacing = ref.spacing;
     }
-    // A posed frame is carried from the rest pose's drape (docs/moult.md, "Posed frames"), unless the
-    // frames move by more than the skin: controls turn feathers, a dynamic chain bends shafts.
+    // A posed frame is carried from the rest pose's drape (docs/moult.md, "Posed frames"), turned by the
+    // controls at rest as the frame is turned; a dynamic chain's bends are draped in full.
     const bool bent = std::any_of(timeState.bends.begin(), timeState.bends.end(),
                                   [](const feather::ShaftBend& b) { return !b.rigid(); });
-    const bool carry = carryPosedDrape && timeState.posedMoved && !bent &&
-                       timeState.poseRef.frames.size() == coatNow.size() && settings.controls(scene).controls.empty();
+    const bool carry =
+        carryPosedDrape && timeState.posedMoved && !bent && timeState.poseRef.frames.size() == coatNow.size();
     if (moultOver && moulting(coatNow)) {
       // A moult frame over the mature coat (docs/moult.md): the mature coat (every feather present and
       // mature) is meshed and draped by a mesher and a drape cache of its own, which reuse everything

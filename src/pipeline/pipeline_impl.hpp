@@ -126,7 +126,8 @@ struct Pipeline::Impl {
     }();
   };
   RestDrape restDrape;
-  std::optional<size_t> carried;  // this frame's mesh stage carried a drape: the feathers it placed
+  std::vector<coat::FeatherFrame> restTurned;  // the reference's frames turned by this frame's controls
+  std::optional<size_t> carried;               // this frame's mesh stage carried a drape: the feathers it placed
   // Drapes `coat` (this frame's frames, meshed flat into `posedMesh`) by carrying its rest pose's drape;
   // with `out`, keeps the carried drape there. `in` is the frame's mesh input with `coat` in it.
   coat::DrapeResult carryFromRest(const coat::CoatFeathers& coat, const CoatMeshInput& in, TriMesh& posedMesh,

@@ -235,6 +235,31 @@ void applyControls(const ControlSettings& controls, const InputKey& controlsKey,
   applyChains(controls, controlsKey, t, follicles, binding, state, coat);
 }
 
+std::vector<coat::FeatherFrame> restTurnedFrames(const ControlSettings& controls, const coat::PackOptions& options,
+                                                 double t, const coat::SkinMesh& rest, const coat::Follicles& follicles,
+                                                 const coat::CoatFeathers& coat,
+                                                 const std::vector<coat::FeatherFrame>& restFrames,
+                                                 const coat::PackConstraints& constraints) {
+  coat::CoatFeathers c;
+  c.follicle = coat.follicle;
+  c.tract = coat.tract;
+  c.params = coat.params;
+  c.frames = restFrames;
+  c.age = coat.age;
+  c.present = coat.present;
+  c.layerOrder = coat.layerOrder;
+  if (controls.controls.empty()) return std::move(c.frames);
+  const moult::ControlBinding binding = moult::bindControls(rest, follicles, controls.controls, controls.tracts);
+  std::vector<double> fixed(c.size(), std::nan(""));
+  coat::PackResult flat;
+  flat.order = c.layerOrder;
+  flat.elevation.assign(c.size(), 0.0);
+  moult::evaluateControls(controls.controls, binding, rest, follicles, t, options, constraints, c, fixed,
+                          [&](const coat::SkinMesh&, const coat::CoatFeathers&, const coat::PackOptions&,
+                              const coat::PackConstraints&) -> const coat::PackResult& { return flat; });
+  return std::move(c.frames);
+}
+
 const coat::PackResult& packFrame(const coat::SkinMesh& posed, const coat::CoatFeathers& coat,
                                   const coat::PackOptions& options, const coat::PackConstraints& constraints,
                                   TimeState& state, const std::vector<double>& grownAge) {

@@ -155,6 +155,15 @@ void applyControls(const ControlSettings& controls, const InputKey& controlsKey,
                    coat::CoatFeathers& coat, const coat::PackConstraints& constraints,
                    std::vector<double>& fixedElevation);
 
+// The frames a carried drape's reference has (coat::drapeCarried): `restFrames` (the coat's frames on the
+// rest skin) turned by the controls at time t as applyControls turns the posed frames, evaluated on the
+// rest skin and rest follicles. Raises are left out: a drape reads no elevation.
+std::vector<coat::FeatherFrame> restTurnedFrames(const ControlSettings& controls, const coat::PackOptions& options,
+                                                 double t, const coat::SkinMesh& rest, const coat::Follicles& follicles,
+                                                 const coat::CoatFeathers& coat,
+                                                 const std::vector<coat::FeatherFrame>& restFrames,
+                                                 const coat::PackConstraints& constraints);
+
 // The dynamic controls' chains at time t (called by applyControls with its binding): state.bends, per
 // feather of `coat`, the shaft bend of every present feather bound to a dynamic control (scaled by the
 // control's dynamic value times the binding weight); empty elsewhere.

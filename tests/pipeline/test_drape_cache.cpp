@@ -465,12 +465,18 @@ TEST(DrapeCarry, ARigidMotionCarriesEveryFeatherRigidly) {
 // evaluated before, a posed frame (pose, time) is the same bits as a fresh evaluation of it, with a
 // moult too; only feathers the pose moved are placed again; the guarantees hold at every pose.
 TEST(DrapeCarry, PosedFramesEqualFreshEvaluationAndKeepTheGuarantees) {
-  for (const bool moult : {false, true}) {
-    SCOPED_TRACE(moult ? "moult" : "no moult");
+  for (const int variant : {0, 1, 2}) {
+    const bool moult = variant >= 1, controls = variant == 2;
+    SCOPED_TRACE(std::string(moult ? "moult" : "no moult") + (controls ? ", controls" : ""));
     Json j = sphereJson(150);
     if (moult)
       j["moult"] = Json::parse(R"({"start": 0, "duration": 10, "window": 0.3, "sequence": "centre_out", "gap": 0,
                                    "seed": 3})");
+    // A control turning feathers on the cap at random and toward a point beside it (the reference turns
+    // them at rest).
+    if (controls)
+      j["controls"] = Json::parse(R"([{"name": "tuft", "at": [0.0, 0.9, 0.3], "radius": 0.6, "falloff": 0.4,
+        "seed": 5, "keys": [{"t": 0, "random": 0.2, "aim": 0.1, "lift": 0.3}, {"t": 4, "random": 0.8, "aim": 0.5}]}])");
     const pipeline::Scene scene = pipeline::sceneFromJson(j, kSceneFile);
     pipeline::Pipeline scrub(scene);
     scrub.setLod(0.2);
