@@ -568,22 +568,8 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
   // Keep what the trims and tests below need of this drape's own outputs before trimming moves vertices.
   if (M) {
     for (uint32_t i : relaid) {
-      FeatherMemo& m = memo(i);
-      const size_t cnt = first[i + 1] - first[i];
-      m.pos.resize(cnt);
-      m.nrm.resize(hasN ? cnt : 0);
-      m.tan.resize(hasT ? cnt : 0);
-      m.surface.resize(cnt);
-      m.bad.resize(cnt);
-      for (size_t l = 0; l < cnt; ++l) {
-        const uint32_t v = verts[first[i] + l];
-        m.pos[l] = mesh.positions[v];
-        if (hasN) m.nrm[l] = mesh.normals[v];
-        if (hasT) m.tan[l] = mesh.tangents[v];
-        m.surface[l] = surfacePoint[v];
-        m.bad[l] = bad[v];
-      }
-      m.elevation = res.elevation[i];
+      keepPlaced(memo(i), mesh, L, i, surfacePoint, bad);
+      memo(i).elevation = res.elevation[i];
     }
   }
   for (uint32_t v = 0; v < nv; ++v)

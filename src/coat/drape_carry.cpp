@@ -87,9 +87,15 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
   const std::vector<uint32_t>&first = L.first, &verts = L.verts, &trisOf = L.trisOf, &tris = L.tris;
   const std::vector<int64_t>& rank = L.rank;
   const std::vector<uint32_t>& order = L.order;
-  if (order != R.order) throw Error("the frame's layer order differs from the rest pose's drape", {}, "layerOrder");
   for (uint32_t i : order)
-    if (!R.feathers[i].laid) throw Error("feather " + std::to_string(i) + " has no rest drape", {}, "reference");
+    if (!R.feathers[i].laid) throw Error("feather " + std::to_string(i) + " has no reference drape", {}, "reference");
+  {
+    // This frame's layers keep the reference's order (feathers lost since may be missing).
+    size_t k = 0;
+    for (uint32_t i : R.order)
+      if (k < order.size() && order[k] == i) ++k;
+    if (k != order.size()) throw Error("the frame's layer order differs from the reference drape's", {}, "layerOrder");
+  }
   const size_t nt = mesh.triangleCount();
   const bool hasN = mesh.normals.size() == nv, hasT = mesh.tangents.size() == nv;
   report(o.progress, "drape", 0);
@@ -124,23 +130,50 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
         const uint32_t i = order[k];
         const FeatherMemo& m = R.feathers[i];
         const FeatherFrame& F = coat.frames[i];
+        const bool footMoved = !sameFrame(m.frame, F);
+        bool moved = footMoved;
+        for (const Node& nd : m.chart.nodes) {
+          if (nd.face >= 0 && static_cast<size_t>(nd.face) >= nf)
+            throw Error("a chart node's face is out of range", {}, "reference");
+          if (!moved && nd.face >= 0 && movedFace[static_cast<size_t>(nd.face)]) moved = true;
+        }
+        const uint32_t* vs = verts.data() + first[i];
+        const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
+        const bool same = !moved && sameFlat(m, mesh, L, i);
+        // The reference's drape of the feather, with its trims and under-skin test.
+        auto copy = [&] {
+          for (size_t l = 0; l < cnt; ++l) {
+            const uint32_t v = vs[l];
+            mesh.positions[v] = m.pos[l];
+            if (hasN) mesh.normals[v] = m.nrm[l];
+            if (hasT) mesh.tangents[v] = m.tan[l];
+            surfacePoint[v] = m.surface[l];
+            bad[v] = m.bad[l];
+            inside[v] = m.inside[l];
+          }
+          for (size_t q = 0; q < tc; ++q) overFollicle[tris[trisOf[i] + q]] = m.overFollicle[q];
+          res.elevation[i] = m.elevation;
+        };
+        // The chart is copied only where this drape places the feather or keeps the chart.
+        if (same && !out) {
+          copy();
+          continue;
+        }
         Chart& C = charts[i];
         C = chartShape(m.chart);
-        bool moved = !sameFrame(m.frame, F);
         // The follicle's motion carries what was marched to no skin point (the follicle's own node).
         const glm::dmat3 footTurn = frameBasis(F) * glm::transpose(frameBasis(m.frame));
         for (Node& nd : C.nodes) {
+          if (!moved) break;
           if (nd.face < 0) {
-            if (!moved) continue;
+            if (!footMoved) continue;
             nd.c = F.origin + footTurn * (nd.c - m.frame.origin);
             nd.n = footTurn * nd.n;
             nd.t = footTurn * nd.t;
             continue;
           }
           const auto f = static_cast<size_t>(nd.face);
-          if (f >= nf) throw Error("a chart node's face is out of range", {}, "reference");
           if (!movedFace[f]) continue;
-          moved = true;
           const glm::dvec3 bary(1 - nd.bu - nd.bv, nd.bu, nd.bv);
           const glm::dmat3& Rf = turn[f];
           const dvec3 p = pointAt(rest, static_cast<uint32_t>(f), bary),
@@ -159,9 +192,6 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
           const double tl = glm::length(tp);
           nd.t = tl > 1e-12 ? tp / tl : t;
         }
-        const uint32_t* vs = verts.data() + first[i];
-        const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
-        const bool same = !moved && sameFlat(m, mesh, L, i);
         if (out) {
           FeatherMemo& w = out->feathers[i];
           if (same) {
@@ -185,17 +215,7 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
           }
         }
         if (same) {
-          for (size_t l = 0; l < cnt; ++l) {
-            const uint32_t v = vs[l];
-            mesh.positions[v] = m.pos[l];
-            if (hasN) mesh.normals[v] = m.nrm[l];
-            if (hasT) mesh.tangents[v] = m.tan[l];
-            surfacePoint[v] = m.surface[l];
-            bad[v] = m.bad[l];
-            inside[v] = m.inside[l];
-          }
-          for (size_t q = 0; q < tc; ++q) overFollicle[tris[trisOf[i] + q]] = m.overFollicle[q];
-          res.elevation[i] = m.elevation;
+          copy();
         } else {
           placed[i] = 1;
           res.elevation[i] = placeOnChart(C, F, mesh, vs, cnt, hasN, hasT, surfacePoint, bad);
@@ -294,22 +314,10 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
   if (out)
     for (uint32_t i : order) {
       FeatherMemo& w = out->feathers[i];
+      keepPlaced(w, mesh, L, i, surfacePoint, bad);
       const size_t cnt = first[i + 1] - first[i];
-      w.pos.resize(cnt);
-      w.nrm.resize(hasN ? cnt : 0);
-      w.tan.resize(hasT ? cnt : 0);
-      w.surface.resize(cnt);
-      w.bad.resize(cnt);
       w.inside.resize(cnt);
-      for (size_t l = 0; l < cnt; ++l) {
-        const uint32_t v = verts[first[i] + l];
-        w.pos[l] = mesh.positions[v];
-        if (hasN) w.nrm[l] = mesh.normals[v];
-        if (hasT) w.tan[l] = mesh.tangents[v];
-        w.surface[l] = surfacePoint[v];
-        w.bad[l] = bad[v];
-        w.inside[l] = inside[v];
-      }
+      for (size_t l = 0; l < cnt; ++l) w.inside[l] = inside[verts[first[i] + l]];
       const size_t tc = trisOf[i + 1] - trisOf[i];
       w.overFollicle.resize(tc);
       for (size_t q = 0; q < tc; ++q) w.overFollicle[q] = overFollicle[tris[trisOf[i] + q]];
@@ -354,7 +362,8 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
   }
   for (size_t t = 0; t < nt; ++t)
     if (!isCut(mesh, t)) ++kept[mesh.featherId[mesh.indices[3 * t]]];
-  tally(res, order, cut, kept, [&](uint32_t i) -> const Chart& { return charts[i]; });
+  tally(res, order, cut, kept,
+        [&](uint32_t i) -> const Chart& { return charts[i].nodes.empty() ? R.feathers[i].chart : charts[i]; });
   size_t placedCount = 0;
   for (uint32_t i : order) placedCount += placed[i];
   res.stats.relaid = placedCount;

@@ -201,6 +201,11 @@ void insideSkinFor(const SkinMesh& skin, const TriMesh& mesh, const CoatLayout& 
 // (positions, normals, tangents where the mesh has them) and triangles, in the same order?
 bool sameFlat(const FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i);
 
+// Keeps in m what a drape placed of feather i before its trims move vertices: positions, normals and
+// tangents (where the mesh has them), surface points and the chart's trims.
+void keepPlaced(FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i,
+                const std::vector<glm::vec3>& surfacePoint, const std::vector<uint8_t>& bad);
+
 // The drape's counts: draped feathers, overhanging nodes of their charts, and those that lost triangles
 // (`cut` per feather) or every triangle (`kept` none).
 void tally(DrapeResult& res, const std::vector<uint32_t>& order, const std::vector<size_t>& cut,

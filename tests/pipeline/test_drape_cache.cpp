@@ -380,16 +380,31 @@ TEST(DrapeCache, AMovingSkinIsNotKeptUntilItHoldsStill) {
 
 // Posed frames carried from the rest pose's drape (coat::drapeCarried, packing.posed_drape "carry").
 
+// The draped sphere (120 feathers) with its drape kept in a cache, the reference a carry starts from.
+struct DrapedSphere {
+  coat::SkinMesh skin;
+  FlatCoat c;
+  coat::DrapeCache cache;
+  TriMesh draped;
+  coat::DrapeResult result;
+  DrapedSphere() {
+    pipeline::Pipeline p(pipeline::sceneFromJson(sphereJson(120), kSceneFile));
+    skin = p.posedSkin();
+    c.feathers = p.feathers();
+    c.remesh();
+    draped = c.mesh;
+    result = coat::drapeCoatMesh(skin, c.feathers, draped, {}, cache);
+  }
+};
+
 // The rest skin carries to itself: every feather copied, the reference drape's bits.
 TEST(DrapeCarry, TheRestPoseCarriesToItself) {
-  pipeline::Pipeline p(pipeline::sceneFromJson(sphereJson(120), kSceneFile));
-  const coat::SkinMesh skin = p.posedSkin();
-  FlatCoat c;
-  c.feathers = p.feathers();
-  c.remesh();
-  coat::DrapeCache cache;
-  TriMesh draped = c.mesh;
-  const coat::DrapeResult ref = coat::drapeCoatMesh(skin, c.feathers, draped, {}, cache);
+  DrapedSphere d;
+  const coat::SkinMesh& skin = d.skin;
+  const FlatCoat& c = d.c;
+  coat::DrapeCache& cache = d.cache;
+  const TriMesh& draped = d.draped;
+  const coat::DrapeResult& ref = d.result;
   TriMesh m = c.mesh;
   coat::DrapeCache kept;
   const coat::DrapeResult r = coat::drapeCarried(skin, skin, c.feathers, m, cache, {}, &kept);
@@ -414,14 +429,10 @@ TEST(DrapeCarry, TheRestPoseCarriesToItself) {
 // A rigid motion of the skin and the follicles carries every feather rigidly: each live vertex is the
 // rest drape's moved, to rounding, and the guarantees hold on the moved skin.
 TEST(DrapeCarry, ARigidMotionCarriesEveryFeatherRigidly) {
-  pipeline::Pipeline p(pipeline::sceneFromJson(sphereJson(120), kSceneFile));
-  const coat::SkinMesh skin = p.posedSkin();
-  FlatCoat c;
-  c.feathers = p.feathers();
-  c.remesh();
-  coat::DrapeCache cache;
-  TriMesh draped = c.mesh;
-  coat::drapeCoatMesh(skin, c.feathers, draped, {}, cache);
+  const DrapedSphere d;
+  const coat::SkinMesh& skin = d.skin;
+  const FlatCoat& c = d.c;
+  const TriMesh& draped = d.draped;
   const double a = 0.7;
   const glm::dmat3 R(std::cos(a), std::sin(a), 0, -std::sin(a), std::cos(a), 0, 0, 0, 1);
   const glm::dvec3 shift(0.3, -0.2, 0.5);
@@ -438,7 +449,7 @@ TEST(DrapeCarry, ARigidMotionCarriesEveryFeatherRigidly) {
   }
   mc.remesh();
   TriMesh m = mc.mesh;
-  const coat::DrapeResult r = coat::drapeCarried(skin, moved, mc.feathers, m, cache);
+  const coat::DrapeResult r = coat::drapeCarried(skin, moved, mc.feathers, m, d.cache);
   EXPECT_EQ(r.stats.reused, 0u);  // every feather moved
   ASSERT_EQ(m.positions.size(), draped.positions.size());
   size_t live = 0, off = 0, liveBoth = 0;
