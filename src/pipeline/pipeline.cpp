@@ -268,22 +268,39 @@ coat::DrapeResult Pipeline::Impl::carryFromRest(const coat::CoatFeathers& c, con
   // rest skin (the mesher and the cache keep what did not change since the last frame).
   RestDrape& R = restDrape;
   coat::CoatFeathers& rc = R.coat;
-  rc.follicle = c.follicle;
-  rc.tract = c.tract;
-  if (rc.params != c.params) rc.params = c.params;
-  rc.frames = restTurned.empty() ? timeState.poseRef.frames : restTurned;
-  rc.age = c.age;
-  rc.present = c.present;
-  rc.layerOrder = c.layerOrder;
-  CoatMeshInput rin = in;
-  rin.coat = &rc;
-  rin.packedCoat = &rc;
-  R.mesher.update(rin, R.mesh);
-  R.mesher.keepIndices(R.mesh);
-  coat::DrapeOptions ro = o;
+  const std::vector<coat::FeatherFrame>& frames = restTurned.empty() ? timeState.poseRef.frames : restTurned;
+  MatureDrapeKey key{InputKey{timeState.generation},
+                     lod,
+                     o.gap,
+                     o.spacing,
+                     o.maxSlope,
+                     o.baseAllowance,
+                     featherLods,
+                     frames,
+                     rest.positions,
+                     false};
   const ProgressFn whole = o.progress;
-  ro.progress = [whole](const std::string& s, double f) { return !whole || whole(s, 0.8 * f); };
-  coat::drapeCoatMesh(rest, rc, R.mesh, ro, R.cache);
+  // Unchanged (a pose scrub over a mature coat, or a coat that holds still): its last drape as it is.
+  if (!R.key || !(*R.key == key) || rc.params != c.params || rc.age != c.age || rc.present != c.present ||
+      rc.layerOrder != c.layerOrder || rc.follicle != c.follicle) {
+    R.key.reset();
+    rc.follicle = c.follicle;
+    rc.tract = c.tract;
+    if (rc.params != c.params) rc.params = c.params;
+    rc.frames = frames;
+    rc.age = c.age;
+    rc.present = c.present;
+    rc.layerOrder = c.layerOrder;
+    CoatMeshInput rin = in;
+    rin.coat = &rc;
+    rin.packedCoat = &rc;
+    R.mesher.update(rin, R.mesh);
+    R.mesher.keepIndices(R.mesh);
+    coat::DrapeOptions ro = o;
+    ro.progress = [whole](const std::string& s, double f) { return !whole || whole(s, 0.8 * f); };
+    coat::drapeCoatMesh(rest, rc, R.mesh, ro, R.cache);
+    R.key = std::move(key);
+  }
   coat::DrapeOptions po = o;
   po.progress = [whole](const std::string& s, double f) { return !whole || whole(s, 0.8 + 0.2 * f); };
   coat::DrapeResult r = coat::drapeCarried(rest, posed, c, posedMesh, R.cache, po, out);

@@ -116,7 +116,6 @@ struct Pipeline::Impl {
   // mesher and a drape cache of their own. The cache reuses what did not change from frame to frame.
   struct RestDrape {
     coat::CoatFeathers coat;  // with the pose reference's frames
-    coat::PackResult flat;
     CoatMesher mesher;
     TriMesh mesh;
     coat::DrapeCache cache = [] {
@@ -124,6 +123,7 @@ struct Pipeline::Impl {
       c.keepEveryDrape();
       return c;
     }();
+    std::optional<MatureDrapeKey> key;  // of its last drape (with its coat's params, ages and presence)
   };
   RestDrape restDrape;
   std::vector<coat::FeatherFrame> restTurned;  // the reference's frames turned by this frame's controls
