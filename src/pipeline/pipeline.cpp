@@ -223,7 +223,7 @@ bool Pipeline::Impl::MatureDrapeKey::operator==(const MatureDrapeKey& o) const {
   };
   return rest == o.rest && lod == o.lod && gap == o.gap && spacing == o.spacing && maxSlope == o.maxSlope &&
          baseAllowance == o.baseAllowance && featherLods == o.featherLods && sameFrames(frames, o.frames) &&
-         skin == o.skin && carried == o.carried;
+         skin == o.skin;
 }
 
 const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOptions& o) {
@@ -262,8 +262,8 @@ const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOption
 }
 
 coat::DrapeResult Pipeline::Impl::carryFromRest(const coat::CoatFeathers& c, const CoatMeshInput& in,
-                                                TriMesh& posedMesh, const coat::DrapeOptions& o,
-                                                coat::DrapeCache* out) {
+                                                const coat::CoatFeathers& frame, TriMesh& posedMesh,
+                                                const coat::DrapeOptions& o) {
   // The coat at rest: this frame's feathers with the pose reference's frames, meshed and draped over the
   // rest skin (the mesher and the cache keep what did not change since the last frame).
   RestDrape& R = restDrape;
@@ -277,8 +277,7 @@ coat::DrapeResult Pipeline::Impl::carryFromRest(const coat::CoatFeathers& c, con
                      o.baseAllowance,
                      featherLods,
                      frames,
-                     rest.positions,
-                     false};
+                     rest.positions};
   const ProgressFn whole = o.progress;
   // Unchanged (a pose scrub over a mature coat, or a coat that holds still): its last drape as it is.
   if (!R.key || !(*R.key == key) || rc.params != c.params || rc.age != c.age || rc.present != c.present ||
@@ -303,7 +302,7 @@ coat::DrapeResult Pipeline::Impl::carryFromRest(const coat::CoatFeathers& c, con
   }
   coat::DrapeOptions po = o;
   po.progress = [whole](const std::string& s, double f) { return !whole || whole(s, 0.8 + 0.2 * f); };
-  coat::DrapeResult r = coat::drapeCarried(rest, posed, c, posedMesh, R.cache, po, out);
+  coat::DrapeResult r = coat::drapeCarried(rest, posed, frame, posedMesh, R.cache, po);
   carried = r.stats.relaid;
   return r;
 }
@@ -347,7 +346,19 @@ void Pipeline::Impl::computeMesh() {
                                   [](const feather::ShaftBend& b) { return !b.rigid(); });
     const bool carry =
         carryPosedDrape && timeState.posedMoved && !bent && timeState.poseRef.frames.size() == coatNow.size();
-    if (moultOver && moulting(coatNow)) {
+    if (moultOver && moulting(coatNow) && carry) {
+      // A posed moult frame: the mature coat's rest drape carried, with the frame's lost feathers left out
+      // and its growing ones placed on their carried mature charts, in one pass.
+      const coat::CoatFeathers& mature = matureCoat(coatNow, timeState);
+      matureFlat = coat::PackResult{};
+      matureFlat.order = mature.layerOrder;
+      matureFlat.elevation.assign(mature.size(), 0.0);
+      CoatMeshInput min = in;
+      min.coat = &mature;
+      min.packedCoat = &mature;
+      min.packed = &matureFlat;
+      drape = carryFromRest(mature, min, coatNow, mesh.mesh, dopt);
+    } else if (moultOver && moulting(coatNow)) {
       // A moult frame over the mature coat (docs/moult.md): the mature coat (every feather present and
       // mature) is meshed and draped by a mesher and a drape cache of its own, which reuse everything
       // while the skin and the controls do not move; the frame's feathers are copied from it or placed
@@ -361,8 +372,7 @@ void Pipeline::Impl::computeMesh() {
                          dopt.baseAllowance,
                          featherLods,
                          mature.frames,
-                         posed.positions,
-                         carry};
+                         posed.positions};
       if (bent || !matureDrapeKey || !(*matureDrapeKey == key)) {
         matureDrapeKey.reset();
         matureFlat = coat::PackResult{};
@@ -379,10 +389,7 @@ void Pipeline::Impl::computeMesh() {
           report(progress, "mesh", 0.1 + 0.8 * f);
           return true;
         };
-        if (carry)
-          carryFromRest(mature, min, matureMesh, mopt, &matureDrapeCache);
-        else
-          coat::drapeCoatMesh(posed, mature, matureMesh, mopt, matureDrapeCache);
+        coat::drapeCoatMesh(posed, mature, matureMesh, mopt, matureDrapeCache);
         if (!bent) matureDrapeKey = std::move(key);
       }
       dopt.progress = [this](const std::string&, double f) {
@@ -391,7 +398,7 @@ void Pipeline::Impl::computeMesh() {
       };
       drape = coat::drapeOverMature(posed, coatNow, mesh.mesh, matureDrapeCache, dopt);
     } else if (carry) {
-      drape = carryFromRest(coatNow, in, mesh.mesh, dopt, nullptr);
+      drape = carryFromRest(coatNow, in, coatNow, mesh.mesh, dopt);
     } else {
       drape = coat::drapeCoatMesh(posed, coatNow, mesh.mesh, dopt, drapeCache);
     }

@@ -107,7 +107,6 @@ struct Pipeline::Impl {
     std::vector<double> featherLods;
     std::vector<coat::FeatherFrame> frames;
     std::vector<glm::dvec3> skin;
-    bool carried = false;  // carried from the rest pose's drape (packing.posed_drape)
     bool operator==(const MatureDrapeKey& o) const;
   };
   std::optional<MatureDrapeKey> matureDrapeKey;
@@ -128,10 +127,10 @@ struct Pipeline::Impl {
   RestDrape restDrape;
   std::vector<coat::FeatherFrame> restTurned;  // the reference's frames turned by this frame's controls
   std::optional<size_t> carried;               // this frame's mesh stage carried a drape: the feathers it placed
-  // Drapes `coat` (this frame's frames, meshed flat into `posedMesh`) by carrying its rest pose's drape;
-  // with `out`, keeps the carried drape there. `in` is the frame's mesh input with `coat` in it.
-  coat::DrapeResult carryFromRest(const coat::CoatFeathers& coat, const CoatMeshInput& in, TriMesh& posedMesh,
-                                  const coat::DrapeOptions& o, coat::DrapeCache* out);
+  // Drapes `frame` (this frame's coat, meshed flat into `posedMesh`) by carrying the rest pose's drape of
+  // `reference` (the same feathers, or a moult frame's mature coat) meshed with `in`.
+  coat::DrapeResult carryFromRest(const coat::CoatFeathers& reference, const CoatMeshInput& in,
+                                  const coat::CoatFeathers& frame, TriMesh& posedMesh, const coat::DrapeOptions& o);
   const coat::DrapeSpacing& drapeReference(const coat::DrapeOptions& options);
   CoatMesh mesh;
   CoatMesher mesher;  // mesh.mesh is its last result

@@ -134,9 +134,9 @@ struct FrameReuse {
   // Draped coats (coat::DrapeCache): feathers laid again by the mesh stage's drape, and feathers whose
   // draped vertices it copied from the last drape.
   size_t drapeRelaid = 0, drapeReused = 0;
-  // Posed frames of a draped coat (packing.posed_drape "carry"): the coat (a moult frame: the mature coat)
-  // was carried from the rest pose's drape this frame, with this many feathers the pose moved (placed on
-  // their carried charts; the others were copied).
+  // Posed frames of a draped coat (packing.posed_drape "carry"): the coat was carried from the rest pose's
+  // drape this frame (a moult frame: the mature coat's), with this many feathers placed on their carried
+  // charts (moved by the pose, or growing); the others were copied.
   bool drapeCarried = false;
   size_t drapeCarriedMoved = 0;
 };
