@@ -183,18 +183,20 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
   auto present = [&](size_t i) { return coat.present.empty() || coat.present[i] != 0; };
 
   // Pass 1: turns about the normal (direction, aim, random twist), and whether any feather
-  // wants to rise (which needs its natural elevation).
+  // wants to rise (which needs its natural elevation). A feather absent at t (moulted) is turned as
+  // when present: a moult frame's mature coat takes every frame from this one, and its frames must not
+  // change as feathers come and go (the mature coat would be packed or draped again).
   std::vector<uint8_t> wantsRaise(n, 0);
   bool needNatural = false;
   for (size_t i = 0; i < n; ++i) {
-    if (!present(i)) continue;
     const uint32_t f = coat.follicle[i];
     const int32_t c = binding.control[f];
     if (c < 0) continue;
     const double w = binding.weight[f];
     const ControlSpec& cs = controls[static_cast<size_t>(c)];
     const ControlValues& v = values[static_cast<size_t>(c)];
-    ++res.bound;
+    const bool here = present(i);
+    res.bound += here ? 1 : 0;
     coat::FeatherFrame& F = coat.frames[i];
     const glm::dvec3 N = F.normal;
     glm::dvec3 T = F.tangent;
@@ -213,8 +215,9 @@ ControlResult evaluateControls(const std::vector<ControlSpec>& controls, const C
     if (turned) {
       F.tangent = T;
       F.binormal = glm::normalize(glm::cross(N, T));
-      ++res.turned;
+      res.turned += here ? 1 : 0;
     }
+    if (!here) continue;
     // `dynamic` neither turns nor raises: it bends the shaft at meshing time (chain.hpp), the root
     // following the packed frame.
     const bool rise =

@@ -295,6 +295,22 @@ TEST(Controls, AimTurnsTowardTheControlAndTwistIsSeeded) {
   for (double a : a1) maxAng = std::max(maxAng, a);
   EXPECT_LE(maxAng, 0.5 + 1e-9);
   EXPECT_GT(maxAng, 0.2);
+  // Feathers absent at t (moulted) turn as when present: a moult frame's mature coat takes its frames from
+  // the frame, and must not change as feathers come and go. Only present feathers are counted.
+  std::vector<ControlSpec> both = {control({0.0, 0.5, 0.0}, 0.3)};
+  both[0].aim.addKey(0, {0.5, 0, 0});
+  both[0].random.addKey(0, {1, 0, 0});
+  coat::CoatFeathers all = s.coat, some = s.coat;
+  some.present.assign(some.size(), 1);
+  for (size_t i = 0; i < some.size(); i += 3) some.present[i] = 0;
+  std::vector<double> fa, fs;
+  const ControlResult ra = evaluateControls(both, b, s.skin, s.follicles, 0.0, po, {}, all, fa);
+  const ControlResult rs = evaluateControls(both, b, s.skin, s.follicles, 0.0, po, {}, some, fs);
+  for (size_t i = 0; i < all.size(); ++i) {
+    EXPECT_EQ(all.frames[i].tangent, some.frames[i].tangent) << i;
+    EXPECT_EQ(all.frames[i].binormal, some.frames[i].binormal) << i;
+  }
+  EXPECT_LT(rs.turned, ra.turned);
 }
 
 TEST(Controls, JsonIsStrict) {
