@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -123,15 +124,23 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   state.counters["drape_carried_moved"] = drapeCarriedMoved / n;
 }
 
-void BM_FrameBirdScene(benchmark::State& state) {
+// The bundled bird with the bench's moult (and its wings bending), or nothing when it is not found.
+std::optional<pipeline::Scene> moultingBird(benchmark::State& state, bool wings) {
   const std::string path = kData + "/scenes/bird.json";
   if (!fileExists(path)) {
     state.SkipWithError("data/scenes/bird.json not found");
-    return;
+    return std::nullopt;
   }
   pipeline::Scene s = pipeline::loadScene(path);
   if (s.moult.empty()) s.moult = moultSection();
-  if (state.range(0) && s.skeleton.empty()) s.skeleton = birdWings();
+  if (wings && s.skeleton.empty()) s.skeleton = birdWings();
+  return s;
+}
+
+void BM_FrameBirdScene(benchmark::State& state) {
+  std::optional<pipeline::Scene> bird = moultingBird(state, state.range(0) != 0);
+  if (!bird) return;
+  pipeline::Scene& s = *bird;
   if (state.range(1) && s.controls.empty()) {
     // A raised crest and a puffed chest, rising over the scrubbed range.
     s.controls = Json::parse(R"([
@@ -153,14 +162,9 @@ BENCHMARK(BM_FrameBirdScene)
 // (packing.posed_drape "carry", the default) against a full drape of every posed frame ("full"), in one
 // run (issue #26).
 void BM_FrameBirdPosedDrape(benchmark::State& state) {
-  const std::string path = kData + "/scenes/bird.json";
-  if (!fileExists(path)) {
-    state.SkipWithError("data/scenes/bird.json not found");
-    return;
-  }
-  pipeline::Scene s = pipeline::loadScene(path);
-  if (s.moult.empty()) s.moult = moultSection();
-  s.skeleton = birdWings();
+  std::optional<pipeline::Scene> bird = moultingBird(state, true);
+  if (!bird) return;
+  pipeline::Scene& s = *bird;
   if (!s.packing.is_object()) s.packing = Json::object();
   s.packing["posed_drape"] = state.range(0) ? "carry" : "full";
   runFrames(state, std::move(s), true);

@@ -346,10 +346,8 @@ void Pipeline::Impl::computeMesh() {
                                   [](const feather::ShaftBend& b) { return !b.rigid(); });
     const bool carry =
         carryPosedDrape && timeState.posedMoved && !bent && timeState.poseRef.frames.size() == coatNow.size();
-    if (moultOver && moulting(coatNow) && carry) {
-      // A posed moult frame: the mature coat's rest drape carried, with the frame's lost feathers left out
-      // and its growing ones placed on their carried mature charts, in one pass.
-      const coat::CoatFeathers& mature = matureCoat(coatNow, timeState);
+    // The mature coat of a moult frame meshed flat as the frame is (matureFlat: its layers, elevation 0).
+    auto matureInput = [&](const coat::CoatFeathers& mature) {
       matureFlat = coat::PackResult{};
       matureFlat.order = mature.layerOrder;
       matureFlat.elevation.assign(mature.size(), 0.0);
@@ -357,7 +355,13 @@ void Pipeline::Impl::computeMesh() {
       min.coat = &mature;
       min.packedCoat = &mature;
       min.packed = &matureFlat;
-      drape = carryFromRest(mature, min, coatNow, mesh.mesh, dopt);
+      return min;
+    };
+    if (moultOver && moulting(coatNow) && carry) {
+      // A posed moult frame: the mature coat's rest drape carried, with the frame's lost feathers left out
+      // and its growing ones placed on their carried mature charts, in one pass.
+      const coat::CoatFeathers& mature = matureCoat(coatNow, timeState);
+      drape = carryFromRest(mature, matureInput(mature), coatNow, mesh.mesh, dopt);
     } else if (moultOver && moulting(coatNow)) {
       // A moult frame over the mature coat (docs/moult.md): the mature coat (every feather present and
       // mature) is meshed and draped by a mesher and a drape cache of its own, which reuse everything
@@ -375,14 +379,7 @@ void Pipeline::Impl::computeMesh() {
                          posed.positions};
       if (bent || !matureDrapeKey || !(*matureDrapeKey == key)) {
         matureDrapeKey.reset();
-        matureFlat = coat::PackResult{};
-        matureFlat.order = mature.layerOrder;
-        matureFlat.elevation.assign(mature.size(), 0.0);
-        CoatMeshInput min = in;
-        min.coat = &mature;
-        min.packedCoat = &mature;
-        min.packed = &matureFlat;
-        matureMesher.update(min, matureMesh);
+        matureMesher.update(matureInput(mature), matureMesh);
         matureMesher.keepIndices(matureMesh);
         coat::DrapeOptions mopt = dopt;
         mopt.progress = [this](const std::string&, double f) {

@@ -95,11 +95,13 @@ struct Pipeline::Impl {
   coat::PackResult matureFlat;
   CoatMesher matureMesher;
   TriMesh matureMesh;
-  coat::DrapeCache matureDrapeCache = [] {
+  // A drape cache that keeps every drape (another drape reads it).
+  static coat::DrapeCache keptDrapes() {
     coat::DrapeCache c;
     c.keepEveryDrape();
     return c;
-  }();
+  }
+  coat::DrapeCache matureDrapeCache = keptDrapes();
   // What the mature drape was made from; an equal next one is not meshed or draped again.
   struct MatureDrapeKey {
     InputKey rest;
@@ -117,11 +119,7 @@ struct Pipeline::Impl {
     coat::CoatFeathers coat;  // with the pose reference's frames
     CoatMesher mesher;
     TriMesh mesh;
-    coat::DrapeCache cache = [] {
-      coat::DrapeCache c;
-      c.keepEveryDrape();
-      return c;
-    }();
+    coat::DrapeCache cache = keptDrapes();
     std::optional<MatureDrapeKey> key;  // of its last drape (with its coat's params, ages and presence)
   };
   RestDrape restDrape;
