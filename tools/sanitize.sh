@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Issue #21 part 7: builds pteryla with AddressSanitizer + UndefinedBehaviorSanitizer
 # (PTERYLA_SANITIZE=address,undefined, -fno-sanitize-recover=all, warnings as errors) into ./build-asan and
-# runs the test suite there; extra arguments go to ctest (tools/test.sh passes `-LE corpus`). Any memory
-# error, leak or undefined behaviour fails the test that hit it.
+# runs the test suite there; extra arguments go to ctest (tools/test.sh passes `-LE "corpus|heavy"`).
+# Any memory error, leak or undefined behaviour fails the test that hit it.
 # -O1 -g1 with NDEBUG: about 1.2x faster to build than -O2 -g and still fast enough to test; the viewer is
 # built (its scripted tests run under the sanitizers too), the Google Benchmark binaries are not.
 # The GoogleTest sources themselves at -Og (PTERYLA_TEST_CXX_FLAGS, tests/CMakeLists.txt): at -O1 they were

@@ -8,6 +8,7 @@
 #include <glm/vector_relational.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -77,34 +78,45 @@ TEST(Scenes, TheThesisScenesAreBundled) {
 
 // Every scene, the bird included, parses and evaluates to a coat with every present feather meshed (at low
 // level of detail, so the bird costs seconds, not minutes), stays near the body, and has no coat vertex
-// below the skin (the wing is checked at four poses below).
-TEST(Scenes, EverySceneEvaluatesAndStaysAboveTheSkin) {
-  for (const std::string& name : bundledScenes()) {
-    SCOPED_TRACE(name);
-    pipeline::Pipeline p(pipeline::loadScene(scenePath(name)));
-    p.setLod(0.05);
-    const auto& mesh = p.coatMesh();
-    EXPECT_GT(p.follicles().size(), 0u);
-    EXPECT_EQ(mesh.ranges.size(), presentCount(p.feathers()));
-    EXPECT_GT(mesh.mesh.triangleCount(), mesh.ranges.size());
-    // No feather leaves the body's neighbourhood: every coat vertex lies within the longest feather of the
-    // skin's bounding box (draped heights that compounded layer over layer once put the bird's wing
-    // feathers metres away).
-    glm::dvec3 lo(1e300), hi(-1e300);
-    for (const auto& v : p.posedSkin().positions) lo = glm::min(lo, v), hi = glm::max(hi, v);
-    double longest = 0;
-    for (const auto& f : p.feathers().params) longest = std::max(longest, f.totalLength());
-    size_t far = 0;
-    for (const auto& v : mesh.mesh.positions)
-      far += glm::any(glm::lessThan(glm::dvec3(v), lo - longest)) ||
-             glm::any(glm::greaterThan(glm::dvec3(v), hi + longest));
-    EXPECT_EQ(far, 0u);
-    // The dense bird's full-detail mesh is about 13M triangles and minutes of draping: `pteryla check`
-    // measures its penetrations for the gallery (docs/gallery.md), not the suite.
-    if (name == "wing.json" || name == "bird_dense.json") continue;
-    EXPECT_EQ(skinPenetrations(p), 0u) << "at t = " << p.time();
-  }
+// below the skin (the wing is checked at four poses below). One test per scene, so ctest runs them side by
+// side and the dense bird alone can be labelled heavy (tests/scenes/CMakeLists.txt: it runs in the Release
+// phase of tools/test.sh, minutes under the sanitizers).
+class EveryScene : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(EveryScene, EvaluatesAndStaysAboveTheSkin) {
+  const std::string& name = GetParam();
+  pipeline::Pipeline p(pipeline::loadScene(scenePath(name)));
+  p.setLod(0.05);
+  const auto& mesh = p.coatMesh();
+  EXPECT_GT(p.follicles().size(), 0u);
+  EXPECT_EQ(mesh.ranges.size(), presentCount(p.feathers()));
+  EXPECT_GT(mesh.mesh.triangleCount(), mesh.ranges.size());
+  // No feather leaves the body's neighbourhood: every coat vertex lies within the longest feather of the
+  // skin's bounding box (draped heights that compounded layer over layer once put the bird's wing
+  // feathers metres away).
+  glm::dvec3 lo(1e300), hi(-1e300);
+  for (const auto& v : p.posedSkin().positions) lo = glm::min(lo, v), hi = glm::max(hi, v);
+  double longest = 0;
+  for (const auto& f : p.feathers().params) longest = std::max(longest, f.totalLength());
+  size_t far = 0;
+  for (const auto& v : mesh.mesh.positions)
+    far +=
+        glm::any(glm::lessThan(glm::dvec3(v), lo - longest)) || glm::any(glm::greaterThan(glm::dvec3(v), hi + longest));
+  EXPECT_EQ(far, 0u);
+  // The dense bird's full-detail mesh is about 13M triangles and minutes of draping: `pteryla check`
+  // measures its penetrations for the gallery (docs/gallery.md), not the suite.
+  if (name == "wing.json" || name == "bird_dense.json") return;
+  EXPECT_EQ(skinPenetrations(p), 0u) << "at t = " << p.time();
 }
+
+// Test names: the file name without .json, e.g. Scenes/EveryScene.EvaluatesAndStaysAboveTheSkin/bird_dense.
+INSTANTIATE_TEST_SUITE_P(Scenes, EveryScene, ::testing::ValuesIn(bundledScenes()),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           std::string n = info.param.substr(0, info.param.rfind('.'));
+                           for (char& c : n)
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           return n;
+                         });
 
 // The bird at the level of detail it renders at, draped: its coat stays near the body. Draped heights once
 // compounded layer over layer on the wings (a cell's corners raised by the shortfall of each sample under
