@@ -5,7 +5,7 @@
 #     leak or undefined behaviour fails the test. The single-node Slurm test runs there too (bootstrap
 #     --slurm installs slurm-wlm and munge).
 #  2. In the Release build (./build, -Werror), only the targets these need: the `heavy` tests (label
-#     heavy, target pteryla_heavy_tests: scene-scale tests that take minutes under the sanitizers, listed
+#     heavy, target pteryla_heavy_tests: scene-scale tests of 20-80 s each under the sanitizers, listed
 #     with HEAVY in tests/*/CMakeLists.txt) and, where ../shared/meshes exists, the real-mesh corpus tests
 #     (label corpus) with the Release CLI: each feathers 3,000 follicles, too slow under the sanitizers.
 #     Only the bare variants: a minimal scene is the same coat (label corpus_minimal; a unit test holds
