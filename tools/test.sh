@@ -10,7 +10,7 @@
 #     (label corpus) with the Release CLI: each feathers 3,000 follicles, too slow under the sanitizers.
 #     Only the bare variants: a minimal scene is the same coat (label corpus_minimal; a unit test holds
 #     that), so running it too would double the phase for nothing.
-#  3. Each reader's libFuzzer target for PTERYLA_FUZZ_SECONDS (default 60) s from its seed corpus
+#  3. Each reader's libFuzzer target for PTERYLA_FUZZ_SECONDS (default 30) s from its seed corpus
 #     (tools/fuzz.sh, clang, ./build-fuzz).
 # PTERYLA_TEST_RELEASE=1 also builds everything in ./build and runs the whole suite there. Each phase
 # prints its wall time. Cost: README, "Sanitizers and fuzzing".
@@ -34,5 +34,5 @@ else
   ctest --test-dir build --output-on-failure -j"$(nproc)" -L "corpus|heavy" -LE corpus_minimal
   phase "Release CLI, heavy tests and corpus"
 fi
-bash tools/fuzz.sh "${PTERYLA_FUZZ_SECONDS:-60}"
+bash tools/fuzz.sh "${PTERYLA_FUZZ_SECONDS:-30}"
 phase fuzzing
