@@ -381,6 +381,13 @@ void drawPackingPanel(PanelContext& ctx) {
     ImGui::SetTooltip(
         "Off: lost and growing feathers are packed over the mature coat (fast scrubbing).\n"
         "On: every feather is repacked (tighter, a full pack per frame; for final renders).");
+  bool posedFull = p.value("posed_drape", std::string("carry")) == "full";
+  if (ImGui::Checkbox("Posed frames: drape in full", &posedFull))
+    guarded(ctx, [&] { actions::setPackingValue(doc, "posed_drape", posedFull ? "full" : "carry"); });
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "Off: a posed frame of a draped coat carries the rest pose's drape with the skin (fast scrubbing).\n"
+        "On: every posed frame is draped whole on the posed skin (a full drape per frame).");
 
   sectionTitle("Brush: fixed angle or lift (8.3)");
   ImGui::SliderFloat("Radius", &ctx.view.brushRadius, 0.001f, 2.0f, "%.3f", ImGuiSliderFlags_Logarithmic);
