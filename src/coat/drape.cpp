@@ -48,7 +48,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
   }
   const CoatLayout L(coat, mesh);
   const std::vector<uint32_t>&first = L.first, &verts = L.verts, &localVert = L.localVert;
-  const std::vector<uint32_t>&trisOf = L.trisOf, &tris = L.tris, &localTri = L.localTri;
+  const std::vector<uint32_t>&trisOf = L.trisOf, &tris = L.tris;
   const std::vector<int64_t>& rank = L.rank;
   const std::vector<uint32_t>& order = L.order;
   if (order.empty()) {
@@ -665,13 +665,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
       }
     }
     M->order = order;
-    M->pairs.clear();
-    for (uint64_t pr : pairs) {
-      const uint32_t t = static_cast<uint32_t>(pr >> 32), u = static_cast<uint32_t>(pr & 0xffffffffu);
-      const uint32_t ft = mesh.featherId[mesh.indices[3 * static_cast<size_t>(t)]],
-                     fu = mesh.featherId[mesh.indices[3 * static_cast<size_t>(u)]];
-      M->pairs.push_back({ft, localTri[t], fu, localTri[u]});
-    }
+    M->pairs = pairMemos(pairs, mesh, L);
     M->valid = true;
   }
   res.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

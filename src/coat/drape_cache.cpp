@@ -114,6 +114,18 @@ void tally(DrapeResult& res, const std::vector<uint32_t>& order, const std::vect
   }
 }
 
+std::vector<PairMemo> pairMemos(const std::vector<uint64_t>& pairs, const TriMesh& mesh, const CoatLayout& L) {
+  std::vector<PairMemo> out;
+  out.reserve(pairs.size());
+  for (uint64_t pr : pairs) {
+    const uint32_t t = static_cast<uint32_t>(pr >> 32), u = static_cast<uint32_t>(pr & 0xffffffffu);
+    const uint32_t ft = mesh.featherId[mesh.indices[3 * static_cast<size_t>(t)]],
+                   fu = mesh.featherId[mesh.indices[3 * static_cast<size_t>(u)]];
+    out.push_back({ft, L.localTri[t], fu, L.localTri[u]});
+  }
+  return out;
+}
+
 bool sameSkin(const SkinMesh& a, const SkinMesh& b) {
   return a.positions.size() == b.positions.size() && a.faces.size() == b.faces.size() &&
          std::equal(a.positions.begin(), a.positions.end(), b.positions.begin()) &&

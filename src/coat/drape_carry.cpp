@@ -408,13 +408,7 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
         w.cut[q] = isCut(mesh, tris[trisOf[i] + q]) ? 1 : 0;
       }
     }
-    W.pairs.clear();
-    for (uint64_t pr : pairs) {
-      const uint32_t t = static_cast<uint32_t>(pr >> 32), u = static_cast<uint32_t>(pr & 0xffffffffu);
-      const uint32_t ft = mesh.featherId[mesh.indices[3 * static_cast<size_t>(t)]],
-                     fu = mesh.featherId[mesh.indices[3 * static_cast<size_t>(u)]];
-      W.pairs.push_back({ft, L.localTri[t], fu, L.localTri[u]});
-    }
+    W.pairs = pairMemos(pairs, mesh, L);
     W.valid = true;
   }
   report(o.progress, "drape", 1);

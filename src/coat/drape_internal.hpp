@@ -216,6 +216,9 @@ struct PairMemo {
   uint32_t fa, ta, fb, tb;
 };
 
+// Crossing pairs of mesh triangles (t << 32 | u) as a cache keeps them: feather and triangle within it.
+std::vector<PairMemo> pairMemos(const std::vector<uint64_t>& pairs, const TriMesh& mesh, const CoatLayout& L);
+
 bool sameSkin(const SkinMesh& a, const SkinMesh& b);
 
 bool sameFrame(const FeatherFrame& a, const FeatherFrame& b);
