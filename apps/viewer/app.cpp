@@ -30,6 +30,11 @@ namespace pteryla::viewer {
 
 namespace {
 
+// While the loop only waits for an evaluation or the play clock: how long it sleeps at most between
+// looks (input wakes it at once), and how often it redraws when nothing new is shown (the progress).
+constexpr double kBackgroundTick = 0.004;
+constexpr double kReadoutInterval = 0.1;
+
 void closeCallback(GLFWwindow* w) {
   if (auto* app = static_cast<App*>(glfwGetWindowUserPointer(w))) app->onCloseRequested();
 }
@@ -241,9 +246,16 @@ void App::onCloseRequested() {
 
 void App::frame() {
   // cameraMoving(): a wheel zoom is drawn at low cost for 300 ms, then once more in full.
-  const bool active = doc_.busy() || view_.playing || scripted() || viewport_.screenshotPending() ||
-                      input_.dragging() || cameraMoving();
-  if (active)
+  const bool interacting =
+      viewport_.screenshotPending() || input_.dragging() || cameraMoving() || script_.feedingInput();
+  // Only an evaluation or the play clock is running: the loop waits for them (or input) instead of
+  // spinning, and draws only what changed (below). On llvmpipe each redraw of an unchanged window took
+  // cores from the evaluation it waited for: half the CPU of a played wing.
+  const bool background = (doc_.busy() || view_.playing) && !interacting;
+  const bool active = background || scripted() || interacting;
+  if (background)
+    glfwWaitEventsTimeout(kBackgroundTick);
+  else if (active)
     glfwPollEvents();
   else
     glfwWaitEventsTimeout(pacing_.settling() ? 0.02 : 0.5);  // 0.5 s: autosave and --quit-after still tick
@@ -261,6 +273,13 @@ void App::frame() {
   timeline_.advance();
   if (script_.active() && !quit_) script_.step();
   if (quit_) return;
+  if (background && !pacing_.inputPending() && !dialogs_.wantsToShow()) {
+    // Draw when there is something new to show: a finished evaluation, another time on screen (a
+    // flipbook frame), or, a few times a second, the progress readouts.
+    const bool newResult = doc_.upToDate() && doc_.resultVersion() != viewport_.drawnResult();
+    const bool newTime = timeline_.shownTime() != lastDrawnTime_;
+    if (!newResult && !newTime && pacing_.sinceDrawn(workStart) < kReadoutInterval) return;
+  }
   // Nothing happened and the last frames settled: draw nothing (the window keeps its last image).
   if (!pacing_.shouldDraw(active || doc_.busy() || dialogs_.wantsToShow(), workStart)) return;
 
@@ -303,6 +322,7 @@ void App::frame() {
     captureScreenshot(fw, fh, false);
   }
   glfwSwapBuffers(window_);
+  lastDrawnTime_ = timeline_.shownTime();
   pacing_.frameDrawn(workStart, std::chrono::steady_clock::now());
   // --screenshot: the capture above happened once the evaluation was complete; then quit.
   if (!options_.screenshot.empty() && !viewport_.screenshotPending() && !script_.active()) quit_ = true;
@@ -319,6 +339,21 @@ void App::renderView() {
   const bool moving = cameraMoving();
   // Levels of detail by screen size (render.lod_by_screen_size) follow the view at rest.
   if (!moving) doc_.setPreviewView(camera_.camera(), viewport_.pixels().x, viewport_.pixels().y);
+  // Playing ahead of the clock: a frame evaluated ahead is drawn into the flipbook when ready, and the
+  // frame due is shown from it (timeline.cpp).
+  if (!moving && timeline_.playingAhead()) {
+    if (timeline_.evaluatedFrameToDraw()) {
+      timeline_.liveViewShown();
+      const Viewport::Drawn drawn = viewport_.render(false, bench_.fixedPass(), true);
+      // Nothing: the view kept from before is this frame's already (same coat, view and quality).
+      if (drawn != Viewport::Drawn::Reduced)
+        timeline_.storeFlipbookFrame(
+            drawn == Viewport::Drawn::Playback || (drawn == Viewport::Drawn::Nothing && view_.fastPlayback),
+            drawn != Viewport::Drawn::Nothing);
+    }
+    timeline_.showShownFrame();
+    return;
+  }
   // A time drawn before whose coat is not evaluated yet: its flipbook frame (timeline.cpp).
   if (!moving && timeline_.showFlipbookFrame()) return;
   // Playing, with the frame shown not evaluated yet: keep the image on screen (drawing the last coat again

@@ -113,7 +113,8 @@ class App {
 
   bool quit_ = false;
   int exitCode_ = 0;
-  FramePacing pacing_{view_};  // redraw on demand, frame rate
+  double lastDrawnTime_ = -1e300;  // the timeline time on screen when the window was last drawn
+  FramePacing pacing_{view_};      // redraw on demand, frame rate
 };
 
 }  // namespace pteryla::viewer

@@ -28,6 +28,7 @@ bool FramePacing::shouldDraw(bool busy, Clock::time_point workStart) {
 
 void FramePacing::frameDrawn(Clock::time_point workStart, Clock::time_point now) {
   ++framesDrawn_;
+  lastDrawn_ = now;
   fpsWorkMs_ += std::chrono::duration<double, std::milli>(now - workStart).count();
   ++fpsFrames_;
   const double s = std::chrono::duration<double>(now - fpsStart_).count();

@@ -24,6 +24,12 @@ class FramePacing {
   bool settling() const { return settleFrames_ > 0; }
   // After the events, at `workStart`: whether this frame is drawn. `busy`: something happens now.
   bool shouldDraw(bool busy, Clock::time_point workStart);
+  // Input arrived since the last frame was drawn.
+  bool inputPending() const { return inputSeen_; }
+  // Seconds since the last frame was drawn (a large number before the first).
+  double sinceDrawn(Clock::time_point now) const {
+    return framesDrawn_ == 0 ? 1e9 : std::chrono::duration<double>(now - lastDrawn_).count();
+  }
   // A frame was drawn: its work took from workStart to now.
   void frameDrawn(Clock::time_point workStart, Clock::time_point now);
 
@@ -33,7 +39,7 @@ class FramePacing {
 
  private:
   ViewState& view_;
-  Clock::time_point started_, fpsStart_;
+  Clock::time_point started_, fpsStart_, lastDrawn_;
   int fpsFrames_ = 0;
   double fpsWorkMs_ = 0;  // work (not waiting) of the frames counted since fpsStart_
   bool inputSeen_ = true;

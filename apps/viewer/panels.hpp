@@ -126,6 +126,8 @@ struct ViewState {
   // due is dropped (timeline.cpp). Frames drawn before are shown from the flipbook at once.
   float playFps = 24.0f;
   int flipbookMB = 512;  // memory for the flipbook of drawn frames
+  // While playing with a flipbook, the coat is evaluated ahead of the clock: the time on screen.
+  double shownTime = 0;
   // While the time slider is dragged the coat is evaluated at scrubLod (when lower than the preview
   // LOD), and at the preview LOD again on release.
   bool scrubLowLod = true;

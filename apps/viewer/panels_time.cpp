@@ -86,7 +86,7 @@ void drawTimelinePanel(PanelContext& ctx) {
   if (ImGui::Button(">")) guarded(ctx, [&] { doc.setTime(std::min<double>(v.timeEnd, doc.time() + v.timeStep)); });
   ImGui::SameLine();
   ImGui::Checkbox("Loop", &v.loop);
-  float t = static_cast<float>(doc.time());
+  float t = static_cast<float>(v.playing ? v.shownTime : doc.time());
   ImGui::SetNextItemWidth(-FLT_MIN);
   if (ImGui::SliderFloat("##time", &t, v.timeStart, v.timeEnd, "t = %.3f")) guarded(ctx, [&] { doc.setTime(t); });
   // Scrubbing: a low level of detail while the slider is held, the preview's again on release.

@@ -48,6 +48,8 @@ class ScriptSession {
   // Before ImGui::NewFrame: the scripted mouse (click, drag) and keys of this frame replace what the
   // GLFW backend read from the (headless) pointer and keyboard.
   void feedInput();
+  // A scripted click, drag or key is being played (each needs drawn frames).
+  bool feedingInput() const { return !fakeMouse_.empty() || !fakeKeys_.empty(); }
 
  private:
   void run(const ScriptCommand& c);

@@ -85,9 +85,10 @@ void Timeline::advance() {
   if (!view_.playing) {
     if (playClock_.running()) {
       playClock_.stop();
-      finishPlayReport();
+      endPlay();
     }
     displayTime_ = doc_.time();
+    view_.shownTime = displayTime_;
     return;
   }
   const FrameGrid grid{view_.timeStart, view_.timeEnd, view_.timeStep};
@@ -100,6 +101,8 @@ void Timeline::advance() {
     // Play from where the timeline is; at (or past) the end of a range played once, from its start.
     const bool atEnd = !view_.loop && grid.nearest(doc_.time()) >= grid.last();
     playClock_.start(grid, atEnd ? grid.start : doc_.time(), now);
+    ask_ = Ask{};
+    displayTime_ = doc_.time();
   }
   // The frame asked for last is on screen once it is evaluated, its coat uploaded and the view drawn
   // (renderView, which also keeps it in the flipbook); only then is the next one asked for.
@@ -112,13 +115,14 @@ void Timeline::advance() {
   auto stop = [&] {
     view_.playing = false;
     playClock_.stop();
-    finishPlayReport();
+    endPlay();
   };
   if (play_.until > 0 && now >= play_.until) return stop();
   const std::optional<int64_t> due = playClock_.due(now, view_.playFps, view_.loop);
   if (!due) return stop();
-  if (*due == play_.lastDue) return;
   if (doc_.failed()) return stop();
+  if (view_.flipbookMB > 0) return advanceAhead(grid, *due, now);
+  if (*due == play_.lastDue) return;
   const double t = grid.time(*due);
   if (findFrame(t, doc_.lod())) {
     play_.lastDue = *due;
@@ -135,6 +139,96 @@ void Timeline::advance() {
   displayTime_ = t;
   play_.awaitingResult = true;
   doc_.setTime(t);
+}
+
+bool Timeline::inFlipbook(double t) const {
+  return flipbook_.contains(t, flipbookKey(doc_.lod())) ||
+         (view_.fastPlayback && flipbook_.contains(t, flipbookKey(doc_.lod(), true)));
+}
+
+// Playing with a flipbook: the clock shows the frame due from the flipbook (or keeps the last one: a frame
+// not drawn in time is dropped), while the coat is evaluated ahead of it: each frame asked for is the first
+// not in the flipbook from where the clock will be when its evaluation ends (the smoothed time an
+// evaluation has taken), and is drawn into the flipbook as soon as it is ready (App::renderView). The
+// drawing and the next evaluation overlap, and no evaluation is wasted: one overtaken by the clock plays
+// on the next pass of a loop.
+void Timeline::advanceAhead(const FrameGrid& grid, int64_t due, double now) {
+  const int64_t n = grid.last() + 1;
+  int64_t arrived = -1;  // the frame asked for, just drawn into the flipbook
+  if (ask_.pending) {
+    if (doc_.time() != ask_.time) {
+      ask_.pending = false;  // the time was set elsewhere (a scrub): ask again
+    } else if (ask_.drawn && doc_.upToDate()) {
+      ask_.pending = false;
+      arrived = ask_.index;
+      ++play_.evaluated;
+      const double took = std::max(0.0, now - ask_.wall);
+      evalSeconds_ = evalSeconds_ > 0 ? 0.5 * (evalSeconds_ + took) : took;
+    }
+  }
+  // The first pass: as many frames due as the range has (before any was drawn on an earlier pass).
+  if (play_.firstPassSeconds == 0 && view_.playFps > 0 && now - play_.startWall >= double(n) / view_.playFps) {
+    play_.firstPassSeconds = std::max(1e-9, now - play_.startWall);
+    play_.firstPassShown = play_.shown;
+  }
+  play_.lastDue = due;
+  // A frame that came in after the clock passed it, but newer than the one on screen: shown (at most an
+  // evaluation late, as playback without a flipbook shows its frames).
+  if (arrived >= 0 && due != play_.shownDue) {
+    const auto ahead = [n](int64_t a, int64_t b) { return ((b - a) % n + n) % n; };
+    if (play_.shownDue < 0 ||
+        (ahead(play_.shownDue, arrived) > 0 && ahead(play_.shownDue, arrived) <= ahead(play_.shownDue, due))) {
+      displayTime_ = grid.time(arrived);
+      play_.shownDue = arrived;
+      ++play_.shown;
+    }
+  }
+  if (due != play_.shownDue) {
+    const double t = grid.time(due);
+    if (findFrame(t, doc_.lod())) {
+      displayTime_ = t;
+      play_.shownDue = due;
+      ++play_.shown;
+      ++play_.fromCache;
+    }
+  }
+  view_.shownTime = displayTime_;
+  if (ask_.pending || !doc_.upToDate()) return;
+  const int64_t lead = static_cast<int64_t>(std::ceil(evalSeconds_ * double(std::max(view_.playFps, 0.0f))));
+  for (int64_t k = 0; k < n; ++k) {
+    int64_t m = due + lead + k;
+    if (m >= n) {
+      if (!view_.loop) break;
+      m %= n;
+    }
+    const double t = grid.time(m);
+    if (inFlipbook(t)) continue;
+    ask_ = Ask{true, false, m, t, now};
+    doc_.setTime(t);
+    break;
+  }
+}
+
+bool Timeline::evaluatedFrameToDraw() const {
+  return playingAhead() && ask_.pending && !ask_.drawn && doc_.upToDate() && doc_.time() == ask_.time &&
+         doc_.resultVersion() == viewport_.syncedResult();
+}
+
+void Timeline::showShownFrame() {
+  if (flipbookShown_ && flipbookShownTime_ == displayTime_) return;
+  const render::Image* img = findFrame(displayTime_, doc_.lod());
+  if (!img) return;  // nothing drawn for it yet: the last image stays
+  viewport_.showImage(*img);
+  flipbookShown_ = true;
+  flipbookShownTime_ = displayTime_;
+}
+
+void Timeline::endPlay() {
+  finishPlayReport();
+  // Played ahead of the clock: the document's time may be a frame asked for and never shown; the paused
+  // view is the frame on screen.
+  if (view_.flipbookMB > 0 && displayTime_ != doc_.time()) doc_.setTime(displayTime_);
+  ask_ = Ask{};
 }
 
 // One step of filling the flipbook: once the frame asked for is evaluated and drawn (renderView stores
@@ -196,8 +290,9 @@ bool Timeline::showFlipbookFrame() {
   return true;
 }
 
-void Timeline::storeFlipbookFrame(bool fast) {
-  if (fast) ++play_.drawnFast;
+void Timeline::storeFlipbookFrame(bool fast, bool drawn) {
+  if (fast && drawn) ++play_.drawnFast;
+  if (ask_.pending && doc_.time() == ask_.time) ask_.drawn = true;
   if (view_.flipbookMB <= 0 || viewport_.image().empty()) return;
   if (!doc_.upToDate() || doc_.resultVersion() != viewport_.syncedResult()) return;
   flipbook_.store(doc_.time(), flipbookKey(doc_.lod(), fast), viewport_.image());
@@ -209,6 +304,9 @@ void Timeline::finishPlayReport() {
   const double seconds = std::max(1e-9, wallSeconds() - play_.startWall);
   // Frames the clock passed: every one of them was due once; those not shown were dropped.
   const size_t due = size_t(std::floor(seconds * double(view_.playFps))) + 1;
+  // The first pass through the range: what played before anything was in the flipbook from an earlier pass.
+  const double firstSeconds = play_.firstPassSeconds > 0 ? play_.firstPassSeconds : seconds;
+  const size_t firstShown = play_.firstPassSeconds > 0 ? play_.firstPassShown : play_.shown;
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "last play: %.1f s, %.1f of %.1f fps shown (%zu frames: %zu evaluated, %zu from the flipbook; "
@@ -220,10 +318,13 @@ void Timeline::finishPlayReport() {
     std::snprintf(buf, sizeof buf,
                   "{\"play_seconds\": %.3f, \"fps_target\": %.2f, \"frames_due\": %zu, \"frames_shown\": %zu, "
                   "\"frames_evaluated\": %zu, \"frames_from_flipbook\": %zu, \"fps_shown\": %.2f, "
-                  "\"frames_drawn_fast\": %zu, \"flipbook_frames\": %zu, \"flipbook_mb\": %.1f}",
+                  "\"frames_drawn_fast\": %zu, \"flipbook_frames\": %zu, \"flipbook_mb\": %.1f, "
+                  "\"first_pass_seconds\": %.3f, \"frames_shown_first_pass\": %zu, \"fps_shown_first_pass\": %.2f, "
+                  "\"evaluation_seconds\": %.3f}",
                   seconds, double(view_.playFps), due, play_.shown, play_.evaluated, play_.fromCache,
                   double(play_.shown) / seconds, play_.drawnFast, flipbook_.size(),
-                  double(flipbook_.bytes()) / (1 << 20));
+                  double(flipbook_.bytes()) / (1 << 20), firstSeconds, firstShown, double(firstShown) / firstSeconds,
+                  evalSeconds_);
     std::cout << buf << std::endl;
     play_.until = 0;
     play_.seconds = 0;

@@ -30,13 +30,23 @@ class Timeline {
   void liveViewShown() { flipbookShown_ = false; }
   // Playing, and the time on screen is not the evaluated, uploaded coat's yet (its evaluation runs).
   bool awaitingPlayedFrame() const;
-  // The view just rendered, complete and at rest (or `fast`: at the fast playback quality), for its time.
-  void storeFlipbookFrame(bool fast = false);
+  // The view just rendered, complete and at rest (or `fast`: at the fast playback quality), for its time
+  // (`drawn`: rendered now, not the view kept from before).
+  void storeFlipbookFrame(bool fast = false, bool drawn = true);
+  // Playing ahead of the clock (a flipbook to play from): frames are evaluated ahead of the time on
+  // screen, each drawn into the flipbook when ready, and the frame due is shown from the flipbook.
+  bool playingAhead() const { return view_.playing && view_.flipbookMB > 0 && playClock_.running(); }
+  // Playing ahead: the frame asked for is evaluated and synced to the view, not drawn yet.
+  bool evaluatedFrameToDraw() const;
+  // Playing ahead: shows the flipbook frame of the time on screen (again, after the view drew another).
+  void showShownFrame();
 
   // A scripted `play S`: plays for S seconds, then prints what the playback showed (JSON on stdout).
   void playFor(double seconds);
   bool scriptedPlayRunning() const { return view_.playing && play_.until > 0; }
   bool filling() const { return fill_.active; }
+  // The time whose frame is on screen (or about to be): while playing it may run ahead of the document's.
+  double shownTime() const { return view_.playing ? displayTime_ : doc_.time(); }
 
  private:
   // The flipbook's key of the 3D view at a level of detail: what the image depends on besides the time
@@ -45,7 +55,11 @@ class Timeline {
   // A frame of time t at this level of detail: at full quality, or while playing also a fast one.
   const render::Image* findFrame(double t, double lod);
   void advanceCacheFill();
+  // Playing ahead of the clock (playingAhead()): show the frame due, ask for the next one to evaluate.
+  void advanceAhead(const FrameGrid& grid, int64_t due, double now);
+  bool inFlipbook(double t) const;
   void finishPlayReport();  // `play S`: prints what the playback showed
+  void endPlay();           // the play report, and the paused time is the time on screen
 
   Document& doc_;
   ViewState& view_;
@@ -72,7 +86,18 @@ class Timeline {
     size_t due = 0, shown = 0, fromCache = 0, evaluated = 0;
     size_t drawnFast = 0;  // views drawn at the fast playback quality
     bool awaitingResult = false;
+    int64_t shownDue = -1;  // playing ahead: the frame index last shown
+    size_t firstPassShown = 0;
+    double firstPassSeconds = 0;  // the wall time of the first pass through the range (0: not over)
   } play_;
+  // Playing ahead: the frame asked for (its evaluation runs or its view is not drawn yet), and the
+  // smoothed seconds from asking to drawn, which set how far ahead of the clock the next ask is.
+  struct Ask {
+    bool pending = false, drawn = false;
+    int64_t index = -1;
+    double time = 0, wall = 0;
+  } ask_;
+  double evalSeconds_ = 0;
 };
 
 }  // namespace pteryla::viewer

@@ -338,6 +338,30 @@ TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
   EXPECT_GE(cached["fps_shown"].get<double>(), 5.0) << r.out;
 }
 
+// #26: with a flipbook, playback evaluates ahead of the clock and draws every evaluated frame into the
+// flipbook, even one the clock passed before it was ready: a looped range is evaluated once, frame by
+// frame, and its later passes play from the flipbook.
+TEST(ViewerSmoke, PlaybackEvaluatesEachFrameOnceAndPlaysLaterPassesFromTheFlipbook) {
+  if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
+  const std::string dir = viewer_test::scratchDir("smoke_play_ahead");
+  const std::string script = dir + "/s.txt";
+  std::ofstream(script) << "count 0 25\ncount 1 25\ncount 2 25\n"
+                        << "time 3\nwait\nrange 3 4 0.1 loop\nplay 6 10\nquit\n";
+  const ViewerRun r = runViewer(
+      "\"" + viewer_test::dataPath("scenes/moult.json") + "\" --lod 0.2 --size 640x480 --script \"" + script + "\"",
+      dir + "/stderr.txt");
+  ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
+  const std::vector<Json> lines = viewer_test::jsonLines(r.out);
+  ASSERT_EQ(lines.size(), 1u) << r.out;
+  const Json& play = lines[0];
+  // 11 frames, the first drawn before playing: each other one evaluated exactly once and kept.
+  EXPECT_EQ(play["frames_evaluated"].get<int>(), 10) << r.out;
+  EXPECT_GE(play["flipbook_frames"].get<int>(), 11) << r.out;
+  // 60 frames due; once the range is in the flipbook (a few seconds at most) every one due is shown.
+  EXPECT_GE(play["frames_shown"].get<int>(), 25) << r.out;
+  EXPECT_GT(play["evaluation_seconds"].get<double>(), 0.0) << r.out;
+}
+
 // #26: fast playback draws each played frame like a moving view (fewer pixels, no multisampling), and
 // the paused frame at full quality again; off, every played frame is drawn at full quality.
 TEST(ViewerSmoke, FastPlaybackDrawsPlayedFramesCheaplyAndThePausedFrameInFull) {
