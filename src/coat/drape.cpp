@@ -329,11 +329,11 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     if (sameTop)
       M->top->reset();
     else
-      M->top = std::make_unique<CoatTop>(skin, spacing);
+      detail::inArena(o.threads, [&] { M->top = std::make_unique<CoatTop>(skin, spacing); });
     M->gap = gap;
     M->spacing = spacing;
   } else {
-    ownTop = std::make_unique<CoatTop>(skin, spacing);
+    detail::inArena(o.threads, [&] { ownTop = std::make_unique<CoatTop>(skin, spacing); });
   }
   CoatTop& top = M ? *M->top : *ownTop;
   step(0.16);

@@ -208,13 +208,6 @@ void gatherSamples(Chart& C, const CoatTop& top, double reqRadius) {
   C.reqOffset.assign(1, 0);
   C.reqSamples.clear();
   C.under.clear();
-  for (int k = 0; k < C.nx * C.ny; ++k) {
-    const Node& nd = C.nodes[k];
-    if (!nd.ok || !nd.active) continue;
-    C.active.push_back(k);
-    top.near(nd.c, nd.n, reqRadius, [&](uint32_t s) { C.reqSamples.push_back(s); });
-    C.reqOffset.push_back(static_cast<uint32_t>(C.reqSamples.size()));
-  }
   // Each sample once, from the first node (in node order) that reached it: a sample this chart has
   // taken is marked (this thread's marks, a generation per gather), and later nodes skip it.
   thread_local std::vector<uint32_t> taken;
@@ -225,13 +218,19 @@ void gatherSamples(Chart& C, const CoatTop& top, double reqRadius) {
     generation = 1;
   }
   const uint32_t mark = generation;
-  for (int k : C.active) {
+  uint32_t* const takenBy = taken.data();  // (one look-up of the thread's vector)
+  // One look-up per node for both radii: the samples it reads (reqRadius) and those it may cover.
+  const double coverRadius = 0.75 * C.diag;
+  const double req2 = reqRadius * reqRadius, cover2 = coverRadius * coverRadius;
+  for (int k = 0; k < C.nx * C.ny; ++k) {
     const Node& nd = C.nodes[k];
+    if (!nd.ok || !nd.active) continue;
+    C.active.push_back(k);
     const double xa = C.x0 + (k / C.ny) * C.hx, yb = C.y0 + (k % C.ny) * C.hy;
     const dvec3 bn = glm::cross(nd.n, nd.t);
-    top.near(nd.c, nd.n, 0.75 * C.diag, [&](uint32_t s) {
-      if (taken[s] == mark) return;
-      const dvec3 d = top.position(s) - nd.c;
+    top.nearAll(nd.c, nd.n, std::max(reqRadius, coverRadius), [&](uint32_t s, const dvec3& d, double dd) {
+      if (dd <= req2) C.reqSamples.push_back(s);
+      if (!(dd <= cover2) || takenBy[s] == mark) return;
       const double x = xa + glm::dot(d, nd.t), y = yb + glm::dot(d, bn);
       if (!C.covers(x, y)) return;
       int a, b;
@@ -239,10 +238,11 @@ void gatherSamples(Chart& C, const CoatTop& top, double reqRadius) {
       C.locate(x, y, a, b, u, v);
       for (const Node* c : {&C.at(a, b), &C.at(a + 1, b), &C.at(a, b + 1), &C.at(a + 1, b + 1)})
         if (!c->ok || !c->active) return;
-      taken[s] = mark;
+      takenBy[s] = mark;
       C.under.push_back(
           {s, static_cast<uint16_t>(a), static_cast<uint16_t>(b), static_cast<float>(u), static_cast<float>(v)});
     });
+    C.reqOffset.push_back(static_cast<uint32_t>(C.reqSamples.size()));
   }
   C.under.shrink_to_fit();
   C.reqSamples.shrink_to_fit();

@@ -11,6 +11,8 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "pteryla/coat/drape.hpp"
 #include "pteryla/core/error.hpp"
@@ -169,40 +171,77 @@ class Surface {
 // about 70 degrees of theirs, so the far side of a thin part never raises a feather.
 class CoatTop {
  public:
+  // Face by face in parallel (in the arena the caller runs in); the samples are those of one pass.
   CoatTop(const SkinMesh& skin, double spacing) {
-    for (size_t f = 0; f < skin.faces.size(); ++f) {
+    const size_t nf = skin.faces.size();
+    std::vector<int> steps(nf);
+    std::vector<size_t> first(nf + 1, 0);
+    for (size_t f = 0; f < nf; ++f) {
       const auto& t = skin.faces[f];
       const dvec3 a = skin.positions[t[0]], b = skin.positions[t[1]], c = skin.positions[t[2]];
       const double e = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
       const int m = std::clamp(static_cast<int>(std::ceil(e / spacing)), 1, 4096);
-      for (int i = 0; i <= m; ++i)
-        for (int j = 0; i + j <= m; ++j) {
-          const dvec3 bary(double(m - i - j) / m, double(i) / m, double(j) / m);
-          pos_.push_back(pointAt(skin, static_cast<uint32_t>(f), bary));
-          nrm_.push_back(normalAt(skin, static_cast<uint32_t>(f), bary));
-        }
+      steps[f] = m;
+      first[f + 1] = first[f] + static_cast<size_t>(m + 1) * static_cast<size_t>(m + 2) / 2;
     }
+    pos_.resize(first[nf]);
+    nrm_.resize(first[nf]);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nf, 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t f = r.begin(); f < r.end(); ++f) {
+        const int m = steps[f];
+        size_t s = first[f];
+        for (int i = 0; i <= m; ++i)
+          for (int j = 0; i + j <= m; ++j, ++s) {
+            const dvec3 bary(double(m - i - j) / m, double(i) / m, double(j) / m);
+            pos_[s] = pointAt(skin, static_cast<uint32_t>(f), bary);
+            nrm_[s] = normalAt(skin, static_cast<uint32_t>(f), bary);
+          }
+      }
+    });
     top_.assign(pos_.size(), 0.0f);
     grid_.build(pos_, spacing * 2);
+    // The samples again in the grid's slot order, so that a query reads them one after the other.
+    slotPos_.resize(pos_.size());
+    slotNrm_.resize(pos_.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, pos_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) {
+        slotPos_[k] = pos_[grid_.item(static_cast<uint32_t>(k))];
+        slotNrm_[k] = nrm_[grid_.item(static_cast<uint32_t>(k))];
+      }
+    });
+    std::vector<dvec3>().swap(nrm_);  // read only through the slots
   }
   size_t size() const { return pos_.size(); }
   // Calls f(sample) for the samples within radius of c facing like n.
   template <class F>
   void near(const dvec3& c, const dvec3& n, double radius, F&& f) const {
+    nearAll(c, n, radius, [&](uint32_t s, const dvec3&, double) { f(s); });
+  }
+  // f(sample, sample - c, its squared length) for the samples within radius of c facing like n, in
+  // near()'s order: one pass serves several radii up to `radius`.
+  template <class F>
+  void nearAll(const dvec3& c, const dvec3& n, double radius, F&& f) const {
     const double r2 = radius * radius;
-    grid_.query(c - dvec3(radius), c + dvec3(radius), [&](uint32_t s) {
-      const dvec3 d = pos_[s] - c;
-      if (glm::dot(d, d) <= r2 && glm::dot(nrm_[s], n) > kFacing) f(s);
+    grid_.querySlots(c - dvec3(radius), c + dvec3(radius), [&](uint32_t first, uint32_t last) {
+      for (uint32_t k = first; k < last; ++k) {
+        const dvec3 d = slotPos_[k] - c;
+        const double dd = glm::dot(d, d);
+        if (dd <= r2 && glm::dot(slotNrm_[k], n) > kFacing) f(grid_.item(k), d, dd);
+      }
     });
   }
   const dvec3& position(uint32_t s) const { return pos_[s]; }
   double at(uint32_t s) const { return top_[s]; }
   void raise(uint32_t s, double h) { top_[s] = std::max(top_[s], static_cast<float>(h)); }
   void reset() { std::fill(top_.begin(), top_.end(), 0.0f); }  // bare skin again
-  size_t bytes() const { return pos_.capacity() * 2 * sizeof(dvec3) + top_.capacity() * sizeof(float); }
+  size_t bytes() const {
+    return (pos_.capacity() + slotPos_.capacity() + slotNrm_.capacity()) * sizeof(dvec3) +
+           top_.capacity() * sizeof(float);
+  }
 
  private:
-  std::vector<dvec3> pos_, nrm_;
+  std::vector<dvec3> pos_, nrm_;          // nrm_: only while the slots are made
+  std::vector<dvec3> slotPos_, slotNrm_;  // positions and normals in the grid's slot order
   std::vector<float> top_;
   detail::PointGrid grid_;
 };

@@ -86,6 +86,21 @@ class PointGrid {
           for (uint32_t k = offsets_[c]; k < offsets_[c + 1]; ++k) f(items_[k]);
         }
   }
+  // Same as query(lo, hi, f), a cell at a time: f(first, last) for the slots [first, last) of a cell
+  // (slot k holds point item(k)); slots are numbered in the order query() visits points in a cell.
+  template <class F>
+  void querySlots(const glm::dvec3& lo, const glm::dvec3& hi, F&& f) const {
+    if (count_ == 0) return;
+    const glm::ivec3 a = cellOf(lo), b = cellOf(hi);
+    for (int z = a.z; z <= b.z; ++z)
+      for (int y = a.y; y <= b.y; ++y) {
+        const size_t row = (static_cast<size_t>(z) * dims_.y + y) * dims_.x;
+        // A row's cells are consecutive: their slots are one range.
+        const uint32_t first = offsets_[row + a.x], last = offsets_[row + b.x + 1];
+        if (first < last) f(first, last);
+      }
+  }
+  uint32_t item(uint32_t slot) const { return items_[slot]; }
   double cell() const { return cell_; }
 
  private:
