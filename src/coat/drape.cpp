@@ -375,6 +375,10 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     // that read it: added when a chart reads it, from the feathers before it whose nodes can be found.
     std::vector<detail::Box> airBox(n);
     std::vector<uint8_t> inAir(n, 0);
+    // When every chart reads anyway (a first drape, a new top or air), the dirty places are never looked
+    // at: the read and write boxes are kept after the loop, in parallel.
+    const bool allRead =
+        !sameTop || !sameAir || std::all_of(order.begin(), order.end(), [&](uint32_t i) { return newChart[i] != 0; });
     for (size_t k = 0; k < order.size(); ++k) {
       const uint32_t i = order[k];
       Chart& C = charts[i];
@@ -408,9 +412,11 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
         laidNow[i] = 1;
         if (M) {
           memo(i).reads = reads;
-          memo(i).readBox = readBoxOf(C, top, airReach);
-          memo(i).writeBox = writeBoxOf(C, top);
-          dirty.push_back(memo(i).writeBox);
+          if (!allRead) {
+            memo(i).readBox = readBoxOf(C, top, airReach);
+            memo(i).writeBox = writeBoxOf(C, top);
+            dirty.push_back(memo(i).writeBox);
+          }
         }
       }
       writeChart(C, top);
@@ -421,6 +427,20 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
         C.reqOffset = {};
         C.under = {};
       }
+    }
+    if (M && allRead) {
+      std::vector<uint32_t> laid;
+      for (uint32_t i : order)
+        if (laidNow[i]) laid.push_back(i);
+      detail::inArena(o.threads, [&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, laid.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t z = r.begin(); z < r.end(); ++z) {
+            const uint32_t i = laid[z];
+            memo(i).readBox = readBoxOf(charts[i], top, airReach);
+            memo(i).writeBox = writeBoxOf(charts[i], top);
+          }
+        });
+      });
     }
     step(0.46);
   }

@@ -275,6 +275,38 @@ void layFromReads(Chart& C, const std::vector<double>& reads, double gap, double
   std::vector<uint32_t> byHeight(idx.size());
   auto envelope = [&] {
     for (size_t j = 0; j < idx.size(); ++j) req[j] = C.nodes[idx[j]].h;
+    double highest = -std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < idx.size(); ++j) highest = std::max(highest, req[j]);
+    if (maxSlope > 0 && C.hx > 0 && C.hy > 0) {
+      // A node farther than (highest - h) / maxSlope cannot raise one at height h: each node looks only
+      // at the grid window within that reach, skipping nodes no higher than it has got (as the sorted
+      // scan below stops at them). The same candidates' same values: the same maximum.
+      thread_local std::vector<double> grid;
+      grid.assign(static_cast<size_t>(C.nx) * C.ny, -std::numeric_limits<double>::infinity());
+      for (size_t j = 0; j < idx.size(); ++j) grid[static_cast<size_t>(idx[j])] = req[j];
+      for (size_t j = 0; j < idx.size(); ++j) {
+        const int aj = idx[j] / C.ny, bj = idx[j] % C.ny;
+        double h = req[j];
+        const double reach = (highest - h) / maxSlope;
+        if (reach > 0) {
+          const double wa = std::floor(reach / C.hx) + 1, wb = std::floor(reach / C.hy) + 1;
+          const int a0 = wa >= aj ? 0 : aj - static_cast<int>(wa);
+          const int a1 = wa >= C.nx - 1 - aj ? C.nx - 1 : aj + static_cast<int>(wa);
+          const int b0 = wb >= bj ? 0 : bj - static_cast<int>(wb);
+          const int b1 = wb >= C.ny - 1 - bj ? C.ny - 1 : bj + static_cast<int>(wb);
+          for (int a = a0; a <= a1; ++a) {
+            const double* row = grid.data() + static_cast<size_t>(a) * C.ny;
+            for (int b = b0; b <= b1; ++b) {
+              if (!(row[b] > h)) continue;
+              const double dx = (a - aj) * C.hx, dy = (b - bj) * C.hy;
+              h = std::max(h, row[b] - maxSlope * std::sqrt(dx * dx + dy * dy));
+            }
+          }
+        }
+        C.nodes[idx[j]].h = h;
+      }
+      return;
+    }
     for (size_t j = 0; j < idx.size(); ++j) byHeight[j] = static_cast<uint32_t>(j);
     std::sort(byHeight.begin(), byHeight.end(), [&](uint32_t x, uint32_t y) { return req[x] > req[y]; });
     for (size_t j = 0; j < idx.size(); ++j) {
