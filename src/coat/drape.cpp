@@ -244,8 +244,13 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
       else
         shrink[i] = memo(i).shrink;
     }
+    // Cells of the median reach: a body feather's look-up does not scan the cells a flight feather needs
+    // (the test below is whether any later follicle is covered: the order found does not matter).
+    std::vector<double> reaches;
+    for (uint32_t i : order) reaches.push_back(reachOf[i]);
+    std::nth_element(reaches.begin(), reaches.begin() + reaches.size() / 2, reaches.end());
     detail::PointGrid og;
-    og.build(origins, std::max(reach, 1e-12));
+    og.build(origins, std::max(reaches.empty() ? reach : reaches[reaches.size() / 2], 1e-12 * std::max(reach, 1.0)));
     detail::inArena(o.threads, [&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
         std::vector<std::pair<glm::dvec2, double>> later;
