@@ -203,15 +203,20 @@ class CoatTop {
     // The samples again in the grid's slot order, so that a query reads them one after the other.
     slotPos_.resize(pos_.size());
     slotNrm_.resize(pos_.size());
+    slotOf_.resize(pos_.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, pos_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
-        slotPos_[k] = pos_[grid_.item(static_cast<uint32_t>(k))];
-        slotNrm_[k] = nrm_[grid_.item(static_cast<uint32_t>(k))];
+        const uint32_t s = grid_.item(static_cast<uint32_t>(k));
+        slotPos_[k] = pos_[s];
+        slotNrm_[k] = nrm_[s];
+        slotOf_[s] = static_cast<uint32_t>(k);
       }
     });
-    std::vector<dvec3>().swap(nrm_);  // read only through the slots
+    // Read only through the slots from here on.
+    std::vector<dvec3>().swap(pos_);
+    std::vector<dvec3>().swap(nrm_);
   }
-  size_t size() const { return pos_.size(); }
+  size_t size() const { return slotOf_.size(); }
   // Calls f(sample) for the samples within radius of c facing like n.
   template <class F>
   void near(const dvec3& c, const dvec3& n, double radius, F&& f) const {
@@ -230,18 +235,19 @@ class CoatTop {
       }
     });
   }
-  const dvec3& position(uint32_t s) const { return pos_[s]; }
+  const dvec3& position(uint32_t s) const { return slotPos_[slotOf_[s]]; }
   double at(uint32_t s) const { return top_[s]; }
   void raise(uint32_t s, double h) { top_[s] = std::max(top_[s], static_cast<float>(h)); }
   void reset() { std::fill(top_.begin(), top_.end(), 0.0f); }  // bare skin again
   size_t bytes() const {
-    return (pos_.capacity() + slotPos_.capacity() + slotNrm_.capacity()) * sizeof(dvec3) +
+    return (slotPos_.capacity() + slotNrm_.capacity()) * sizeof(dvec3) + slotOf_.capacity() * sizeof(uint32_t) +
            top_.capacity() * sizeof(float);
   }
 
  private:
-  std::vector<dvec3> pos_, nrm_;          // nrm_: only while the slots are made
+  std::vector<dvec3> pos_, nrm_;          // per sample, only while the slots are made
   std::vector<dvec3> slotPos_, slotNrm_;  // positions and normals in the grid's slot order
+  std::vector<uint32_t> slotOf_;          // per sample, its slot
   std::vector<float> top_;
   detail::PointGrid grid_;
 };
