@@ -302,40 +302,50 @@ TEST(ViewerSmoke, AScreenshotOfTheForcedNavigationViewFinishes) {
   EXPECT_FALSE(render::loadImage(dir + "/nav.png").empty());
 }
 
+// The moult scene thinned (25 feathers a tract: every frame of a range is another coat, quickly), then
+// `commands`: the JSON lines the run printed (empty, with a failure, when it did not exit 0).
+static std::vector<Json> runThinnedMoult(const std::string& dir, const std::string& commands,
+                                         const std::string& size = "800x600") {
+  const std::string script = dir + "/s.txt";
+  std::ofstream(script) << "count 0 25\ncount 1 25\ncount 2 25\n" << commands;
+  const ViewerRun r = runViewer("\"" + viewer_test::dataPath("scenes/moult.json") + "\" --lod 0.2 --size " + size +
+                                    " --script \"" + script + "\"",
+                                dir + "/stderr.txt");
+  if (r.code != 0) {
+    ADD_FAILURE() << "the viewer exited " << r.code << ": " << slurp(dir + "/stderr.txt");
+    return {};
+  }
+  std::vector<Json> lines = viewer_test::jsonLines(r.out);
+  if (lines.empty()) ADD_FAILURE() << "no JSON printed: " << r.out;
+  return lines;
+}
+
 // #26: playback follows the wall clock (frames not ready in time are dropped, never waited for), and
 // after `cache-range` every frame of the range plays from the flipbook without evaluating anything.
 TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
   if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
-  const std::string dir = viewer_test::scratchDir("smoke_play");
-  const std::string script = dir + "/s.txt";
-  // The moult scene, thinned: every frame of the range is another coat.
-  std::ofstream(script) << "count 0 25\ncount 1 25\ncount 2 25\n"
-                        << "time 3\nwait\nrange 3 4 0.01 once\nplay 5 240\nrange 3 4 0.25 loop\ncache-range\n"
-                        << "play 2 10\n"
-                        << "quit\n";
-  const ViewerRun r = runViewer(
-      "\"" + viewer_test::dataPath("scenes/moult.json") + "\" --lod 0.2 --size 800x600 --script \"" + script + "\"",
-      dir + "/stderr.txt");
-  ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
-  const std::vector<Json> lines = viewer_test::jsonLines(r.out);
-  ASSERT_EQ(lines.size(), 2u) << r.out;
+  const std::vector<Json> lines = runThinnedMoult(
+      viewer_test::scratchDir("smoke_play"),
+      "time 3\nwait\nrange 3 4 0.01 once\nplay 5 240\nrange 3 4 0.25 loop\ncache-range\nplay 2 10\nquit\n");
+  ASSERT_EQ(lines.size(), 2u);
   const Json& live = lines[0];
   const Json& cached = lines[1];
   // 101 frames at 240 a second, once: the clock passes the last frame after 0.42 s and playback ends
   // there, having shown only the frames that were ready (a playback that waited for each frame would
   // evaluate all 101 and take many seconds).
-  EXPECT_LT(live["play_seconds"].get<double>(), 2.0) << "playback waited for frames: " << r.out;
+  EXPECT_LT(live["play_seconds"].get<double>(), 2.0) << "playback waited for frames: " << live.dump();
   EXPECT_GE(live["frames_shown"].get<int>(), 1);
-  EXPECT_LT(live["frames_shown"].get<int>(), 50) << r.out;
+  EXPECT_LT(live["frames_shown"].get<int>(), 50) << live.dump() << cached.dump();
   // Every frame it evaluated was drawn before the next was asked for: each is in the flipbook (with
   // the frame playback started on).
-  EXPECT_GE(live["frames_evaluated"].get<int>(), 1) << r.out;
-  EXPECT_GE(live["flipbook_frames"].get<int>(), live["frames_evaluated"].get<int>() + 1) << r.out;
+  EXPECT_GE(live["frames_evaluated"].get<int>(), 1) << live.dump() << cached.dump();
+  EXPECT_GE(live["flipbook_frames"].get<int>(), live["frames_evaluated"].get<int>() + 1)
+      << live.dump() << cached.dump();
   // Cached: the range's 5 frames, looped at 10 fps, all from the flipbook.
   EXPECT_GE(cached["flipbook_frames"].get<int>(), 5);
-  EXPECT_EQ(cached["frames_evaluated"].get<int>(), 0) << r.out;
-  EXPECT_GE(cached["frames_from_flipbook"].get<int>(), 10) << r.out;
-  EXPECT_GE(cached["fps_shown"].get<double>(), 5.0) << r.out;
+  EXPECT_EQ(cached["frames_evaluated"].get<int>(), 0) << live.dump() << cached.dump();
+  EXPECT_GE(cached["frames_from_flipbook"].get<int>(), 10) << live.dump() << cached.dump();
+  EXPECT_GE(cached["fps_shown"].get<double>(), 5.0) << live.dump() << cached.dump();
 }
 
 // #26: with a flipbook, playback evaluates ahead of the clock and draws every evaluated frame into the
@@ -343,23 +353,16 @@ TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
 // frame, and its later passes play from the flipbook.
 TEST(ViewerSmoke, PlaybackEvaluatesEachFrameOnceAndPlaysLaterPassesFromTheFlipbook) {
   if (!haveXvfbRun()) GTEST_SKIP() << "xvfb-run not found (install the xvfb and xauth packages: tools/bootstrap.sh)";
-  const std::string dir = viewer_test::scratchDir("smoke_play_ahead");
-  const std::string script = dir + "/s.txt";
-  std::ofstream(script) << "count 0 25\ncount 1 25\ncount 2 25\n"
-                        << "time 3\nwait\nrange 3 4 0.1 loop\nplay 6 10\nquit\n";
-  const ViewerRun r = runViewer(
-      "\"" + viewer_test::dataPath("scenes/moult.json") + "\" --lod 0.2 --size 640x480 --script \"" + script + "\"",
-      dir + "/stderr.txt");
-  ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
-  const std::vector<Json> lines = viewer_test::jsonLines(r.out);
-  ASSERT_EQ(lines.size(), 1u) << r.out;
+  const std::vector<Json> lines = runThinnedMoult(viewer_test::scratchDir("smoke_play_ahead"),
+                                                  "time 3\nwait\nrange 3 4 0.1 loop\nplay 6 10\nquit\n", "640x480");
+  ASSERT_EQ(lines.size(), 1u);
   const Json& play = lines[0];
   // 11 frames, the first drawn before playing: each other one evaluated exactly once and kept.
-  EXPECT_EQ(play["frames_evaluated"].get<int>(), 10) << r.out;
-  EXPECT_GE(play["flipbook_frames"].get<int>(), 11) << r.out;
+  EXPECT_EQ(play["frames_evaluated"].get<int>(), 10) << play.dump();
+  EXPECT_GE(play["flipbook_frames"].get<int>(), 11) << play.dump();
   // 60 frames due; once the range is in the flipbook (a few seconds at most) every one due is shown.
-  EXPECT_GE(play["frames_shown"].get<int>(), 25) << r.out;
-  EXPECT_GT(play["evaluation_seconds"].get<double>(), 0.0) << r.out;
+  EXPECT_GE(play["frames_shown"].get<int>(), 25) << play.dump();
+  EXPECT_GT(play["evaluation_seconds"].get<double>(), 0.0) << play.dump();
 }
 
 // #26: fast playback draws each played frame like a moving view (fewer pixels, no multisampling), and
@@ -369,23 +372,17 @@ TEST(ViewerSmoke, FastPlaybackDrawsPlayedFramesCheaplyAndThePausedFrameInFull) {
   const std::string dir = viewer_test::scratchDir("smoke_fast_play");
   for (const bool fast : {true, false}) {
     SCOPED_TRACE(fast);
-    const std::string script = dir + "/s.txt", shot = dir + (fast ? "/fast.png" : "/full.png");
-    std::ofstream(script) << "count 0 25\ncount 1 25\ncount 2 25\n"
-                          << "show fast-playback " << (fast ? "on" : "off") << "\n"
-                          << "time 3\nwait\nrange 3 4 0.05 loop\nplay 2 24\ntime 3.5\nwait\nscreenshot " << shot
-                          << "\nquit\n";
-    const ViewerRun r = runViewer(
-        "\"" + viewer_test::dataPath("scenes/moult.json") + "\" --lod 0.2 --size 800x600 --script \"" + script + "\"",
-        dir + "/stderr.txt");
-    ASSERT_EQ(r.code, 0) << slurp(dir + "/stderr.txt");
-    const std::vector<Json> lines = viewer_test::jsonLines(r.out);
-    ASSERT_EQ(lines.size(), 1u) << r.out;
+    const std::string shot = dir + (fast ? "/fast.png" : "/full.png");
+    const std::vector<Json> lines = runThinnedMoult(
+        dir, std::string("show fast-playback ") + (fast ? "on" : "off") +
+                 "\ntime 3\nwait\nrange 3 4 0.05 loop\nplay 2 24\ntime 3.5\nwait\nscreenshot " + shot + "\nquit\n");
+    ASSERT_EQ(lines.size(), 1u);
     const Json& play = lines[0];
-    ASSERT_GE(play["frames_evaluated"].get<int>(), 1) << r.out;
+    ASSERT_GE(play["frames_evaluated"].get<int>(), 1) << play.dump();
     if (fast)
-      EXPECT_GE(play["frames_drawn_fast"].get<int>(), play["frames_evaluated"].get<int>()) << r.out;
+      EXPECT_GE(play["frames_drawn_fast"].get<int>(), play["frames_evaluated"].get<int>()) << play.dump();
     else
-      EXPECT_EQ(play["frames_drawn_fast"].get<int>(), 0) << r.out;
+      EXPECT_EQ(play["frames_drawn_fast"].get<int>(), 0) << play.dump();
   }
   // The paused view is drawn at full resolution and quality either way: the same image.
   const render::Image a = render::loadImage(dir + "/fast.png"), b = render::loadImage(dir + "/full.png");
