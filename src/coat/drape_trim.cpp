@@ -32,6 +32,10 @@ detail::Box trimOverFollicles(const RootZones& Z, size_t k, const TriMesh& mesh,
     const double rj = Z.rootZone[f];
     // A little past rj: the closest point's rounding never matters.
     const double reach = rj + 1e-6 * (rj + std::max({std::abs(g.x), std::abs(g.y), std::abs(g.z)}));
+    // Beyond its own reach of the feather's box, no triangle's box comes near it (the test below).
+    if (g.x < fb.lo.x - reach || g.y < fb.lo.y - reach || g.z < fb.lo.z - reach || g.x > fb.hi.x + reach ||
+        g.y > fb.hi.y + reach || g.z > fb.hi.z + reach)
+      return;
     later.push_back({g, rj, reach});
   });
   if (later.empty()) return fb;
