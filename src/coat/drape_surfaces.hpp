@@ -168,7 +168,8 @@ class Surface {
 // The top of the coat laid so far, on samples of the skin: every face sampled on a barycentric grid no
 // coarser than `spacing`; top[s] is the height over the skin of the highest feather material over sample s
 // (0: bare skin). Samples are looked up by position and only count for a node whose normal is within
-// about 70 degrees of theirs, so the far side of a thin part never raises a feather.
+// about 70 degrees of theirs, so the far side of a thin part never raises a feather. Samples are numbered
+// in the grid's slot order (cell by cell, row by row), so those near one point have nearby numbers.
 class CoatTop {
  public:
   // Face by face in parallel (in the arena the caller runs in); the samples are those of one pass.
@@ -203,20 +204,18 @@ class CoatTop {
     // The samples again in the grid's slot order, so that a query reads them one after the other.
     slotPos_.resize(pos_.size());
     slotNrm_.resize(pos_.size());
-    slotOf_.resize(pos_.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, pos_.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         const uint32_t s = grid_.item(static_cast<uint32_t>(k));
         slotPos_[k] = pos_[s];
         slotNrm_[k] = nrm_[s];
-        slotOf_[s] = static_cast<uint32_t>(k);
       }
     });
     // Read only through the slots from here on.
     std::vector<dvec3>().swap(pos_);
     std::vector<dvec3>().swap(nrm_);
   }
-  size_t size() const { return slotOf_.size(); }
+  size_t size() const { return slotPos_.size(); }
   // Calls f(sample) for the samples within radius of c facing like n.
   template <class F>
   void near(const dvec3& c, const dvec3& n, double radius, F&& f) const {
@@ -231,23 +230,21 @@ class CoatTop {
       for (uint32_t k = first; k < last; ++k) {
         const dvec3 d = slotPos_[k] - c;
         const double dd = glm::dot(d, d);
-        if (dd <= r2 && glm::dot(slotNrm_[k], n) > kFacing) f(grid_.item(k), d, dd);
+        if (dd <= r2 && glm::dot(slotNrm_[k], n) > kFacing) f(k, d, dd);
       }
     });
   }
-  const dvec3& position(uint32_t s) const { return slotPos_[slotOf_[s]]; }
+  const dvec3& position(uint32_t s) const { return slotPos_[s]; }
   double at(uint32_t s) const { return top_[s]; }
   void raise(uint32_t s, double h) { top_[s] = std::max(top_[s], static_cast<float>(h)); }
   void reset() { std::fill(top_.begin(), top_.end(), 0.0f); }  // bare skin again
   size_t bytes() const {
-    return (slotPos_.capacity() + slotNrm_.capacity()) * sizeof(dvec3) + slotOf_.capacity() * sizeof(uint32_t) +
-           top_.capacity() * sizeof(float);
+    return (slotPos_.capacity() + slotNrm_.capacity()) * sizeof(dvec3) + top_.capacity() * sizeof(float);
   }
 
  private:
   std::vector<dvec3> pos_, nrm_;          // per sample, only while the slots are made
-  std::vector<dvec3> slotPos_, slotNrm_;  // positions and normals in the grid's slot order
-  std::vector<uint32_t> slotOf_;          // per sample, its slot
+  std::vector<dvec3> slotPos_, slotNrm_;  // per sample (numbered by slot), its position and normal
   std::vector<float> top_;
   detail::PointGrid grid_;
 };
