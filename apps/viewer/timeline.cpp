@@ -119,7 +119,12 @@ void Timeline::advance() {
   };
   if (play_.until > 0 && now >= play_.until) return stop();
   const std::optional<int64_t> due = playClock_.due(now, view_.playFps, view_.loop);
-  if (!due) return stop();
+  if (!due) {
+    // Played once to the end: the playhead stops on the range's last frame (evaluated on pause when it
+    // was not drawn in time).
+    if (view_.flipbookMB > 0) displayTime_ = grid.time(grid.last());
+    return stop();
+  }
   if (doc_.failed()) return stop();
   if (view_.flipbookMB > 0) return advanceAhead(grid, *due, now);
   if (*due == play_.lastDue) return;
@@ -320,11 +325,11 @@ void Timeline::finishPlayReport() {
                   "\"frames_evaluated\": %zu, \"frames_from_flipbook\": %zu, \"fps_shown\": %.2f, "
                   "\"frames_drawn_fast\": %zu, \"flipbook_frames\": %zu, \"flipbook_mb\": %.1f, "
                   "\"first_pass_seconds\": %.3f, \"frames_shown_first_pass\": %zu, \"fps_shown_first_pass\": %.2f, "
-                  "\"evaluation_seconds\": %.3f}",
+                  "\"evaluation_seconds\": %.3f, \"time_shown\": %.9g}",
                   seconds, double(view_.playFps), due, play_.shown, play_.evaluated, play_.fromCache,
                   double(play_.shown) / seconds, play_.drawnFast, flipbook_.size(),
                   double(flipbook_.bytes()) / (1 << 20), firstSeconds, firstShown, double(firstShown) / firstSeconds,
-                  evalSeconds_);
+                  evalSeconds_, displayTime_);
     std::cout << buf << std::endl;
     play_.until = 0;
     play_.seconds = 0;

@@ -336,6 +336,8 @@ TEST(ViewerSmoke, PlaybackDropsFramesAndPlaysTheFlipbook) {
   EXPECT_LT(live["play_seconds"].get<double>(), 2.0) << "playback waited for frames: " << live.dump();
   EXPECT_GE(live["frames_shown"].get<int>(), 1);
   EXPECT_LT(live["frames_shown"].get<int>(), 50) << live.dump() << cached.dump();
+  // Played once to the end: the playhead stops on the range's last frame.
+  EXPECT_NEAR(live["time_shown"].get<double>(), 4.0, 1e-6) << live.dump();
   // Every frame it evaluated was drawn before the next was asked for: each is in the flipbook (with
   // the frame playback started on).
   EXPECT_GE(live["frames_evaluated"].get<int>(), 1) << live.dump() << cached.dump();
