@@ -86,8 +86,9 @@ class PointGrid {
           for (uint32_t k = offsets_[c]; k < offsets_[c + 1]; ++k) f(items_[k]);
         }
   }
-  // Same as query(lo, hi, f), a cell at a time: f(first, last) for the slots [first, last) of a cell
-  // (slot k holds point item(k)); slots are numbered in the order query() visits points in a cell.
+  // Same as query(lo, hi, f), a row of cells at a time: f(first, last) for the slots [first, last) of the
+  // row's cells in the box (slot k holds point item(k)); slots are numbered in the order query() visits
+  // points, so the visits are query()'s.
   template <class F>
   void querySlots(const glm::dvec3& lo, const glm::dvec3& hi, F&& f) const {
     if (count_ == 0) return;
