@@ -58,6 +58,15 @@ void toolToggle(PanelContext& ctx, Tool tool, const char* label, const char* hin
   }
 }
 
+// A packing setting that is "full" or a faster default (`fast`), as a checkbox (on: "full") with its tooltip.
+void fullOrFastCheckbox(PanelContext& ctx, const Json& packing, const char* label, const char* key, const char* fast,
+                        const char* tip) {
+  bool full = packing.value(key, std::string(fast)) == "full";
+  if (ImGui::Checkbox(label, &full))
+    guarded(ctx, [&] { actions::setPackingValue(ctx.doc, key, full ? "full" : fast); });
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip);
+}
+
 void metricsTable(const std::optional<pipeline::QualityMetrics>& m) {
   if (!m) {
     ImGui::TextDisabled("no metrics yet");
@@ -374,20 +383,12 @@ void drawPackingPanel(PanelContext& ctx) {
   bool skin = p.value("skin", true);
   ImGui::SameLine();
   if (ImGui::Checkbox("Pack against skin", &skin)) guarded(ctx, [&] { actions::setPackingValue(doc, "skin", skin); });
-  bool moultFull = p.value("moult_pack", std::string("over")) == "full";
-  if (ImGui::Checkbox("Moult frames: repack every feather", &moultFull))
-    guarded(ctx, [&] { actions::setPackingValue(doc, "moult_pack", moultFull ? "full" : "over"); });
-  if (ImGui::IsItemHovered())
-    ImGui::SetTooltip(
-        "Off: lost and growing feathers are packed over the mature coat (fast scrubbing).\n"
-        "On: every feather is repacked (tighter, a full pack per frame; for final renders).");
-  bool posedFull = p.value("posed_drape", std::string("carry")) == "full";
-  if (ImGui::Checkbox("Posed frames: drape in full", &posedFull))
-    guarded(ctx, [&] { actions::setPackingValue(doc, "posed_drape", posedFull ? "full" : "carry"); });
-  if (ImGui::IsItemHovered())
-    ImGui::SetTooltip(
-        "Off: a posed frame of a draped coat carries the rest pose's drape with the skin (fast scrubbing).\n"
-        "On: every posed frame is draped whole on the posed skin (a full drape per frame).");
+  fullOrFastCheckbox(ctx, p, "Moult frames: repack every feather", "moult_pack", "over",
+                     "Off: lost and growing feathers are packed over the mature coat (fast scrubbing).\n"
+                     "On: every feather is repacked (tighter, a full pack per frame; for final renders).");
+  fullOrFastCheckbox(ctx, p, "Posed frames: drape in full", "posed_drape", "carry",
+                     "Off: a posed frame of a draped coat carries the rest pose's drape with the skin (fast "
+                     "scrubbing).\nOn: every posed frame is draped whole on the posed skin (a full drape per frame).");
 
   sectionTitle("Brush: fixed angle or lift (8.3)");
   ImGui::SliderFloat("Radius", &ctx.view.brushRadius, 0.001f, 2.0f, "%.3f", ImGuiSliderFlags_Logarithmic);
