@@ -346,7 +346,9 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
     for (uint32_t i : order)
       if (changed[i])
         for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) changedTri[tris[q]] = 1;
-    const std::vector<uint64_t> found = pairsWithChanged(mesh, order, trisOf, tris, changedTri, {});
+    const std::vector<uint64_t> found = R.pairTrees
+                                            ? pairsWithChanged(mesh, order, trisOf, tris, changedTri, *R.pairTrees)
+                                            : pairsWithChanged(mesh, order, trisOf, tris, changedTri, {});
     pairs.insert(pairs.end(), found.begin(), found.end());
   }
   std::sort(pairs.begin(), pairs.end());

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -114,6 +115,21 @@ inline void collapseTriangle(TriMesh& mesh, size_t t, std::vector<size_t>& cut) 
 std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<uint32_t>& order,
                                        const std::vector<uint32_t>& trisOf, const std::vector<uint32_t>& tris,
                                        const std::vector<uint8_t>& changedTri, const ProgressFn& progress);
+
+// Per feather, a pair tree over its triangles (in CoatLayout order) that a reference drape keeps for the
+// frames carried from it: each search refits it to the frame's corners, and builds it again only where
+// the feather's triangle count changed (a growing feather). Between searches its corner pointers are
+// stale; a search holds the lock.
+struct PairTrees {
+  std::mutex lock;
+  std::vector<detail::TriangleBvh> tree;
+  std::vector<uint32_t> count;  // triangles each tree was built over
+};
+
+// The same pairs, the feathers' trees taken from `cache` and refitted (a carried frame's search).
+std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<uint32_t>& order,
+                                       const std::vector<uint32_t>& trisOf, const std::vector<uint32_t>& tris,
+                                       const std::vector<uint8_t>& changedTri, PairTrees& cache);
 
 // Where laying a chart reads the coat in the air: around its free nodes, within the air radius of the
 // line along the normal, to a depth of a quarter of its length (AirTop::highest's reach, and a little).
@@ -251,6 +267,8 @@ struct DrapeCache::State {
   std::vector<draping::FeatherMemo> feathers;
   std::vector<uint32_t> order;
   std::vector<draping::PairMemo> pairs;
+  // Pair trees for the frames carried from this drape (drapeCarried): a cache, not part of the result.
+  mutable std::unique_ptr<draping::PairTrees> pairTrees = std::make_unique<draping::PairTrees>();
   // The skin of the last drape and how many drapes in a row found it moved (drapeCoatMesh).
   std::vector<glm::dvec3> lastSkin;
   int skinMoves = 0;

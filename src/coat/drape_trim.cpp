@@ -9,6 +9,7 @@
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
 namespace pteryla::coat::draping {
@@ -60,33 +61,69 @@ detail::Box trimOverFollicles(const RootZones& Z, size_t k, const TriMesh& mesh,
   return fb;
 }
 
+namespace {
+
+// The feathers a search for the changed triangles' crossing pairs needs: `touched` those with a changed
+// live triangle, `take` every feather whose live bounds meet a touched one's (a touched one meets its own).
+// False when nothing is touched.
+bool featherReach(const TriMesh& mesh, const std::vector<uint32_t>& order, const std::vector<uint32_t>& trisOf,
+                  const std::vector<uint32_t>& tris, const std::vector<uint8_t>& changedTri,
+                  std::vector<uint8_t>& touched, std::vector<uint8_t>& take) {
+  const size_t n = trisOf.size() - 1;
+  touched.assign(n, 0);
+  take.assign(n, 0);
+  std::vector<detail::Box> liveBox(n);  // per feather, its live triangles' bounds
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const uint32_t i = order[k];
+      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
+        const size_t t = tris[q];
+        if (isCut(mesh, t)) continue;
+        if (changedTri[t]) touched[i] = 1;
+        for (int c = 0; c < 3; ++c) liveBox[i].add(dvec3(mesh.positions[mesh.indices[3 * t + c]]));
+      }
+    }
+  });
+  std::vector<uint32_t> touchedList, all;
+  for (uint32_t i : order) {
+    if (touched[i]) touchedList.push_back(i);
+    if (!liveBox[i].empty()) all.push_back(i);
+  }
+  if (touchedList.empty()) return false;
+  // The boxes' trees (each box a "triangle" (lo, hi, lo), held in float rounded outward) find every
+  // meeting pair and maybe a few more, which the exact test drops.
+  auto boxTree = [&](const std::vector<uint32_t>& which, std::vector<dvec3>& corners, std::vector<uint32_t>& idx,
+                     detail::TriangleBvh& tree) {
+    for (uint32_t i : which) {
+      const uint32_t c = static_cast<uint32_t>(corners.size());
+      corners.push_back(liveBox[i].lo);
+      corners.push_back(liveBox[i].hi);
+      idx.insert(idx.end(), {c, c + 1, c});
+    }
+    tree.build(corners.data(), idx.data(), which.size());
+    tree.makePrimBoxes();
+  };
+  std::vector<dvec3> cAll, cTouched;
+  std::vector<uint32_t> iAll, iTouched;
+  detail::TriangleBvh allTree, touchedTree;
+  boxTree(all, cAll, iAll, allTree);
+  boxTree(touchedList, cTouched, iTouched, touchedTree);
+  allTree.overlappingPairs(touchedTree, [&](uint32_t a, uint32_t b) {
+    const uint32_t i = all[a];
+    if (!take[i] && liveBox[i].overlaps(liveBox[touchedList[b]])) take[i] = 1;
+  });
+  return true;
+}
+
+}  // namespace
+
 std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<uint32_t>& order,
                                        const std::vector<uint32_t>& trisOf, const std::vector<uint32_t>& tris,
                                        const std::vector<uint8_t>& changedTri, const ProgressFn& progress) {
-  const size_t n = trisOf.size() - 1, nt = mesh.triangleCount(), nv = mesh.positions.size();
-  std::vector<uint8_t> touched(n, 0);   // feathers with a changed live triangle
-  std::vector<detail::Box> liveBox(n);  // per feather, its live triangles' bounds
-  for (uint32_t i : order)
-    for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
-      const size_t t = tris[q];
-      if (isCut(mesh, t)) continue;
-      if (changedTri[t]) touched[i] = 1;
-      for (int c = 0; c < 3; ++c) liveBox[i].add(dvec3(mesh.positions[mesh.indices[3 * t + c]]));
-    }
-  std::vector<uint32_t> touchedList;
-  for (uint32_t i : order)
-    if (touched[i]) touchedList.push_back(i);
+  const size_t nt = mesh.triangleCount(), nv = mesh.positions.size();
+  std::vector<uint8_t> touched, take;
   std::vector<uint64_t> pairs;
-  if (touchedList.empty()) return pairs;
-  std::vector<uint8_t> take(n, 0);
-  for (uint32_t i : order) {
-    if (liveBox[i].empty()) continue;
-    for (uint32_t j : touchedList)
-      if (liveBox[i].overlaps(liveBox[j])) {
-        take[i] = 1;
-        break;
-      }
-  }
+  if (!featherReach(mesh, order, trisOf, tris, changedTri, touched, take)) return pairs;
   // The taken feathers' live triangles in mesh order, on their own vertices.
   TriMesh part;
   std::vector<uint32_t> triBack, vertOf(nv, UINT32_MAX);
@@ -108,6 +145,94 @@ std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<ui
     const uint32_t t = triBack[pr >> 32], u = triBack[pr & 0xffffffffu];
     if (changedTri[t] || changedTri[u]) pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
   }
+  return pairs;
+}
+
+std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<uint32_t>& order,
+                                       const std::vector<uint32_t>& trisOf, const std::vector<uint32_t>& tris,
+                                       const std::vector<uint8_t>& changedTri, PairTrees& cache) {
+  const size_t n = trisOf.size() - 1;
+  std::vector<uint8_t> touched, take;
+  std::vector<uint64_t> pairs;
+  if (!featherReach(mesh, order, trisOf, tris, changedTri, touched, take)) return pairs;
+  const std::lock_guard<std::mutex> hold(cache.lock);
+  if (cache.tree.size() != n) {
+    cache.tree.assign(n, detail::TriangleBvh{});
+    cache.count.assign(n, 0);
+  }
+  // Per taken feather its triangles' current corners (collapsed ones too: a refitted tree leaves them
+  // out) and shapes, and its tree: the cached one refitted, or built again if its triangle count changed.
+  std::vector<uint32_t> taken, base(n, 0);
+  size_t slots = 0;
+  for (uint32_t i : order)
+    if (take[i]) {
+      taken.push_back(i);
+      base[i] = static_cast<uint32_t>(slots);
+      slots += trisOf[i + 1] - trisOf[i];
+    }
+  std::vector<uint32_t> idx(3 * slots);
+  std::vector<detail::TriangleShape> shapes(slots);
+  auto corner = [&](size_t slot, int c) { return dvec3(mesh.positions[idx[3 * slot + c]]); };
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, taken.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t z = r.begin(); z < r.end(); ++z) {
+      const uint32_t i = taken[z];
+      const uint32_t tc = trisOf[i + 1] - trisOf[i];
+      for (uint32_t q = 0; q < tc; ++q) {
+        const size_t t = tris[trisOf[i] + q], s = base[i] + q;
+        for (int c = 0; c < 3; ++c) idx[3 * s + c] = mesh.indices[3 * t + c];
+        if (!isCut(mesh, t)) shapes[s] = detail::triangleShape(corner(s, 0), corner(s, 1), corner(s, 2));
+      }
+      detail::TriangleBvh& tree = cache.tree[i];
+      if (cache.count[i] != tc || tree.empty()) {
+        tree.build(mesh.positions.data(), idx.data() + 3 * static_cast<size_t>(base[i]), tc);
+        tree.makePrimBoxes();
+        cache.count[i] = tc;
+      }
+      tree.refit(mesh.positions.data(), idx.data() + 3 * static_cast<size_t>(base[i]));
+    }
+  });
+  // The taken feathers whose trees hold a live triangle, and the pairs of them whose bounds meet with a
+  // touched one: every crossing pair the search over the whole coat finds with a changed triangle.
+  std::vector<uint32_t> group;
+  std::vector<dvec3> corners;
+  std::vector<uint32_t> boxIdx;
+  for (uint32_t i : taken) {
+    glm::vec3 lo, hi;
+    if (!cache.tree[i].bounds(lo, hi) || lo.x > hi.x) continue;
+    const uint32_t c = static_cast<uint32_t>(corners.size());
+    corners.push_back(dvec3(lo));
+    corners.push_back(dvec3(hi));
+    boxIdx.insert(boxIdx.end(), {c, c + 1, c});
+    group.push_back(i);
+  }
+  std::vector<std::pair<uint32_t, uint32_t>> tasks;
+  if (!group.empty()) {
+    detail::TriangleBvh top;
+    top.build(corners.data(), boxIdx.data(), group.size());
+    top.makePrimBoxes();
+    top.overlappingPairs(top, [&](uint32_t g, uint32_t h) {
+      if (g < h && (touched[group[g]] || touched[group[h]])) tasks.emplace_back(group[g], group[h]);
+    });
+  }
+  tbb::combinable<std::vector<uint64_t>> found;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<uint64_t>& mine = found.local();
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const uint32_t f = tasks[k].first, g = tasks[k].second;
+      cache.tree[f].overlappingPairs(cache.tree[g], [&](uint32_t a, uint32_t b) {
+        const uint32_t t = tris[trisOf[f] + a], u = tris[trisOf[g] + b];
+        if (!changedTri[t] && !changedTri[u]) return;
+        // Moeller's test on the lower triangle index first, as the search over the whole coat runs it.
+        size_t s = base[f] + a, p = base[g] + b;
+        if (u < t) std::swap(s, p);
+        if (detail::trianglesIntersect(corner(s, 0), corner(s, 1), corner(s, 2), shapes[s], corner(p, 0), corner(p, 1),
+                                       corner(p, 2), shapes[p]))
+          mine.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
+      });
+    }
+  });
+  found.combine_each([&](const std::vector<uint64_t>& v) { pairs.insert(pairs.end(), v.begin(), v.end()); });
+  std::sort(pairs.begin(), pairs.end());
   return pairs;
 }
 

@@ -258,13 +258,7 @@ void TriangleBvh::buildNodes(size_t triangleCount) {
     for (size_t t = r.begin(); t < r.end(); ++t) {
       PrimInfo& pi = info[t];
       pi.id = static_cast<uint32_t>(t);
-      Box box;
-      for (int c = 0; c < 3; ++c) box.add(vertex(static_cast<uint32_t>(t), c));
-      for (int a = 0; a < 3; ++a) {
-        // Rounded outward, so the float box contains the double triangle.
-        pi.box.lo[a] = std::nextafter(static_cast<float>(box.lo[a]), -std::numeric_limits<float>::infinity());
-        pi.box.hi[a] = std::nextafter(static_cast<float>(box.hi[a]), std::numeric_limits<float>::infinity());
-      }
+      outwardBox(static_cast<uint32_t>(t), &pi.box.lo[0], &pi.box.hi[0]);
     }
   });
   nodes_.reserve(2 * triangleCount / kLeafSize + 1);
@@ -298,6 +292,57 @@ void TriangleBvh::setGroups(const uint32_t* groupOfTriangle) {
       g = nodeGroup_[i + 1] == nodeGroup_[n.first] ? nodeGroup_[i + 1] : kMixed;
     }
     nodeGroup_[i] = g;
+  }
+}
+
+void TriangleBvh::outwardBox(uint32_t t, float* lo, float* hi) const {
+  Box box;
+  for (int c = 0; c < 3; ++c) box.add(vertex(t, c));
+  for (int a = 0; a < 3; ++a) {
+    // Rounded outward, so the float box contains the double triangle.
+    lo[a] = std::nextafter(static_cast<float>(box.lo[a]), -std::numeric_limits<float>::infinity());
+    hi[a] = std::nextafter(static_cast<float>(box.hi[a]), std::numeric_limits<float>::infinity());
+  }
+}
+
+void TriangleBvh::refit(const glm::vec3* positions, const uint32_t* indices) {
+  posF_ = positions;
+  posD_ = nullptr;
+  idx_ = indices;
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  for (size_t k = 0; k < prims_.size(); ++k) {
+    PrimBox& pb = primBoxes_[k];
+    const uint32_t t = prims_[k];
+    const uint32_t* i = idx_ + 3 * static_cast<size_t>(t);
+    if (i[0] == i[1] && i[0] == i[2]) {
+      for (int a = 0; a < 3; ++a) {
+        pb.lo[a] = inf;
+        pb.hi[a] = -inf;
+      }
+      continue;
+    }
+    outwardBox(t, pb.lo, pb.hi);
+  }
+  // Children follow their parent: one backward sweep sees both before the parent.
+  for (size_t n = nodes_.size(); n-- > 0;) {
+    Node& nd = nodes_[n];
+    float lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
+    auto add = [&](const float* l, const float* h) {
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], l[a]);
+        hi[a] = std::max(hi[a], h[a]);
+      }
+    };
+    if (nd.count > 0) {
+      for (uint32_t k = 0; k < nd.count; ++k) add(primBoxes_[nd.first + k].lo, primBoxes_[nd.first + k].hi);
+    } else {
+      add(nodes_[n + 1].lo, nodes_[n + 1].hi);
+      add(nodes_[nd.first].lo, nodes_[nd.first].hi);
+    }
+    for (int a = 0; a < 3; ++a) {
+      nd.lo[a] = lo[a];
+      nd.hi[a] = hi[a];
+    }
   }
 }
 

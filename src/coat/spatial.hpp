@@ -232,6 +232,12 @@ class TriangleBvh {
   }
   // Each slot's own box for the pair queries (setGroups() makes them too).
   void makePrimBoxes();
+  // The same tree over moved corners (as many triangles as it was built over, numbered the same): every
+  // slot's box and node's bounds made again from `positions` and `indices`, which must outlive the use.
+  // A collapsed triangle (three equal indices) gets an empty box, so the pair queries never return it
+  // and it widens no bounds. For the pair queries only: which tree holds the triangles does not change
+  // what they return, and refitting skips the build's partitioning.
+  void refit(const glm::vec3* positions, const uint32_t* indices);
   // The bounds of everything in the BVH (float, rounded outward); false when empty.
   bool bounds(glm::vec3& lo, glm::vec3& hi) const {
     if (nodes_.empty()) return false;
@@ -292,6 +298,8 @@ class TriangleBvh {
         emit(splitA ? c : keep, splitA ? keep : c);
   }
   void buildNodes(size_t triangleCount);
+  // Triangle t's box in float, rounded outward (it contains the triangle).
+  void outwardBox(uint32_t t, float* lo, float* hi) const;
   const glm::vec3* posF_ = nullptr;
   const glm::dvec3* posD_ = nullptr;
   const uint32_t* idx_ = nullptr;

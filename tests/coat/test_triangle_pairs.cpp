@@ -98,3 +98,52 @@ TEST(TrianglePairs, TheBvhIsTheSameWhateverTheThreadCount) {
   }
   EXPECT_EQ(all.pairTasks(64), one.pairTasks(64));
 }
+
+TEST(TrianglePairs, ARefittedTreeFindsWhatAFreshTreeFindsAndSkipsCollapsedTriangles) {
+  // Two clusters' trees built over one placement, then every corner moved (a turn and a stretch, as a
+  // pose moves a feather) and some triangles collapsed: refitted, the trees give exactly the box-overlap
+  // pairs of trees built afresh over the moved corners, less every pair with a collapsed triangle.
+  TriMesh m = soup(4000, 2, 13);
+  std::vector<uint32_t> ia(m.indices.begin(), m.indices.begin() + 3 * 2000),
+      ib(m.indices.begin() + 3 * 2000, m.indices.end());
+  pteryla::coat::detail::TriangleBvh a, b;
+  a.build(m.positions.data(), ia.data(), 2000);
+  b.build(m.positions.data(), ib.data(), 2000);
+  for (glm::vec3& p : m.positions)
+    p = glm::vec3(p.x * 1.3f - p.y * 0.4f, p.y * 0.9f + p.x * 0.4f, p.z + 0.2f * p.x * p.x);
+  for (uint32_t t : {5u, 77u, 1999u}) ia[3 * t + 1] = ia[3 * t + 2] = ia[3 * t];
+  for (uint32_t t : {0u, 640u}) ib[3 * t + 1] = ib[3 * t + 2] = ib[3 * t];
+  a.refit(m.positions.data(), ia.data());
+  b.refit(m.positions.data(), ib.data());
+  auto pairsOf = [](const pteryla::coat::detail::TriangleBvh& x, const pteryla::coat::detail::TriangleBvh& y) {
+    std::vector<uint64_t> out;
+    x.overlappingPairs(y, [&](uint32_t s, uint32_t t) { out.push_back((uint64_t(s) << 32) | t); });
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  const std::vector<uint64_t> got = pairsOf(a, b);
+  pteryla::coat::detail::TriangleBvh fa, fb;
+  fa.build(m.positions.data(), ia.data(), 2000);
+  fb.build(m.positions.data(), ib.data(), 2000);
+  fa.makePrimBoxes();
+  fb.makePrimBoxes();
+  std::vector<uint64_t> want;
+  auto collapsed = [](const std::vector<uint32_t>& idx, uint64_t t) { return idx[3 * t] == idx[3 * t + 1]; };
+  for (uint64_t k : pairsOf(fa, fb))
+    if (!collapsed(ia, k >> 32) && !collapsed(ib, k & 0xffffffffu)) want.push_back(k);
+  ASSERT_GT(want.size(), 500u);  // the moved clusters still meet
+  EXPECT_EQ(got, want);
+  // The bounds are the live triangles' own.
+  glm::vec3 lo, hi;
+  ASSERT_TRUE(a.bounds(lo, hi));
+  pteryla::coat::detail::Box live;
+  for (size_t t = 0; t < 2000; ++t)
+    if (!collapsed(ia, t))
+      for (int c = 0; c < 3; ++c) live.add(dvec3(m.positions[ia[3 * t + c]]));
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_LE(lo[k], live.lo[k]);
+    EXPECT_GE(hi[k], live.hi[k]);
+    EXPECT_NEAR(lo[k], live.lo[k], 1e-6);
+    EXPECT_NEAR(hi[k], live.hi[k], 1e-6);
+  }
+}
