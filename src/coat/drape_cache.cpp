@@ -101,7 +101,7 @@ void tally(DrapeResult& res, const std::vector<uint32_t>& order, const std::vect
            const std::vector<size_t>& kept, const std::function<const Chart&(uint32_t)>& chartOf) {
   for (uint32_t i : order) {
     ++res.stats.draped;
-    for (const Node& nd : chartOf(i).nodes) res.stats.overhangingNodes += nd.free && nd.active;
+    res.stats.overhangingNodes += chartOf(i).overhanging;
     if (cut[i]) {
       res.trimmed[i] = 1;
       ++res.stats.trimmedFeathers;

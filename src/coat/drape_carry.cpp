@@ -57,6 +57,7 @@ Chart chartShape(const Chart& c) {
   out.fine = c.fine;
   out.nodes = c.nodes;
   out.active = c.active;
+  out.overhanging = c.overhanging;
   return out;
 }
 

@@ -117,6 +117,8 @@ void buildChart(const Surface& S, const FeatherFrame& F, const feather::FeatherP
     for (int b = 0; b + 1 < C.ny; ++b)
       if (cell[static_cast<size_t>(a) * (C.ny - 1) + b])
         C.at(a, b).active = C.at(a + 1, b).active = C.at(a, b + 1).active = C.at(a + 1, b + 1).active = 1;
+  C.overhanging = 0;
+  for (const Node& nd : C.nodes) C.overhanging += nd.free && nd.active;
 }
 
 bool foldsOrLeaves(const Chart& C) {
