@@ -171,16 +171,29 @@ std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<ui
       slots += trisOf[i + 1] - trisOf[i];
     }
   std::vector<uint32_t> idx(3 * slots);
-  std::vector<detail::TriangleShape> shapes(slots);
-  auto corner = [&](size_t slot, int c) { return dvec3(mesh.positions[idx[3 * slot + c]]); };
+  // What the triangle test reads of a slot, together: its corners, its shape, its triangle and whether
+  // it changed.
+  struct Slot {
+    dvec3 v[3];
+    detail::TriangleShape shape;
+    uint32_t tri;
+    uint8_t changed;
+  };
+  std::vector<Slot> slot(slots);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, taken.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t z = r.begin(); z < r.end(); ++z) {
       const uint32_t i = taken[z];
       const uint32_t tc = trisOf[i + 1] - trisOf[i];
       for (uint32_t q = 0; q < tc; ++q) {
         const size_t t = tris[trisOf[i] + q], s = base[i] + q;
-        for (int c = 0; c < 3; ++c) idx[3 * s + c] = mesh.indices[3 * t + c];
-        if (!isCut(mesh, t)) shapes[s] = detail::triangleShape(corner(s, 0), corner(s, 1), corner(s, 2));
+        Slot& sl = slot[s];
+        for (int c = 0; c < 3; ++c) {
+          idx[3 * s + c] = mesh.indices[3 * t + c];
+          sl.v[c] = dvec3(mesh.positions[idx[3 * s + c]]);
+        }
+        sl.tri = static_cast<uint32_t>(t);
+        sl.changed = changedTri[t];
+        if (!isCut(mesh, t)) sl.shape = detail::triangleShape(sl.v[0], sl.v[1], sl.v[2]);
       }
       detail::TriangleBvh& tree = cache.tree[i];
       if (cache.count[i] != tc || tree.empty()) {
@@ -219,15 +232,14 @@ std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<ui
     std::vector<uint64_t>& mine = found.local();
     for (size_t k = r.begin(); k < r.end(); ++k) {
       const uint32_t f = tasks[k].first, g = tasks[k].second;
+      const Slot *sf = slot.data() + base[f], *sg = slot.data() + base[g];
       cache.tree[f].overlappingPairs(cache.tree[g], [&](uint32_t a, uint32_t b) {
-        const uint32_t t = tris[trisOf[f] + a], u = tris[trisOf[g] + b];
-        if (!changedTri[t] && !changedTri[u]) return;
+        const Slot *x = sf + a, *y = sg + b;
+        if (!x->changed && !y->changed) return;
         // Moeller's test on the lower triangle index first, as the search over the whole coat runs it.
-        size_t s = base[f] + a, p = base[g] + b;
-        if (u < t) std::swap(s, p);
-        if (detail::trianglesIntersect(corner(s, 0), corner(s, 1), corner(s, 2), shapes[s], corner(p, 0), corner(p, 1),
-                                       corner(p, 2), shapes[p]))
-          mine.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
+        if (y->tri < x->tri) std::swap(x, y);
+        if (detail::trianglesIntersect(x->v[0], x->v[1], x->v[2], x->shape, y->v[0], y->v[1], y->v[2], y->shape))
+          mine.push_back((uint64_t(x->tri) << 32) | y->tri);
       });
     }
   });
