@@ -535,7 +535,8 @@ bool interval(const double p[3], const double d[3], double& t0, double& t1) {
 
 TriangleShape triangleShape(const V3& a0, const V3& a1, const V3& a2) {
   TriangleShape s;
-  s.normalLength = glm::length(glm::cross(a1 - a0, a2 - a0));
+  s.normal = glm::cross(a1 - a0, a2 - a0);
+  s.normalLength = glm::length(s.normal);
   // The longest edge: the maximum of the three lengths is the same whichever order they come in.
   s.longestEdge = std::max({glm::length(a0 - a1), glm::length(a1 - a2), glm::length(a2 - a0)});
   return s;
@@ -552,16 +553,29 @@ bool trianglesIntersect(const V3& a0, const V3& a1, const V3& a2, const Triangle
   const V3 A[3] = {a0, a1, a2}, B[3] = {b0, b1, b2};
   // Both triangles' edges, relative to which "touching" is judged.
   const double eps = 1e-12 * std::max(sa.longestEdge, sb.longestEdge);
-  const V3 nb = glm::cross(b1 - b0, b2 - b0);
+  const V3 &na = sa.normal, &nb = sb.normal;
+  // Signed distances to the other's plane, first times its normal's length: where all three are beyond
+  // twice the tolerance on one side, the distances themselves (rounded, then zeroed below eps) are
+  // nonzero on that side too, so the pair is apart as the test below would find, without dividing. (A
+  // bound in the subnormal range is not relied on: its rounding is coarser.)
   double da[3], db[3];
+  for (int k = 0; k < 3; ++k) da[k] = glm::dot(nb, A[k] - b0);
+  const double sureB = 2 * eps * lnb;
+  if (sureB >= std::numeric_limits<double>::min() &&
+      ((da[0] > sureB && da[1] > sureB && da[2] > sureB) || (da[0] < -sureB && da[1] < -sureB && da[2] < -sureB)))
+    return false;
   for (int k = 0; k < 3; ++k) {
-    da[k] = glm::dot(nb, A[k] - b0) / lnb;
+    da[k] /= lnb;
     if (std::abs(da[k]) < eps) da[k] = 0;
   }
   if ((da[0] > 0 && da[1] > 0 && da[2] > 0) || (da[0] < 0 && da[1] < 0 && da[2] < 0)) return false;
-  const V3 na = glm::cross(a1 - a0, a2 - a0);
+  for (int k = 0; k < 3; ++k) db[k] = glm::dot(na, B[k] - a0);
+  const double sureA = 2 * eps * lna;
+  if (sureA >= std::numeric_limits<double>::min() &&
+      ((db[0] > sureA && db[1] > sureA && db[2] > sureA) || (db[0] < -sureA && db[1] < -sureA && db[2] < -sureA)))
+    return false;
   for (int k = 0; k < 3; ++k) {
-    db[k] = glm::dot(na, B[k] - a0) / lna;
+    db[k] /= lna;
     if (std::abs(db[k]) < eps) db[k] = 0;
   }
   if ((db[0] > 0 && db[1] > 0 && db[2] > 0) || (db[0] < 0 && db[1] < 0 && db[2] < 0)) return false;

@@ -348,7 +348,8 @@ bool trianglesIntersect(const glm::dvec3& a0, const glm::dvec3& a1, const glm::d
 // What trianglesIntersect computes of each triangle alone (the square roots), made once per triangle
 // when it meets many others. The overload below gives the very answer of the one above.
 struct TriangleShape {
-  double normalLength = 0;  // |(a1 - a0) x (a2 - a0)|; not > 0: degenerate, never intersects
+  glm::dvec3 normal{0};     // (a1 - a0) x (a2 - a0), unnormalised
+  double normalLength = 0;  // |normal|; not > 0: degenerate, never intersects
   double longestEdge = 0;
   bool degenerate() const { return !(normalLength > 0); }
 };
