@@ -310,8 +310,21 @@ TEST(FastCheck, TriangleTestWithShapesIsTheFullTest) {
   EXPECT_FALSE(both(a0, a1, a2, {1, 1, 0}, {2, 1, 0}, {1, 2, 0}));                 // coplanar, apart
   EXPECT_TRUE(both(a0, a1, a2, {0.2, 0.2, 1e-13}, {0.3, 0.2, 1}, {0.2, 0.3, 1}));  // touching within eps
   EXPECT_FALSE(both(a0, a1, a2, {0.2, 0.2, 1e-6}, {0.3, 0.2, 1}, {0.2, 0.3, 1}));  // just above
-  EXPECT_FALSE(both(a0, a1, a2, {0.2, 0.2, -1}, {0.2, 0.2, 0}, {0.2, 0.2, 1}));    // degenerate (a segment)
-  EXPECT_FALSE(both(a0, a1, a2, {0.2, 0.2, 0}, {0.2, 0.2, 0}, {0.2, 0.2, 0}));     // collapsed to a point
+  {
+    // A triangle lying flat over the other at heights around the tolerance (1e-12 of the longest edge,
+    // here sqrt 2 x 2): within it they touch, beyond it they are apart, also where the test rejects
+    // without dividing (beyond twice the tolerance) and between the two.
+    const double eps = 1e-12 * std::sqrt(2.0) * 2;
+    const dvec3 b0(-0.5, -0.5, 0), b1(1.5, -0.5, 0), b2(-0.5, 1.5, 0);
+    for (double f : {0.5, 0.9, 0.99})
+      EXPECT_TRUE(both(a0, a1, a2, b0 + dvec3(0, 0, f * eps), b1 + dvec3(0, 0, f * eps), b2 + dvec3(0, 0, f * eps)))
+          << f;
+    for (double f : {1.01, 1.5, 1.99, 2.0, 2.01, 3.0, -1.5, -2.5})
+      EXPECT_FALSE(both(a0, a1, a2, b0 + dvec3(0, 0, f * eps), b1 + dvec3(0, 0, f * eps), b2 + dvec3(0, 0, f * eps)))
+          << f;
+  }
+  EXPECT_FALSE(both(a0, a1, a2, {0.2, 0.2, -1}, {0.2, 0.2, 0}, {0.2, 0.2, 1}));  // degenerate (a segment)
+  EXPECT_FALSE(both(a0, a1, a2, {0.2, 0.2, 0}, {0.2, 0.2, 0}, {0.2, 0.2, 0}));   // collapsed to a point
   pteryla::Rng rng(17);
   size_t crossing = 0;
   for (int k = 0; k < 20000; ++k) {
