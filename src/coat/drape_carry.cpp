@@ -238,33 +238,62 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
     movedPosed.build(posed.positions.data(), movedIdx.data(), movedIdx.size() / 3);
   }
   std::vector<uint8_t> retrim(n, 0);
+  // The moved follicles, where they were and where they are (two points each), in a grid of the largest
+  // root zone's reach.
+  std::vector<dvec3> movedAt;
+  double zoneMax = 0;
+  for (uint32_t j : movedFeet) {
+    movedAt.push_back(R.feathers[j].frame.origin);
+    movedAt.push_back(coat.frames[j].origin);
+    zoneMax = std::max(zoneMax, R.feathers[j].rootZone * (1 + 1e-6) + 1e-9);
+  }
+  detail::PointGrid movedGrid;
+  if (!movedAt.empty()) movedGrid.build(movedAt, std::max(zoneMax, 1e-9));
+  // The moved skin's bounds at rest and posed: a vertex whose reach meets neither finds no moved face.
+  detail::Box movedBounds[2];
+  for (int w = 0; w < 2 && !movedIdx.empty(); ++w) {
+    glm::vec3 lo(0), hi(0);
+    if (!(w ? movedPosed : movedRest).bounds(lo, hi)) continue;
+    movedBounds[w].add(dvec3(lo));
+    movedBounds[w].add(dvec3(hi));
+  }
   detail::inArena(o.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         const uint32_t i = order[k];
         if (placed[i]) continue;
         const FeatherMemo& m = R.feathers[i];
-        for (uint32_t j : movedFeet) {
-          if (rank[j] <= static_cast<int64_t>(k)) continue;
-          const double rz = R.feathers[j].rootZone * (1 + 1e-6) + 1e-9;
-          auto near = [&](const dvec3& g) {
-            return g.x >= m.box.lo.x - rz && g.y >= m.box.lo.y - rz && g.z >= m.box.lo.z - rz &&
-                   g.x <= m.box.hi.x + rz && g.y <= m.box.hi.y + rz && g.z <= m.box.hi.z + rz;
-          };
-          if (near(R.feathers[j].frame.origin) || near(coat.frames[j].origin)) {
-            retrim[i] = 1;
-            break;
-          }
-        }
+        // A later follicle that moved within its root zone's reach of the feather's box.
+        if (!m.box.empty() && !movedAt.empty())
+          movedGrid.query(m.box.lo - dvec3(zoneMax), m.box.hi + dvec3(zoneMax), [&](uint32_t a) {
+            const uint32_t j = movedFeet[a / 2];
+            if (retrim[i] || rank[j] <= static_cast<int64_t>(k)) return;
+            const double rz = R.feathers[j].rootZone * (1 + 1e-6) + 1e-9;
+            const dvec3& g = movedAt[a];
+            if (g.x >= m.box.lo.x - rz && g.y >= m.box.lo.y - rz && g.z >= m.box.lo.z - rz && g.x <= m.box.hi.x + rz &&
+                g.y <= m.box.hi.y + rz && g.z <= m.box.hi.z + rz)
+              retrim[i] = 1;
+          });
         if (movedIdx.empty() || changed[i]) continue;
         // The nearest skin point of a vertex lies within its height over its chart point and half a chart
         // cell; moved skin (at rest or posed) that close can change which side of the skin it is on.
         const double cell = 0.5 * m.chart.diag;
-        for (uint32_t q = first[i]; q < first[i + 1] && !changed[i]; ++q) {
-          const uint32_t l = q - first[i];
+        const size_t cnt = first[i + 1] - first[i];
+        thread_local std::vector<double> reach;
+        reach.assign(cnt, 0.0);
+        detail::Box within;  // where the vertices' searches reach
+        for (size_t l = 0; l < cnt; ++l) {
           if (m.bad[l]) continue;
           const dvec3 p(m.pos[l]);
-          const double rr = glm::length(p - dvec3(m.surface[l])) + cell;
+          reach[l] = glm::length(p - dvec3(m.surface[l])) + cell;
+          within.add(p - dvec3(reach[l]));
+          within.add(p + dvec3(reach[l]));
+        }
+        if (!within.overlaps(movedBounds[0]) && !within.overlaps(movedBounds[1])) continue;
+        for (size_t l = 0; l < cnt && !changed[i]; ++l) {
+          if (m.bad[l]) continue;
+          const dvec3 p(m.pos[l]);
+          const double rr = reach[l];
           dvec3 bary;
           double d2 = 0;
           if (movedRest.nearest(p, rr * rr, bary, d2) >= 0 || movedPosed.nearest(p, rr * rr, bary, d2) >= 0)
