@@ -58,6 +58,7 @@ Chart chartShape(const Chart& c) {
   out.nodes = c.nodes;
   out.active = c.active;
   out.overhanging = c.overhanging;
+  out.faces = c.faces;
   return out;
 }
 
@@ -133,10 +134,9 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
         const FeatherFrame& F = coat.frames[i];
         const bool footMoved = !sameFrame(m.frame, F);
         bool moved = footMoved;
-        for (const Node& nd : m.chart.nodes) {
-          if (nd.face >= 0 && static_cast<size_t>(nd.face) >= nf)
-            throw Error("a chart node's face is out of range", {}, "reference");
-          if (!moved && nd.face >= 0 && movedFace[static_cast<size_t>(nd.face)]) moved = true;
+        for (int32_t f : m.chart.faces) {
+          if (static_cast<size_t>(f) >= nf) throw Error("a chart node's face is out of range", {}, "reference");
+          if (!moved && movedFace[static_cast<size_t>(f)]) moved = true;
         }
         const uint32_t* vs = verts.data() + first[i];
         const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];

@@ -118,7 +118,13 @@ void buildChart(const Surface& S, const FeatherFrame& F, const feather::FeatherP
       if (cell[static_cast<size_t>(a) * (C.ny - 1) + b])
         C.at(a, b).active = C.at(a + 1, b).active = C.at(a, b + 1).active = C.at(a + 1, b + 1).active = 1;
   C.overhanging = 0;
-  for (const Node& nd : C.nodes) C.overhanging += nd.free && nd.active;
+  C.faces.clear();
+  for (const Node& nd : C.nodes) {
+    C.overhanging += nd.free && nd.active;
+    if (nd.face >= 0) C.faces.push_back(nd.face);
+  }
+  std::sort(C.faces.begin(), C.faces.end());
+  C.faces.erase(std::unique(C.faces.begin(), C.faces.end()), C.faces.end());
 }
 
 bool foldsOrLeaves(const Chart& C) {

@@ -62,8 +62,9 @@ struct Chart {
     if (a < 0 || b < 0 || a >= fineX() || b >= fineY()) return false;
     return fine[static_cast<size_t>(a) * fineY() + b] != 0;
   }
-  std::vector<Node> nodes;  // a * ny + b
-  size_t overhanging = 0;   // active nodes past the skin's edge (free), counted when the chart is built
+  std::vector<Node> nodes;     // a * ny + b
+  size_t overhanging = 0;      // active nodes past the skin's edge (free), counted when the chart is built
+  std::vector<int32_t> faces;  // the distinct skin faces its nodes were marched to, ascending
   // The skin samples a chart reads and writes while it is laid (static geometry, gathered in parallel
   // before the sequential pass): per active node (in node order) the samples facing like it within the
   // requirement radius, and once per sample the cell and weights of the material over it.
