@@ -10,6 +10,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#include "../../src/coat/drape_internal.hpp"
 #include "../../src/coat/spatial.hpp"
 #include "pteryla/coat/check.hpp"
 #include "pteryla/core/rng.hpp"
@@ -145,5 +146,56 @@ TEST(TrianglePairs, ARefittedTreeFindsWhatAFreshTreeFindsAndSkipsCollapsedTriang
     EXPECT_GE(hi[k], live.hi[k]);
     EXPECT_NEAR(lo[k], live.lo[k], 1e-6);
     EXPECT_NEAR(hi[k], live.hi[k], 1e-6);
+  }
+}
+
+TEST(TrianglePairs, KeptTreesFindTheChangedTrianglesPairsOfAFreshSearch) {
+  // A carried frame's pair search (pairsWithChanged with a PairTrees cache, drape_trim.cpp) against the
+  // search that builds every tree afresh, over three frames of one cache: feathers moved (their trees
+  // refitted), triangles collapsed (left out), and one feather losing triangles (its tree built again).
+  namespace dr = pteryla::coat::draping;
+  TriMesh m = soup(6000, 60, 21);
+  pteryla::Rng rng(4);
+  dr::PairTrees cache;
+  for (int frame = 0; frame < 3; ++frame) {
+    const size_t nt = m.triangleCount();
+    const uint32_t n = 60;
+    std::vector<uint32_t> order(n), trisOf(n + 1, 0), tris(nt);
+    for (uint32_t i = 0; i < n; ++i) order[i] = i;
+    for (size_t t = 0; t < nt; ++t) ++trisOf[m.featherId[m.indices[3 * t]] + 1];
+    for (uint32_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
+    std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
+    for (size_t t = 0; t < nt; ++t) tris[fill[m.featherId[m.indices[3 * t]]]++] = static_cast<uint32_t>(t);
+    std::vector<uint8_t> changedTri(nt, 0);
+    for (uint32_t i = 0; i < n; ++i)
+      if (rng.uniform(0, 1) < 0.3)
+        for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) changedTri[tris[q]] = 1;
+    const std::vector<uint64_t> fresh = dr::pairsWithChanged(m, order, trisOf, tris, changedTri, pteryla::ProgressFn{});
+    const std::vector<uint64_t> kept = dr::pairsWithChanged(m, order, trisOf, tris, changedTri, cache);
+    if (frame == 0) {
+      ASSERT_GT(fresh.size(), 50u);  // the changed feathers do cross others
+    }
+    EXPECT_EQ(kept, fresh) << "frame " << frame;
+    // The next frame: a third of the feathers moved, a few triangles collapsed, feather 5 shorter.
+    for (uint32_t i = 0; i < n; i += 3) {
+      const glm::vec3 shift(static_cast<float>(rng.uniform(-0.02, 0.02)), static_cast<float>(rng.uniform(-0.02, 0.02)),
+                            static_cast<float>(rng.uniform(-0.01, 0.01)));
+      for (size_t v = 0; v < m.positions.size(); ++v)
+        if (m.featherId[v] == i) m.positions[v] += shift;
+    }
+    for (int c = 0; c < 40; ++c) {
+      const size_t t = static_cast<size_t>(rng.uniform(0, double(m.triangleCount()) - 1));
+      m.indices[3 * t + 1] = m.indices[3 * t + 2] = m.indices[3 * t];
+    }
+    std::vector<uint32_t> indices;
+    int dropped = 0;
+    for (size_t t = 0; t < m.triangleCount(); ++t) {
+      if (m.featherId[m.indices[3 * t]] == 5 && dropped < 10) {
+        ++dropped;
+        continue;
+      }
+      indices.insert(indices.end(), m.indices.begin() + 3 * t, m.indices.begin() + 3 * t + 3);
+    }
+    m.indices = indices;
   }
 }
