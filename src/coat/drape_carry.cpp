@@ -160,8 +160,24 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
           copy();
           continue;
         }
-        Chart& C = charts[i];
-        C = chartShape(m.chart);
+        // Without `out` the carried chart only places the feather: it is made in this thread's scratch
+        // (its grid and nodes, all that placing reads).
+        thread_local Chart scratch;
+        Chart& C = out ? charts[i] : scratch;
+        if (out) {
+          C = chartShape(m.chart);
+        } else {
+          C.x0 = m.chart.x0;
+          C.y0 = m.chart.y0;
+          C.hx = m.chart.hx;
+          C.hy = m.chart.hy;
+          C.diag = m.chart.diag;
+          C.nx = m.chart.nx;
+          C.ny = m.chart.ny;
+          C.ramp = m.chart.ramp;
+          C.scale = m.chart.scale;
+          C.nodes.assign(m.chart.nodes.begin(), m.chart.nodes.end());
+        }
         // The follicle's motion carries what was marched to no skin point (the follicle's own node).
         const glm::dmat3 footTurn = frameBasis(F) * glm::transpose(frameBasis(m.frame));
         for (Node& nd : C.nodes) {
