@@ -163,35 +163,40 @@ void Pipeline::Impl::computeControls() {
   constraints.fixedElevation = fixedElevation;
 }
 
+// A growing feather is packed with its barbs (age 1 for the packer) as it will be meshed: once its
+// shaft is full grown, as grown at its age (the packer sees its barb lengths, angles and opening, and
+// computeMesh meshes the packed grown parameters as they are); while its shaft still grows, as the
+// mature feather, grown afterwards (a prefix of the packed shaft, barbs closed and short). Straight
+// shafts of the mature feather (the packer's age < opening_age rule) let opening barbs reach into
+// the skin, and a short grown shaft's thin footprint finds no skin to pack against.
+const coat::CoatFeathers& Pipeline::Impl::grownPackInput() {
+  bool anyGrowing = false;
+  for (size_t i = 0; i < coatNow.size() && !anyGrowing; ++i) anyGrowing = coatNow.present[i] && coatNow.age[i] < 1.0;
+  packGrownAge.clear();
+  if (!anyGrowing) return coatNow;
+  packGrownAge.assign(coatNow.size(), 1.0);
+  packCoat = coatNow;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, packCoat.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i < range.end(); ++i)
+      if (packCoat.present[i] && packCoat.age[i] < 1.0) {
+        const feather::GrowthSchedule& schedule = feather::growthScheduleOf(coatNow.params[i]);
+        if (packedAsGrown(packCoat.age[i], schedule, coatNow.params[i])) {
+          packCoat.params[i] = feather::featherAtAge(coatNow.params[i], coatNow.age[i], schedule);
+          packGrownAge[i] = coatNow.age[i];
+        }
+        packCoat.age[i] = 1.0;
+      }
+  });
+  return packCoat;
+}
+
 void Pipeline::Impl::computePack() {
   report(progress, "pack", 0);
   const coat::PackOptions& o = packOptions;
-  // A growing feather is packed with its barbs (age 1 for the packer) as it will be meshed: once its
-  // shaft is full grown, as grown at its age (the packer sees its barb lengths, angles and opening, and
-  // computeMesh meshes the packed grown parameters as they are); while its shaft still grows, as the
-  // mature feather, grown afterwards (a prefix of the packed shaft, barbs closed and short). Straight
-  // shafts of the mature feather (the packer's age < opening_age rule) let opening barbs reach into
-  // the skin, and a short grown shaft's thin footprint finds no skin to pack against.
-  bool anyGrowing = false;
-  for (size_t i = 0; i < coatNow.size() && !anyGrowing; ++i) anyGrowing = coatNow.present[i] && coatNow.age[i] < 1.0;
-  const coat::CoatFeathers* packInput = &coatNow;
+  // A draped coat is laid by the mesh stage from the frame's own feathers, so nothing is grown for a
+  // packer here (timeFullPack grows them when it times a pack).
   packGrownAge.clear();
-  if (anyGrowing) {
-    packGrownAge.assign(coatNow.size(), 1.0);
-    packCoat = coatNow;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, packCoat.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t i = range.begin(); i < range.end(); ++i)
-        if (packCoat.present[i] && packCoat.age[i] < 1.0) {
-          const feather::GrowthSchedule& schedule = feather::growthScheduleOf(coatNow.params[i]);
-          if (packedAsGrown(packCoat.age[i], schedule, coatNow.params[i])) {
-            packCoat.params[i] = feather::featherAtAge(coatNow.params[i], coatNow.age[i], schedule);
-            packGrownAge[i] = coatNow.age[i];
-          }
-          packCoat.age[i] = 1.0;
-        }
-    });
-    packInput = &packCoat;
-  }
+  const coat::CoatFeathers* packInput = o.method == coat::PackMethod::Drape ? &coatNow : &grownPackInput();
   if (o.method == coat::PackMethod::Drape) {
     // Laid by the mesh stage (computeMesh drapes the flat coat): every feather meshed flat, unpacked.
     flatPack = coat::PackResult{};
@@ -735,6 +740,8 @@ double Pipeline::timeFullPack(int repeats) {
   elevations();  // the pack stage has run: its inputs are this frame's
   Impl& m = *impl_;
   const coat::PackOptions& o = m.packOptions;
+  // (A draped coat's pack stage grows nothing: its growing feathers are grown here, as a packer takes them.)
+  if (o.method == coat::PackMethod::Drape && !m.timeState.packReport.moult) m.grownPackInput();
   const coat::CoatFeathers& c =
       m.timeState.packReport.moult ? m.timeState.mature : (m.packGrownAge.empty() ? m.coatNow : m.packCoat);
   double best = std::numeric_limits<double>::infinity();

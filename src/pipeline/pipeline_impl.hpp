@@ -71,7 +71,9 @@ struct Pipeline::Impl {
   bool carryPosedDrape = true;        // PackingSettings::carryPosedDrape
   coat::CoatFeathers coatNow;         // at the current time: posed frames, ages, presence
   coat::CoatFeathers packCoat;        // coatNow with growing feathers as grown (the pack input when any grows)
-  std::vector<double> packGrownAge;   // per feather, the age packCoat's parameters are grown to (empty = none)
+  // Makes packCoat and packGrownAge from coatNow; returns the pack input (coatNow when nothing grows).
+  const coat::CoatFeathers& grownPackInput();
+  std::vector<double> packGrownAge;  // per feather, the age packCoat's parameters are grown to (empty = none)
   TimeState timeState;
   std::vector<double> fixedElevation;
   const coat::PackResult* packed = nullptr;        // timeState.frame.result() once packed
