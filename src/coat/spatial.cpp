@@ -300,8 +300,8 @@ void TriangleBvh::outwardBox(uint32_t t, float* lo, float* hi) const {
   for (int c = 0; c < 3; ++c) box.add(vertex(t, c));
   for (int a = 0; a < 3; ++a) {
     // Rounded outward, so the float box contains the double triangle.
-    lo[a] = std::nextafter(static_cast<float>(box.lo[a]), -std::numeric_limits<float>::infinity());
-    hi[a] = std::nextafter(static_cast<float>(box.hi[a]), std::numeric_limits<float>::infinity());
+    lo[a] = nextDown(static_cast<float>(box.lo[a]));
+    hi[a] = nextUp(static_cast<float>(box.hi[a]));
   }
 }
 

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -29,6 +30,23 @@ void inArena(int threads, F&& f) {
     f();
   }
 }
+
+// std::nextafter(x, +-infinity) for a float, inline (the build and refit call it six times a triangle):
+// the neighbouring float, stepping the bits away from or toward zero; infinities toward the far side
+// and NaN stay, zero steps to the smallest subnormal.
+inline float stepFloat(float x, bool up) {
+  if (x != x) return x;
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  if (x == (up ? inf : -inf)) return x;
+  if (x == 0) return up ? std::numeric_limits<float>::denorm_min() : -std::numeric_limits<float>::denorm_min();
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  bits = (x > 0) == up ? bits + 1 : bits - 1;
+  std::memcpy(&x, &bits, sizeof bits);
+  return x;
+}
+inline float nextUp(float x) { return stepFloat(x, true); }
+inline float nextDown(float x) { return stepFloat(x, false); }
 
 struct Box {
   glm::dvec3 lo{std::numeric_limits<double>::infinity()};

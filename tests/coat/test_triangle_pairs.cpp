@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <limits>
 #include <vector>
 
 #include <glm/common.hpp>
@@ -198,4 +201,33 @@ TEST(TrianglePairs, KeptTreesFindTheChangedTrianglesPairsOfAFreshSearch) {
     }
     m.indices = indices;
   }
+}
+
+TEST(TrianglePairs, OutwardRoundingStepsAsNextafterDoes) {
+  // The boxes' outward rounding (detail::nextUp / nextDown, inline) against std::nextafter toward the
+  // infinities: zeros, subnormals, the largest float, infinities, NaN and random floats of both signs.
+  using pteryla::coat::detail::nextDown;
+  using pteryla::coat::detail::nextUp;
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  std::vector<float> xs = {0.0f,
+                           -0.0f,
+                           std::numeric_limits<float>::denorm_min(),
+                           -std::numeric_limits<float>::denorm_min(),
+                           std::numeric_limits<float>::min(),
+                           std::numeric_limits<float>::max(),
+                           -std::numeric_limits<float>::max(),
+                           inf,
+                           -inf,
+                           1.0f,
+                           -1.0f};
+  pteryla::Rng rng(9);
+  for (int k = 0; k < 20000; ++k)
+    xs.push_back(static_cast<float>(rng.uniform(-1e6, 1e6) * std::pow(10.0, rng.uniform(-30, 30))));
+  auto same = [](float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  for (float x : xs) {
+    EXPECT_TRUE(same(nextUp(x), std::nextafter(x, inf))) << x;
+    EXPECT_TRUE(same(nextDown(x), std::nextafter(x, -inf))) << x;
+  }
+  EXPECT_TRUE(std::isnan(nextUp(std::nanf(""))));
+  EXPECT_TRUE(std::isnan(nextDown(std::nanf(""))));
 }
