@@ -32,8 +32,8 @@ void inArena(int threads, F&& f) {
 }
 
 // std::nextafter(x, +-infinity) for a float, inline (the build and refit call it six times a triangle):
-// the neighbouring float, stepping the bits away from or toward zero; infinities toward the far side
-// and NaN stay, zero steps to the smallest subnormal.
+// the neighbouring float (its bits one step away from or toward zero); an infinity stepped outward and
+// NaN stay as they are, and zero steps to the smallest subnormal.
 inline float stepFloat(float x, bool up) {
   if (x != x) return x;
   constexpr float inf = std::numeric_limits<float>::infinity();
