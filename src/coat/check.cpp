@@ -77,8 +77,8 @@ struct CoatBvh {
   std::vector<uint32_t> indices;              // order's index triples, each feather's contiguous
   std::vector<detail::TriangleShape> shapes;  // per slot
   std::vector<detail::TriangleBvh> trees;
-  std::vector<glm::dvec3> boxCorners;  // per group lo, hi: the feather tree's bounds
-  std::vector<uint32_t> boxIndices;    // (lo, hi, lo): a "triangle" whose box is the feather's bounds
+  std::vector<glm::dvec3> boxCorners;  // the feather trees' bounds as buildBoxTree holds them
+  std::vector<uint32_t> boxIndices;
   detail::TriangleBvh top;
 
   bool complete = true;  // false: the progress callback stopped the build (the trees are unusable)
@@ -133,20 +133,14 @@ struct CoatBvh {
       }
     });
     if (!complete) return;
-    boxCorners.resize(2 * ng);
-    boxIndices.resize(3 * ng);
+    std::vector<detail::Box> bounds(ng);
     for (size_t g = 0; g < ng; ++g) {
       glm::vec3 lo(0), hi(0);
       trees[g].bounds(lo, hi);  // a group has a triangle
-      boxCorners[2 * g] = glm::dvec3(lo);
-      boxCorners[2 * g + 1] = glm::dvec3(hi);
-      const uint32_t i = static_cast<uint32_t>(2 * g);
-      boxIndices[3 * g] = i;
-      boxIndices[3 * g + 1] = i + 1;
-      boxIndices[3 * g + 2] = i;
+      bounds[g].add(glm::dvec3(lo));
+      bounds[g].add(glm::dvec3(hi));
     }
-    top.build(boxCorners.data(), boxIndices.data(), ng);
-    top.makePrimBoxes();
+    detail::buildBoxTree(bounds, boxCorners, boxIndices, top);
   }
   size_t groups() const { return featherOf.size(); }
   // Pairs of groups whose bounds meet (g < h), sorted.

@@ -41,9 +41,8 @@ glm::dmat3 faceFrame(const SkinMesh& s, size_t f) {
 
 glm::dmat3 frameBasis(const FeatherFrame& F) { return glm::dmat3(F.tangent, F.binormal, F.normal); }
 
-// What a carried chart needs of a laid one: its grid and nodes (not what laying it gathered).
-Chart chartShape(const Chart& c) {
-  Chart out;
+// A laid chart's grid and nodes into `out` (all that placing a feather on it reads).
+void copyGrid(const Chart& c, Chart& out) {
   out.x0 = c.x0;
   out.y0 = c.y0;
   out.hx = c.hx;
@@ -53,9 +52,16 @@ Chart chartShape(const Chart& c) {
   out.ny = c.ny;
   out.ramp = c.ramp;
   out.scale = c.scale;
+  out.nodes.assign(c.nodes.begin(), c.nodes.end());
+}
+
+// What a carried chart needs of a laid one: its grid and nodes, masks and counts (not what laying it
+// gathered).
+Chart chartShape(const Chart& c) {
+  Chart out;
+  copyGrid(c, out);
   out.material = c.material;
   out.fine = c.fine;
-  out.nodes = c.nodes;
   out.active = c.active;
   out.overhanging = c.overhanging;
   out.faces = c.faces;
@@ -164,20 +170,10 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
         // (its grid and nodes, all that placing reads).
         thread_local Chart scratch;
         Chart& C = out ? charts[i] : scratch;
-        if (out) {
+        if (out)
           C = chartShape(m.chart);
-        } else {
-          C.x0 = m.chart.x0;
-          C.y0 = m.chart.y0;
-          C.hx = m.chart.hx;
-          C.hy = m.chart.hy;
-          C.diag = m.chart.diag;
-          C.nx = m.chart.nx;
-          C.ny = m.chart.ny;
-          C.ramp = m.chart.ramp;
-          C.scale = m.chart.scale;
-          C.nodes.assign(m.chart.nodes.begin(), m.chart.nodes.end());
-        }
+        else
+          copyGrid(m.chart, C);
         // The follicle's motion carries what was marched to no skin point (the follicle's own node).
         const glm::dmat3 footTurn = frameBasis(F) * glm::transpose(frameBasis(m.frame));
         for (Node& nd : C.nodes) {

@@ -85,29 +85,23 @@ bool featherReach(const TriMesh& mesh, const std::vector<uint32_t>& order, const
     }
   });
   std::vector<uint32_t> touchedList, all;
+  std::vector<detail::Box> touchedBox, allBox;
   for (uint32_t i : order) {
-    if (touched[i]) touchedList.push_back(i);
-    if (!liveBox[i].empty()) all.push_back(i);
+    if (touched[i]) {
+      touchedList.push_back(i);
+      touchedBox.push_back(liveBox[i]);
+    }
+    if (!liveBox[i].empty()) {
+      all.push_back(i);
+      allBox.push_back(liveBox[i]);
+    }
   }
   if (touchedList.empty()) return false;
-  // The boxes' trees (each box a "triangle" (lo, hi, lo), held in float rounded outward) find every
-  // meeting pair and maybe a few more, which the exact test drops.
-  auto boxTree = [&](const std::vector<uint32_t>& which, std::vector<dvec3>& corners, std::vector<uint32_t>& idx,
-                     detail::TriangleBvh& tree) {
-    for (uint32_t i : which) {
-      const uint32_t c = static_cast<uint32_t>(corners.size());
-      corners.push_back(liveBox[i].lo);
-      corners.push_back(liveBox[i].hi);
-      idx.insert(idx.end(), {c, c + 1, c});
-    }
-    tree.build(corners.data(), idx.data(), which.size());
-    tree.makePrimBoxes();
-  };
   std::vector<dvec3> cAll, cTouched;
   std::vector<uint32_t> iAll, iTouched;
   detail::TriangleBvh allTree, touchedTree;
-  boxTree(all, cAll, iAll, allTree);
-  boxTree(touchedList, cTouched, iTouched, touchedTree);
+  detail::buildBoxTree(allBox, cAll, iAll, allTree);
+  detail::buildBoxTree(touchedBox, cTouched, iTouched, touchedTree);
   allTree.overlappingPairs(touchedTree, [&](uint32_t a, uint32_t b) {
     const uint32_t i = all[a];
     if (!take[i] && liveBox[i].overlaps(liveBox[touchedList[b]])) take[i] = 1;
@@ -207,22 +201,21 @@ std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<ui
   // The taken feathers whose trees hold a live triangle, and the pairs of them whose bounds meet with a
   // touched one: every crossing pair the search over the whole coat finds with a changed triangle.
   std::vector<uint32_t> group;
-  std::vector<dvec3> corners;
-  std::vector<uint32_t> boxIdx;
+  std::vector<detail::Box> groupBox;
   for (uint32_t i : taken) {
     glm::vec3 lo, hi;
     if (!cache.tree[i].bounds(lo, hi) || lo.x > hi.x) continue;
-    const uint32_t c = static_cast<uint32_t>(corners.size());
-    corners.push_back(dvec3(lo));
-    corners.push_back(dvec3(hi));
-    boxIdx.insert(boxIdx.end(), {c, c + 1, c});
     group.push_back(i);
+    groupBox.emplace_back();
+    groupBox.back().add(dvec3(lo));
+    groupBox.back().add(dvec3(hi));
   }
   std::vector<std::pair<uint32_t, uint32_t>> tasks;
   if (!group.empty()) {
+    std::vector<dvec3> corners;
+    std::vector<uint32_t> boxIdx;
     detail::TriangleBvh top;
-    top.build(corners.data(), boxIdx.data(), group.size());
-    top.makePrimBoxes();
+    detail::buildBoxTree(groupBox, corners, boxIdx, top);
     top.overlappingPairs(top, [&](uint32_t g, uint32_t h) {
       if (g < h && (touched[group[g]] || touched[group[h]])) tasks.emplace_back(group[g], group[h]);
     });

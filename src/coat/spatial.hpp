@@ -363,6 +363,26 @@ bool TriangleBvh::anyLeafHit(const glm::dvec3& origin, const glm::dvec3& dir, do
 bool trianglesIntersect(const glm::dvec3& a0, const glm::dvec3& a1, const glm::dvec3& a2, const glm::dvec3& b0,
                         const glm::dvec3& b1, const glm::dvec3& b2);
 
+// A tree over boxes: box k becomes the "triangle" (lo, hi, lo) of corners[2k], corners[2k + 1], whose box
+// is the box itself (held in float, rounded outward), so its pair queries give every pair of boxes that
+// meet, and at most a few more that the caller's exact test drops. corners and indices hold the tree's
+// input and must outlive it.
+inline void buildBoxTree(const std::vector<Box>& boxes, std::vector<glm::dvec3>& corners,
+                         std::vector<uint32_t>& indices, TriangleBvh& tree) {
+  corners.resize(2 * boxes.size());
+  indices.resize(3 * boxes.size());
+  for (size_t k = 0; k < boxes.size(); ++k) {
+    corners[2 * k] = boxes[k].lo;
+    corners[2 * k + 1] = boxes[k].hi;
+    const uint32_t c = static_cast<uint32_t>(2 * k);
+    indices[3 * k] = c;
+    indices[3 * k + 1] = c + 1;
+    indices[3 * k + 2] = c;
+  }
+  tree.build(corners.data(), indices.data(), boxes.size());
+  tree.makePrimBoxes();
+}
+
 // What trianglesIntersect computes of each triangle alone (the square roots), made once per triangle
 // when it meets many others. The overload below gives the very answer of the one above.
 struct TriangleShape {
