@@ -65,7 +65,7 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   size_t k = 0;
   double packChanged = 0, packRecomputed = 0, naturalRecomputed = 0, meshRegenerated = 0, meshReused = 0,
          incremental = 0, moultChanged = 0, moultRecomputed = 0, poseMoved = 0, poseRepacked = 0, drapeRelaid = 0,
-         drapeReused = 0, drapeCarriedMoved = 0;
+         drapeReused = 0, drapeCarriedMoved = 0, drapeCarriedRigid = 0;
   p->resetTimings();
   for (auto _ : state) {
     p->setTime(consecutive ? 4.0 + double(++k) / 24.0 : times[k++ % 8]);
@@ -84,6 +84,7 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
     drapeRelaid += double(r.drapeRelaid);
     drapeReused += double(r.drapeReused);
     drapeCarriedMoved += double(r.drapeCarriedMoved);
+    drapeCarriedRigid += double(r.drapeCarriedRigid);
   }
   const auto& c = p->feathers();
   size_t absent = 0, growing = 0;
@@ -122,6 +123,7 @@ void runFrames(benchmark::State& state, pipeline::Scene scene, bool consecutive)
   state.counters["drape_reused"] = drapeReused / n;
   // Posed frames of a draped coat carried from the rest pose's drape: feathers the pose moved.
   state.counters["drape_carried_moved"] = drapeCarriedMoved / n;
+  state.counters["drape_carried_rigid"] = drapeCarriedRigid / n;
 }
 
 // The bundled bird with the bench's moult (and its wings bending), or nothing when it is not found.

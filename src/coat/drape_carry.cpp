@@ -8,6 +8,13 @@
 // guarantees are then enforced as the drape enforces them, on the posed skin: material over a later
 // follicle, vertices under the skin and the lower triangle of every crossing pair are trimmed. What did
 // not move (skin, frame and flat mesh the same bits) is copied with what depends on it only.
+//
+// Where a whole piece of skin moves rigidly (a forearm under a bending elbow), a feather lying on it alone
+// whose follicle frame and flat mesh moved with it is its rest drape moved by the piece's motion: nothing
+// under or around it changed relative to it, so it is not placed again, and its trims, its under-skin test
+// and its pairs with feathers on the same piece are the rest drape's. Only what it could meet off the
+// piece is tested again: later follicles and skin not on the piece within reach, and every pair with a
+// feather off the piece (RigidPieces below; DrapeOptions::rigidPieces).
 #include "drape_internal.hpp"
 
 #include <algorithm>
@@ -68,6 +75,113 @@ Chart chartShape(const Chart& c) {
   return out;
 }
 
+// A rigid motion: p -> R p + t.
+struct Motion {
+  glm::dmat3 R{1.0};
+  dvec3 t{0.0};
+  dvec3 at(const dvec3& p) const { return R * p + t; }
+};
+
+// The pose's rigid pieces (issue #26: "where the skin moves rigidly, move the packed feather with its
+// follicle frame"): moved faces whose corners and corner normals one rigid motion takes from rest to posed,
+// within `tol` (positions) and kNormalTol (unit normals). Piece 0 is the unmoved skin; a face is given the
+// first piece (in face order) whose motion takes it, or starts a new piece with its own motion.
+struct RigidPieces {
+  static constexpr double kRelTol = 1e-6;  // of the rest skin's bounding diagonal
+  static constexpr double kNormalTol = 1e-6;
+  static constexpr size_t kMaxPieces = 64;
+  std::vector<int32_t> of;     // per face: 0 unmoved, g >= 1 its piece, -1 moved with no piece
+  std::vector<Motion> motion;  // per piece (0: the identity)
+  double tol = 0;
+
+  RigidPieces(const SkinMesh& rest, const SkinMesh& posed, const std::vector<uint8_t>& movedFace,
+              const std::vector<glm::dmat3>& turn, bool enabled) {
+    const size_t nf = rest.faces.size();
+    of.assign(nf, 0);
+    motion.assign(1, Motion{});
+    detail::Box bb;
+    for (const dvec3& p : rest.positions) bb.add(p);
+    tol = bb.empty() ? 0.0 : kRelTol * glm::length(bb.hi - bb.lo);
+    for (size_t f = 0; f < nf; ++f) {
+      if (!movedFace[f]) continue;
+      int32_t g = -1;
+      for (size_t q = 1; enabled && q < motion.size() && g < 0; ++q)
+        if (faceMoves(rest, posed, f, motion[q])) g = static_cast<int32_t>(q);
+      if (enabled && g < 0 && motion.size() < kMaxPieces) {
+        const auto& t = rest.faces[f];
+        const dvec3 cr = (rest.positions[t[0]] + rest.positions[t[1]] + rest.positions[t[2]]) / 3.0;
+        const dvec3 cp = (posed.positions[t[0]] + posed.positions[t[1]] + posed.positions[t[2]]) / 3.0;
+        const Motion M{turn[f], cp - turn[f] * cr};
+        if (faceMoves(rest, posed, f, M)) {
+          g = static_cast<int32_t>(motion.size());
+          motion.push_back(M);
+        }
+      }
+      of[f] = g;
+    }
+  }
+  bool faceMoves(const SkinMesh& rest, const SkinMesh& posed, size_t f, const Motion& M) const {
+    for (uint32_t v : rest.faces[f]) {
+      const dvec3 d = posed.positions[v] - M.at(rest.positions[v]);
+      if (!(glm::dot(d, d) <= tol * tol)) return false;
+      const dvec3 e = posed.vertexNormals[v] - M.R * rest.vertexNormals[v];
+      if (!(glm::dot(e, e) <= kNormalTol * kNormalTol)) return false;
+    }
+    return true;
+  }
+  // The piece whose motion takes follicle frame a (rest) to b (posed): 0 for the same frame, -1 for none.
+  int32_t frameOf(const FeatherFrame& a, const FeatherFrame& b) const {
+    if (sameFrame(a, b)) return 0;
+    for (size_t q = 1; q < motion.size(); ++q)
+      if (frameMoves(a, b, motion[q])) return static_cast<int32_t>(q);
+    return -1;
+  }
+  bool frameMoves(const FeatherFrame& a, const FeatherFrame& b, const Motion& M) const {
+    const dvec3 d = b.origin - M.at(a.origin);
+    if (!(glm::dot(d, d) <= tol * tol)) return false;
+    const dvec3 axes[3][2] = {{a.normal, b.normal}, {a.tangent, b.tangent}, {a.binormal, b.binormal}};
+    for (const auto& q : axes) {
+      const dvec3 e = q[1] - M.R * q[0];
+      if (!(glm::dot(e, e) <= kNormalTol * kNormalTol)) return false;
+    }
+    return true;
+  }
+};
+
+// Is feather i's flat mesh in `mesh` the memo's moved by M: the same triangles, each vertex within `tol`,
+// its normal and tangent within kFlatAxisTol (float data, made along another path)?
+constexpr double kFlatAxisTol = 1e-5;
+bool flatMoves(const FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i, const Motion& M,
+               double tol) {
+  const uint32_t* vs = L.verts.data() + L.first[i];
+  const size_t cnt = L.first[i + 1] - L.first[i], tc = L.trisOf[i + 1] - L.trisOf[i];
+  const bool hasN = mesh.normals.size() == mesh.positions.size(), hasT = mesh.tangents.size() == mesh.positions.size();
+  if (m.flatPos.size() != cnt || m.flatTris.size() != 3 * tc) return false;
+  if ((hasN && m.flatNrm.size() != cnt) || (hasT && m.flatTan.size() != cnt)) return false;
+  auto far = [](const dvec3& d, double r) { return !(glm::dot(d, d) <= r * r); };
+  for (size_t q = 0; q < cnt; ++q) {
+    const uint32_t v = vs[q];
+    if (far(dvec3(mesh.positions[v]) - M.at(dvec3(m.flatPos[q])), tol)) return false;
+    if (hasN && far(dvec3(mesh.normals[v]) - M.R * dvec3(m.flatNrm[q]), kFlatAxisTol)) return false;
+    if (hasT && far(dvec3(mesh.tangents[v]) - M.R * dvec3(m.flatTan[q]), kFlatAxisTol)) return false;
+  }
+  for (size_t q = 0; q < tc; ++q)
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t v = mesh.indices[3 * static_cast<size_t>(L.tris[L.trisOf[i] + q]) + c];
+      if (mesh.featherId[v] != i || m.flatTris[3 * q + c] != L.localVert[v]) return false;
+    }
+  return true;
+}
+
+// The bounds of a box's eight corners moved by M.
+detail::Box movedBox(const detail::Box& b, const Motion& M) {
+  detail::Box out;
+  if (b.empty()) return out;
+  for (int c = 0; c < 8; ++c)
+    out.add(M.at(dvec3(c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z)));
+  return out;
+}
+
 }  // namespace
 
 DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeathers& coat, TriMesh& mesh,
@@ -123,9 +237,14 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
     movedIdx.insert(movedIdx.end(), t.begin(), t.end());
   }
 
-  // Per feather: its chart carried by the skin, and whether anything of it moved.
+  const RigidPieces pieces(rest, posed, movedFace, turn, o.rigidPieces);
+
+  // Per feather: its chart carried by the skin, and whether anything of it moved. `piece`: 0 unmoved, g >= 1
+  // moved rigidly with piece g (its chart's faces all on g, its frame moved by g's motion, its flat mesh
+  // the reference's), -1 placed on its carried chart.
   std::vector<Chart> charts(n);
   std::vector<uint8_t> placed(n, 0);
+  std::vector<int32_t> piece(n, -1);
   std::vector<glm::vec3> surfacePoint(nv);
   std::vector<uint8_t> bad(nv, 0), inside(nv, 0), overFollicle(nt, 0);
   if (out) {
@@ -140,13 +259,19 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
         const FeatherFrame& F = coat.frames[i];
         const bool footMoved = !sameFrame(m.frame, F);
         bool moved = footMoved;
+        int32_t on = -2;  // the piece all its chart's faces lie on (-1: none, or more than one)
         for (int32_t f : m.chart.faces) {
           if (static_cast<size_t>(f) >= nf) throw Error("a chart node's face is out of range", {}, "reference");
           if (!moved && movedFace[static_cast<size_t>(f)]) moved = true;
+          const int32_t g = pieces.of[static_cast<size_t>(f)];
+          on = on == -2 || on == g ? g : -1;
         }
         const uint32_t* vs = verts.data() + first[i];
         const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
         const bool same = !moved && sameFlat(m, mesh, L, i);
+        const bool rigid = moved && on >= 1 && pieces.frameMoves(m.frame, F, pieces.motion[static_cast<size_t>(on)]) &&
+                           flatMoves(m, mesh, L, i, pieces.motion[static_cast<size_t>(on)], pieces.tol);
+        piece[i] = same ? 0 : rigid ? on : -1;
         // The reference's drape of the feather, with its trims and under-skin test.
         auto copy = [&] {
           for (size_t l = 0; l < cnt; ++l) {
@@ -161,9 +286,27 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
           for (size_t q = 0; q < tc; ++q) overFollicle[tris[trisOf[i] + q]] = m.overFollicle[q];
           res.elevation[i] = m.elevation;
         };
+        // The same, moved by its piece's motion.
+        auto copyMoved = [&](const Motion& M) {
+          for (size_t l = 0; l < cnt; ++l) {
+            const uint32_t v = vs[l];
+            mesh.positions[v] = glm::vec3(M.at(dvec3(m.pos[l])));
+            if (hasN) mesh.normals[v] = glm::vec3(M.R * dvec3(m.nrm[l]));
+            if (hasT) mesh.tangents[v] = glm::vec3(M.R * dvec3(m.tan[l]));
+            surfacePoint[v] = glm::vec3(M.at(dvec3(m.surface[l])));
+            bad[v] = m.bad[l];
+            inside[v] = m.inside[l];
+          }
+          for (size_t q = 0; q < tc; ++q) overFollicle[tris[trisOf[i] + q]] = m.overFollicle[q];
+          res.elevation[i] = m.elevation;
+        };
         // The chart is copied only where this drape places the feather or keeps the chart.
         if (same && !out) {
           copy();
+          continue;
+        }
+        if (rigid && !out) {
+          copyMoved(pieces.motion[static_cast<size_t>(on)]);
           continue;
         }
         // Without `out` the carried chart only places the feather: it is made in this thread's scratch
@@ -229,6 +372,8 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
         }
         if (same) {
           copy();
+        } else if (rigid) {
+          copyMoved(pieces.motion[static_cast<size_t>(on)]);
         } else {
           placed[i] = 1;
           res.elevation[i] = placeOnChart(C, F, mesh, vs, cnt, hasN, hasT, surfacePoint, bad);
@@ -269,11 +414,135 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
     movedBounds[w].add(dvec3(lo));
     movedBounds[w].add(dvec3(hi));
   }
+  // For the feathers moved with a piece: which piece moved each follicle, every follicle where it was and
+  // where it is (grids by place in `order`), and per such piece the skin that is not on it within reach of
+  // its feathers' vertex searches (a tree at rest and one posed).
+  const size_t np = pieces.motion.size();
+  std::vector<int32_t> footPiece(n, -1);
+  std::vector<uint8_t> pieceUsed(np, 0);
+  for (uint32_t j : order)
+    if (piece[j] >= 1) pieceUsed[static_cast<size_t>(piece[j])] = 1;
+  const bool anyRigid = std::find(pieceUsed.begin(), pieceUsed.end(), 1) != pieceUsed.end();
+  std::vector<dvec3> restAt, posedAt;
+  double zoneAll = 0;
+  detail::PointGrid restGrid, posedGrid;
+  std::vector<std::vector<uint32_t>> offIdx(2 * np);  // per piece: at rest, posed
+  std::vector<detail::TriangleBvh> offTree(2 * np);
+  // Where a vertex's search for the nearest skin point reaches: its height over its chart point, half a
+  // chart cell, and the pieces' tolerance for the rounding of a moved copy.
+  auto searchReach = [&](const FeatherMemo& m, size_t l) {
+    return glm::length(dvec3(m.pos[l]) - dvec3(m.surface[l])) + 0.5 * m.chart.diag + pieces.tol;
+  };
+  if (anyRigid) {
+    for (uint32_t j : order) {
+      footPiece[j] = pieces.frameOf(R.feathers[j].frame, coat.frames[j]);
+      restAt.push_back(R.feathers[j].frame.origin);
+      posedAt.push_back(coat.frames[j].origin);
+      zoneAll = std::max(zoneAll, R.feathers[j].rootZone * (1 + 1e-6) + 1e-9);
+    }
+    restGrid.build(restAt, std::max(zoneAll, 1e-9));
+    posedGrid.build(posedAt, std::max(zoneAll, 1e-9));
+    // Per piece, the bounds of its feathers' vertex searches, at rest and moved.
+    std::vector<detail::Box> reachOf(2 * np);
+    for (uint32_t i : order) {
+      if (piece[i] < 1) continue;
+      const FeatherMemo& m = R.feathers[i];
+      const auto g = static_cast<size_t>(piece[i]);
+      detail::Box b;
+      for (size_t l = 0; l < m.pos.size(); ++l) {
+        if (m.bad[l]) continue;
+        const double r = searchReach(m, l);
+        b.add(dvec3(m.pos[l]) - dvec3(r));
+        b.add(dvec3(m.pos[l]) + dvec3(r));
+      }
+      reachOf[2 * g].add(b);
+      reachOf[2 * g + 1].add(movedBox(b, pieces.motion[g]));
+    }
+    for (size_t g = 1; g < np; ++g) {
+      if (!pieceUsed[g]) continue;
+      for (int w = 0; w < 2; ++w) {
+        const SkinMesh& s = w ? posed : rest;
+        std::vector<uint32_t>& idx = offIdx[2 * g + w];
+        for (size_t f = 0; f < nf; ++f) {
+          if (pieces.of[f] == static_cast<int32_t>(g)) continue;
+          detail::Box fb;
+          for (uint32_t v : s.faces[f]) fb.add(s.positions[v]);
+          if (fb.overlaps(reachOf[2 * g + w])) idx.insert(idx.end(), s.faces[f].begin(), s.faces[f].end());
+        }
+      }
+    }
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(size_t(0), 2 * np, [&](size_t k) {
+        if (!offIdx[k].empty())
+          offTree[k].build((k % 2 ? posed : rest).positions.data(), offIdx[k].data(), offIdx[k].size() / 3);
+      });
+    });
+  }
+  // A feather moved with piece g: retrimmed where a later follicle not moved by g is within its root zone's
+  // reach of the feather's surface points (at rest or posed), tested against the skin again where skin not
+  // on g is within a vertex's search (at rest or posed).
+  auto retestWithPiece = [&](uint32_t i, size_t k) {
+    const FeatherMemo& m = R.feathers[i];
+    const auto g = static_cast<size_t>(piece[i]);
+    const Motion& M = pieces.motion[g];
+    const double pad = pieces.tol;
+    if (!m.box.empty()) {
+      auto near = [&](const detail::PointGrid& grid, const std::vector<dvec3>& at, const detail::Box& b) {
+        grid.query(b.lo - dvec3(zoneAll + pad), b.hi + dvec3(zoneAll + pad), [&](uint32_t a) {
+          const uint32_t j = order[a];
+          if (retrim[i] || a <= k || footPiece[j] == piece[i]) return;
+          const double rz = R.feathers[j].rootZone * (1 + 1e-6) + 1e-9 + pad;
+          const dvec3& q = at[a];
+          if (q.x >= b.lo.x - rz && q.y >= b.lo.y - rz && q.z >= b.lo.z - rz && q.x <= b.hi.x + rz &&
+              q.y <= b.hi.y + rz && q.z <= b.hi.z + rz)
+            retrim[i] = 1;
+        });
+      };
+      near(restGrid, restAt, m.box);
+      near(posedGrid, posedAt, movedBox(m.box, M));
+    }
+    const detail::TriangleBvh &offRest = offTree[2 * g], &offPosed = offTree[2 * g + 1];
+    if (offRest.empty() && offPosed.empty()) return;
+    const size_t cnt = first[i + 1] - first[i];
+    thread_local std::vector<double> reach;
+    reach.assign(cnt, 0.0);
+    detail::Box within;
+    for (size_t l = 0; l < cnt; ++l) {
+      if (m.bad[l]) continue;
+      const dvec3 p(m.pos[l]);
+      reach[l] = searchReach(m, l);
+      within.add(p - dvec3(reach[l]));
+      within.add(p + dvec3(reach[l]));
+    }
+    if (within.empty()) return;
+    dvec3 bary;
+    double d2 = 0;
+    {
+      // The whole feather first: a ball around all its vertices' searches.
+      const dvec3 c = 0.5 * (within.lo + within.hi);
+      const double rad = 0.5 * glm::length(within.hi - within.lo) + pad;
+      if ((offRest.empty() || offRest.nearest(c, rad * rad, bary, d2) < 0) &&
+          (offPosed.empty() || offPosed.nearest(M.at(c), rad * rad, bary, d2) < 0))
+        return;
+    }
+    for (size_t l = 0; l < cnt && !changed[i]; ++l) {
+      if (m.bad[l]) continue;
+      const dvec3 p(m.pos[l]);
+      const double rr = reach[l];
+      if ((!offRest.empty() && offRest.nearest(p, rr * rr, bary, d2) >= 0) ||
+          (!offPosed.empty() && offPosed.nearest(M.at(p), rr * rr, bary, d2) >= 0))
+        changed[i] = 1;
+    }
+  };
   detail::inArena(o.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) {
         const uint32_t i = order[k];
         if (placed[i]) continue;
+        if (piece[i] >= 1) {
+          retestWithPiece(i, k);
+          continue;
+        }
         const FeatherMemo& m = R.feathers[i];
         // A later follicle that moved within its root zone's reach of the feather's box.
         if (!m.box.empty() && !movedAt.empty())
@@ -378,7 +647,8 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
   // changed feathers' triangles searched here.
   std::vector<uint64_t> pairs;
   for (const PairMemo& pm : R.pairs) {
-    if (rank[pm.fa] < 0 || rank[pm.fb] < 0 || changed[pm.fa] || changed[pm.fb]) continue;
+    if (rank[pm.fa] < 0 || rank[pm.fb] < 0 || changed[pm.fa] || changed[pm.fb] || piece[pm.fa] != piece[pm.fb])
+      continue;
     const uint32_t t = tris[trisOf[pm.fa] + pm.ta], u = tris[trisOf[pm.fb] + pm.tb];
     if (isCut(mesh, t) || isCut(mesh, u)) continue;
     pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
@@ -388,9 +658,9 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
     for (uint32_t i : order)
       if (changed[i])
         for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) changedTri[tris[q]] = 1;
-    const std::vector<uint64_t> found = R.pairTrees
-                                            ? pairsWithChanged(mesh, order, trisOf, tris, changedTri, *R.pairTrees)
-                                            : pairsWithChanged(mesh, order, trisOf, tris, changedTri, {});
+    const std::vector<uint64_t> found =
+        R.pairTrees ? pairsWithChanged(mesh, order, trisOf, tris, changedTri, *R.pairTrees, &piece)
+                    : pairsWithChanged(mesh, order, trisOf, tris, changedTri, {}, &piece);
     pairs.insert(pairs.end(), found.begin(), found.end());
   }
   std::sort(pairs.begin(), pairs.end());
@@ -409,7 +679,10 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
   tally(res, order, cut, kept,
         [&](uint32_t i) -> const Chart& { return charts[i].nodes.empty() ? R.feathers[i].chart : charts[i]; });
   size_t placedCount = 0;
-  for (uint32_t i : order) placedCount += placed[i];
+  for (uint32_t i : order) {
+    placedCount += placed[i];
+    res.stats.rigid += piece[i] >= 1 ? 1 : 0;
+  }
   res.stats.relaid = placedCount;
   res.stats.reused = order.size() - placedCount;
   if (out) {

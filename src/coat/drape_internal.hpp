@@ -112,9 +112,12 @@ inline void collapseTriangle(TriMesh& mesh, size_t t, std::vector<size_t>& cut) 
 // pair search over the live triangles of every feather whose live bounds meet those of a feather with a
 // changed live triangle. A pair's test depends on its two triangles alone (and which comes first in the
 // mesh, kept here), so these are exactly the changed triangles' pairs of a search over the whole coat.
+// With `piece` (per feather), pairs of two feathers on different pieces count as changed too (a carried
+// frame's feathers moved with different rigid pieces of skin, drape_carry.cpp).
 std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<uint32_t>& order,
                                        const std::vector<uint32_t>& trisOf, const std::vector<uint32_t>& tris,
-                                       const std::vector<uint8_t>& changedTri, const ProgressFn& progress);
+                                       const std::vector<uint8_t>& changedTri, const ProgressFn& progress,
+                                       const std::vector<int32_t>* piece = nullptr);
 
 // Per feather, a pair tree over its triangles (in CoatLayout order) that a reference drape keeps for the
 // frames carried from it: each search refits it to the frame's corners, and builds it again only where
@@ -129,7 +132,8 @@ struct PairTrees {
 // The same pairs, the feathers' trees taken from `cache` and refitted (a carried frame's search).
 std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<uint32_t>& order,
                                        const std::vector<uint32_t>& trisOf, const std::vector<uint32_t>& tris,
-                                       const std::vector<uint8_t>& changedTri, PairTrees& cache);
+                                       const std::vector<uint8_t>& changedTri, PairTrees& cache,
+                                       const std::vector<int32_t>* piece = nullptr);
 
 // Where laying a chart reads the coat in the air: around its free nodes, within the air radius of the
 // line along the normal, to a depth of a quarter of its length (AirTop::highest's reach, and a little).

@@ -63,12 +63,15 @@ detail::Box trimOverFollicles(const RootZones& Z, size_t k, const TriMesh& mesh,
 
 namespace {
 
+// Do feathers i and j (neither touched) need their pairs searched: are they on different pieces?
+bool apart(const std::vector<int32_t>* piece, uint32_t i, uint32_t j) { return piece && (*piece)[i] != (*piece)[j]; }
+
 // The feathers a search for the changed triangles' crossing pairs needs: `touched` those with a changed
-// live triangle, `take` every feather whose live bounds meet a touched one's (a touched one meets its own).
-// False when nothing is touched.
+// live triangle, `take` every feather whose live bounds meet a touched one's or one on a moved piece
+// (`piece` >= 1; either meets its own). False when there is nothing to search.
 bool featherReach(const TriMesh& mesh, const std::vector<uint32_t>& order, const std::vector<uint32_t>& trisOf,
                   const std::vector<uint32_t>& tris, const std::vector<uint8_t>& changedTri,
-                  std::vector<uint8_t>& touched, std::vector<uint8_t>& take) {
+                  const std::vector<int32_t>* piece, std::vector<uint8_t>& touched, std::vector<uint8_t>& take) {
   const size_t n = trisOf.size() - 1;
   touched.assign(n, 0);
   take.assign(n, 0);
@@ -87,7 +90,7 @@ bool featherReach(const TriMesh& mesh, const std::vector<uint32_t>& order, const
   std::vector<uint32_t> touchedList, all;
   std::vector<detail::Box> touchedBox, allBox;
   for (uint32_t i : order) {
-    if (touched[i]) {
+    if ((touched[i] || (piece && (*piece)[i] >= 1)) && !liveBox[i].empty()) {
       touchedList.push_back(i);
       touchedBox.push_back(liveBox[i]);
     }
@@ -113,11 +116,17 @@ bool featherReach(const TriMesh& mesh, const std::vector<uint32_t>& order, const
 
 std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<uint32_t>& order,
                                        const std::vector<uint32_t>& trisOf, const std::vector<uint32_t>& tris,
-                                       const std::vector<uint8_t>& changedTri, const ProgressFn& progress) {
+                                       const std::vector<uint8_t>& changedTri, const ProgressFn& progress,
+                                       const std::vector<int32_t>* piece) {
   const size_t nt = mesh.triangleCount(), nv = mesh.positions.size();
   std::vector<uint8_t> touched, take;
   std::vector<uint64_t> pairs;
-  if (!featherReach(mesh, order, trisOf, tris, changedTri, touched, take)) return pairs;
+  if (!featherReach(mesh, order, trisOf, tris, changedTri, piece, touched, take)) return pairs;
+  // The search below finds every pair with a triangle of a marked feather: touched, or on a moved piece.
+  std::vector<uint8_t> marked = touched;
+  if (piece)
+    for (uint32_t i : order)
+      if ((*piece)[i] >= 1) marked[i] = 1;
   // The taken feathers' live triangles in mesh order, on their own vertices.
   TriMesh part;
   std::vector<uint32_t> triBack, vertOf(nv, UINT32_MAX);
@@ -135,20 +144,23 @@ std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<ui
     }
     triBack.push_back(static_cast<uint32_t>(t));
   }
-  for (uint64_t pr : intersectingTrianglePairsWith(part, touched, progress)) {
+  for (uint64_t pr : intersectingTrianglePairsWith(part, marked, progress)) {
     const uint32_t t = triBack[pr >> 32], u = triBack[pr & 0xffffffffu];
-    if (changedTri[t] || changedTri[u]) pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
+    if (changedTri[t] || changedTri[u] ||
+        apart(piece, mesh.featherId[mesh.indices[3 * size_t(t)]], mesh.featherId[mesh.indices[3 * size_t(u)]]))
+      pairs.push_back((uint64_t(std::min(t, u)) << 32) | std::max(t, u));
   }
   return pairs;
 }
 
 std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<uint32_t>& order,
                                        const std::vector<uint32_t>& trisOf, const std::vector<uint32_t>& tris,
-                                       const std::vector<uint8_t>& changedTri, PairTrees& cache) {
+                                       const std::vector<uint8_t>& changedTri, PairTrees& cache,
+                                       const std::vector<int32_t>* piece) {
   const size_t n = trisOf.size() - 1;
   std::vector<uint8_t> touched, take;
   std::vector<uint64_t> pairs;
-  if (!featherReach(mesh, order, trisOf, tris, changedTri, touched, take)) return pairs;
+  if (!featherReach(mesh, order, trisOf, tris, changedTri, piece, touched, take)) return pairs;
   const std::lock_guard<std::mutex> hold(cache.lock);
   if (cache.tree.size() != n) {
     cache.tree.assign(n, detail::TriangleBvh{});
@@ -217,7 +229,8 @@ std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<ui
     detail::TriangleBvh top;
     detail::buildBoxTree(groupBox, corners, boxIdx, top);
     top.overlappingPairs(top, [&](uint32_t g, uint32_t h) {
-      if (g < h && (touched[group[g]] || touched[group[h]])) tasks.emplace_back(group[g], group[h]);
+      if (g < h && (touched[group[g]] || touched[group[h]] || apart(piece, group[g], group[h])))
+        tasks.emplace_back(group[g], group[h]);
     });
   }
   tbb::combinable<std::vector<uint64_t>> found;
@@ -226,9 +239,10 @@ std::vector<uint64_t> pairsWithChanged(const TriMesh& mesh, const std::vector<ui
     for (size_t k = r.begin(); k < r.end(); ++k) {
       const uint32_t f = tasks[k].first, g = tasks[k].second;
       const Slot *sf = slot.data() + base[f], *sg = slot.data() + base[g];
+      const bool every = apart(piece, f, g);  // on different pieces: every pair of theirs
       cache.tree[f].overlappingPairs(cache.tree[g], [&](uint32_t a, uint32_t b) {
         const Slot *x = sf + a, *y = sg + b;
-        if (!x->changed && !y->changed) return;
+        if (!every && !x->changed && !y->changed) return;
         // Moeller's test on the lower triangle index first, as the search over the whole coat runs it.
         if (y->tri < x->tri) std::swap(x, y);
         if (detail::trianglesIntersect(x->v[0], x->v[1], x->v[2], x->shape, y->v[0], y->v[1], y->v[2], y->shape))

@@ -309,6 +309,7 @@ coat::DrapeResult Pipeline::Impl::carryFromRest(const coat::CoatFeathers& c, con
   po.progress = [whole](const std::string& s, double f) { return !whole || whole(s, 0.8 + 0.2 * f); };
   coat::DrapeResult r = coat::drapeCarried(rest, posed, frame, posedMesh, R.cache, po);
   carried = r.stats.relaid;
+  carriedRigid = r.stats.rigid;
   return r;
 }
 
@@ -775,6 +776,7 @@ FrameReuse Pipeline::frameReuse() const {
   r.drapeReused = impl_->drape.stats.reused;
   r.drapeCarried = impl_->carried.has_value();
   r.drapeCarriedMoved = impl_->carried ? *impl_->carried : 0;
+  r.drapeCarriedRigid = impl_->carried ? impl_->carriedRigid : 0;
   return r;
 }
 

@@ -127,6 +127,7 @@ struct Pipeline::Impl {
   RestDrape restDrape;
   std::vector<coat::FeatherFrame> restTurned;  // the reference's frames turned by this frame's controls
   std::optional<size_t> carried;               // this frame's mesh stage carried a drape: the feathers it placed
+  size_t carriedRigid = 0;                     // and those it moved with a rigid piece of the skin
   // Drapes `frame` (this frame's coat, meshed flat into `posedMesh`) by carrying the rest pose's drape of
   // `reference` (the same feathers, or a moult frame's mature coat) meshed with `in`.
   coat::DrapeResult carryFromRest(const coat::CoatFeathers& reference, const CoatMeshInput& in,

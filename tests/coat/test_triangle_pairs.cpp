@@ -203,6 +203,46 @@ TEST(TrianglePairs, KeptTreesFindTheChangedTrianglesPairsOfAFreshSearch) {
   }
 }
 
+TEST(TrianglePairs, FeathersOnDifferentPiecesArePairedAsIfChanged) {
+  // A carried frame's feathers moved with rigid pieces of skin (drape_carry.cpp): two feathers on one
+  // piece keep their rest pairs, so the search finds the pairs with a changed triangle and every pair of
+  // two feathers on different pieces, no others; with the kept trees too.
+  namespace dr = pteryla::coat::draping;
+  const TriMesh m = soup(6000, 60, 23);
+  pteryla::Rng rng(9);
+  const size_t nt = m.triangleCount();
+  const uint32_t n = 60;
+  std::vector<uint32_t> order(n), trisOf(n + 1, 0), tris(nt);
+  for (uint32_t i = 0; i < n; ++i) order[i] = i;
+  for (size_t t = 0; t < nt; ++t) ++trisOf[m.featherId[m.indices[3 * t]] + 1];
+  for (uint32_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
+  std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
+  for (size_t t = 0; t < nt; ++t) tris[fill[m.featherId[m.indices[3 * t]]]++] = static_cast<uint32_t>(t);
+  std::vector<uint8_t> changedTri(nt, 0);
+  std::vector<int32_t> piece(n, 0);
+  for (uint32_t i = 0; i < n; ++i) {
+    piece[i] = static_cast<int32_t>(rng.uniform(0, 2.999));
+    if (rng.uniform(0, 1) < 0.1)
+      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) changedTri[tris[q]] = 1;
+  }
+  std::vector<uint64_t> want;
+  size_t apart = 0;
+  for (uint64_t pr : pteryla::coat::intersectingTrianglePairs(m)) {
+    const size_t t = pr >> 32, u = pr & 0xffffffffu;
+    const uint32_t ft = m.featherId[m.indices[3 * t]], fu = m.featherId[m.indices[3 * u]];
+    if (changedTri[t] || changedTri[u]) {
+      want.push_back(pr);
+    } else if (piece[ft] != piece[fu]) {
+      want.push_back(pr);
+      ++apart;
+    }
+  }
+  ASSERT_GT(apart, 50u);  // pairs found only because their pieces differ
+  dr::PairTrees cache;
+  EXPECT_EQ(dr::pairsWithChanged(m, order, trisOf, tris, changedTri, pteryla::ProgressFn{}, &piece), want);
+  EXPECT_EQ(dr::pairsWithChanged(m, order, trisOf, tris, changedTri, cache, &piece), want);
+}
+
 TEST(TrianglePairs, OutwardRoundingStepsAsNextafterDoes) {
   // The boxes' outward rounding (detail::nextUp / nextDown, inline) against std::nextafter toward the
   // infinities: zeros, subnormals, the largest float, infinities, NaN and random floats of both signs.

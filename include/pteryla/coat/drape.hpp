@@ -54,6 +54,11 @@ struct DrapeOptions {
   double baseAllowance =
       0.08;         // fraction of a feather's length around its follicle the checks exempt (PackOptions::baseAllowance)
   int threads = 0;  // 0 = all cores
+  // drapeCarried: a feather whose chart and follicle frame a rigid piece of the posed skin carried (every
+  // face under it, with its corners' normals, moved by one rotation and translation, within 1e-6 of the
+  // skin's size) moves with the piece as it lay at rest, and only its pairs with feathers off the piece are
+  // searched. False places every moved feather on its carried chart and searches all its pairs.
+  bool rigidPieces = true;
   // Called on the calling thread with ("drape", fraction done) after each step and during the checker's
   // tests of the last two. Its answer is ignored: a caller stops the drape by throwing from it (the
   // mesh is then left half draped).
@@ -73,6 +78,7 @@ struct DrapeStats {
   // drapeOverMature: feathers placed on their mature chart, and feathers copied from the mature drape.
   size_t relaid = 0;
   size_t reused = 0;
+  size_t rigid = 0;  // drapeCarried: of `reused`, feathers moved with a rigid piece of the skin
 };
 
 struct DrapeResult {
@@ -137,7 +143,9 @@ DrapeResult drapeOverMature(const SkinMesh& skin, const CoatFeathers& coat, TriM
 // drape's guarantees are enforced on the posed skin as a drape enforces them: material over a later
 // follicle, vertices under the skin and the lower triangle of every crossing pair are trimmed. A feather
 // whose skin, frame and flat mesh did not move is copied from the reference. The result depends on the
-// reference, the posed skin and the frame's coat only. With `out`, the carried drape is kept there
+// reference, the posed skin and the frame's coat only. A feather on a rigidly moving piece of the skin
+// (DrapeOptions::rigidPieces) is moved with it as it lay, and keeps its rest trims and its rest pairs with
+// the feathers on that piece. With `out`, the carried drape is kept there
 // (drapeOverMature can lay a moult over it; a later drapeCoatMesh with it lays everything). Throws Error
 // when the reference is not a drape of this coat's feathers in this layer order over `rest`.
 DrapeResult drapeCarried(const SkinMesh& rest, const SkinMesh& posed, const CoatFeathers& coat, TriMesh& mesh,

@@ -136,9 +136,10 @@ struct FrameReuse {
   size_t drapeRelaid = 0, drapeReused = 0;
   // Posed frames of a draped coat (packing.posed_drape "carry"): the coat was carried from the rest pose's
   // drape this frame (a moult frame: the mature coat's), with this many feathers placed on their carried
-  // charts (moved by the pose, or growing); the others were copied.
+  // charts (moved by the pose, or growing); the others were copied, `drapeCarriedRigid` of them moved with
+  // a rigidly moving piece of the skin (coat::DrapeOptions::rigidPieces).
   bool drapeCarried = false;
-  size_t drapeCarriedMoved = 0;
+  size_t drapeCarriedMoved = 0, drapeCarriedRigid = 0;
 };
 
 // Checks a posed skin given by a caller against the rest skin: one position per rest vertex, each
