@@ -4,15 +4,19 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <memory>
+#include <thread>
 #include <unordered_map>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include "pteryla/core/error.hpp"
 #include "pteryla/coat/check.hpp"
@@ -358,12 +362,33 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     double airRadius = 1.5 * spacing;
     for (uint32_t i : order) airRadius = std::max(airRadius, 0.75 * charts[i].diag);
     AirTop air(airRadius);
-    detail::inArena(o.threads, [&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t z = r.begin(); z < r.end(); ++z) gatherSamples(charts[todo[z]], top, 1.5 * spacing);
-      });
-    });
-    step(0.37);
+    // Gathering (in parallel) and laying (in layer order, on this thread) overlap: a chart is gathered by
+    // whichever thread claims it first, and laying waits only for the chart it lays next (it gathers that
+    // one itself when no one has claimed it). Gathering reads the top's samples and never their heights,
+    // which laying writes, so each chart gathers what it would have gathered before any laying.
+    std::unique_ptr<std::atomic<uint8_t>[]> gathered(new std::atomic<uint8_t>[n]);  // 0 to do, 1 claimed, 2 done
+    for (size_t i = 0; i < n; ++i) gathered[i].store(2, std::memory_order_relaxed);
+    for (uint32_t i : todo) gathered[i].store(0, std::memory_order_relaxed);
+    std::atomic<bool> gatherFailed{false};
+    auto claimAndGather = [&](uint32_t i) {
+      uint8_t expect = 0;
+      if (!gathered[i].compare_exchange_strong(expect, 1, std::memory_order_acq_rel)) return;
+      gatherSamples(charts[i], top, 1.5 * spacing);
+      gathered[i].store(2, std::memory_order_release);
+    };
+    // Laying waits for chart i; while another thread gathers it, it gathers the next unclaimed ones.
+    size_t ahead = 0;
+    auto awaitGathered = [&](uint32_t i) {
+      claimAndGather(i);
+      while (gathered[i].load(std::memory_order_acquire) != 2) {
+        if (gatherFailed.load(std::memory_order_acquire)) throw Error("gathering a chart failed", {}, "drape");
+        while (ahead < todo.size() && gathered[todo[ahead]].load(std::memory_order_relaxed) != 0) ++ahead;
+        if (ahead < todo.size())
+          claimAndGather(todo[ahead]);
+        else
+          std::this_thread::yield();
+      }
+    };
     std::vector<double> req, reads;
     // Where the coat's top or the coat in the air may differ from last time when a feather reads it: the
     // places feathers laid again so far wrote (before and now), and those of feathers gone since. A kept
@@ -384,55 +409,80 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     // at: the read and write boxes are kept after the loop, in parallel.
     const bool allRead =
         !sameTop || !sameAir || std::all_of(order.begin(), order.end(), [&](uint32_t i) { return newChart[i] != 0; });
-    for (size_t k = 0; k < order.size(); ++k) {
-      const uint32_t i = order[k];
-      Chart& C = charts[i];
-      bool mustRead = newChart[i] || !sameTop || !sameAir;
-      if (!mustRead) {
-        const detail::Box& rb = memo(i).readBox;
-        mustRead = std::any_of(dirty.begin(), dirty.end(), [&](const detail::Box& b) { return rb.overlaps(b); });
-      }
-      bool relay = false;
-      if (mustRead) {
-        if (readsAir(C)) {
-          const detail::Box rb = airReadBox(C, airReach);
-          for (size_t j = 0; j < k; ++j) {
-            const uint32_t f = order[j];
-            if (!inAir[f] && airBox[f].overlaps(rb)) {
-              addToAir(charts[f], air);
-              inAir[f] = 1;
+    auto layAll = [&] {
+      for (size_t k = 0; k < order.size(); ++k) {
+        const uint32_t i = order[k];
+        awaitGathered(i);
+        Chart& C = charts[i];
+        bool mustRead = newChart[i] || !sameTop || !sameAir;
+        if (!mustRead) {
+          const detail::Box& rb = memo(i).readBox;
+          mustRead = std::any_of(dirty.begin(), dirty.end(), [&](const detail::Box& b) { return rb.overlaps(b); });
+        }
+        bool relay = false;
+        if (mustRead) {
+          if (readsAir(C)) {
+            const detail::Box rb = airReadBox(C, airReach);
+            for (size_t j = 0; j < k; ++j) {
+              const uint32_t f = order[j];
+              if (!inAir[f] && airBox[f].overlaps(rb)) {
+                addToAir(charts[f], air);
+                inAir[f] = 1;
+              }
+            }
+          }
+          readChart(C, top, air, reads);
+          relay = newChart[i] || !sameTop || reads != memo(i).reads;
+        }
+        if (relay) {
+          if (!newChart[i] && sameTop) {
+            for (uint32_t k : memo(i).folded) C.nodes[k].ok = 1;
+            memo(i).folded.clear();
+          }
+          if (M) dirty.push_back(memo(i).writeBox);
+          layFromReads(C, reads, gap, o.maxSlope, req);
+          laidNow[i] = 1;
+          if (M) {
+            memo(i).reads = reads;
+            if (!allRead) {
+              memo(i).readBox = readBoxOf(C, top, airReach);
+              memo(i).writeBox = writeBoxOf(C, top);
+              dirty.push_back(memo(i).writeBox);
             }
           }
         }
-        readChart(C, top, air, reads);
-        relay = newChart[i] || !sameTop || reads != memo(i).reads;
-      }
-      if (relay) {
-        if (!newChart[i] && sameTop) {
-          for (uint32_t k : memo(i).folded) C.nodes[k].ok = 1;
-          memo(i).folded.clear();
-        }
-        if (M) dirty.push_back(memo(i).writeBox);
-        layFromReads(C, reads, gap, o.maxSlope, req);
-        laidNow[i] = 1;
-        if (M) {
-          memo(i).reads = reads;
-          if (!allRead) {
-            memo(i).readBox = readBoxOf(C, top, airReach);
-            memo(i).writeBox = writeBoxOf(C, top);
-            dirty.push_back(memo(i).writeBox);
-          }
+        writeChart(C, top);
+        for (int a : C.active) airBox[i].add(C.nodes[a].c + C.nodes[a].h * C.nodes[a].n);
+        if (!M) {
+          // What was gathered for laying is not needed again.
+          C.reqSamples = {};
+          C.reqOffset = {};
+          C.under = {};
         }
       }
-      writeChart(C, top);
-      for (int a : C.active) airBox[i].add(C.nodes[a].c + C.nodes[a].h * C.nodes[a].n);
-      if (!M) {
-        // What was gathered for laying is not needed again.
-        C.reqSamples = {};
-        C.reqOffset = {};
-        C.under = {};
+    };
+    detail::inArena(o.threads, [&] {
+      tbb::task_group gathering;
+      gathering.run([&] {
+        try {
+          tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t z = r.begin(); z < r.end(); ++z) claimAndGather(todo[z]);
+          });
+        } catch (...) {
+          gatherFailed.store(true, std::memory_order_release);
+          throw;
+        }
+      });
+      try {
+        layAll();
+      } catch (...) {
+        gathering.cancel();
+        gathering.wait();
+        throw;
       }
-    }
+      gathering.wait();
+    });
+    step(0.37);
     if (M && allRead) {
       std::vector<uint32_t> laid;
       for (uint32_t i : order)

@@ -71,6 +71,24 @@ TEST(Drape, SameSceneGivesTheSameCoatBitForBit) {
   EXPECT_EQ(a.coatMesh().mesh.indices, b.coatMesh().mesh.indices);
 }
 
+TEST(Drape, SameCoatWhateverTheThreadCount) {
+  // Charts are gathered by whichever thread claims them first while the calling thread lays them in layer
+  // order (drape.cpp): one thread, two, or more threads than cores give the same bits.
+  auto withThreads = [](int threads) {
+    Scene s = sphereScene("drape");
+    s.packing["threads"] = threads;
+    Pipeline p(std::move(s));
+    return p.coatMesh().mesh;
+  };
+  const TriMesh one = withThreads(1);
+  ASSERT_FALSE(one.empty());
+  for (const int threads : {2, 5}) {
+    const TriMesh m = withThreads(threads);
+    EXPECT_EQ(m.positions, one.positions) << threads << " threads";
+    EXPECT_EQ(m.indices, one.indices) << threads << " threads";
+  }
+}
+
 TEST(Drape, UnpackedBaselineDependsOnTheInputOnly) {
   const QualityMetrics a = Pipeline(sphereScene("drape")).check();
   const QualityMetrics b = Pipeline(sphereScene("height_field")).check();
