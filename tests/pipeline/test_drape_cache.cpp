@@ -539,6 +539,14 @@ TEST(DrapeCarry, FeathersOnARigidPieceMoveWhereTheirCarriedChartsPlaceThem) {
     EXPECT_TRUE(coat::intersectingTrianglePairs(*m).empty());
     EXPECT_EQ(liveVerticesUnderSkin(posed, *m, mc.feathers), 0u);
   }
+  // Kept (`out`), the frame is a drape a moult can be laid over: the same coat over it is the same mesh.
+  TriMesh keptMesh = mc.mesh;
+  coat::DrapeCache kept;
+  coat::drapeCarried(d.skin, posed, mc.feathers, keptMesh, d.cache, {}, &kept);
+  EXPECT_TRUE(sameMesh(keptMesh, with));
+  TriMesh over = mc.mesh;
+  coat::drapeOverMature(posed, mc.feathers, over, kept);
+  EXPECT_TRUE(sameMesh(over, with));
   // After a frame of another pose (the reference's pair trees refitted to it), the same bits again.
   pipeline::Pipeline q(pipeline::sceneFromJson(sphereJson(120), kSceneFile));
   std::vector<glm::dvec3> other = d.skin.positions;
