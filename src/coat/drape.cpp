@@ -135,26 +135,29 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
       });
     });
   }
-  // The flat inputs of the others, before the drape moves them.
+  // The flat inputs of the others, before the drape moves them (each feather's own memo: in parallel).
   if (M)
-    for (uint32_t i : order) {
-      if (sameInput[i]) continue;
-      FeatherMemo& m = M->feathers[i];
-      const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
-      m.flatPos.resize(cnt);
-      m.flatNrm.resize(hasN ? cnt : 0);
-      m.flatTan.resize(hasT ? cnt : 0);
-      for (size_t l = 0; l < cnt; ++l) {
-        const uint32_t v = verts[first[i] + l];
-        m.flatPos[l] = mesh.positions[v];
-        if (hasN) m.flatNrm[l] = mesh.normals[v];
-        if (hasT) m.flatTan[l] = mesh.tangents[v];
-      }
-      m.flatTris.resize(3 * tc);
-      for (size_t q = 0; q < tc; ++q)
-        for (int c = 0; c < 3; ++c)
-          m.flatTris[3 * q + c] = localVert[mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c]];
-    }
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(size_t(0), order.size(), [&](size_t z) {
+        const uint32_t i = order[z];
+        if (sameInput[i]) return;
+        FeatherMemo& m = M->feathers[i];
+        const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
+        m.flatPos.resize(cnt);
+        m.flatNrm.resize(hasN ? cnt : 0);
+        m.flatTan.resize(hasT ? cnt : 0);
+        for (size_t l = 0; l < cnt; ++l) {
+          const uint32_t v = verts[first[i] + l];
+          m.flatPos[l] = mesh.positions[v];
+          if (hasN) m.flatNrm[l] = mesh.normals[v];
+          if (hasT) m.flatTan[l] = mesh.tangents[v];
+        }
+        m.flatTris.resize(3 * tc);
+        for (size_t q = 0; q < tc; ++q)
+          for (int c = 0; c < 3; ++c)
+            m.flatTris[3 * q + c] = localVert[mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c]];
+      });
+    });
   // Nothing changed: the last drape, copied.
   if (usable && std::none_of(footChanged.begin(), footChanged.end(), [](uint8_t c) { return c != 0; }) &&
       std::all_of(order.begin(), order.end(), [&](uint32_t i) { return sameInput[i] != 0; })) {
@@ -204,33 +207,33 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
       }
   // Longest triangle edge per feather as meshed (flat): its chords dip below the skin-following surface by
   // about edge^2 x curvature / 8, which the gap over what lies under it must exceed.
+  // It and each feather's reach from its follicle (below) are the feather's own: found in parallel.
   std::vector<double> flatEdge(n, 0.0);
-  for (uint32_t i : order) {
-    if (sameInput[i]) {
-      flatEdge[i] = memo(i).flatEdge;
-      continue;
-    }
-    for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
-      const uint32_t* tri = &mesh.indices[3 * static_cast<size_t>(tris[q])];
-      for (int k = 0; k < 3; ++k)
-        flatEdge[i] =
-            std::max(flatEdge[i], double(glm::length(mesh.positions[tri[k]] - mesh.positions[tri[(k + 1) % 3]])));
-    }
-  }
-  // Scale factors: no feather covers a later follicle's root zone.
   std::vector<double> scale(n, 1.0), shrink(n, 1.0), reachOf(n, 0.0);
+  detail::inArena(o.threads, [&] {
+    tbb::parallel_for(size_t(0), order.size(), [&](size_t z) {
+      const uint32_t i = order[z];
+      if (sameInput[i]) {
+        flatEdge[i] = memo(i).flatEdge;
+        reachOf[i] = memo(i).reach;
+        return;
+      }
+      for (uint32_t q = trisOf[i]; q < trisOf[i + 1]; ++q) {
+        const uint32_t* tri = &mesh.indices[3 * static_cast<size_t>(tris[q])];
+        for (int k = 0; k < 3; ++k)
+          flatEdge[i] =
+              std::max(flatEdge[i], double(glm::length(mesh.positions[tri[k]] - mesh.positions[tri[(k + 1) % 3]])));
+      }
+      for (uint32_t q = first[i]; q < first[i + 1]; ++q)
+        reachOf[i] = std::max(reachOf[i], double(glm::length(dvec3(mesh.positions[verts[q]]) - coat.frames[i].origin)));
+    });
+  });
+  // Scale factors: no feather covers a later follicle's root zone.
   {
     std::vector<dvec3> origins;
     double reach = 0;
     for (uint32_t i : order) {
       origins.push_back(coat.frames[i].origin);
-      if (sameInput[i]) {
-        reachOf[i] = memo(i).reach;
-      } else {
-        for (uint32_t q = first[i]; q < first[i + 1]; ++q)
-          reachOf[i] =
-              std::max(reachOf[i], double(glm::length(dvec3(mesh.positions[verts[q]]) - coat.frames[i].origin)));
-      }
       reach = std::max(reach, reachOf[i]);
     }
     // A feather's factor depends on its own flat mesh and the later follicles within its reach.
