@@ -644,12 +644,14 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     if (inside.size() != nv) throw Error("the drape was cancelled", {}, "drape");
   }
   // Keep what the trims and tests below need of this drape's own outputs before trimming moves vertices.
-  if (M) {
-    for (uint32_t i : relaid) {
-      keepPlaced(memo(i), mesh, L, i, surfacePoint, bad);
-      memo(i).elevation = res.elevation[i];
-    }
-  }
+  if (M)
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(size_t(0), relaid.size(), [&](size_t z) {
+        const uint32_t i = relaid[z];
+        keepPlaced(memo(i), mesh, L, i, surfacePoint, bad);
+        memo(i).elevation = res.elevation[i];
+      });
+    });
   for (uint32_t v = 0; v < nv; ++v)
     if (inside[v] && rank[mesh.featherId[v]] >= 0) bad[v] = 1;
   std::vector<size_t> kept(n, 0), cut(n, 0);
@@ -704,44 +706,46 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
   res.stats.relaid = relaid.size();
   res.stats.reused = order.size() - relaid.size();
   if (M) {
-    // Keep this drape for the next.
-    for (size_t i = 0; i < n; ++i) {
-      FeatherMemo& m = memo(static_cast<uint32_t>(i));
-      if (rank[i] < 0) {
-        m = FeatherMemo{};
-        continue;
-      }
-      m.laid = true;
-      m.chart = std::move(charts[i]);
-      m.shrink = shrink[i];
-      m.scale = scale[i];
-      m.flatEdge = flatEdge[i];
-      m.reach = reachOf[i];
-      m.rootZone = rootZone[i];
-      m.box = surfaceBox[i];
-      const size_t tc = trisOf[i + 1] - trisOf[i];
-      m.overFollicle.resize(tc);
-      m.preCut.resize(tc);
-      m.cut.resize(tc);
-      for (size_t q = 0; q < tc; ++q) {
-        m.overFollicle[q] = overFollicle[tris[trisOf[i] + q]];
-        m.preCut[q] = preCut[tris[trisOf[i] + q]];
-        m.cut[q] = isCut(mesh, tris[trisOf[i] + q]) ? 1 : 0;
-      }
-      if (laidNow[i]) {
-        const size_t cnt = first[i + 1] - first[i];
-        m.inside.resize(cnt);
-        for (size_t l = 0; l < cnt; ++l) m.inside[l] = inside[verts[first[i] + l]];
-      }
-      if (!sameInput[i]) {
-        const feather::FeatherParams& p = coat.params[i];
-        m.frame = coat.frames[i];
-        m.rachisWidth = p.rachisWidth;
-        m.calamusLength = p.calamusLength;
-        m.totalLength = p.totalLength();
-        m.baseRadius = baseRadius(static_cast<uint32_t>(i));
-      }
-    }
+    // Keep this drape for the next (each feather's own memo: in parallel).
+    detail::inArena(o.threads, [&] {
+      tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        FeatherMemo& m = memo(static_cast<uint32_t>(i));
+        if (rank[i] < 0) {
+          m = FeatherMemo{};
+          return;
+        }
+        m.laid = true;
+        m.chart = std::move(charts[i]);
+        m.shrink = shrink[i];
+        m.scale = scale[i];
+        m.flatEdge = flatEdge[i];
+        m.reach = reachOf[i];
+        m.rootZone = rootZone[i];
+        m.box = surfaceBox[i];
+        const size_t tc = trisOf[i + 1] - trisOf[i];
+        m.overFollicle.resize(tc);
+        m.preCut.resize(tc);
+        m.cut.resize(tc);
+        for (size_t q = 0; q < tc; ++q) {
+          m.overFollicle[q] = overFollicle[tris[trisOf[i] + q]];
+          m.preCut[q] = preCut[tris[trisOf[i] + q]];
+          m.cut[q] = isCut(mesh, tris[trisOf[i] + q]) ? 1 : 0;
+        }
+        if (laidNow[i]) {
+          const size_t cnt = first[i + 1] - first[i];
+          m.inside.resize(cnt);
+          for (size_t l = 0; l < cnt; ++l) m.inside[l] = inside[verts[first[i] + l]];
+        }
+        if (!sameInput[i]) {
+          const feather::FeatherParams& p = coat.params[i];
+          m.frame = coat.frames[i];
+          m.rachisWidth = p.rachisWidth;
+          m.calamusLength = p.calamusLength;
+          m.totalLength = p.totalLength();
+          m.baseRadius = baseRadius(static_cast<uint32_t>(i));
+        }
+      });
+    });
     M->order = order;
     M->pairs = pairMemos(pairs, mesh, L);
     M->valid = true;
