@@ -152,6 +152,19 @@ TEST(TrianglePairs, ARefittedTreeFindsWhatAFreshTreeFindsAndSkipsCollapsedTriang
   }
 }
 
+// A soup's feathers in order 0..n-1 and each one's triangles (CSR), as a drape's CoatLayout holds them.
+struct SoupLayout {
+  std::vector<uint32_t> order, trisOf, tris;
+  SoupLayout(const TriMesh& m, uint32_t n) : order(n), trisOf(n + 1, 0), tris(m.triangleCount()) {
+    const size_t nt = m.triangleCount();
+    for (uint32_t i = 0; i < n; ++i) order[i] = i;
+    for (size_t t = 0; t < nt; ++t) ++trisOf[m.featherId[m.indices[3 * t]] + 1];
+    for (uint32_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
+    std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
+    for (size_t t = 0; t < nt; ++t) tris[fill[m.featherId[m.indices[3 * t]]]++] = static_cast<uint32_t>(t);
+  }
+};
+
 TEST(TrianglePairs, KeptTreesFindTheChangedTrianglesPairsOfAFreshSearch) {
   // A carried frame's pair search (pairsWithChanged with a PairTrees cache, drape_trim.cpp) against the
   // search that builds every tree afresh, over three frames of one cache: feathers moved (their trees
@@ -163,12 +176,8 @@ TEST(TrianglePairs, KeptTreesFindTheChangedTrianglesPairsOfAFreshSearch) {
   for (int frame = 0; frame < 3; ++frame) {
     const size_t nt = m.triangleCount();
     const uint32_t n = 60;
-    std::vector<uint32_t> order(n), trisOf(n + 1, 0), tris(nt);
-    for (uint32_t i = 0; i < n; ++i) order[i] = i;
-    for (size_t t = 0; t < nt; ++t) ++trisOf[m.featherId[m.indices[3 * t]] + 1];
-    for (uint32_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
-    std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
-    for (size_t t = 0; t < nt; ++t) tris[fill[m.featherId[m.indices[3 * t]]]++] = static_cast<uint32_t>(t);
+    const SoupLayout L(m, n);
+    const std::vector<uint32_t>&order = L.order, &trisOf = L.trisOf, &tris = L.tris;
     std::vector<uint8_t> changedTri(nt, 0);
     for (uint32_t i = 0; i < n; ++i)
       if (rng.uniform(0, 1) < 0.3)
@@ -212,12 +221,8 @@ TEST(TrianglePairs, FeathersOnDifferentPiecesArePairedAsIfChanged) {
   pteryla::Rng rng(9);
   const size_t nt = m.triangleCount();
   const uint32_t n = 60;
-  std::vector<uint32_t> order(n), trisOf(n + 1, 0), tris(nt);
-  for (uint32_t i = 0; i < n; ++i) order[i] = i;
-  for (size_t t = 0; t < nt; ++t) ++trisOf[m.featherId[m.indices[3 * t]] + 1];
-  for (uint32_t i = 0; i < n; ++i) trisOf[i + 1] += trisOf[i];
-  std::vector<uint32_t> fill(trisOf.begin(), trisOf.end() - 1);
-  for (size_t t = 0; t < nt; ++t) tris[fill[m.featherId[m.indices[3 * t]]]++] = static_cast<uint32_t>(t);
+  const SoupLayout L(m, n);
+  const std::vector<uint32_t>&order = L.order, &trisOf = L.trisOf, &tris = L.tris;
   std::vector<uint8_t> changedTri(nt, 0);
   std::vector<int32_t> piece(n, 0);
   for (uint32_t i = 0; i < n; ++i) {

@@ -380,6 +380,15 @@ TEST(DrapeCache, AMovingSkinIsNotKeptUntilItHoldsStill) {
 
 // Posed frames carried from the rest pose's drape (coat::drapeCarried, packing.posed_drape "carry").
 
+// Per vertex: 1 when a live (not collapsed) triangle uses it.
+std::vector<uint8_t> liveVertices(const TriMesh& m) {
+  std::vector<uint8_t> live(m.positions.size(), 0);
+  for (size_t t = 0; t < m.triangleCount(); ++t)
+    if (!collapsed(m, t))
+      for (int k = 0; k < 3; ++k) live[m.indices[3 * t + k]] = 1;
+  return live;
+}
+
 // The draped sphere (120 feathers) with its drape kept in a cache, the reference a carry starts from.
 struct DrapedSphere {
   coat::SkinMesh skin;
@@ -467,12 +476,7 @@ TEST(DrapeCarry, ARigidMotionCarriesEveryFeatherRigidly) {
     }
     ASSERT_EQ(m.positions.size(), draped.positions.size());
     size_t live = 0, off = 0, liveBoth = 0;
-    std::vector<uint8_t> liveDraped(draped.positions.size(), 0), liveNow(m.positions.size(), 0);
-    for (size_t t = 0; t < m.triangleCount(); ++t)
-      for (int k = 0; k < 3; ++k) {
-        if (!collapsed(draped, t)) liveDraped[draped.indices[3 * t + k]] = 1;
-        if (!collapsed(m, t)) liveNow[m.indices[3 * t + k]] = 1;
-      }
+    const std::vector<uint8_t> liveDraped = liveVertices(draped), liveNow = liveVertices(m);
     for (size_t v = 0; v < m.positions.size(); ++v) {
       live += liveNow[v];
       if (!liveNow[v] || !liveDraped[v]) continue;
@@ -521,12 +525,7 @@ TEST(DrapeCarry, FeathersOnARigidPieceMoveWhereTheirCarriedChartsPlaceThem) {
   EXPECT_EQ(a.stats.relaid + a.stats.rigid, b.stats.relaid);
   ASSERT_EQ(with.positions.size(), without.positions.size());
   size_t liveA = 0, liveBoth = 0, off = 0;
-  std::vector<uint8_t> la(with.positions.size(), 0), lb(without.positions.size(), 0);
-  for (size_t t = 0; t < with.triangleCount(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      if (!collapsed(with, t)) la[with.indices[3 * t + k]] = 1;
-      if (!collapsed(without, t)) lb[without.indices[3 * t + k]] = 1;
-    }
+  const std::vector<uint8_t> la = liveVertices(with), lb = liveVertices(without);
   for (size_t v = 0; v < la.size(); ++v) {
     liveA += la[v];
     if (!la[v] || !lb[v]) continue;
