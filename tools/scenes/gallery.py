@@ -113,8 +113,8 @@ SECTIONS = [
      "mirror images of the denser left follicles, as in `bird.json`; the flight feathers are the bird's own. "
      "It renders within the default 4 GB memory guard because a render meshes each feather by its size on "
      "screen (docs/render.md): at 1280x720 and `--lod 0.6` the coat is 1.8M triangles, not 8M "
-     "(the numbers before and after: docs/render.md, \"A hero bird on one machine\"). Its bench ran beside a "
-     "build (slower than the page's quiet-machine numbers); `mesh` includes the drape, most of it. Compared "
+     "(the numbers before and after: docs/render.md, \"A hero bird on one machine\"). Its numbers were "
+     "regenerated on 2026-11-29 on an idle machine; `mesh` includes the drape, most of it. Compared "
      "with `bird.json` the wings' leading edges show skin between the smaller rim feathers.",
      "bird_dense.json", [("bird_dense", None, "bird_dense.json")], [None], None),
 ]
