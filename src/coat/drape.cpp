@@ -51,7 +51,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     return res;
   }
   const CoatLayout L(coat, mesh);
-  const std::vector<uint32_t>&first = L.first, &verts = L.verts, &localVert = L.localVert;
+  const std::vector<uint32_t>&first = L.first, &verts = L.verts;
   const std::vector<uint32_t>&trisOf = L.trisOf, &tris = L.tris;
   const std::vector<int64_t>& rank = L.rank;
   const std::vector<uint32_t>& order = L.order;
@@ -140,22 +140,7 @@ DrapeResult drape(const SkinMesh& skin, const CoatFeathers& coat, TriMesh& mesh,
     detail::inArena(o.threads, [&] {
       tbb::parallel_for(size_t(0), order.size(), [&](size_t z) {
         const uint32_t i = order[z];
-        if (sameInput[i]) return;
-        FeatherMemo& m = M->feathers[i];
-        const size_t cnt = first[i + 1] - first[i], tc = trisOf[i + 1] - trisOf[i];
-        m.flatPos.resize(cnt);
-        m.flatNrm.resize(hasN ? cnt : 0);
-        m.flatTan.resize(hasT ? cnt : 0);
-        for (size_t l = 0; l < cnt; ++l) {
-          const uint32_t v = verts[first[i] + l];
-          m.flatPos[l] = mesh.positions[v];
-          if (hasN) m.flatNrm[l] = mesh.normals[v];
-          if (hasT) m.flatTan[l] = mesh.tangents[v];
-        }
-        m.flatTris.resize(3 * tc);
-        for (size_t q = 0; q < tc; ++q)
-          for (int c = 0; c < 3; ++c)
-            m.flatTris[3 * q + c] = localVert[mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c]];
+        if (!sameInput[i]) keepFlat(M->feathers[i], mesh, L, i);
       });
     });
   // Nothing changed: the last drape, copied.

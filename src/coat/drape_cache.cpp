@@ -61,21 +61,28 @@ void insideSkinFor(const SkinMesh& skin, const TriMesh& mesh, const CoatLayout& 
 }
 
 bool sameFlat(const FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i) {
-  const uint32_t* vs = L.verts.data() + L.first[i];
-  const size_t cnt = L.first[i + 1] - L.first[i], tc = L.trisOf[i + 1] - L.trisOf[i];
-  const bool hasN = mesh.normals.size() == mesh.positions.size(), hasT = mesh.tangents.size() == mesh.positions.size();
-  if (m.flatPos.size() != cnt || m.flatTris.size() != 3 * tc) return false;
-  if ((hasN && m.flatNrm.size() != cnt) || (hasT && m.flatTan.size() != cnt)) return false;
-  for (size_t q = 0; q < cnt; ++q)
-    if (m.flatPos[q] != mesh.positions[vs[q]] || (hasN && m.flatNrm[q] != mesh.normals[vs[q]]) ||
-        (hasT && m.flatTan[q] != mesh.tangents[vs[q]]))
-      return false;
+  return flatLike(m, mesh, L, i, [&](size_t q, uint32_t v, bool hasN, bool hasT) {
+    return m.flatPos[q] == mesh.positions[v] && (!hasN || m.flatNrm[q] == mesh.normals[v]) &&
+           (!hasT || m.flatTan[q] == mesh.tangents[v]);
+  });
+}
+
+void keepFlat(FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i) {
+  const size_t nv = mesh.positions.size(), cnt = L.first[i + 1] - L.first[i], tc = L.trisOf[i + 1] - L.trisOf[i];
+  const bool hasN = mesh.normals.size() == nv, hasT = mesh.tangents.size() == nv;
+  m.flatPos.resize(cnt);
+  m.flatNrm.resize(hasN ? cnt : 0);
+  m.flatTan.resize(hasT ? cnt : 0);
+  for (size_t l = 0; l < cnt; ++l) {
+    const uint32_t v = L.verts[L.first[i] + l];
+    m.flatPos[l] = mesh.positions[v];
+    if (hasN) m.flatNrm[l] = mesh.normals[v];
+    if (hasT) m.flatTan[l] = mesh.tangents[v];
+  }
+  m.flatTris.resize(3 * tc);
   for (size_t q = 0; q < tc; ++q)
-    for (int c = 0; c < 3; ++c) {
-      const uint32_t v = mesh.indices[3 * static_cast<size_t>(L.tris[L.trisOf[i] + q]) + c];
-      if (mesh.featherId[v] != i || m.flatTris[3 * q + c] != L.localVert[v]) return false;
-    }
-  return true;
+    for (int c = 0; c < 3; ++c)
+      m.flatTris[3 * q + c] = L.localVert[mesh.indices[3 * static_cast<size_t>(L.tris[L.trisOf[i] + q]) + c]];
 }
 
 void keepPlaced(FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i,

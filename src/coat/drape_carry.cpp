@@ -153,24 +153,33 @@ struct RigidPieces {
 constexpr double kFlatAxisTol = 1e-5;
 bool flatMoves(const FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i, const Motion& M,
                double tol) {
-  const uint32_t* vs = L.verts.data() + L.first[i];
-  const size_t cnt = L.first[i + 1] - L.first[i], tc = L.trisOf[i + 1] - L.trisOf[i];
-  const bool hasN = mesh.normals.size() == mesh.positions.size(), hasT = mesh.tangents.size() == mesh.positions.size();
-  if (m.flatPos.size() != cnt || m.flatTris.size() != 3 * tc) return false;
-  if ((hasN && m.flatNrm.size() != cnt) || (hasT && m.flatTan.size() != cnt)) return false;
-  auto far = [](const dvec3& d, double r) { return !(glm::dot(d, d) <= r * r); };
-  for (size_t q = 0; q < cnt; ++q) {
-    const uint32_t v = vs[q];
-    if (far(dvec3(mesh.positions[v]) - M.at(dvec3(m.flatPos[q])), tol)) return false;
-    if (hasN && far(dvec3(mesh.normals[v]) - M.R * dvec3(m.flatNrm[q]), kFlatAxisTol)) return false;
-    if (hasT && far(dvec3(mesh.tangents[v]) - M.R * dvec3(m.flatTan[q]), kFlatAxisTol)) return false;
+  auto near = [](const dvec3& d, double r) { return glm::dot(d, d) <= r * r; };
+  return flatLike(m, mesh, L, i, [&](size_t q, uint32_t v, bool hasN, bool hasT) {
+    return near(dvec3(mesh.positions[v]) - M.at(dvec3(m.flatPos[q])), tol) &&
+           (!hasN || near(dvec3(mesh.normals[v]) - M.R * dvec3(m.flatNrm[q]), kFlatAxisTol)) &&
+           (!hasT || near(dvec3(mesh.tangents[v]) - M.R * dvec3(m.flatTan[q]), kFlatAxisTol));
+  });
+}
+
+// Is q within r of box b on every axis?
+bool nearBox(const dvec3& q, const detail::Box& b, double r) {
+  return q.x >= b.lo.x - r && q.y >= b.lo.y - r && q.z >= b.lo.z - r && q.x <= b.hi.x + r && q.y <= b.hi.y + r &&
+         q.z <= b.hi.z + r;
+}
+
+// Does skin of `restTree` come within reach[l] of vertex l of m as it lay, or skin of `posedTree` within
+// reach of it moved by M (null: where it lay)? Vertices the chart trimmed are not searched.
+bool skinNear(const FeatherMemo& m, const std::vector<double>& reach, const detail::TriangleBvh& restTree,
+              const detail::TriangleBvh& posedTree, const Motion* M) {
+  dvec3 bary;
+  double d2 = 0;
+  for (size_t l = 0; l < m.pos.size(); ++l) {
+    if (m.bad[l]) continue;
+    const dvec3 p(m.pos[l]);
+    const double rr = reach[l] * reach[l];
+    if (restTree.nearest(p, rr, bary, d2) >= 0 || posedTree.nearest(M ? M->at(p) : p, rr, bary, d2) >= 0) return true;
   }
-  for (size_t q = 0; q < tc; ++q)
-    for (int c = 0; c < 3; ++c) {
-      const uint32_t v = mesh.indices[3 * static_cast<size_t>(L.tris[L.trisOf[i] + q]) + c];
-      if (mesh.featherId[v] != i || m.flatTris[3 * q + c] != L.localVert[v]) return false;
-    }
-  return true;
+  return false;
 }
 
 // The bounds of a box's eight corners moved by M.
@@ -272,28 +281,22 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
         const bool rigid = moved && on >= 1 && pieces.frameMoves(m.frame, F, pieces.motion[static_cast<size_t>(on)]) &&
                            flatMoves(m, mesh, L, i, pieces.motion[static_cast<size_t>(on)], pieces.tol);
         piece[i] = same ? 0 : rigid ? on : -1;
-        // The reference's drape of the feather, with its trims and under-skin test.
-        auto copy = [&] {
+        // The reference's drape of the feather, with its trims and under-skin test: as it is, or moved by
+        // its piece's motion M.
+        auto copy = [&](const Motion* M = nullptr) {
           for (size_t l = 0; l < cnt; ++l) {
             const uint32_t v = vs[l];
-            mesh.positions[v] = m.pos[l];
-            if (hasN) mesh.normals[v] = m.nrm[l];
-            if (hasT) mesh.tangents[v] = m.tan[l];
-            surfacePoint[v] = m.surface[l];
-            bad[v] = m.bad[l];
-            inside[v] = m.inside[l];
-          }
-          for (size_t q = 0; q < tc; ++q) overFollicle[tris[trisOf[i] + q]] = m.overFollicle[q];
-          res.elevation[i] = m.elevation;
-        };
-        // The same, moved by its piece's motion.
-        auto copyMoved = [&](const Motion& M) {
-          for (size_t l = 0; l < cnt; ++l) {
-            const uint32_t v = vs[l];
-            mesh.positions[v] = glm::vec3(M.at(dvec3(m.pos[l])));
-            if (hasN) mesh.normals[v] = glm::vec3(M.R * dvec3(m.nrm[l]));
-            if (hasT) mesh.tangents[v] = glm::vec3(M.R * dvec3(m.tan[l]));
-            surfacePoint[v] = glm::vec3(M.at(dvec3(m.surface[l])));
+            if (M) {
+              mesh.positions[v] = glm::vec3(M->at(dvec3(m.pos[l])));
+              if (hasN) mesh.normals[v] = glm::vec3(M->R * dvec3(m.nrm[l]));
+              if (hasT) mesh.tangents[v] = glm::vec3(M->R * dvec3(m.tan[l]));
+              surfacePoint[v] = glm::vec3(M->at(dvec3(m.surface[l])));
+            } else {
+              mesh.positions[v] = m.pos[l];
+              if (hasN) mesh.normals[v] = m.nrm[l];
+              if (hasT) mesh.tangents[v] = m.tan[l];
+              surfacePoint[v] = m.surface[l];
+            }
             bad[v] = m.bad[l];
             inside[v] = m.inside[l];
           }
@@ -306,7 +309,7 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
           continue;
         }
         if (rigid && !out) {
-          copyMoved(pieces.motion[static_cast<size_t>(on)]);
+          copy(&pieces.motion[static_cast<size_t>(on)]);
           continue;
         }
         // Without `out` the carried chart only places the feather: it is made in this thread's scratch
@@ -356,24 +359,13 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
             w.flatTan = m.flatTan;
             w.flatTris = m.flatTris;
           } else {
-            w.flatPos.resize(cnt);
-            w.flatNrm.resize(hasN ? cnt : 0);
-            w.flatTan.resize(hasT ? cnt : 0);
-            for (size_t l = 0; l < cnt; ++l) {
-              w.flatPos[l] = mesh.positions[vs[l]];
-              if (hasN) w.flatNrm[l] = mesh.normals[vs[l]];
-              if (hasT) w.flatTan[l] = mesh.tangents[vs[l]];
-            }
-            w.flatTris.resize(3 * tc);
-            for (size_t q = 0; q < tc; ++q)
-              for (int c = 0; c < 3; ++c)
-                w.flatTris[3 * q + c] = L.localVert[mesh.indices[3 * static_cast<size_t>(tris[trisOf[i] + q]) + c]];
+            keepFlat(w, mesh, L, i);
           }
         }
         if (same) {
           copy();
         } else if (rigid) {
-          copyMoved(pieces.motion[static_cast<size_t>(on)]);
+          copy(&pieces.motion[static_cast<size_t>(on)]);
         } else {
           placed[i] = 1;
           res.elevation[i] = placeOnChart(C, F, mesh, vs, cnt, hasN, hasT, surfacePoint, bad);
@@ -491,17 +483,13 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
         grid.query(b.lo - dvec3(zoneAll + pad), b.hi + dvec3(zoneAll + pad), [&](uint32_t a) {
           const uint32_t j = order[a];
           if (retrim[i] || a <= k || footPiece[j] == piece[i]) return;
-          const double rz = R.feathers[j].rootZone * (1 + 1e-6) + 1e-9 + pad;
-          const dvec3& q = at[a];
-          if (q.x >= b.lo.x - rz && q.y >= b.lo.y - rz && q.z >= b.lo.z - rz && q.x <= b.hi.x + rz &&
-              q.y <= b.hi.y + rz && q.z <= b.hi.z + rz)
-            retrim[i] = 1;
+          if (nearBox(at[a], b, R.feathers[j].rootZone * (1 + 1e-6) + 1e-9 + pad)) retrim[i] = 1;
         });
       };
       near(restGrid, restAt, m.box);
       near(posedGrid, posedAt, movedBox(m.box, M));
     }
-    const detail::TriangleBvh &offRest = offTree[2 * g], &offPosed = offTree[2 * g + 1];
+    const detail::TriangleBvh &offRest = offTree[2 * g], &offPosed = offTree[2 * g + 1];  // (empty: no skin)
     if (offRest.empty() && offPosed.empty()) return;
     const size_t cnt = first[i + 1] - first[i];
     thread_local std::vector<double> reach;
@@ -515,24 +503,13 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
       within.add(p + dvec3(reach[l]));
     }
     if (within.empty()) return;
+    // The whole feather first: a ball around all its vertices' searches.
+    const dvec3 c = 0.5 * (within.lo + within.hi);
+    const double rad = 0.5 * glm::length(within.hi - within.lo) + pad;
     dvec3 bary;
     double d2 = 0;
-    {
-      // The whole feather first: a ball around all its vertices' searches.
-      const dvec3 c = 0.5 * (within.lo + within.hi);
-      const double rad = 0.5 * glm::length(within.hi - within.lo) + pad;
-      if ((offRest.empty() || offRest.nearest(c, rad * rad, bary, d2) < 0) &&
-          (offPosed.empty() || offPosed.nearest(M.at(c), rad * rad, bary, d2) < 0))
-        return;
-    }
-    for (size_t l = 0; l < cnt && !changed[i]; ++l) {
-      if (m.bad[l]) continue;
-      const dvec3 p(m.pos[l]);
-      const double rr = reach[l];
-      if ((!offRest.empty() && offRest.nearest(p, rr * rr, bary, d2) >= 0) ||
-          (!offPosed.empty() && offPosed.nearest(M.at(p), rr * rr, bary, d2) >= 0))
-        changed[i] = 1;
-    }
+    if (offRest.nearest(c, rad * rad, bary, d2) < 0 && offPosed.nearest(M.at(c), rad * rad, bary, d2) < 0) return;
+    if (skinNear(m, reach, offRest, offPosed, &M)) changed[i] = 1;
   };
   detail::inArena(o.threads, [&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, order.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
@@ -549,11 +526,7 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
           movedGrid.query(m.box.lo - dvec3(zoneMax), m.box.hi + dvec3(zoneMax), [&](uint32_t a) {
             const uint32_t j = movedFeet[a / 2];
             if (retrim[i] || rank[j] <= static_cast<int64_t>(k)) return;
-            const double rz = R.feathers[j].rootZone * (1 + 1e-6) + 1e-9;
-            const dvec3& g = movedAt[a];
-            if (g.x >= m.box.lo.x - rz && g.y >= m.box.lo.y - rz && g.z >= m.box.lo.z - rz && g.x <= m.box.hi.x + rz &&
-                g.y <= m.box.hi.y + rz && g.z <= m.box.hi.z + rz)
-              retrim[i] = 1;
+            if (nearBox(movedAt[a], m.box, R.feathers[j].rootZone * (1 + 1e-6) + 1e-9)) retrim[i] = 1;
           });
         if (movedIdx.empty() || changed[i]) continue;
         // The nearest skin point of a vertex lies within its height over its chart point and half a chart
@@ -571,15 +544,7 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
           within.add(p + dvec3(reach[l]));
         }
         if (!within.overlaps(movedBounds[0]) && !within.overlaps(movedBounds[1])) continue;
-        for (size_t l = 0; l < cnt && !changed[i]; ++l) {
-          if (m.bad[l]) continue;
-          const dvec3 p(m.pos[l]);
-          const double rr = reach[l];
-          dvec3 bary;
-          double d2 = 0;
-          if (movedRest.nearest(p, rr * rr, bary, d2) >= 0 || movedPosed.nearest(p, rr * rr, bary, d2) >= 0)
-            changed[i] = 1;
-        }
+        if (skinNear(m, reach, movedRest, movedPosed, nullptr)) changed[i] = 1;
       }
     });
   });

@@ -221,6 +221,29 @@ void insideSkinFor(const SkinMesh& skin, const TriMesh& mesh, const CoatLayout& 
 // (positions, normals, tangents where the mesh has them) and triangles, in the same order?
 bool sameFlat(const FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i);
 
+// The test behind it, with the vertices compared by `like(q, v, hasN, hasT)` (memo vertex q, mesh vertex
+// v): the same counts, each vertex alike, and the same triangles in the same local vertex indices.
+template <class Like>
+bool flatLike(const FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i, Like&& like) {
+  const uint32_t* vs = L.verts.data() + L.first[i];
+  const size_t cnt = L.first[i + 1] - L.first[i], tc = L.trisOf[i + 1] - L.trisOf[i];
+  const bool hasN = mesh.normals.size() == mesh.positions.size(), hasT = mesh.tangents.size() == mesh.positions.size();
+  if (m.flatPos.size() != cnt || m.flatTris.size() != 3 * tc) return false;
+  if ((hasN && m.flatNrm.size() != cnt) || (hasT && m.flatTan.size() != cnt)) return false;
+  for (size_t q = 0; q < cnt; ++q)
+    if (!like(q, vs[q], hasN, hasT)) return false;
+  for (size_t q = 0; q < tc; ++q)
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t v = mesh.indices[3 * static_cast<size_t>(L.tris[L.trisOf[i] + q]) + c];
+      if (mesh.featherId[v] != i || m.flatTris[3 * q + c] != L.localVert[v]) return false;
+    }
+  return true;
+}
+
+// Keeps in m feather i's flat inputs as `mesh` holds them (before a drape moves them): its vertices'
+// positions, normals and tangents (where the mesh has them) and its triangles in local vertex indices.
+void keepFlat(FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i);
+
 // Keeps in m what a drape placed of feather i before its trims move vertices: positions, normals and
 // tangents (where the mesh has them), surface points and the chart's trims.
 void keepPlaced(FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i,
