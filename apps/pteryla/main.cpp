@@ -110,7 +110,8 @@ int main(int argc, char** argv) {
       "bench",
       "Print one JSON object of per-stage seconds of the first evaluation (load, distribute,\n"
       "interpolate, pack, mesh, render), pack_repeat (best of 3 more full packs, warm memory), frame\n"
-      "(a timeline step), triangles and peak_rss_mb on stdout; with --check also check_mesh (meshing\n"
+      "(a timeline step from the rendered frame), triangles and peak_rss_mb on stdout; with --check also check_mesh "
+      "(meshing\n"
       "at full detail) and check (`pteryla check`'s measurement of that mesh). The first evaluation is\n"
       "the first render's: the mesh at its levels of detail (by screen size unless --fixed-lod)");
   addSceneOptions(cBench, bench, true);

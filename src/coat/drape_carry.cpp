@@ -149,15 +149,16 @@ struct RigidPieces {
 };
 
 // Is feather i's flat mesh in `mesh` the memo's moved by M: the same triangles, each vertex within `tol`,
-// its normal and tangent within kFlatAxisTol (float data, made along another path)?
-constexpr double kFlatAxisTol = 1e-5;
+// its normal and tangent within kFlatAxisTol (16-bit data, each rounded from a float made along another
+// path: up to 1.6e-5 a component either side)?
+constexpr double kFlatAxisTol = 1e-4;
 bool flatMoves(const FeatherMemo& m, const TriMesh& mesh, const CoatLayout& L, uint32_t i, const Motion& M,
                double tol) {
   auto near = [](const dvec3& d, double r) { return glm::dot(d, d) <= r * r; };
   return flatLike(m, mesh, L, i, [&](size_t q, uint32_t v, bool hasN, bool hasT) {
     return near(dvec3(mesh.positions[v]) - M.at(dvec3(m.flatPos[q])), tol) &&
-           (!hasN || near(dvec3(mesh.normals[v]) - M.R * dvec3(m.flatNrm[q]), kFlatAxisTol)) &&
-           (!hasT || near(dvec3(mesh.tangents[v]) - M.R * dvec3(m.flatTan[q]), kFlatAxisTol));
+           (!hasN || near(dvec3(mesh.normals[v].get()) - M.R * dvec3(m.flatNrm[q].get()), kFlatAxisTol)) &&
+           (!hasT || near(dvec3(mesh.tangents[v].get()) - M.R * dvec3(m.flatTan[q].get()), kFlatAxisTol));
   });
 }
 
@@ -288,8 +289,8 @@ DrapeResult carry(const SkinMesh& rest, const SkinMesh& posed, const CoatFeather
             const uint32_t v = vs[l];
             if (M) {
               mesh.positions[v] = glm::vec3(M->at(dvec3(m.pos[l])));
-              if (hasN) mesh.normals[v] = glm::vec3(M->R * dvec3(m.nrm[l]));
-              if (hasT) mesh.tangents[v] = glm::vec3(M->R * dvec3(m.tan[l]));
+              if (hasN) mesh.normals[v] = glm::vec3(M->R * dvec3(m.nrm[l].get()));
+              if (hasT) mesh.tangents[v] = glm::vec3(M->R * dvec3(m.tan[l].get()));
               surfacePoint[v] = glm::vec3(M->at(dvec3(m.surface[l])));
             } else {
               mesh.positions[v] = m.pos[l];

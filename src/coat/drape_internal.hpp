@@ -151,14 +151,16 @@ struct FeatherMemo {
   // Inputs: the follicle frame, what the drape reads of the parameters, the flat mesh.
   FeatherFrame frame;
   double rachisWidth = 0, calamusLength = 0, totalLength = 0, baseRadius = 0;
-  std::vector<glm::vec3> flatPos, flatNrm, flatTan;
+  std::vector<glm::vec3> flatPos;
+  std::vector<PackedDir> flatNrm, flatTan;
   std::vector<uint32_t> flatTris;  // local vertex indices
   // Outputs.
   double shrink = 1, scale = 1, flatEdge = 0, reach = 0, rootZone = 0, elevation = 0;
   Chart chart;                   // laid, after the fold test, with what it gathered
   std::vector<uint32_t> folded;  // nodes the fold test cleared
   std::vector<double> reads;     // what laying it read (readChart)
-  std::vector<glm::vec3> pos, nrm, tan, surface;
+  std::vector<glm::vec3> pos, surface;
+  std::vector<PackedDir> nrm, tan;
   std::vector<uint8_t> bad, inside;                // per vertex: trimmed by the chart; under the skin
   std::vector<uint8_t> overFollicle, preCut, cut;  // per triangle: over a later follicle; cut before the pairs; cut
   detail::Box box;                                 // surface points of its triangles

@@ -7,16 +7,19 @@
 namespace pteryla {
 namespace {
 
+float component(const glm::vec3& v, int c) { return v[c]; }
+float component(const glm::vec2& v, int c) { return v[c]; }
+float component(const PackedDir& v, int c) { return PackedDir::unpack(v.q[c]); }
+float component(Half v, int) { return v; }
+
 template <class V>
 void check(const std::vector<V>& values, int comps, const char* what, const std::string& file) {
-  for (size_t i = 0; i < values.size(); ++i) {
-    const float* f = reinterpret_cast<const float*>(&values[i]);
+  for (size_t i = 0; i < values.size(); ++i)
     for (int c = 0; c < comps; ++c)
-      if (!std::isfinite(f[c]))
+      if (!std::isfinite(component(values[i], c)))
         throw Error("the computed mesh has a non-finite " + std::string(what) +
                         " (an input value is too large or degenerate); nothing written",
                     file, "vertex " + std::to_string(i));
-  }
 }
 
 }  // namespace

@@ -20,14 +20,14 @@ void appendAttr(std::vector<T>& dst, size_t dstVerts, const std::vector<T>& src,
 
 void TriMesh::append(const TriMesh& o) {
   const size_t n = positions.size(), m = o.positions.size();
-  appendAttr(normals, n, o.normals, m, glm::vec3(0, 0, 1));
-  appendAttr(tangents, n, o.tangents, m, glm::vec3(1, 0, 0));
+  appendAttr(normals, n, o.normals, m, PackedDir(glm::vec3(0, 0, 1)));
+  appendAttr(tangents, n, o.tangents, m, PackedDir(glm::vec3(1, 0, 0)));
   appendAttr(uvGlobal, n, o.uvGlobal, m, glm::vec2(0));
   appendAttr(uvBarb, n, o.uvBarb, m, glm::vec2(0));
   appendAttr(uvGrowth, n, o.uvGrowth, m, glm::vec2(0));
-  appendAttr(alpha, n, o.alpha, m, 1.0f);
-  appendAttr(sheath, n, o.sheath, m, 0.0f);
-  appendAttr(barbCount, n, o.barbCount, m, 1.0f);
+  appendAttr(alpha, n, o.alpha, m, Half(1.0f));
+  appendAttr(sheath, n, o.sheath, m, Half(0.0f));
+  appendAttr(barbCount, n, o.barbCount, m, Half(1.0f));
   appendAttr(featherId, n, o.featherId, m, 0u);
   positions.insert(positions.end(), o.positions.begin(), o.positions.end());
   const uint32_t off = static_cast<uint32_t>(n);

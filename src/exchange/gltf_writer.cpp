@@ -148,11 +148,12 @@ tinygltf::Primitive primitive(Builder& b, const TriMesh& m, const std::vector<ui
   for (size_t i = 0; i < n; ++i) {
     const uint32_t v = order[i];
     for (int c = 0; c < 3; ++c) pos[3 * i + size_t(c)] = m.positions[v][c];
-    const glm::vec3 nn = hasN ? unitOr(m.normals[v], glm::vec3(0, 0, 1)) : glm::vec3(0, 0, 1);
+    const glm::vec3 nn = hasN ? unitOr(m.normals[v].get(), glm::vec3(0, 0, 1)) : glm::vec3(0, 0, 1);
     for (int c = 0; c < 3; ++c) nrm[3 * i + size_t(c)] = nn[c];
     if (hasT) {
       // glTF wants a unit tangent; the barb direction made orthogonal to the normal.
-      glm::vec3 t = m.tangents[v] - glm::dot(m.tangents[v], nn) * nn;
+      const glm::vec3 tv = m.tangents[v];
+      glm::vec3 t = tv - glm::dot(tv, nn) * nn;
       t = unitOr(t, anyPerpendicular(nn));
       for (int c = 0; c < 3; ++c) tan[4 * i + size_t(c)] = t[c];
       tan[4 * i + 3] = 1.0f;
@@ -163,7 +164,7 @@ tinygltf::Primitive primitive(Builder& b, const TriMesh& m, const std::vector<ui
     }
     if (hasA) {
       col[4 * i] = col[4 * i + 1] = col[4 * i + 2] = 1.0f;
-      col[4 * i + 3] = std::clamp(m.alpha[v], 0.0f, 1.0f);
+      col[4 * i + 3] = std::clamp(static_cast<float>(m.alpha[v]), 0.0f, 1.0f);
     }
     if (feathers) {
       const uint32_t f = m.featherId.empty() ? 0 : m.featherId[v];

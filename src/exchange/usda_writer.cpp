@@ -312,7 +312,7 @@ void buildMesh(const TriMesh& m, const std::vector<uint32_t>& tris, const Export
     }
   }
   for (uint32_t v : order) {
-    glm::vec3 p = m.positions[v], n = m.normals.empty() ? glm::vec3(0, 0, 1) : m.normals[v];
+    glm::vec3 p = m.positions[v], n = m.normals.empty() ? glm::vec3(0, 0, 1) : m.normals[v].get();
     if (localOrigin) {  // into the feather's local frame, scaled to unit length
       const glm::dvec3 q = glm::dvec3(p) - *localOrigin;
       p = glm::vec3(float(glm::dot(q, axes[0]) * invScale), float(glm::dot(q, axes[1]) * invScale),

@@ -103,8 +103,8 @@ std::vector<glm::dvec3> bentShaft(const FeatherPlacement& placement, const Shaft
 }
 
 void placeBentFeatherVertices(const FeatherPlacement& placement, const ShaftBend& b, const glm::vec3* positions,
-                              const glm::vec3* normals, const glm::vec3* tangents, size_t count,
-                              glm::vec3* outPositions, glm::vec3* outNormals, glm::vec3* outTangents) {
+                              const PackedDir* normals, const PackedDir* tangents, size_t count,
+                              glm::vec3* outPositions, PackedDir* outNormals, PackedDir* outTangents) {
   if (b.rigid()) {
     placeFeatherVertices(placement, positions, normals, tangents, count, outPositions, outNormals, outTangents);
     return;
@@ -124,8 +124,9 @@ void placeBentFeatherVertices(const FeatherPlacement& placement, const ShaftBend
     const glm::dvec3 local = placement.x * (q.x - a) + placement.y * q.y + placement.z * q.z;
     outPositions[v] = glm::vec3(centre + r * local);
     const glm::mat3 rf(r);
-    outNormals[v] = meshing::safeUnit(rf * xf.placeNormal(normals[v]), normals[v]);
-    outTangents[v] = meshing::safeUnit(rf * xf.placeTangent(tangents[v]), tangents[v]);
+    const glm::vec3 n = normals[v], t = tangents[v];
+    outNormals[v] = meshing::safeUnit(rf * xf.placeNormal(n), n);
+    outTangents[v] = meshing::safeUnit(rf * xf.placeTangent(t), t);
   }
 }
 

@@ -382,14 +382,14 @@ Dst reserveSlice(TriMesh& out, size_t verts, size_t indices) {
   const size_t n0 = out.positions.size();
   const size_t n1 = n0 + verts;
   PTERYLA_CHECK_LE(n1, std::numeric_limits<uint32_t>::max(), "mesh exceeds 32-bit vertex indices");
-  padTo(out.normals, n0, glm::vec3(0, 0, 1));
-  padTo(out.tangents, n0, glm::vec3(1, 0, 0));
+  padTo(out.normals, n0, PackedDir(glm::vec3(0, 0, 1)));
+  padTo(out.tangents, n0, PackedDir(glm::vec3(1, 0, 0)));
   padTo(out.uvGlobal, n0, glm::vec2(0));
   padTo(out.uvBarb, n0, glm::vec2(0));
   padTo(out.uvGrowth, n0, glm::vec2(0));
-  padTo(out.alpha, n0, 1.0f);
-  padTo(out.sheath, n0, 0.0f);
-  padTo(out.barbCount, n0, 1.0f);
+  padTo(out.alpha, n0, Half(1.0f));
+  padTo(out.sheath, n0, Half(0.0f));
+  padTo(out.barbCount, n0, Half(1.0f));
   padTo(out.featherId, n0, 0u);
   out.positions.resize(n1);
   out.normals.resize(n1);
@@ -504,14 +504,14 @@ void appendFeatherMeshes(const FeatherMeshInput* inputs, size_t count, const Mes
   });
 }
 
-void placeFeatherVertices(const FeatherPlacement& placement, const glm::vec3* positions, const glm::vec3* normals,
-                          const glm::vec3* tangents, size_t count, glm::vec3* outPositions, glm::vec3* outNormals,
-                          glm::vec3* outTangents) {
+void placeFeatherVertices(const FeatherPlacement& placement, const glm::vec3* positions, const PackedDir* normals,
+                          const PackedDir* tangents, size_t count, glm::vec3* outPositions, PackedDir* outNormals,
+                          PackedDir* outTangents) {
   const Xform xf(placement);
   for (size_t k = 0; k < count; ++k) {
     outPositions[k] = xf.place(positions[k]);
-    outNormals[k] = xf.placeNormal(normals[k]);
-    outTangents[k] = xf.placeTangent(tangents[k]);
+    outNormals[k] = xf.placeNormal(normals[k].get());
+    outTangents[k] = xf.placeTangent(tangents[k].get());
   }
 }
 

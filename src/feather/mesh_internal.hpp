@@ -18,9 +18,10 @@ constexpr float kTwoPi = 6.28318530717958647692f;
 // ---------------------------------------------------------------- output slice
 
 struct Dst {
-  glm::vec3 *pos, *nrm, *tan;
+  glm::vec3* pos;
+  PackedDir *nrm, *tan;
   glm::vec2 *uvG, *uvB, *uvGr;
-  float *alpha, *sheath, *count;
+  Half *alpha, *sheath, *count;
   uint32_t* fid;
   uint32_t* idx;
   uint32_t vbase;  // absolute index of the feather's first vertex
@@ -44,8 +45,17 @@ struct Xform {
     const float l2 = glm::dot(v, v);
     return l2 > 1e-30f ? v / std::sqrt(l2) : fallback;
   }
-  glm::vec3 normal(const glm::vec3& n) const { return raw ? n : placeNormal(n); }
-  glm::vec3 tangent(const glm::vec3& t) const { return raw ? t : placeTangent(t); }
+  // A local normal or tangent is made unit and rounded to the 16 bits a mesh stores (core/packed.hpp):
+  // unplaced, that is what is written; placed meshing places the rounded vector, as placeFeatherVertices
+  // does with an unplaced mesh, so both give the same bits.
+  PackedDir normal(const glm::vec3& n) const {
+    const PackedDir local(unit(n, n));
+    return raw ? local : PackedDir(placeNormal(local.get()));
+  }
+  PackedDir tangent(const glm::vec3& t) const {
+    const PackedDir local(unit(t, t));
+    return raw ? local : PackedDir(placeTangent(local.get()));
+  }
   glm::vec3 placeNormal(const glm::vec3& n) const { return unit(nm * n, n); }
   glm::vec3 placeTangent(const glm::vec3& t) const { return unit(m * t, t); }
 };

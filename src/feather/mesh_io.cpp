@@ -87,7 +87,7 @@ void writeObj(const std::string& path, const TriMesh& m, UvSet uv) {
   if (hasT)
     for (const auto& q : t) out.printf("vt %.7g %.7g\n", q.x, q.y);
   if (hasN)
-    for (const auto& q : m.normals) out.printf("vn %.6g %.6g %.6g\n", q.x, q.y, q.z);
+    for (const glm::vec3 q : m.normals) out.printf("vn %.6g %.6g %.6g\n", q.x, q.y, q.z);
   for (size_t i = 0; i < m.indices.size(); i += 3) {
     const uint32_t a = m.indices[i] + 1, b = m.indices[i + 1] + 1, c = m.indices[i + 2] + 1;
     if (hasT && hasN)
@@ -112,6 +112,13 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
     const float* f;     // float source with stride
     const uint32_t* u;  // or uint source
     size_t stride;
+    const PackedDir* d = nullptr;  // or a packed unit vector's component `stride`
+    const Half* h = nullptr;       // or a half float
+    float value(size_t i) const {
+      if (d) return PackedDir::unpack(d[i].q[stride]);
+      if (h) return h[i];
+      return f[i * stride];
+    }
   };
   std::vector<Prop> props;
   const size_t n = m.positions.size();
@@ -120,13 +127,19 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
     for (const char* nm : names) props.push_back({nm, base + c++, nullptr, comps});
   };
   addVec(&m.positions.data()->x, 3, {"x", "y", "z"});
-  if (!m.normals.empty()) addVec(&m.normals.data()->x, 3, {"nx", "ny", "nz"});
+  if (!m.normals.empty()) {
+    size_t c = 0;
+    for (const char* nm : {"nx", "ny", "nz"}) props.push_back({nm, nullptr, nullptr, c++, m.normals.data()});
+  }
   if (!t.empty()) addVec(&t.data()->x, 2, {"u", "v"});
   if (!m.uvBarb.empty()) addVec(&m.uvBarb.data()->x, 2, {"u_barb", "v_barb"});
   if (!m.uvGrowth.empty()) addVec(&m.uvGrowth.data()->x, 2, {"u_growth", "v_growth"});
-  if (!m.alpha.empty()) addVec(m.alpha.data(), 1, {"alpha"});
-  if (!m.sheath.empty()) addVec(m.sheath.data(), 1, {"sheath"});
-  if (!m.barbCount.empty()) addVec(m.barbCount.data(), 1, {"barb_count"});
+  auto addHalf = [&](const std::vector<Half>& v, const char* name) {
+    if (!v.empty()) props.push_back({name, nullptr, nullptr, 1, nullptr, v.data()});
+  };
+  addHalf(m.alpha, "alpha");
+  addHalf(m.sheath, "sheath");
+  addHalf(m.barbCount, "barb_count");
   if (!m.featherId.empty()) props.push_back({"feather_id", nullptr, m.featherId.data(), 1});
 
   std::string header = "ply\nformat ";
@@ -151,10 +164,12 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
       flushIf(vbytes);
       for (const Prop& p : props) {
         char b[4];
-        if (p.u)
+        if (p.u) {
           std::memcpy(b, p.u + i * p.stride, 4);
-        else
-          std::memcpy(b, p.f + i * p.stride, 4);
+        } else {
+          const float f = p.value(i);
+          std::memcpy(b, &f, 4);
+        }
         buf.insert(buf.end(), b, b + 4);
       }
     }
@@ -174,7 +189,7 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
         if (p.u)
           out.printf("%u%s", p.u[i * p.stride], sep);
         else
-          out.printf("%.7g%s", static_cast<double>(p.f[i * p.stride]), sep);
+          out.printf("%.7g%s", static_cast<double>(p.value(i)), sep);
       }
     }
     for (size_t i = 0; i < m.indices.size(); i += 3)

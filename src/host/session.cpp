@@ -66,6 +66,11 @@ struct Session::Impl {
   uint64_t boundMeshEvaluation = ~uint64_t(0);  // the mesh stage's evaluation count when bound
   coat::SkinMesh followSkin;                    // the base skin's connectivity at the host's pose
   std::vector<glm::vec3> followPositions, followNormals;
+  // The frame's vertex normals and alphas as floats: the host API hands out float arrays, where the coat
+  // mesh keeps 16-bit ones (core/packed.hpp).
+  std::vector<glm::vec3> vertexNormals;
+  std::vector<float> vertexAlphas;
+  uint64_t decodedMeshEvaluation = ~uint64_t(0);  // the mesh evaluation they were decoded from
   std::vector<glm::dvec3> scratch;
 
   Progress progress;  // setProgress (or SceneFileOptions::progress): reports of every evaluation
@@ -122,7 +127,7 @@ struct Session::Impl {
     if (evaluation != boundMeshEvaluation || vertexBinding.size() != m.positions.size() || originBinding.size() != n) {
       boundMeshEvaluation = ~uint64_t(0);
       vertexBinding.bind(base, m.positions);
-      vertexNormalLocal = vertexBinding.localDirections(base, m.normals);
+      vertexNormalLocal = vertexBinding.localDirections(base, vertexNormals);
       // Follicles are on the skin already: bound by their own (face, barycentric) coordinates.
       const coat::Follicles& follicles = p.follicles();
       const coat::CoatFeathers& coat = p.feathers();
@@ -221,7 +226,7 @@ struct Session::Impl {
     if (!following()) return m;
     TriMesh out = m;
     out.positions = followPositions;
-    out.normals = followNormals;
+    out.normals.assign(followNormals.begin(), followNormals.end());
     return out;
   }
 
@@ -276,9 +281,16 @@ struct Session::Impl {
     fr.binormals = {binormals.data(), 3 * n};
     fr.elevations = {elevation.data(), n};
     fr.positions = {nv ? &m.positions[0].x : nullptr, 3 * nv};
-    fr.vertexNormals = {nv ? &m.normals[0].x : nullptr, 3 * nv};
+    // Decoded again only when the mesh stage ran: a step that changes no input costs nothing here.
+    if (meshEvaluations() != decodedMeshEvaluation || vertexNormals.size() != m.normals.size() ||
+        vertexAlphas.size() != m.alpha.size()) {
+      vertexNormals.assign(m.normals.begin(), m.normals.end());
+      vertexAlphas.assign(m.alpha.begin(), m.alpha.end());
+      decodedMeshEvaluation = meshEvaluations();
+    }
+    fr.vertexNormals = {nv ? &vertexNormals[0].x : nullptr, 3 * nv};
     fr.uvs = {m.uvGlobal.empty() ? nullptr : &m.uvGlobal[0].x, 2 * m.uvGlobal.size()};
-    fr.alphas = {m.alpha.empty() ? nullptr : m.alpha.data(), m.alpha.size()};
+    fr.alphas = {vertexAlphas.empty() ? nullptr : vertexAlphas.data(), vertexAlphas.size()};
     fr.vertexFeathers = {m.featherId.data(), nv};
     fr.indices = {m.indices.data(), m.indices.size()};
     fr.ranges = {ranges.data(), ranges.size()};

@@ -305,7 +305,8 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
       // The layout moved: assemble a new mesh from the last one and the fresh slices, then let the last
       // one go (no spare copy of the coat is kept between updates).
       TriMesh next_;
-      std::vector<glm::vec3> nextPos(vTotal), nextNrm(vTotal), nextTan(vTotal);
+      std::vector<glm::vec3> nextPos(vTotal);
+      std::vector<PackedDir> nextNrm(vTotal), nextTan(vTotal);
       resizeAll(next_, vTotal, iTotal);  // every element is overwritten (positions etc. when placed)
       const TriMesh& last = out;
       tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {

@@ -91,7 +91,8 @@ class CoatMesher {
   // Unplaced positions, normals and tangents of the last mesh's vertices. No spare copy of the mesh is
   // kept: an update writes changed slices in place when the layout is unchanged, else builds the new mesh
   // beside the last one and frees the last (docs/limits.md, bytes per triangle).
-  std::vector<glm::vec3> localPos_, localNrm_, localTan_;
+  std::vector<glm::vec3> localPos_;
+  std::vector<PackedDir> localNrm_, localTan_;
   TriMesh freshMesh_;  // the changed feathers, unplaced, during an update (empty between updates)
   std::vector<uint32_t> keptIndices_;
   std::vector<uint32_t> which_;

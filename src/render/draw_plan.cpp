@@ -135,9 +135,28 @@ void DrawPlan::validateRanges(const std::vector<FeatherDrawRange>& ranges, size_
 
 void DrawPlan::setCoat(const std::vector<glm::vec3>& positions, const std::vector<uint32_t>& indices,
                        const std::vector<FeatherDrawRange>& ranges) {
-  const size_t n = indices.size();
-  positions_ = positions;
-  coatIndices_ = indices;
+  ownPositions_ = positions;
+  ownIndices_ = indices;
+  positions_ = ownPositions_.data();
+  coatIndices_ = ownIndices_.data();
+  indexCount_ = ownIndices_.size();
+  prepare(ranges);
+}
+
+void DrawPlan::setCoatReference(const std::vector<glm::vec3>& positions, const std::vector<uint32_t>& indices,
+                                const std::vector<FeatherDrawRange>& ranges) {
+  ownPositions_ = {};
+  ownIndices_ = {};
+  positions_ = positions.data();
+  coatIndices_ = indices.data();
+  indexCount_ = indices.size();
+  prepare(ranges);
+}
+
+void DrawPlan::prepare(const std::vector<FeatherDrawRange>& ranges) {
+  const size_t n = indexCount_;
+  const glm::vec3* positions = positions_;
+  const uint32_t* indices = coatIndices_;
   ranges_ = ranges;
   if (ranges_.empty() && n > 0) {
     FeatherDrawRange all;
@@ -246,7 +265,7 @@ DrawPlan::Depth DrawPlan::classify(const glm::vec3& lo, const glm::vec3& hi, con
 uint32_t DrawPlan::emitChunk(const Chunk& ch, bool backward, const DepthTiles* test, bool subpixel,
                              const glm::mat4& viewProj, int w, int h, uint32_t* out, std::vector<glm::vec3>& projected,
                              uint32_t& tiny) const {
-  const uint32_t* idx = coatIndices_.data() + ch.first;
+  const uint32_t* idx = coatIndices_ + ch.first;
   const uint32_t tris = ch.count / 3;
   if (!test && !subpixel) {
     if (!backward) {
@@ -335,7 +354,7 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
   samples_ = options.samplePositions;
   if (samples_.empty()) samples_.push_back(glm::vec2(0.5f));
   feathers_.resize(ranges_.size());
-  scratch_.resize(coatIndices_.size());
+  scratch_.resize(indexCount_);
   kept_.resize(chunks_.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ranges_.size(), 16), [&](const tbb::blocked_range<size_t>& br) {
     std::vector<glm::vec3> projected;
@@ -425,7 +444,7 @@ void DrawPlan::build(const Camera& camera, int width, int height, const DrawOpti
 void DrawPlan::buildShadow(const glm::mat4& viewProj, int size) {
   runs_.clear();
   samples_.assign(1, glm::vec2(0.5f));
-  scratch_.resize(coatIndices_.size());
+  scratch_.resize(indexCount_);
   kept_.resize(chunks_.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks_.size(), 64), [&](const tbb::blocked_range<size_t>& br) {
     std::vector<glm::vec3> projected;

@@ -147,28 +147,42 @@ void Renderer::Impl::releaseTarget() {
 
 namespace {
 
-// Unit vectors (normals, tangents) are stored on the GPU as four signed normalized 16-bit integers
-// (8 bytes instead of 12; error under 2e-5, the shaders read floats), converted in blocks of kBlock
-// vertices so an upload needs no second copy of the mesh. Texture coordinates and alpha stay float:
-// quantized to 16 bits, the nearest-texel look-ups of fastTextureFiltering flipped at texel borders
+// The arrays are uploaded as TriMesh holds them (core/packed.hpp), with no converted copy: float
+// positions and texture coordinates, unit vectors as three signed normalized 16-bit integers (the shaders
+// read floats; error under 2e-5), alpha, sheath and barb count as half floats. Texture coordinates stay
+// float: quantized to 16 bits, the nearest-texel look-ups of fastTextureFiltering flipped at texel borders
 // (up to 28/255 on 15 pixels of the bird), where packed normals change at most 2/255 on a few pixels.
-constexpr size_t kBlock = 1 << 16;
-
-int16_t snorm16(float x) { return static_cast<int16_t>(std::lround(std::clamp(x, -1.0f, 1.0f) * 32767.0f)); }
-
 template <class T>
-const float* floatsOf(const std::vector<T>& v) {
-  if constexpr (std::is_same_v<T, float>)
-    return v.data();
-  else
-    return &v[0].x;
-}
+struct GpuFormat;
+template <>
+struct GpuFormat<glm::vec3> {
+  static constexpr GLint comps = 3;
+  static constexpr GLenum type = GL_FLOAT;
+  static constexpr GLboolean normalized = GL_FALSE;
+};
+template <>
+struct GpuFormat<glm::vec2> {
+  static constexpr GLint comps = 2;
+  static constexpr GLenum type = GL_FLOAT;
+  static constexpr GLboolean normalized = GL_FALSE;
+};
+template <>
+struct GpuFormat<PackedDir> {
+  static constexpr GLint comps = 3;
+  static constexpr GLenum type = GL_SHORT;
+  static constexpr GLboolean normalized = GL_TRUE;
+};
+template <>
+struct GpuFormat<Half> {
+  static constexpr GLint comps = 1;
+  static constexpr GLenum type = GL_HALF_FLOAT;
+  static constexpr GLboolean normalized = GL_FALSE;
+};
 
 }  // namespace
 
 template <class T>
-void Renderer::Impl::syncAttr(GpuMesh& m, Attr a, const std::vector<T>& data, size_t vertexCount, int comps,
-                              const char* name) {
+void Renderer::Impl::syncAttr(GpuMesh& m, Attr a, const std::vector<T>& data, size_t vertexCount, const char* name) {
   if (data.empty()) {
     m.present[a] = false;
     gl.DisableVertexAttribArray(a);
@@ -178,33 +192,15 @@ void Renderer::Impl::syncAttr(GpuMesh& m, Attr a, const std::vector<T>& data, si
     throw Error(std::string("mesh attribute '") + name + "' has " + std::to_string(data.size()) + " entries for " +
                     std::to_string(vertexCount) + " vertices",
                 {}, name);
-  const float* f = floatsOf(data);
-  const size_t n = data.size();
-  const bool packed = (a == kNormal || a == kTangent) && comps == 3;
-  const size_t vertexBytes = packed ? 4 * sizeof(int16_t) : comps * sizeof(float);
-  const size_t bytes = n * vertexBytes;
+  const size_t bytes = data.size() * sizeof(T);
   if (!m.vbo[a]) gl.GenBuffers(1, &m.vbo[a]);
   gl.BindBuffer(GL_ARRAY_BUFFER, m.vbo[a]);
-  if (!packed) {
-    if (bytes == m.vboBytes[a])
-      gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), f);
-    else
-      gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), f, GL_STATIC_DRAW);
-    gl.VertexAttribPointer(a, comps, GL_FLOAT, GL_FALSE, 0, nullptr);
-  } else {
-    if (bytes != m.vboBytes[a]) gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), nullptr, GL_STATIC_DRAW);
-    std::vector<int16_t> block(4 * std::min(kBlock, n));
-    for (size_t v0 = 0; v0 < n; v0 += kBlock) {
-      const size_t count = std::min(kBlock, n - v0);
-      for (size_t v = 0; v < count; ++v) {
-        for (int c = 0; c < 3; ++c) block[4 * v + c] = snorm16(f[3 * (v0 + v) + c]);
-        block[4 * v + 3] = 0;
-      }
-      gl.BufferSubData(GL_ARRAY_BUFFER, static_cast<GLintptr>(v0 * vertexBytes),
-                       static_cast<GLsizeiptr>(count * vertexBytes), block.data());
-    }
-    gl.VertexAttribPointer(a, 4, GL_SHORT, GL_TRUE, 0, nullptr);
-  }
+  if (bytes == m.vboBytes[a])
+    gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), data.data());
+  else
+    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), data.data(), GL_STATIC_DRAW);
+  gl.VertexAttribPointer(a, GpuFormat<T>::comps, GpuFormat<T>::type, GpuFormat<T>::normalized,
+                         static_cast<GLsizei>(sizeof(T)), nullptr);
   m.vboBytes[a] = bytes;
   gl.EnableVertexAttribArray(a);
   m.present[a] = true;
@@ -221,7 +217,7 @@ void Renderer::Impl::applyDefaults(const GpuMesh& m) {
   if (!m.present[kBarbCount]) gl.VertexAttrib1f(kBarbCount, 1.0f);
 }
 
-void Renderer::Impl::upload(GpuMesh& m, const TriMesh& mesh, const std::vector<glm::vec3>* normalsOverride,
+void Renderer::Impl::upload(GpuMesh& m, const TriMesh& mesh, const std::vector<PackedDir>* normalsOverride,
                             bool staticIndices) {
   if (mesh.indices.size() % 3 != 0) throw Error("mesh index count is not a multiple of 3", {}, "indices");
   const size_t nv = mesh.vertexCount();
@@ -232,31 +228,30 @@ void Renderer::Impl::upload(GpuMesh& m, const TriMesh& mesh, const std::vector<g
           "face " + std::to_string(i / 3));
   if (!m.vao) gl.GenVertexArrays(1, &m.vao);
   gl.BindVertexArray(m.vao);
-  syncAttr(m, kPos, mesh.positions, nv, 3, "positions");
-  syncAttr(m, kNormal, normalsOverride ? *normalsOverride : mesh.normals, nv, 3, "normals");
-  syncAttr(m, kTangent, mesh.tangents, nv, 3, "tangents");
-  syncAttr(m, kUvGlobal, mesh.uvGlobal, nv, 2, "uvGlobal");
-  syncAttr(m, kUvBarb, mesh.uvBarb, nv, 2, "uvBarb");
-  syncAttr(m, kUvGrowth, mesh.uvGrowth, nv, 2, "uvGrowth");
-  syncAttr(m, kAlpha, mesh.alpha, nv, 1, "alpha");
-  syncAttr(m, kSheath, mesh.sheath, nv, 1, "sheath");
-  syncAttr(m, kBarbCount, mesh.barbCount, nv, 1, "barbCount");
+  syncAttr(m, kPos, mesh.positions, nv, "positions");
+  syncAttr(m, kNormal, normalsOverride ? *normalsOverride : mesh.normals, nv, "normals");
+  syncAttr(m, kTangent, mesh.tangents, nv, "tangents");
+  syncAttr(m, kUvGlobal, mesh.uvGlobal, nv, "uvGlobal");
+  syncAttr(m, kUvBarb, mesh.uvBarb, nv, "uvBarb");
+  syncAttr(m, kUvGrowth, mesh.uvGrowth, nv, "uvGrowth");
+  syncAttr(m, kAlpha, mesh.alpha, nv, "alpha");
+  syncAttr(m, kSheath, mesh.sheath, nv, "sheath");
+  syncAttr(m, kBarbCount, mesh.barbCount, nv, "barbCount");
   // Static indices (skin), or none here: the coat's are written every frame (streamIndices).
   const size_t n = mesh.indices.size();
   if (!m.ebo) gl.GenBuffers(1, &m.ebo);
-  if (staticIndices) streamIndices(m, mesh.indices, GL_STATIC_DRAW);
+  if (staticIndices) streamIndices(m, mesh.indices.data(), mesh.indices.size(), GL_STATIC_DRAW);
   m.indexCount = n;
   gl.BindVertexArray(0);
 }
 
-void Renderer::Impl::streamIndices(GpuMesh& m, const std::vector<uint32_t>& indices, GLenum usage) {
+void Renderer::Impl::streamIndices(GpuMesh& m, const uint32_t* indices, size_t count, GLenum usage) {
   gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
-  const size_t bytes = indices.size() * sizeof(uint32_t);
+  const size_t bytes = count * sizeof(uint32_t);
   if (bytes <= m.eboBytes && bytes > 0 && usage == GL_STREAM_DRAW) {
-    gl.BufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), indices.data());
+    gl.BufferSubData(GL_ELEMENT_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), indices);
   } else {
-    gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), indices.empty() ? nullptr : indices.data(),
-                  usage);
+    gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(bytes), count ? indices : nullptr, usage);
     m.eboBytes = bytes;
   }
 }

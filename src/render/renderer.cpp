@@ -95,17 +95,25 @@ void Renderer::setSkin(const TriMesh& skin) {
     const float len = glm::length(n);
     n = len > 0.0f ? n / len : glm::vec3(0, 0, 1);
   }
-  r.upload(r.skin, skin, &normals, true);
+  const std::vector<PackedDir> packed(normals.begin(), normals.end());
+  r.upload(r.skin, skin, &packed, true);
 }
 
 void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>& ranges) {
+  setCoat(coat, ranges, CoatStorage::Copy);
+}
+
+void Renderer::setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>& ranges, CoatStorage storage) {
   const size_t n = coat.indices.size();
   DrawPlan::validateRanges(ranges, n);
   Impl& r = *impl_;
   r.ctx.makeCurrent();
   r.upload(r.coat, coat, nullptr, false);
   r.shadow.valid = false;
-  r.plan.setCoat(coat.positions, coat.indices, ranges);
+  if (storage == CoatStorage::Reference)
+    r.plan.setCoatReference(coat.positions, coat.indices, ranges);
+  else
+    r.plan.setCoat(coat.positions, coat.indices, ranges);
 }
 
 void Renderer::setMaterials(const std::vector<FeatherMaterial>& materials) {
@@ -371,7 +379,7 @@ void Renderer::render(const Camera& camera, const std::vector<Light>& lights, co
     stats_.subpixelTriangles += counts.subpixelTriangles;
 
     // The plan's indices uploaded once, one draw call per material run.
-    r.streamIndices(r.coat, r.plan.indices(), GL_STREAM_DRAW);
+    r.streamIndices(r.coat, r.plan.indices().data(), r.plan.indices().size(), GL_STREAM_DRAW);
     size_t sinceWait = 0;
     for (const DrawRun& run : r.plan.runs()) {
       const GpuMaterial& mat = r.materials[run.material];

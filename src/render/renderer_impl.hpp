@@ -149,11 +149,11 @@ struct Renderer::Impl {
   void releaseMesh(GpuMesh& m);
   void releaseTarget();
   template <class T>
-  void syncAttr(GpuMesh& m, Attr a, const std::vector<T>& data, size_t vertexCount, int comps, const char* name);
+  void syncAttr(GpuMesh& m, Attr a, const std::vector<T>& data, size_t vertexCount, const char* name);
   // Generic attribute values are context state, not VAO state: set them before each mesh's draw.
   void applyDefaults(const GpuMesh& m);
-  void upload(GpuMesh& m, const TriMesh& mesh, const std::vector<glm::vec3>* normalsOverride, bool staticIndices);
-  void streamIndices(GpuMesh& m, const std::vector<uint32_t>& indices, GLenum usage);
+  void upload(GpuMesh& m, const TriMesh& mesh, const std::vector<PackedDir>* normalsOverride, bool staticIndices);
+  void streamIndices(GpuMesh& m, const uint32_t* indices, size_t count, GLenum usage);
   // drawIndices in pieces, waiting for llvmpipe after every kWaitIndices indices (`since` counts the
   // indices drawn since the last wait, across calls): llvmpipe keeps each binned triangle (about 400
   // bytes with 4x multisampling) until the rasterizer is done with it, and a flush alone frees none, so

@@ -348,7 +348,11 @@ Image renderFeatherImage(RenderContext& context, const feather::FeatherParams& p
 struct SceneView::Impl {
   explicit Impl(RenderContext& c) : renderer(c) {}
   Renderer renderer;
-  const void* lastCoat = nullptr;
+  // The arrays the renderer reads (it keeps no copy of the coat's positions and indices): set again
+  // whenever the mesh stage ran or the arrays are others (another pipeline, or moved).
+  const void* lastPositions = nullptr;
+  const void* lastIndices = nullptr;
+  size_t lastVertices = 0, lastIndexCount = 0;
   uint64_t lastSkinEval = ~0ull, lastMeshEval = ~0ull;
   bool materialsSet = false;
   std::vector<pipeline::CoatMaterial> lastMaterials;  // the coat's materials when last set
@@ -362,15 +366,21 @@ struct SceneView::Impl {
       renderer.setSkin(skin);
       lastSkinEval = p.evaluations(Stage::Pose);
     }
-    if (p.evaluations(Stage::Mesh) != lastMeshEval) {
+    const TriMesh& m = coat.mesh;
+    if (p.evaluations(Stage::Mesh) != lastMeshEval || m.positions.data() != lastPositions ||
+        m.indices.data() != lastIndices || m.positions.size() != lastVertices || m.indices.size() != lastIndexCount) {
       // Materials follow the rest coat (blends of key feathers' looks), so re-set them when it changes.
       if (!materialsSet || coat.materials != lastMaterials) {
         renderer.setMaterials(sceneMaterials(p.scene(), coat));
         lastMaterials = coat.materials;
         materialsSet = true;
       }
-      renderer.setCoat(coat.mesh, drawRanges(coat));
+      renderer.setCoat(m, drawRanges(coat), Renderer::CoatStorage::Reference);
       lastMeshEval = p.evaluations(Stage::Mesh);
+      lastPositions = m.positions.data();
+      lastIndices = m.indices.data();
+      lastVertices = m.positions.size();
+      lastIndexCount = m.indices.size();
     }
   }
 };

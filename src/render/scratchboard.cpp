@@ -52,7 +52,7 @@ void rasterize(GBuffer& g, const TriMesh& mesh, const glm::mat4& viewProj, const
     bool ok = false;
     sv[v].p = project(p, ok);
     sv[v].valid = ok;
-    glm::vec3 n = hasN ? mesh.normals[v] : glm::vec3(0, 0, 1);
+    glm::vec3 n = hasN ? mesh.normals[v].get() : glm::vec3(0, 0, 1);
     const float nl = glm::length(n);
     n = nl > 0.0f ? n / nl : glm::vec3(0, 0, 1);
     if (glm::dot(n, eye - p) < 0.0f) n = -n;
@@ -63,13 +63,13 @@ void rasterize(GBuffer& g, const TriMesh& mesh, const glm::mat4& viewProj, const
       const float lum = 0.2126f * l.color.r + 0.7152f * l.color.g + 0.0722f * l.color.b;
       light += lum * std::max(0.0f, glm::dot(n, l.direction / ll));
     }
-    float tone = albedo * light * (isCoat && hasA ? std::clamp(mesh.alpha[v], 0.0f, 1.0f) : 1.0f);
+    float tone = albedo * light * (isCoat && hasA ? std::clamp(static_cast<float>(mesh.alpha[v]), 0.0f, 1.0f) : 1.0f);
     sv[v].tone = std::clamp(tone, 0.0f, 1.0f);
     sv[v].dir = fixedDir;
     if (isCoat && hasT) {
       bool ok2 = false;
       const float scale = 1e-3f * std::max(1.0f, glm::length(p - eye));
-      const glm::vec3 q = project(p + mesh.tangents[v] * scale, ok2);
+      const glm::vec3 q = project(p + mesh.tangents[v].get() * scale, ok2);
       glm::vec2 d(q.x - sv[v].p.x, q.y - sv[v].p.y);
       const float len = glm::length(d);
       sv[v].dir = (ok2 && len > 1e-9f) ? d / len : fixedDir;

@@ -105,7 +105,10 @@ bool Renderer::Impl::updateShadowMap(const glm::vec3& toLight, const RenderSetti
     // no texel centre of the map (they draw no depth: the map is the same).
     const bool cull = s.subpixelCulling;
     if (cull) plan.buildShadow(shadow.viewProj, size);
-    streamIndices(coat, cull ? plan.indices() : plan.coatIndices(), GL_STREAM_DRAW);
+    if (cull)
+      streamIndices(coat, plan.indices().data(), plan.indices().size(), GL_STREAM_DRAW);
+    else
+      streamIndices(coat, plan.coatIndices(), plan.coatIndexCount(), GL_STREAM_DRAW);
     size_t sinceWait = 0;
     for (const DrawRun& run : cull ? plan.runs() : plan.shadowRuns()) {
       if (run.material >= materials.size()) continue;

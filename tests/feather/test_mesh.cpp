@@ -44,8 +44,8 @@ void expectConsistent(const TriMesh& m) {
   ASSERT_EQ(m.indices.size() % 3, 0u);
   for (uint32_t i : m.indices) ASSERT_LT(i, n);
   for (size_t i = 0; i < n; ++i) {
-    ASSERT_NEAR(glm::length(m.normals[i]), 1.0f, 1e-4f) << i;
-    ASSERT_NEAR(glm::length(m.tangents[i]), 1.0f, 1e-4f) << i;
+    ASSERT_NEAR(glm::length(m.normals[i].get()), 1.0f, 1e-4f) << i;
+    ASSERT_NEAR(glm::length(m.tangents[i].get()), 1.0f, 1e-4f) << i;
     for (const auto* uv : {&m.uvGlobal[i], &m.uvBarb[i], &m.uvGrowth[i]}) {
       ASSERT_GE(uv->x, 0.0f);
       ASSERT_LE(uv->x, 1.0f);
@@ -94,7 +94,7 @@ TEST(FeatherMesh, VaneNormalsAreDorsalAndAgreeWithWinding) {
     const glm::vec3 fn = faceNormal(m, i / 3);
     if (glm::length(fn) < 1e-9f) continue;
     EXPECT_GT(fn.z, 0.0f) << "triangle " << i / 3;
-    for (int k = 0; k < 3; ++k) EXPECT_GT(glm::dot(glm::normalize(fn), m.normals[m.indices[i + k]]), 0.5f);
+    for (int k = 0; k < 3; ++k) EXPECT_GT(glm::dot(glm::normalize(fn), m.normals[m.indices[i + k]].get()), 0.5f);
     ++checked;
   }
   EXPECT_GT(checked, 2000u);
@@ -225,8 +225,8 @@ TEST(FeatherMesh, AlphaFallsOffQuadraticallyEarlierOnTheEdges) {
   std::vector<float> a;
   for (const auto& q : line) a.push_back(m.alpha[idx.at({q.x, q.y, q.z})]);
   EXPECT_EQ(a[0], 1.0f);
-  EXPECT_EQ(a[3], 1.0f);  // centre row: fall-off over the last segment only
-  EXPECT_NEAR(a[4], 0.1f, 1e-6f);
+  EXPECT_EQ(a[3], 1.0f);                 // centre row: fall-off over the last segment only
+  EXPECT_NEAR(a[4], 0.1f, 0.1f / 2048);  // alpha is a half float (11 significant bits)
   // Side rows: midpoint between barbs 20 and 21, fall-off over the last two segments, quadratic.
   std::vector<glm::vec3> next;
   barbPolyline(c, c.barbs[21], 4, next);
@@ -248,8 +248,8 @@ TEST(FeatherMesh, AlphaFallsOffQuadraticallyEarlierOnTheEdges) {
     e.push_back(m.alpha[bi]);
   }
   EXPECT_EQ(e[2], 1.0f);
-  EXPECT_NEAR(e[3], 1.0f - 0.9f * 0.25f, 1e-5f);
-  EXPECT_NEAR(e[4], 0.1f, 1e-6f);
+  EXPECT_NEAR(e[3], 1.0f - 0.9f * 0.25f, 0.775f / 2048);
+  EXPECT_NEAR(e[4], 0.1f, 0.1f / 2048);
 }
 
 TEST(FeatherMesh, BarbCountIsOneAtFullDetailAndGrowsAtLowDetail) {
@@ -260,7 +260,7 @@ TEST(FeatherMesh, BarbCountIsOneAtFullDetailAndGrowsAtLowDetail) {
   const TriMesh low = meshOf(c, 0.1, &r);
   float maxCount = 0;
   for (uint32_t i = r.leftFirst; i < r.rightFirst + r.rightCount; ++i)
-    maxCount = std::max(maxCount, low.barbCount[low.indices[i]]);
+    maxCount = std::max(maxCount, static_cast<float>(low.barbCount[low.indices[i]]));
   EXPECT_GT(maxCount, 4.0f);
   // Summed over kept barbs' centre rows (t = 0 vertices) the counts cover every barb once.
   double sum = 0;
@@ -298,9 +298,9 @@ TEST(FeatherMesh, PlacementTransformsPositionsNormalsTangents) {
     const glm::dvec3 p(local.positions[i]);
     const glm::dvec3 expect = pl.origin + p.x * pl.x + p.y * pl.y + p.z * pl.z;
     ASSERT_NEAR(glm::length(glm::dvec3(world.positions[i + 1]) - expect), 0.0, 1e-5);
-    const glm::dvec3 n(local.normals[i]);
+    const glm::dvec3 n(local.normals[i].get());
     const glm::dvec3 en = glm::normalize(n.x * pl.x + n.y * pl.y + n.z * pl.z);  // rotation + uniform scale
-    ASSERT_NEAR(glm::length(glm::dvec3(world.normals[i + 1]) - en), 0.0, 1e-4);
+    ASSERT_NEAR(glm::length(glm::dvec3(world.normals[i + 1].get()) - en), 0.0, 1e-4);
     EXPECT_EQ(world.featherId[i + 1], 17u);
     EXPECT_EQ(world.uvGlobal[i + 1], local.uvGlobal[i]);
   }

@@ -52,8 +52,9 @@ std::unique_ptr<Pipeline> make(const Json& dynamic) {
   return p;
 }
 
-bool sameBits(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::vec3)) == 0;
+template <class T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
 }
 
 // Feathers whose vertices differ between two meshes of the same coat, and the largest move.

@@ -278,7 +278,8 @@ TEST(IncrementalFrames, UnplacedMeshPlacedLaterEqualsPlacedMesh) {
       ASSERT_EQ(n, placedMesh.vertexCount());
       ASSERT_GT(n, 0u);
       EXPECT_FALSE(sameBytes(unplacedMesh.positions, placedMesh.positions));  // really unplaced
-      std::vector<glm::vec3> pos(n), nrm(n), tan(n);
+      std::vector<glm::vec3> pos(n);
+      std::vector<PackedDir> nrm(n), tan(n);
       feather::placeFeatherVertices(in.placement, unplacedMesh.positions.data(), unplacedMesh.normals.data(),
                                     unplacedMesh.tangents.data(), n, pos.data(), nrm.data(), tan.data());
       EXPECT_TRUE(sameBytes(pos, placedMesh.positions));

@@ -421,3 +421,32 @@ TEST(DrawPlan, RangesThatOverlapOrDoNotFitAreRefused) {
   a.partCount[1] = 3;
   EXPECT_THROW(DrawPlan::validateRanges({a}, 6), Error);
 }
+
+// A plan made by reference (the renderer's CoatStorage::Reference, SceneView's default) keeps no copy of
+// the coat: it plans exactly what a copying plan plans, from the caller's arrays.
+TEST(DrawPlan, AReferencePlanIsTheCopyingOneWithoutTheCopy) {
+  Coat coat;
+  coat.feather({0, 0, 0}, 40);
+  coat.feather({0.4f, 0.2f, 0.1f}, 70, 1);
+  coat.feather({50, 0, 0}, 3);
+  coat.triangle({0.2f, -0.3f, 0.0f}, 1e-4f);
+  coat.ranges.push_back({static_cast<uint32_t>(coat.indices.size() - 3), 3});
+  DrawPlan copy = coat.plan(), ref;
+  ref.setCoatReference(coat.positions, coat.indices, coat.ranges);
+  DrawOptions o;
+  o.subpixelCulling = true;
+  for (const Camera& cam : {front(), cameraAt({-3, 2, 4}), cameraAt({52, 1, 5}, {50, 0, 0})}) {
+    copy.build(cam, kSize, kSize, o);
+    ref.build(cam, kSize, kSize, o);
+    EXPECT_EQ(ref.indices(), copy.indices());
+    EXPECT_EQ(ref.runs().size(), copy.runs().size());
+    EXPECT_EQ(ref.counts().triangles, copy.counts().triangles);
+    EXPECT_EQ(ref.counts().subpixelTriangles, copy.counts().subpixelTriangles);
+  }
+  copy.buildShadow(glm::mat4(1.0f), 256);
+  ref.buildShadow(glm::mat4(1.0f), 256);
+  EXPECT_EQ(ref.indices(), copy.indices());
+  EXPECT_EQ(ref.coatIndices(), coat.indices.data());  // no copy of the index list
+  EXPECT_EQ(ref.coatIndexCount(), coat.indices.size());
+  EXPECT_NE(copy.coatIndices(), coat.indices.data());
+}

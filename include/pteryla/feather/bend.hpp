@@ -14,6 +14,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "pteryla/core/packed.hpp"
+
 #include "pteryla/feather/mesh.hpp"
 
 namespace pteryla::feather {
@@ -26,8 +28,8 @@ struct ShaftBend {
 
 // Places vertices written with FeatherMeshInput::unplaced through `placement` bent by `bend`.
 void placeBentFeatherVertices(const FeatherPlacement& placement, const ShaftBend& bend, const glm::vec3* positions,
-                              const glm::vec3* normals, const glm::vec3* tangents, size_t count,
-                              glm::vec3* outPositions, glm::vec3* outNormals, glm::vec3* outTangents);
+                              const PackedDir* normals, const PackedDir* tangents, size_t count,
+                              glm::vec3* outPositions, PackedDir* outNormals, PackedDir* outTangents);
 
 // The bent shaft's centre line: samples 0..4N from the follicle to the tip (world).
 std::vector<glm::dvec3> bentShaft(const FeatherPlacement& placement, const ShaftBend& bend);

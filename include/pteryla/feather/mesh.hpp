@@ -116,9 +116,9 @@ void appendFeatherMeshes(const FeatherMeshInput* inputs, size_t count, const Mes
 
 // Places vertices written with FeatherMeshInput::unplaced: out = what meshing with `placement` writes,
 // bit for bit. Input and output arrays must not overlap.
-void placeFeatherVertices(const FeatherPlacement& placement, const glm::vec3* positions, const glm::vec3* normals,
-                          const glm::vec3* tangents, size_t count, glm::vec3* outPositions, glm::vec3* outNormals,
-                          glm::vec3* outTangents);
+void placeFeatherVertices(const FeatherPlacement& placement, const glm::vec3* positions, const PackedDir* normals,
+                          const PackedDir* tangents, size_t count, glm::vec3* outPositions, PackedDir* outNormals,
+                          PackedDir* outTangents);
 
 // Single-feather convenience (CLI `pteryla feather`): the feather at `age` (growth.hpp) at level `lod`
 // in (0, 1], texture coordinates from the mature feather, in feather-local coordinates.

@@ -109,6 +109,10 @@ class DrawPlan {
   // non-empty mesh: the whole mesh is one feather of material 0.
   void setCoat(const std::vector<glm::vec3>& positions, const std::vector<uint32_t>& indices,
                const std::vector<FeatherDrawRange>& ranges);
+  // The same without the copy: the plan reads `positions` and `indices` where they are whenever it
+  // builds, so both must stay alive and unchanged until the next setCoat or setCoatReference.
+  void setCoatReference(const std::vector<glm::vec3>& positions, const std::vector<uint32_t>& indices,
+                        const std::vector<FeatherDrawRange>& ranges);
 
   // Plans the colour pass of a width x height frame. `occluders` (nullptr: no occlusion culling) must
   // be built for the same size, from the depth of the same camera.
@@ -132,7 +136,8 @@ class DrawPlan {
   const DrawCounts& counts() const { return counts_; }
   // The shadow pass over the coat's own index list (set by setCoat).
   const std::vector<DrawRun>& shadowRuns() const { return shadowRuns_; }
-  const std::vector<uint32_t>& coatIndices() const { return coatIndices_; }
+  const uint32_t* coatIndices() const { return coatIndices_; }
+  size_t coatIndexCount() const { return indexCount_; }
 
  private:
   // A run of at most kChunkTriangles consecutive triangles of one part, with its box.
@@ -163,8 +168,13 @@ class DrawPlan {
   std::vector<Chunk> chunks_;
   std::vector<uint32_t> partChunks_;
   std::vector<std::pair<uint32_t, uint32_t>> shadowRunRanges_;  // per shadow run: its ranges [first, last)
-  std::vector<glm::vec3> positions_;
-  std::vector<uint32_t> coatIndices_;
+  void prepare(const std::vector<FeatherDrawRange>& ranges);
+  // The coat's positions and indices: setCoat's copies, or the caller's arrays (setCoatReference).
+  std::vector<glm::vec3> ownPositions_;
+  std::vector<uint32_t> ownIndices_;
+  const glm::vec3* positions_ = nullptr;
+  const uint32_t* coatIndices_ = nullptr;
+  size_t indexCount_ = 0;
   std::vector<DrawRun> shadowRuns_;
   // Per frame.
   std::vector<Feather> feathers_;

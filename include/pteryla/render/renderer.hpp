@@ -151,6 +151,12 @@ class Renderer {
   // `ranges` draws the whole mesh as one feather with material 0. Validates ranges against the
   // mesh (pteryla::Error with element "ranges[i]").
   void setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>& ranges);
+  // Copy: the renderer keeps the positions and indices its per-frame culling reads (about 20 bytes a
+  // triangle). Reference: it reads them from `coat` itself whenever it draws, so `coat` must stay alive
+  // and unchanged until the next setCoat (a caller that draws while another thread may rewrite the
+  // mesh, as the viewer's evaluation does, copies).
+  enum class CoatStorage { Copy, Reference };
+  void setCoat(const TriMesh& coat, const std::vector<FeatherDrawRange>& ranges, CoatStorage storage);
   // Loads textures and builds one BRDF table per material. Throws pteryla::Error naming the file
   // (and the element "materials[i].colorTexture") for a missing or unreadable texture. With no
   // materials set, a default material (white, BRDF d=1 h=0) is used.
