@@ -53,7 +53,10 @@ class SceneView {
  public:
   explicit SceneView(RenderContext& context);
   ~SceneView();
-  // Uploads the pipeline's current skin and coat (when they changed) and renders an image.
+  // Uploads the pipeline's current skin and coat (when they changed) and renders an image. The renderer
+  // reads the coat mesh's positions and indices where the pipeline keeps them
+  // (Renderer::CoatStorage::Reference): render and draw bring it up to date first, so draw only through
+  // them, from the thread that evaluates the pipeline.
   // style: "" (the scene's), "shaded" or "scratchboard". With the scene's render.lod_by_screen_size
   // (the default), first sets the pipeline's per-feather levels of detail from the scene camera
   // (screenSizeLods; an auto-framed camera frames coatReachBounds), so the coat is meshed once, at those
