@@ -142,6 +142,11 @@ TEST(HostSession, FrameIsConsistent) {
   for (uint32_t i : f.indices) ASSERT_LT(i, nv);
   for (float x : f.positions) ASSERT_TRUE(std::isfinite(x));
   for (double x : f.origins) ASSERT_TRUE(std::isfinite(x));
+  // The host gets float normals decoded from the mesh's 16-bit ones: unit within their rounding.
+  for (size_t v = 0; v < nv; ++v) {
+    const float* n = &f.vertexNormals[3 * v];
+    ASSERT_NEAR(std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), 1.0f, 5e-5f) << v;
+  }
   // Follicles sit on the unit sphere; frames are orthonormal with B = N x T.
   for (size_t i = 0; i < f.featherCount; ++i) {
     const double* o = &f.origins[3 * i];
