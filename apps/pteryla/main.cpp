@@ -110,10 +110,10 @@ int main(int argc, char** argv) {
       "bench",
       "Print one JSON object of per-stage seconds of the first evaluation (load, distribute,\n"
       "interpolate, pack, mesh, render), pack_repeat (best of 3 more full packs, warm memory), frame\n"
-      "(a timeline step from the rendered frame), triangles and peak_rss_mb on stdout; with --check also check_mesh "
-      "(meshing\n"
-      "at full detail) and check (`pteryla check`'s measurement of that mesh). The first evaluation is\n"
-      "the first render's: the mesh at its levels of detail (by screen size unless --fixed-lod)");
+      "(a timeline step from the rendered frame), triangles and peak_rss_mb on stdout; with --check\n"
+      "also check_mesh (meshing at full detail) and check (`pteryla check`'s measurement of that mesh).\n"
+      "The first evaluation is the first render's: the mesh at its levels of detail (by screen size\n"
+      "unless --fixed-lod)");
   addSceneOptions(cBench, bench, true);
   cBench->add_flag("--check", bench.check, "Also time the checker: the mesh at full detail, then Pipeline::check");
 

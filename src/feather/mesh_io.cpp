@@ -112,10 +112,11 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
     const float* f;     // float source with stride
     const uint32_t* u;  // or uint source
     size_t stride;
-    const PackedDir* d = nullptr;  // or a packed unit vector's component `stride`
+    const PackedDir* d = nullptr;  // or component `comp` of a packed unit vector
     const Half* h = nullptr;       // or a half float
+    int comp = 0;
     float value(size_t i) const {
-      if (d) return PackedDir::unpack(d[i].q[stride]);
+      if (d) return PackedDir::unpack(d[i].q[comp]);
       if (h) return h[i];
       return f[i * stride];
     }
@@ -128,8 +129,9 @@ void writePly(const std::string& path, const TriMesh& m, const PlyOptions& opt) 
   };
   addVec(&m.positions.data()->x, 3, {"x", "y", "z"});
   if (!m.normals.empty()) {
-    size_t c = 0;
-    for (const char* nm : {"nx", "ny", "nz"}) props.push_back({nm, nullptr, nullptr, c++, m.normals.data()});
+    int c = 0;
+    for (const char* nm : {"nx", "ny", "nz"})
+      props.push_back({nm, nullptr, nullptr, 1, m.normals.data(), nullptr, c++});
   }
   if (!t.empty()) addVec(&t.data()->x, 2, {"u", "v"});
   if (!m.uvBarb.empty()) addVec(&m.uvBarb.data()->x, 2, {"u_barb", "v_barb"});
