@@ -1,0 +1,136 @@
+// Instancing (instancing.hpp): leader clustering of barb curves under a tolerance.
+#include "pteryla/feather/instancing.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+namespace pteryla::feather {
+
+namespace {
+
+struct Fnv {
+  uint64_t h = 1469598103934665603ull;
+  void add(uint64_t v) {
+    for (int i = 0; i < 8; ++i) {
+      h ^= (v >> (8 * i)) & 0xffu;
+      h *= 1099511628211ull;
+    }
+  }
+};
+
+// A hash of what sameCurveStructure compares (equal structures hash equal).
+uint64_t structureKey(const FeatherCurves& c) {
+  Fnv f;
+  f.add(c.shafts.size());
+  for (const ShaftCurve& s : c.shafts) {
+    f.add(s.points.size());
+    f.add(static_cast<uint64_t>(s.calamusPoints));
+    f.add(s.rachisCvs.size());
+  }
+  for (uint32_t b : c.barbBegin) f.add(b);
+  for (uint32_t b : c.barbEnd) f.add(b);
+  f.add(c.barbs.size());
+  for (const BarbCurve& b : c.barbs)
+    f.add(uint64_t(b.cvCount) | uint64_t(b.vane) << 16 | uint64_t(b.part) << 24 | uint64_t(b.isKey) << 32 |
+          uint64_t(b.isSplitEdge) << 33 | uint64_t(b.splitAfter) << 34 | uint64_t(b.cvOffset) << 35);
+  f.add(c.cvs.size());
+  return f.h;
+}
+
+// The sizes curveDistance indexes by (cheap; sameCurveStructure checks the rest).
+bool sameSizes(const FeatherCurves& a, const FeatherCurves& b) {
+  if (a.shafts.size() != b.shafts.size() || a.barbs.size() != b.barbs.size() || a.cvs.size() != b.cvs.size())
+    return false;
+  for (size_t s = 0; s < a.shafts.size(); ++s)
+    if (a.shafts[s].points.size() != b.shafts[s].points.size() ||
+        a.shafts[s].rachisCvs.size() != b.shafts[s].rachisCvs.size() ||
+        a.shafts[s].widths.size() != b.shafts[s].widths.size() || a.shafts[s].rp.size() != b.shafts[s].rp.size())
+      return false;
+  return true;
+}
+
+double dist(const glm::vec3& a, const glm::vec3& b) { return glm::length(glm::dvec3(a) - glm::dvec3(b)); }
+
+}  // namespace
+
+double curveExtent(const FeatherCurves& c) {
+  double e = 0;
+  for (const ShaftCurve& s : c.shafts)
+    for (const glm::vec3& p : s.points) e = std::max(e, glm::length(glm::dvec3(p)));
+  for (const glm::vec3& p : c.cvs) e = std::max(e, glm::length(glm::dvec3(p)));
+  return e;
+}
+
+bool sameCurveStructure(const FeatherCurves& a, const FeatherCurves& b) {
+  if (!sameSizes(a, b) || a.barbBegin != b.barbBegin || a.barbEnd != b.barbEnd) return false;
+  for (size_t s = 0; s < a.shafts.size(); ++s)
+    if (a.shafts[s].calamusPoints != b.shafts[s].calamusPoints) return false;
+  for (size_t k = 0; k < a.barbs.size(); ++k) {
+    const BarbCurve &x = a.barbs[k], &y = b.barbs[k];
+    if (x.cvOffset != y.cvOffset || x.cvCount != y.cvCount || x.vane != y.vane || x.part != y.part ||
+        x.isKey != y.isKey || x.isSplitEdge != y.isSplitEdge || x.splitAfter != y.splitAfter)
+      return false;
+  }
+  return true;
+}
+
+double curveDistance(const FeatherCurves& a, const FeatherCurves& b, double extent, double limit) {
+  double d = 0;
+  auto over = [&](double v) {
+    d = std::max(d, v);
+    return !(d <= limit);  // NaN counts as over
+  };
+  // The tips first (the likeliest to differ), then the bulk of the barbs.
+  for (size_t s = 0; s < a.shafts.size(); ++s)
+    if (!a.shafts[s].points.empty() && over(dist(a.shafts[s].points.back(), b.shafts[s].points.back()))) return d;
+  for (size_t k = 0; k < a.cvs.size(); ++k)
+    if (over(dist(a.cvs[k], b.cvs[k]))) return d;
+  for (size_t k = 0; k < a.barbs.size(); ++k)
+    if (over(dist(a.barbs[k].root, b.barbs[k].root)) ||
+        over(extent * std::abs(double(a.barbs[k].rp) - double(b.barbs[k].rp))))
+      return d;
+  for (size_t s = 0; s < a.shafts.size(); ++s) {
+    const ShaftCurve &x = a.shafts[s], &y = b.shafts[s];
+    for (size_t k = 0; k < x.points.size(); ++k)
+      if (over(dist(x.points[k], y.points[k])) || over(0.5 * std::abs(double(x.widths[k]) - double(y.widths[k]))) ||
+          over(extent * std::abs(double(x.rp[k]) - double(y.rp[k]))))
+        return d;
+    for (size_t k = 0; k < x.rachisCvs.size(); ++k)
+      if (over(dist(x.rachisCvs[k], y.rachisCvs[k]))) return d;
+    for (int k = 0; k < 2; ++k)
+      if (over(extent * dist(x.dorsal[k], y.dorsal[k]))) return d;
+  }
+  return d;
+}
+
+std::vector<uint32_t> shareCurves(const std::vector<const FeatherCurves*>& curves, double tolerance) {
+  const size_t n = curves.size();
+  std::vector<uint32_t> rep(n);
+  std::unordered_map<uint64_t, std::vector<uint32_t>> leaders;  // structure key -> representatives, in order
+  for (size_t k = 0; k < n; ++k) rep[k] = static_cast<uint32_t>(k);
+  if (!(tolerance > 0)) return rep;
+  const double tol = tolerance;
+  for (size_t k = 0; k < n; ++k) {
+    const FeatherCurves* c = curves[k];
+    if (!c) continue;
+    const double extent = curveExtent(*c);
+    const double limit = tol * extent;
+    if (!std::isfinite(limit)) continue;
+    std::vector<uint32_t>& bucket = leaders[structureKey(*c)];
+    for (uint32_t r : bucket) {
+      const FeatherCurves& l = *curves[r];
+      if (!sameSizes(*c, l)) continue;
+      if (curveDistance(*c, l, extent, limit) <= limit && sameCurveStructure(*c, l)) {
+        rep[k] = r;
+        break;
+      }
+    }
+    if (rep[k] == k) bucket.push_back(static_cast<uint32_t>(k));
+  }
+  return rep;
+}
+
+}  // namespace pteryla::feather
