@@ -8,10 +8,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <unordered_map>
 
 #include "pteryla/core/error.hpp"
 #include "pteryla/core/trimesh_reuse.hpp"
 #include "pteryla/feather/generator.hpp"
+#include "pteryla/feather/instancing.hpp"
 
 namespace pteryla::pipeline {
 
@@ -56,7 +58,28 @@ feather::FeatherMeshRanges rebase(feather::FeatherMeshRanges r, uint32_t from, u
   return r;
 }
 
+// A hash of a feather's unplaced vertices (positions, normals, tangents), for finding identical ones.
+uint64_t unplacedHash(const glm::vec3* p, const PackedDir* n, const PackedDir* t, size_t count) {
+  uint64_t h = 0x9e3779b97f4a7c15ull ^ count;
+  auto mix = [&](uint64_t v) {
+    h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+    h *= 0xff51afd7ed558ccdull;
+  };
+  for (size_t k = 0; k < count; ++k) {
+    uint32_t x[3];
+    std::memcpy(x, &p[k], sizeof(x));
+    mix(uint64_t(x[0]) << 32 | x[1]);
+    mix(uint64_t(x[2]) << 32 | uint32_t(uint16_t(n[k].q[0])) << 16 | uint16_t(n[k].q[1]));
+    mix(uint64_t(uint16_t(n[k].q[2])) << 48 | uint64_t(uint16_t(t[k].q[0])) << 32 |
+        uint64_t(uint16_t(t[k].q[1])) << 16 | uint16_t(t[k].q[2]));
+  }
+  return h;
+}
+
 }  // namespace
+
+size_t InstancingStats::storedBytes() const { return storedVertices * (sizeof(glm::vec3) + 2 * sizeof(PackedDir)); }
+size_t InstancingStats::unsharedBytes() const { return vertices * (sizeof(glm::vec3) + 2 * sizeof(PackedDir)); }
 
 uint32_t indexEnd(const feather::FeatherMeshRanges& r) {
   return std::max({r.shaftFirst + r.shaftCount, r.leftFirst + r.leftCount, r.rightFirst + r.rightCount,
@@ -99,6 +122,27 @@ void CoatMesher::resize(size_t n) {
   grownOrders_.assign(n, {});
   curvesVersion_.assign(n, 0);
   slices_.assign(n, Slice{});
+  rep_.clear();
+  repKey_.clear();
+}
+
+// Representatives over the present mature feathers in feather index order (a pure function of their
+// curves), computed again only when those curves or the tolerance changed.
+void CoatMesher::updateRepresentatives(const CoatMeshInput& in, const std::vector<uint8_t>& grown) {
+  const coat::CoatFeathers& coat = *in.coat;
+  const size_t n = coat.size();
+  const double tol = in.instanceTolerance > 0 ? in.instanceTolerance : 0;
+  std::vector<uint64_t> key(n, 0);
+  if (tol > 0)
+    for (size_t i = 0; i < n; ++i)
+      if (coat.present[i] && grown[i]) key[i] = curvesVersion_[i];
+  if (rep_.size() == n && key == repKey_ && std::memcmp(&tol, &tolerance_, sizeof(double)) == 0) return;
+  tolerance_ = tol;
+  repKey_ = std::move(key);
+  std::vector<const feather::FeatherCurves*> curves(n, nullptr);
+  for (size_t i = 0; i < n; ++i)
+    if (repKey_[i]) curves[i] = &matureCurves_[i];
+  rep_ = feather::shareCurves(curves, tol);
 }
 
 // Barb curves are a pure function of the packed parameters (and the age while growing), so a feather
@@ -176,16 +220,18 @@ void CoatMesher::update(const CoatMeshInput& in, TriMesh& out) {
   std::vector<uint8_t> grown(n, 1);
   std::vector<double> shed(n, 1.0);
   updateCurves(in, grown, shed);
+  updateRepresentatives(in, grown);
   std::vector<feather::FeatherMeshInput> inputs;
   which_.clear();
   inputs.reserve(n);
   for (uint32_t i : coat.layerOrder) {
     if (!coat.present[i]) continue;
     feather::FeatherMeshInput fi;
-    fi.curves = grown[i] ? &matureCurves_[i] : &grownCurves_[i];
+    const uint32_t r = rep_[i];  // i itself unless it is instanced (then mature, as r is)
+    fi.curves = grown[i] ? &matureCurves_[r] : &grownCurves_[i];
     fi.reference = grown[i] ? nullptr : &matureCurves_[i];
     fi.order =
-        !grown[i] && grownCurves_[i].barbs.size() != matureCurves_[i].barbs.size() ? &grownOrders_[i] : &lodOrders_[i];
+        !grown[i] && grownCurves_[i].barbs.size() != matureCurves_[i].barbs.size() ? &grownOrders_[i] : &lodOrders_[r];
     const coat::FeatherFrame& fr = coat.frames[i];
     fi.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, in.packed->elevation[i]);
     fi.featherId = i;
@@ -197,7 +243,7 @@ void CoatMesher::update(const CoatMeshInput& in, TriMesh& out) {
   if (!keptIndices_.empty() && keptIndices_.size() == out.indices.size()) out.indices.swap(keptIndices_);
   keptIndices_.clear();
   // Not the mesh of the last update (or a first one): nothing can be copied from it.
-  if (out.featherId.size() != localPos_.size())
+  if (out.featherId.size() != meshVertices_)
     for (auto& sl : slices_) sl.valid = false;
   bends_ = in.bends && in.bends->size() == n ? in.bends : nullptr;
   assemble(inputs, shed, out);
@@ -221,8 +267,9 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     const uint32_t i = which[k];
     const Slice& sl = slices_[i];
     const bool growing = inputs[k].reference != nullptr;
-    const bool same = sl.valid && sl.version == curvesVersion_[i] && sl.growing == growing && sl.lod == inputs[k].lod &&
-                      std::memcmp(&sl.shed, &shed[i], sizeof(double)) == 0 &&
+    const uint32_t r = growing ? i : rep_[i];
+    const bool same = sl.valid && sl.rep == r && sl.version == curvesVersion_[r] && sl.growing == growing &&
+                      sl.lod == inputs[k].lod && std::memcmp(&sl.shed, &shed[i], sizeof(double)) == 0 &&
                       sl.in > 0;  // empty feathers are re-meshed (nothing to copy; keeps range offsets exact)
     reuse[k] = same ? 1 : 0;
     reused += reuse[k];
@@ -236,9 +283,9 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     clearKeepingCapacity(out);
     feather::appendFeatherMeshes(inputs.data(), count, mo, out, &ranges);
     next = locate(inputs, ranges, out);
-    std::swap(out.positions, localPos_);
-    std::swap(out.normals, localNrm_);
-    std::swap(out.tangents, localTan_);
+    // Stored from the mesh's (unplaced) positions, which placing then overwrites.
+    const std::vector<Slice> at = next;
+    storeUnplaced(std::vector<uint8_t>(count, 0), at, out, next);
   } else {
     // Mesh the changed feathers into freshMesh_, then copy them into the mesh: in place when the layout is
     // unchanged, else into a new mesh with the reused slices.
@@ -272,7 +319,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     // Every feather where it was, with as many vertices and indices (a feather regrown, re-shed or
     // repacked at the same level of detail): the changed slices are written over their old places in the
     // mesh itself, and nothing else moves.
-    bool inPlace = vTotal == localPos_.size() && vTotal == out.featherId.size() && iTotal == out.indices.size();
+    bool inPlace = vTotal == meshVertices_ && vTotal == out.featherId.size() && iTotal == out.indices.size();
     for (size_t k = 0; k < count && inPlace; ++k) {
       const Slice& old = slices_[which[k]];
       inPlace =
@@ -285,9 +332,6 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
                             const size_t k = changedAt[c];
                             const Slice& a = src[k];
                             const Slice& b = next[k];
-                            copySlice(freshMesh_.positions, a.v0, localPos_, b.v0, a.vn);
-                            copySlice(freshMesh_.normals, a.v0, localNrm_, b.v0, a.vn);
-                            copySlice(freshMesh_.tangents, a.v0, localTan_, b.v0, a.vn);
                             copySlice(freshMesh_.uvGlobal, a.v0, out.uvGlobal, b.v0, a.vn);
                             copySlice(freshMesh_.uvBarb, a.v0, out.uvBarb, b.v0, a.vn);
                             copySlice(freshMesh_.uvGrowth, a.v0, out.uvGrowth, b.v0, a.vn);
@@ -305,8 +349,6 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
       // The layout moved: assemble a new mesh from the last one and the fresh slices, then let the last
       // one go (no spare copy of the coat is kept between updates).
       TriMesh next_;
-      std::vector<glm::vec3> nextPos(vTotal);
-      std::vector<PackedDir> nextNrm(vTotal), nextTan(vTotal);
       resizeAll(next_, vTotal, iTotal);  // every element is overwritten (positions etc. when placed)
       const TriMesh& last = out;
       tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
@@ -315,9 +357,6 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
           const TriMesh& from = old ? last : freshMesh_;
           const Slice& a = src[k];
           const Slice& b = next[k];
-          copySlice(old ? localPos_ : freshMesh_.positions, a.v0, nextPos, b.v0, a.vn);
-          copySlice(old ? localNrm_ : freshMesh_.normals, a.v0, nextNrm, b.v0, a.vn);
-          copySlice(old ? localTan_ : freshMesh_.tangents, a.v0, nextTan, b.v0, a.vn);
           copySlice(from.uvGlobal, a.v0, next_.uvGlobal, b.v0, a.vn);
           copySlice(from.uvBarb, a.v0, next_.uvBarb, b.v0, a.vn);
           copySlice(from.uvGrowth, a.v0, next_.uvGrowth, b.v0, a.vn);
@@ -332,15 +371,22 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
         }
       });
       out = std::move(next_);
-      localPos_ = std::move(nextPos);
-      localNrm_ = std::move(nextNrm);
-      localTan_ = std::move(nextTan);
+    }
+    // The store: kept as it is when no feather was meshed and none left (a feather that came would have
+    // been meshed), else built again from the reused slices' stored meshes and the fresh ones.
+    if (changed.empty() && count == stats_.feathers) {
+      for (size_t k = 0; k < count; ++k) {
+        next[k].u0 = src[k].u0;
+        next[k].hash = src[k].hash;
+      }
+    } else {
+      storeUnplaced(reuse, src, freshMesh_, next);
     }
     freshMesh_ = TriMesh{};  // the changed feathers' meshes are in `out` now
     for (size_t k = 0; k < count; ++k) ranges[k] = next[k].ranges;
   }
   // Place every feather.
-  const size_t vertices = localPos_.size();
+  const size_t vertices = out.featherId.size();
   out.positions.resize(vertices);
   out.normals.resize(vertices);
   out.tangents.resize(vertices);
@@ -348,13 +394,13 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     for (size_t k = range.begin(); k < range.end(); ++k) {
       const Slice& sl = next[k];
       if (bends_ && !(*bends_)[which[k]].rigid())
-        feather::placeBentFeatherVertices(placed[k].placement, (*bends_)[which[k]], localPos_.data() + sl.v0,
-                                          localNrm_.data() + sl.v0, localTan_.data() + sl.v0, sl.vn,
+        feather::placeBentFeatherVertices(placed[k].placement, (*bends_)[which[k]], localPos_.data() + sl.u0,
+                                          localNrm_.data() + sl.u0, localTan_.data() + sl.u0, sl.vn,
                                           out.positions.data() + sl.v0, out.normals.data() + sl.v0,
                                           out.tangents.data() + sl.v0);
       else
-        feather::placeFeatherVertices(placed[k].placement, localPos_.data() + sl.v0, localNrm_.data() + sl.v0,
-                                      localTan_.data() + sl.v0, sl.vn, out.positions.data() + sl.v0,
+        feather::placeFeatherVertices(placed[k].placement, localPos_.data() + sl.u0, localNrm_.data() + sl.u0,
+                                      localTan_.data() + sl.u0, sl.vn, out.positions.data() + sl.v0,
                                       out.normals.data() + sl.v0, out.tangents.data() + sl.v0);
     }
   });
@@ -364,11 +410,88 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     Slice& sl = slices_[which[k]];
     sl = next[k];
     sl.valid = true;
-    sl.version = curvesVersion_[which[k]];
     sl.growing = inputs[k].reference != nullptr;
+    sl.rep = sl.growing ? which[k] : rep_[which[k]];
+    sl.version = curvesVersion_[sl.rep];
     sl.lod = inputs[k].lod;
     sl.shed = shed[which[k]];
   }
+  meshVertices_ = vertices;
+  stats_ = InstancingStats{};
+  stats_.feathers = count;
+  for (size_t k = 0; k < count; ++k) stats_.representatives += slices_[which[k]].rep == which[k];
+  stats_.vertices = vertices;
+  stats_.storedVertices = localPos_.size();
+  {
+    std::vector<uint32_t> starts;
+    starts.reserve(count);
+    for (size_t k = 0; k < count; ++k)
+      if (next[k].vn) starts.push_back(next[k].u0);
+    std::sort(starts.begin(), starts.end());
+    stats_.meshes = static_cast<size_t>(std::unique(starts.begin(), starts.end()) - starts.begin());
+  }
+}
+
+void CoatMesher::storeUnplaced(const std::vector<uint8_t>& reused, const std::vector<Slice>& src, const TriMesh& fresh,
+                               std::vector<Slice>& next) {
+  const size_t count = next.size();
+  // Each slice's data and hash (the fresh ones hashed in parallel).
+  std::vector<const glm::vec3*> pos(count);
+  std::vector<const PackedDir*> nrm(count), tan(count);
+  std::vector<uint64_t> hash(count);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) {
+      const bool old = reused[k] != 0;
+      const size_t at = old ? src[k].u0 : src[k].v0;
+      pos[k] = (old ? localPos_ : fresh.positions).data() + at;
+      nrm[k] = (old ? localNrm_ : fresh.normals).data() + at;
+      tan[k] = (old ? localTan_ : fresh.tangents).data() + at;
+      hash[k] = old ? src[k].hash : unplacedHash(pos[k], nrm[k], tan[k], src[k].vn);
+    }
+  });
+  // Identical meshes once: the first slice (in layer order) with a mesh is where it is stored.
+  std::unordered_multimap<uint64_t, uint32_t> firstOf;  // hash -> slice that stores it
+  firstOf.reserve(count);
+  std::vector<uint32_t> storedBy(count);
+  size_t total = 0;
+  for (size_t k = 0; k < count; ++k) {
+    const uint32_t vn = src[k].vn;
+    storedBy[k] = static_cast<uint32_t>(k);
+    auto [lo, hi] = firstOf.equal_range(hash[k]);
+    for (auto it = lo; it != hi; ++it) {
+      const uint32_t j = it->second;
+      if (src[j].vn == vn && std::memcmp(pos[j], pos[k], vn * sizeof(glm::vec3)) == 0 &&
+          std::memcmp(nrm[j], nrm[k], vn * sizeof(PackedDir)) == 0 &&
+          std::memcmp(tan[j], tan[k], vn * sizeof(PackedDir)) == 0) {
+        storedBy[k] = j;
+        break;
+      }
+    }
+    if (storedBy[k] == k) {
+      firstOf.emplace(hash[k], static_cast<uint32_t>(k));
+      next[k].u0 = static_cast<uint32_t>(total);
+      total += vn;
+    } else {
+      next[k].u0 = next[storedBy[k]].u0;
+    }
+    next[k].hash = hash[k];
+  }
+  PTERYLA_CHECK(total <= UINT32_MAX, "unplaced store exceeds 32-bit offsets");
+  std::vector<glm::vec3> p(total);
+  std::vector<PackedDir> nn(total), tt(total);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) {
+      if (storedBy[k] != k) continue;
+      const size_t vn = src[k].vn, u0 = next[k].u0;
+      if (!vn) continue;
+      std::memcpy(p.data() + u0, pos[k], vn * sizeof(glm::vec3));
+      std::memcpy(nn.data() + u0, nrm[k], vn * sizeof(PackedDir));
+      std::memcpy(tt.data() + u0, tan[k], vn * sizeof(PackedDir));
+    }
+  });
+  localPos_ = std::move(p);
+  localNrm_ = std::move(nn);
+  localTan_ = std::move(tt);
 }
 
 }  // namespace pteryla::pipeline

@@ -7,6 +7,12 @@
 // meshes the others, and places every feather again. The result equals meshing every feather afresh,
 // bit for bit: a feather's vertices and indices depend only on its own input and its position in the
 // mesh, and placing later applies the same arithmetic (feather::placeFeatherVertices).
+//
+// Instancing (CoatMeshInput::instanceTolerance > 0, feather/instancing.hpp): a mature feather whose
+// curves are within the tolerance of an earlier feather's (in feather index order) is meshed from that
+// feather's curves. Unplaced meshes that come out identical (the same representative at the same level of
+// detail) are kept once: the unplaced store holds one copy per distinct mesh, and every feather is placed
+// from its copy. With the tolerance at 0 every feather is meshed from its own curves, as without.
 #include <cstdint>
 #include <vector>
 
@@ -41,6 +47,21 @@ struct CoatMeshInput {
   // Per feather, the shaft bend of the dynamic chain (feather/bend.hpp); ignored unless it has one entry
   // per feather; rigid entries are placed as without.
   const std::vector<feather::ShaftBend>* bends = nullptr;
+  // Instancing: the largest difference, as a fraction of a feather's extent, between a mature feather's
+  // curves and those it is meshed from (feather::shareCurves); 0 = off.
+  double instanceTolerance = 0;
+};
+
+// What the unplaced store of the last update holds (CoatMesher::instancing).
+struct InstancingStats {
+  size_t feathers = 0;         // present feathers meshed
+  size_t representatives = 0;  // of them, meshed from their own curves (the rest share another's)
+  size_t meshes = 0;           // distinct unplaced meshes kept
+  size_t vertices = 0;         // vertices of the coat mesh
+  size_t storedVertices = 0;   // vertices in the unplaced store (= vertices without instancing)
+  // Bytes of the unplaced store, and what it would take with a copy per feather.
+  size_t storedBytes() const;
+  size_t unsharedBytes() const;
 };
 
 class CoatMesher {
@@ -61,15 +82,19 @@ class CoatMesher {
   const std::vector<feather::FeatherMeshRanges>& ranges() const { return ranges_; }
   size_t regenerated() const { return regenerated_; }  // present feathers whose barb curves were generated
   size_t reused() const { return reused_; }            // present feathers copied from the last mesh
+  const InstancingStats& instancing() const { return stats_; }
 
  private:
   // Where a feather sits in the mesh and what it was meshed from.
   struct Slice {
     bool valid = false;
-    uint64_t version = 0;  // curvesVersion_ of the curves it was meshed from
+    uint32_t rep = 0;      // the feather whose curves it was meshed from (itself without instancing)
+    uint64_t version = 0;  // curvesVersion_ of those curves
     bool growing = false;  // meshed from the grown curves (else the mature ones)
     double lod = 0, shed = 0;
     uint32_t v0 = 0, vn = 0, i0 = 0, in = 0;
+    uint32_t u0 = 0;                    // its unplaced vertices: localPos_[u0 .. u0 + vn)
+    uint64_t hash = 0;                  // of those vertices (unplacedHash)
     feather::FeatherMeshRanges ranges;  // absolute, in the mesh
   };
 
@@ -78,6 +103,11 @@ class CoatMesher {
   void resize(size_t n);
   void updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& grown, std::vector<double>& shed);
   void assemble(const std::vector<feather::FeatherMeshInput>& placed, const std::vector<double>& shed, TriMesh& out);
+  void updateRepresentatives(const CoatMeshInput& in, const std::vector<uint8_t>& grown);
+  // Rebuilds the unplaced store: every slice of `next` from the last store (reused[k]) or from `fresh`'s
+  // positions, normals and tangents at src[k].v0, identical meshes kept once. Sets next[k].u0 and .hash.
+  void storeUnplaced(const std::vector<uint8_t>& reused, const std::vector<Slice>& src, const TriMesh& fresh,
+                     std::vector<Slice>& next);
 
   // Per feather: the packed parameters the mature curves and LOD order were generated from, and the age
   // (NaN = none) and packed grown parameters of the grown (pin feather) curves.
@@ -88,11 +118,18 @@ class CoatMesher {
   std::vector<feather::LodOrder> lodOrders_, grownOrders_;
   std::vector<uint64_t> curvesVersion_;  // bumped whenever a feather's curves are regenerated
   std::vector<Slice> slices_;
-  // Unplaced positions, normals and tangents of the last mesh's vertices. No spare copy of the mesh is
-  // kept: an update writes changed slices in place when the layout is unchanged, else builds the new mesh
-  // beside the last one and frees the last (docs/limits.md, bytes per triangle).
+  // The unplaced store: positions, normals and tangents of each distinct unplaced mesh of the last update
+  // (Slice::u0). No spare copy of the coat mesh is kept: an update writes changed slices in place when the
+  // layout is unchanged, else builds the new mesh beside the last one and frees the last; the store is
+  // built again only when a feather was meshed (docs/limits.md, bytes per triangle).
   std::vector<glm::vec3> localPos_;
   std::vector<PackedDir> localNrm_, localTan_;
+  size_t meshVertices_ = 0;  // vertices of the last update's mesh
+  // Instancing: the tolerance of the last update, and per feather the one whose curves it is meshed from.
+  double tolerance_ = 0;
+  std::vector<uint32_t> rep_;
+  std::vector<uint64_t> repKey_;  // what rep_ was computed from: per feather, curvesVersion_ if clustered, else 0
+  InstancingStats stats_;
   TriMesh freshMesh_;  // the changed feathers, unplaced, during an update (empty between updates)
   std::vector<uint32_t> keptIndices_;
   std::vector<uint32_t> which_;

@@ -226,9 +226,9 @@ bool Pipeline::Impl::MatureDrapeKey::operator==(const MatureDrapeKey& o) const {
              return x.origin == y.origin && x.normal == y.normal && x.tangent == y.tangent && x.binormal == y.binormal;
            });
   };
-  return rest == o.rest && lod == o.lod && gap == o.gap && spacing == o.spacing && maxSlope == o.maxSlope &&
-         baseAllowance == o.baseAllowance && featherLods == o.featherLods && sameFrames(frames, o.frames) &&
-         skin == o.skin;
+  return rest == o.rest && lod == o.lod && instanceTolerance == o.instanceTolerance && gap == o.gap &&
+         spacing == o.spacing && maxSlope == o.maxSlope && baseAllowance == o.baseAllowance &&
+         featherLods == o.featherLods && sameFrames(frames, o.frames) && skin == o.skin;
 }
 
 const coat::DrapeSpacing& Pipeline::Impl::drapeReference(const coat::DrapeOptions& o) {
@@ -283,6 +283,7 @@ coat::DrapeResult Pipeline::Impl::carryFromRest(const coat::CoatFeathers& c, con
                      featherLods,
                      frames,
                      rest.positions};
+  key.instanceTolerance = in.instanceTolerance;
   const ProgressFn whole = o.progress;
   // Unchanged (a pose scrub over a mature coat, or a coat that holds still): its last drape as it is.
   if (!R.key || !(*R.key == key) || rc.params != c.params || rc.age != c.age || rc.present != c.present ||
@@ -325,6 +326,7 @@ void Pipeline::Impl::computeMesh() {
   in.lod = lod;
   in.featherLods = &featherLods;
   in.bends = &timeState.bends;
+  in.instanceTolerance = scene.render.instanceTolerance;
   mesher.update(in, mesh.mesh);
   drape = coat::DrapeResult{};
   carried.reset();
@@ -383,6 +385,7 @@ void Pipeline::Impl::computeMesh() {
                          featherLods,
                          mature.frames,
                          posed.positions};
+      key.instanceTolerance = in.instanceTolerance;
       if (bent || !matureDrapeKey || !(*matureDrapeKey == key)) {
         matureDrapeKey.reset();
         matureMesher.update(matureInput(mature), matureMesh);
@@ -772,6 +775,12 @@ FrameReuse Pipeline::frameReuse() const {
   r.poseRepacked = p.poseRepacked;
   r.meshRegenerated = impl_->mesher.regenerated();
   r.meshReused = impl_->mesher.reused();
+  const InstancingStats& inst = impl_->mesher.instancing();
+  r.meshFeathers = inst.feathers;
+  r.meshRepresentatives = inst.representatives;
+  r.meshDistinct = inst.meshes;
+  r.meshStoredVertices = inst.storedVertices;
+  r.meshVertices = inst.vertices;
   r.drapeRelaid = impl_->drape.stats.relaid;
   r.drapeReused = impl_->drape.stats.reused;
   r.drapeCarried = impl_->carried.has_value();

@@ -111,6 +111,7 @@ struct Pipeline::Impl {
     std::vector<double> featherLods;
     std::vector<coat::FeatherFrame> frames;
     std::vector<glm::dvec3> skin;
+    double instanceTolerance = 0;  // scene render.instance_tolerance (CoatMeshInput)
     bool operator==(const MatureDrapeKey& o) const;
   };
   std::optional<MatureDrapeKey> matureDrapeKey;

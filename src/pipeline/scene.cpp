@@ -71,6 +71,7 @@ RenderSpec readRender(JsonReader r) {
   }
   s.lod = r.number("lod", s.lod, 1e-3, 1.0);
   s.lodByScreenSize = r.boolean("lod_by_screen_size", s.lodByScreenSize);
+  s.instanceTolerance = r.number("instance_tolerance", s.instanceTolerance, 0.0, 0.1);
   s.style = r.oneOf("style", s.style, {"shaded", "scratchboard"});
   s.background = color(r, "background", s.background);
   s.skinColor = color(r, "skin_color", s.skinColor);
@@ -204,6 +205,7 @@ Json sceneToJson(const Scene& s, const std::string& relativeTo) {
   j["render"] = {{"size", {rs.width, rs.height}},
                  {"lod", rs.lod},
                  {"lod_by_screen_size", rs.lodByScreenSize},
+                 {"instance_tolerance", rs.instanceTolerance},
                  {"style", rs.style},
                  {"background", vec(rs.background)},
                  {"skin_color", vec(rs.skinColor)},

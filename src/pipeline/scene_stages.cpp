@@ -27,7 +27,8 @@ const std::vector<SectionStage>& sectionStages() {
       {"packing", "", Stage::Controls},  // styling and the controls' natural pack read it
       {"camera", "", std::nullopt},
       {"lights", "", std::nullopt},
-      {"render", "", std::nullopt},  // render.lod: the starting level of detail, Pipeline::setLod
+      {"render", "", std::nullopt},                   // render.lod: the starting level of detail, Pipeline::setLod
+      {"render", "instance_tolerance", Stage::Mesh},  // read by the mesh stage
   };
   return table;
 }
@@ -36,6 +37,14 @@ Json sectionValue(const Json& scene, const SectionStage& row) {
   const auto it = scene.find(row.key);
   const Json section = it == scene.end() ? Json() : *it;
   if (!section.is_array() && !section.is_object()) return *row.subKey ? Json() : section;
+  // An object section's sub-key is one of its members.
+  if (section.is_object() && *row.subKey) return section.contains(row.subKey) ? section.at(row.subKey) : Json();
+  if (section.is_object() && !*row.subKey) {
+    Json out = section;
+    for (const SectionStage& other : sectionStages())
+      if (*other.subKey && std::strcmp(other.key, row.key) == 0) out.erase(other.subKey);
+    return out;
+  }
   if (*row.subKey) {
     Json out = Json::array();
     for (const Json& e : section) out.push_back(e.is_object() && e.contains(row.subKey) ? e.at(row.subKey) : Json());

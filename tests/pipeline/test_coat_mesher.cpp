@@ -3,6 +3,8 @@
 // mesher meshing the same input from scratch, and really reuses the unchanged feathers.
 #include <gtest/gtest.h>
 
+#include <glm/geometric.hpp>
+
 #include <string>
 #include <vector>
 
@@ -131,4 +133,109 @@ TEST(CoatMesher, IncrementalUpdateEqualsFullMesh) {
   incremental.update(input(c), other);
   EXPECT_EQ(incremental.reused(), 0u);
   expectSameResult(incremental, other, again, fresh2);
+}
+
+// Instancing (CoatMeshInput::instanceTolerance): feathers meshed from an earlier feather's curves keep
+// their own topology and lie within the tolerance of their own mesh (a barb vertex is a convex combination
+// of control vertices, each within tolerance x extent; the shaft's rings add its width's turn, hence the
+// factor 2), representatives are meshed exactly, and the store holds fewer vertices than the coat.
+TEST(CoatMesher, InstancedFeathersStayWithinTheTolerance) {
+  const Coat c = patchCoat();
+  const size_t n = c.feathers.size();
+  const double tol = 0.02;
+  CoatMesher exact, shared;
+  TriMesh a, b;
+  CoatMeshInput in = input(c);
+  exact.update(in, a);
+  in.instanceTolerance = tol;
+  shared.update(in, b);
+  const pipeline::InstancingStats& s = shared.instancing();
+  EXPECT_EQ(s.feathers, n);
+  EXPECT_LT(s.representatives, n / 2) << "neighbours in a patch share curves at 2%";
+  EXPECT_GE(s.meshes, s.representatives);
+  EXPECT_EQ(s.vertices, b.positions.size());
+  EXPECT_LT(s.storedVertices, s.vertices / 2);
+  EXPECT_LT(s.storedBytes(), s.unsharedBytes() / 2);
+  EXPECT_EQ(exact.instancing().representatives, n);
+  EXPECT_LE(exact.instancing().storedVertices, a.positions.size());  // identical feathers are stored once
+
+  // Without a tolerance the coat is what meshing every feather placed, on its own, gives: identical
+  // meshes stored once are placed as their own.
+  {
+    std::vector<feather::FeatherCurves> curves(n);
+    std::vector<feather::LodOrder> orders(n);
+    std::vector<feather::FeatherMeshInput> inputs;
+    for (uint32_t i : c.feathers.layerOrder) {
+      if (!c.feathers.present[i]) continue;
+      feather::FeatherParams p;
+      coat::packedParamsInto(c.feathers, c.packed, i, p);
+      feather::generateBarbs(p, curves[i]);
+      feather::computeLodOrder(curves[i], orders[i]);
+      feather::FeatherMeshInput fi;
+      fi.curves = &curves[i];
+      fi.order = &orders[i];
+      const coat::FeatherFrame& fr = c.feathers.frames[i];
+      fi.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, c.packed.elevation[i]);
+      fi.featherId = i;
+      fi.lod = in.lod;
+      inputs.push_back(fi);
+    }
+    TriMesh direct;
+    feather::appendFeatherMeshes(inputs.data(), inputs.size(), feather::MeshOptions{}, direct);
+    EXPECT_TRUE(pipeline_test::sameMesh(a, direct));
+  }
+
+  ASSERT_EQ(a.positions.size(), b.positions.size());
+  ASSERT_EQ(a.indices, b.indices);
+  ASSERT_EQ(a.featherId, b.featherId);
+  std::vector<double> extent(n, 0.0), moved(n, 0.0);
+  for (size_t v = 0; v < a.positions.size(); ++v) {
+    const uint32_t i = a.featherId[v];
+    extent[i] = std::max(extent[i], glm::length(glm::dvec3(a.positions[v]) - c.feathers.frames[i].origin));
+    moved[i] = std::max(moved[i], glm::length(glm::dvec3(a.positions[v]) - glm::dvec3(b.positions[v])));
+  }
+  size_t changed = 0;
+  for (size_t i = 0; i < n; ++i) {
+    EXPECT_LE(moved[i], 2 * tol * extent[i]) << "feather " << i;
+    changed += moved[i] > 0;
+  }
+  EXPECT_GT(changed, 0u);
+  EXPECT_LE(changed, n - s.representatives);  // a representative is meshed from its own curves
+}
+
+// Instancing is a function of the frame's coat alone: after feathers changed (raised, growing, hidden,
+// another level) or the tolerance changed, an update equals a new mesher's at that tolerance.
+TEST(CoatMesher, InstancedUpdateEqualsFreshInstancedMesh) {
+  Coat c = patchCoat();
+  const size_t n = c.feathers.size();
+  auto at = [&](double tol) {
+    CoatMeshInput in = input(c);
+    in.instanceTolerance = tol;
+    return in;
+  };
+  CoatMesher incremental;
+  TriMesh mesh;
+  incremental.update(at(0.02), mesh);
+  c.packed.elevation[3] += 0.1;
+  c.feathers.age[7] = 0.6;
+  c.feathers.present[12] = 0;
+  c.lods.assign(n, 1.0);
+  c.lods[25] = 0.5;
+  incremental.update(at(0.02), mesh);
+  EXPECT_GT(incremental.reused(), n / 2);
+  {
+    CoatMesher full;
+    TriMesh fresh;
+    full.update(at(0.02), fresh);
+    expectSameResult(incremental, mesh, full, fresh);
+    EXPECT_EQ(incremental.instancing().storedVertices, full.instancing().storedVertices);
+    EXPECT_EQ(incremental.instancing().meshes, full.instancing().meshes);
+  }
+  for (double tol : {0.05, 0.0}) {
+    incremental.update(at(tol), mesh);
+    CoatMesher full;
+    TriMesh fresh;
+    full.update(at(tol), fresh);
+    expectSameResult(incremental, mesh, full, fresh);
+  }
 }

@@ -116,6 +116,7 @@ std::vector<Edit> edits() {
       {"camera", "", [](Scene& s) { s.camera.fovDeg = 20; }},
       {"lights", "", [](Scene& s) { s.lights.pop_back(); }},
       {"render", "", [](Scene& s) { s.render.lod = 0.5; }},
+      {"render", "instance_tolerance", [](Scene& s) { s.render.instanceTolerance = 0.05; }},
   };
 }
 

@@ -127,6 +127,10 @@ struct FrameReuse {
   size_t moultRecomputed = 0;  // feathers packed over the mature pack (0: the last one was reused)
   size_t meshRegenerated = 0;  // present feathers whose barb curves the mesh stage generated
   size_t meshReused = 0;       // present feathers whose triangles were copied from the last mesh
+  // Instancing (scene render.instance_tolerance): of the meshFeathers present feathers meshed, those meshed
+  // from their own curves (the others share an earlier feather's), the distinct unplaced meshes kept, and
+  // the vertices of that store against the coat mesh's (equal without instancing; 24 bytes each).
+  size_t meshFeathers = 0, meshRepresentatives = 0, meshDistinct = 0, meshStoredVertices = 0, meshVertices = 0;
   // Posed frames (coat::packDeformed from the rest pose's pack; packing.pose_tolerance): packs made that
   // way this frame, and over them the feathers whose surroundings moved (relative to them) beyond the
   // tolerance and the feathers packed again (those and what packs over a changed one).

@@ -28,8 +28,11 @@ struct LightSpec {
 
 struct RenderSpec {
   int width = 960, height = 720;
-  double lod = 1.0;              // fraction of feather geometry in (0,1]
-  bool lodByScreenSize = true;   // pick per-feather LOD from screen size (7.1.3); lod is then the cap
+  double lod = 1.0;             // fraction of feather geometry in (0,1]
+  bool lodByScreenSize = true;  // pick per-feather LOD from screen size (7.1.3); lod is then the cap
+  // Instancing (pipeline::CoatMesher, feather/instancing.hpp): mature feathers within this fraction of
+  // their extent of an earlier feather are meshed from its curves, and identical meshes stored once; 0 = off.
+  double instanceTolerance = 0.0;
   std::string style = "shaded";  // shaded | scratchboard
   glm::dvec3 background{0.82, 0.86, 0.9};
   glm::dvec3 skinColor{0.78, 0.62, 0.52};
