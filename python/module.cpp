@@ -6,8 +6,8 @@
 //
 // Lifetime of zero-copy frames. frame(copy=False) returns read-only arrays over the session's own
 // memory; they keep the session alive (their numpy base holds it), and while any of them is alive the
-// calls that would rewrite that memory (evaluate, set_pose, set_time, set_lod, check, ...) raise
-// pteryla.Error instead of leaving them dangling.
+// calls that would rewrite that memory (evaluate, set_pose, set_time, set_lod, set_instance_tolerance, check, ...)
+// raise pteryla.Error instead of leaving them dangling.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -680,6 +680,16 @@ skin carry it, elevations and drape fixed as laid (one pass over the vertices pe
           },
           py::arg("fraction"), "Fraction of barbs meshed, in (0, 1]. Only the mesh is redone.")
       .def_property_readonly("lod", [](const PySession& s) { return s.session->lod(); })
+      .def(
+          "set_instance_tolerance",
+          [](PySession& s, double f) {
+            s.requireMutable("set_instance_tolerance");
+            s.session->setInstanceTolerance(f);
+          },
+          py::arg("fraction"),
+          "Instancing, in [0, 0.1] (0 = off): mature feathers within this fraction of their length of an earlier "
+          "feather are meshed from its curves, identical unplaced meshes stored once. Only the mesh is redone.")
+      .def_property_readonly("instance_tolerance", [](const PySession& s) { return s.session->instanceTolerance(); })
       .def("evaluate", &evaluate, py::arg("progress") = py::none(),
            R"(Brings the frame up to date with the GIL released; returns True when done.
 
@@ -691,7 +701,7 @@ cancels and is re-raised here; so is Ctrl-C.)")
 
 copy=True: arrays of their own. copy=False: read-only views of the session's memory without a copy;
 they keep the session alive, and while any is alive the calls that would overwrite them (evaluate,
-set_pose, clear_pose, set_time, set_lod, check) raise pteryla.Error.)")
+set_pose, clear_pose, set_time, set_lod, set_instance_tolerance, check) raise pteryla.Error.)")
       .def(
           "check",
           [](PySession& s) {

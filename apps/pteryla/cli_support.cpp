@@ -96,6 +96,12 @@ Loaded load(const Common& c, const SceneArgs& a) {
   SceneFileOptions options;
   if (!a.seed.empty()) options.seed = parseSeed(a.seed);
   if (a.fixedLod) options.lodByScreenSize = false;
+  if (a.instanceTolerance) {
+    if (!(*a.instanceTolerance >= 0 && *a.instanceTolerance <= 0.1))
+      throw Error("expected a fraction in [0, 0.1], got " + std::to_string(*a.instanceTolerance), "",
+                  "--instance-tolerance");
+    options.instanceTolerance = *a.instanceTolerance;
+  }
   if (width) requireMemory(double(width) * height * kBytesPerPixel, "a " + a.size + " image", "", "--size");
   options.progress = makeProgress(c);
   Loaded l{Session::fromSceneFile(a.scene, options), width, height};

@@ -14,6 +14,7 @@ struct SceneArgs {
   std::string seed;       // empty = the scene's seed; else a non-negative integer (checked in load)
   std::string size;       // "WxH" or empty for the scene's render size
   bool fixedLod = false;  // --fixed-lod: render.lod_by_screen_size false (render, bench, frames, farm)
+  std::optional<double> instanceTolerance;  // --instance-tolerance: render.instance_tolerance (same commands)
 };
 
 struct BenchArgs : SceneArgs {

@@ -123,6 +123,7 @@ nlohmann::json frameParams(const FramesArgs& a, const std::string& sceneDigest, 
   }
   p["lod"] = a.lod ? nlohmann::json(*a.lod) : nlohmann::json(nullptr);
   if (a.exportExt.empty()) p["fixed_lod"] = a.fixedLod;  // exports mesh at --lod either way
+  if (a.instanceTolerance) p["instance_tolerance"] = *a.instanceTolerance;
   p["seed"] = a.seed;
   return p;
 }
@@ -538,6 +539,7 @@ int cmdFarmSlurm(const Common& c, const FarmArgs& args) {
                        fmt17(a.to) + " --fps " + fmt17(a.fps) + " --out " + shellQuote(out);
   if (a.lod) common += " --lod " + fmt17(*a.lod);
   if (a.fixedLod) common += " --fixed-lod";
+  if (a.instanceTolerance) common += " --instance-tolerance " + fmt17(*a.instanceTolerance);
   if (!a.size.empty()) common += " --size " + shellQuote(a.size);
   if (!a.seed.empty()) common += " --seed " + a.seed;
   if (!a.style.empty()) common += " --style " + a.style;

@@ -28,6 +28,10 @@ void addSceneOptions(CLI::App* sub, SceneArgs& a, bool withSize) {
     sub->add_flag("--fixed-lod", a.fixedLod,
                   "Mesh every feather at --lod (a fixed level) instead of by its size on screen: as if the scene "
                   "had render.lod_by_screen_size false");
+    sub->add_option("--instance-tolerance", a.instanceTolerance,
+                    "Instancing: feathers within this fraction of their length of an earlier feather are "
+                    "meshed from its curves and share one unplaced mesh, in [0, 0.1]; 0 = off; default: the "
+                    "scene's render.instance_tolerance (docs/limits.md)");
   }
 }
 
@@ -110,7 +114,9 @@ int main(int argc, char** argv) {
       "bench",
       "Print one JSON object of per-stage seconds of the first evaluation (load, distribute,\n"
       "interpolate, pack, mesh, render), pack_repeat (best of 3 more full packs, warm memory), frame\n"
-      "(a timeline step from the rendered frame), triangles and peak_rss_mb on stdout; with --check\n"
+      "(a timeline step from the rendered frame), triangles, the mesh stage's unplaced store\n"
+      "(representatives, unplaced_meshes, unplaced_mb against unplaced_mb_unshared: instancing,\n"
+      "--instance-tolerance) and peak_rss_mb on stdout; with --check\n"
       "also check_mesh (meshing at full detail) and check (`pteryla check`'s measurement of that mesh).\n"
       "The first evaluation is the first render's: the mesh at its levels of detail (by screen size\n"
       "unless --fixed-lod)");

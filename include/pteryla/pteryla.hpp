@@ -289,6 +289,10 @@ struct SceneFileOptions {
   // feather at lod(), a fixed level; docs/render.md). evaluate() before any render meshes every feather at
   // lod(); after a render, frame() is the coat that render drew.
   std::optional<bool> lodByScreenSize;
+  // Replaces the scene's render.instance_tolerance (default 0, off): mature feathers whose barb curves are
+  // within this fraction of their extent of an earlier feather's are meshed from that feather's curves, so
+  // identical unplaced meshes are kept once (docs/limits.md, "Instancing"). In [0, 0.1].
+  std::optional<double> instanceTolerance;
   Progress progress;  // reports of reading the skin and tracts, and then of every evaluation
                       // until setProgress replaces it (see setProgress)
 };
@@ -368,6 +372,12 @@ class PTERYLA_API Session {
   // Fraction of barbs meshed, in (0, 1] (Streit 7.1.3). Only the mesh is redone.
   void setLod(double fraction);
   double lod() const;
+  // Instancing (the scene's render.instance_tolerance; docs/limits.md, "Instancing"): mature feathers whose
+  // barb curves are within this fraction of their extent of an earlier feather's are meshed from that
+  // feather's curves, and identical unplaced meshes are stored once. In [0, 0.1]; 0 = off, every feather
+  // meshed from its own curves. Only the mesh is redone.
+  void setInstanceTolerance(double fraction);
+  double instanceTolerance() const;
 
   // Brings the frame up to date. Returns true when done; false when `progress` returned false, which
   // stops evaluation at once: the session keeps every stage completed before the cancel, frame() is
@@ -418,6 +428,15 @@ class PTERYLA_API Session {
   // coat with warm memory (what a packing edit costs; leaves every result as it was).
   StageSeconds stageSeconds() const;
   double timeFullPack(int repeats);
+  // The mesh stage's store of unplaced feather meshes at its last run (instancing shrinks it).
+  struct MeshStore {
+    size_t feathers = 0;         // present feathers meshed
+    size_t representatives = 0;  // of them, meshed from their own curves (the rest share another's)
+    size_t distinctMeshes = 0;   // unplaced meshes kept
+    size_t storedVertices = 0;   // their vertices (24 bytes each), against
+    size_t vertices = 0;         // the coat mesh's (what a copy per feather would hold)
+  };
+  MeshStore meshStore() const;
 
  private:
   struct Impl;

@@ -311,6 +311,12 @@ Session Session::fromSceneFile(const std::string& path, const SceneFileOptions& 
   pipeline::Scene scene = pipeline::loadScene(path);
   if (options.seed) scene.seed = *options.seed;
   if (options.lodByScreenSize) scene.render.lodByScreenSize = *options.lodByScreenSize;
+  if (options.instanceTolerance) {
+    const double t = *options.instanceTolerance;
+    if (!(t >= 0 && t <= 0.1))
+      throw Error("expected an instance tolerance in [0, 0.1], got " + std::to_string(t), path, "instanceTolerance");
+    scene.render.instanceTolerance = t;
+  }
   // The constructor reads the skin and the tracts: their reports go to the options' callback.
   const Progress& report = options.progress;
   auto impl = std::make_unique<Impl>(std::make_unique<pipeline::Pipeline>(
@@ -418,6 +424,15 @@ void Session::setLod(double fraction) {
 }
 double Session::lod() const { return impl_->pipeline->lod(); }
 
+void Session::setInstanceTolerance(double fraction) {
+  if (!(fraction >= 0 && fraction <= 0.1))
+    throw Error("expected an instance tolerance in [0, 0.1], got " + std::to_string(fraction), "", "instanceTolerance");
+  if (fraction == instanceTolerance()) return;
+  impl_->pipeline->editScene(pipeline::Stage::Mesh, [&](pipeline::Scene& s) { s.render.instanceTolerance = fraction; });
+  impl_->frameValid = false;
+}
+double Session::instanceTolerance() const { return impl_->pipeline->scene().render.instanceTolerance; }
+
 bool Session::evaluate(const Progress& progress) {
   Impl& m = *impl_;
   m.frameValid = false;
@@ -431,6 +446,17 @@ bool Session::evaluate(const Progress& progress) {
 }
 
 void Session::setProgress(Progress progress) { impl_->progress = std::move(progress); }
+
+Session::MeshStore Session::meshStore() const {
+  const pipeline::FrameReuse r = impl_->pipeline->frameReuse();
+  MeshStore m;
+  m.feathers = r.meshFeathers;
+  m.representatives = r.meshRepresentatives;
+  m.distinctMeshes = r.meshDistinct;
+  m.storedVertices = r.meshStoredVertices;
+  m.vertices = r.meshVertices;
+  return m;
+}
 
 StageSeconds Session::stageSeconds() const {
   const pipeline::Pipeline& p = *impl_->pipeline;

@@ -714,6 +714,48 @@ TEST(HostSession, FromSceneFileEqualsThePipeline) {
   for (size_t i = 0; i < f.featherCount; ++i) ASSERT_EQ(f.follicleKeys[i], follicles.id[coat.follicle[i]]);
 }
 
+// Instancing through the host API: a scene file's option and the setter both reach the mesh stage (its
+// store shrinks, its triangles stay), out-of-range values are refused naming the setting and change
+// nothing, and 0 gives back the unshared coat bit for bit.
+TEST(HostSession, InstanceToleranceSharesTheStoreAndIsRangeChecked) {
+  const std::string file = kData + "/scenes/sphere_250.json";
+  Session s = Session::fromSceneFile(file);
+  ASSERT_TRUE(s.evaluate());
+  const std::vector<float> exact(s.frame().positions.begin(), s.frame().positions.end());
+  const size_t indices = s.frame().indices.size;
+  const Session::MeshStore before = s.meshStore();
+  EXPECT_EQ(before.representatives, before.feathers);
+  EXPECT_EQ(before.vertices, exact.size() / 3);
+
+  s.setInstanceTolerance(0.02);
+  EXPECT_EQ(s.instanceTolerance(), 0.02);
+  ASSERT_TRUE(s.evaluate());
+  const Session::MeshStore shared = s.meshStore();
+  EXPECT_EQ(shared.feathers, before.feathers);
+  EXPECT_LT(shared.representatives, shared.feathers / 2);
+  EXPECT_LT(shared.storedVertices, before.storedVertices / 2);
+  EXPECT_GE(shared.distinctMeshes, shared.representatives);
+  EXPECT_EQ(s.frame().indices.size, indices);
+  EXPECT_NE(std::memcmp(s.frame().positions.data, exact.data(), exact.size() * sizeof(float)), 0);
+
+  for (double bad : {-0.001, 0.11, std::nan("")})
+    EXPECT_EQ(errorOf([&] { s.setInstanceTolerance(bad); }).element(), "instanceTolerance") << bad;
+  EXPECT_EQ(s.instanceTolerance(), 0.02);
+  pteryla::SceneFileOptions o;
+  o.instanceTolerance = 0.5;
+  EXPECT_EQ(errorOf([&] { Session::fromSceneFile(file, o); }).element(), "instanceTolerance");
+
+  o.instanceTolerance = 0.02;
+  Session fromFile = Session::fromSceneFile(file, o);
+  ASSERT_TRUE(fromFile.evaluate());
+  expectIdentical(fromFile.frame(), s.frame());
+
+  s.setInstanceTolerance(0);
+  ASSERT_TRUE(s.evaluate());
+  ASSERT_EQ(s.frame().positions.size, exact.size());
+  EXPECT_EQ(std::memcmp(s.frame().positions.data, exact.data(), exact.size() * sizeof(float)), 0);
+}
+
 TEST(HostSession, MetricsMatchTheFrame) {
   {
     // A session that only checks gets the metrics without a frame: the checker meshes at full detail,

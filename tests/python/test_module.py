@@ -444,3 +444,33 @@ def test_export_gltf_and_usd_from_python(sphere, tmp_path):
 def test_version_and_data_directory():
     assert pteryla.__version__ == pteryla.version() and pteryla.version().count(".") == 2
     assert os.path.isfile(os.path.join(pteryla.data_directory(), "feathers", "contour.json"))
+
+
+def test_instance_tolerance_keeps_topology_and_moves_little():
+    """Instancing through the module: the same triangles and feathers, vertices within the tolerance of
+    the unshared coat, back to the exact coat at 0, and a refused value changes nothing. (The sphere
+    scene's packed feathers differ a little from each other; the small set-up's are identical.)"""
+    s = pteryla.Session.from_scene_file(os.path.join(DATA, "scenes", "sphere_250.json"))
+    assert s.evaluate()
+    exact = s.frame()
+    assert s.instance_tolerance == 0.0
+    s.set_instance_tolerance(0.02)
+    assert s.instance_tolerance == 0.02
+    assert s.evaluate()
+    shared = s.frame()
+    assert np.array_equal(shared.triangles, exact.triangles)
+    assert np.array_equal(shared.vertex_feathers, exact.vertex_feathers)
+    moved = np.linalg.norm(shared.positions - exact.positions, axis=1)
+    assert moved.max() > 0
+    # Each vertex within twice the tolerance of its feather's extent (the scene is packed, not draped).
+    reach = np.linalg.norm(exact.positions - exact.origins[exact.vertex_feathers], axis=1)
+    extent = np.zeros(len(exact.origins))
+    np.maximum.at(extent, exact.vertex_feathers, reach)
+    assert np.all(moved <= 2 * 0.02 * extent[exact.vertex_feathers] + 1e-6)
+    for bad in (-0.01, 0.2, float("nan")):
+        with pytest.raises(pteryla.Error):
+            s.set_instance_tolerance(bad)
+    assert s.instance_tolerance == 0.02
+    s.set_instance_tolerance(0.0)
+    assert s.evaluate()
+    assert s.frame().positions.tobytes() == exact.positions.tobytes()
