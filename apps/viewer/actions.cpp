@@ -260,6 +260,12 @@ void setRenderLod(Document& d, double f) {
   d.edit("render LOD", [&](Scene& s) { s.render.lod = f; });
 }
 
+void setInstanceTolerance(Document& d, double f) {
+  if (!(f >= 0 && f <= 0.1))
+    throw Error("instance tolerance must be in [0, 0.1]", "", "render.instance_tolerance");
+  d.edit("instancing", [&](Scene& s) { s.render.instanceTolerance = f; });
+}
+
 double combRadius(const Scene& s) {
   if (!s.directions.is_object() || !s.directions.contains("axis") || !s.directions["axis"].is_array()) return 0;
   const Json& a = s.directions["axis"];

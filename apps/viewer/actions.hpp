@@ -56,6 +56,9 @@ void removeKeyFeather(Document& d, size_t tract, size_t key);
 // The scene's render.lod (renders, the CLI), as an undoable edit; the viewer's preview level of detail
 // (Document::setLod) is separate and never saved.
 void setRenderLod(Document& d, double fraction);
+// render.instance_tolerance in [0, 0.1] (0 = off): feathers that close share one unplaced mesh; only the
+// mesh stage re-runs.
+void setInstanceTolerance(Document& d, double fraction);
 
 // Directions: a styling vector over a body axis combs it locally (the axis is kept; coat/directions.hpp)
 // within `radius` (0: the field's falloff, else combRadius() of the axis); without an axis, styling

@@ -106,6 +106,14 @@ void drawViewPanel(PanelContext& ctx) {
       guarded(ctx, [&] { actions::setRenderLod(doc, renderLod); });
     if (ImGui::IsItemHovered())
       ImGui::SetTooltip("the scene's render.lod: what renders, exports and the CLI use; saved with the scene");
+    float instancing = static_cast<float>(doc.scene().render.instanceTolerance);
+    if (ImGui::SliderFloat("Instancing", &instancing, 0.0f, 0.02f, "%.4f"))
+      guarded(ctx, [&] { actions::setInstanceTolerance(doc, instancing); });
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip(
+          "the scene's render.instance_tolerance: feathers within this fraction of their length of an earlier\n"
+          "one are meshed from its curves and share one unplaced mesh (less memory, shapes move that much);\n"
+          "0 = off; saved with the scene (docs/limits.md, Instancing)");
   }
   ImGui::Checkbox("Coat", &v.showCoat);
   ImGui::SameLine();

@@ -189,11 +189,22 @@ TEST(Document, OnlyDownstreamStagesRerun) {
   ASSERT_TRUE(d.waitIdle());
   EXPECT_EQ(evals(pipeline::Stage::Distribute), distribute);
   EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 1);
+  // Instancing re-meshes only; an out-of-range value is refused and changes nothing.
+  actions::setInstanceTolerance(d, 0.01);
+  ASSERT_TRUE(d.waitIdle());
+  EXPECT_EQ(d.scene().render.instanceTolerance, 0.01);
+  EXPECT_EQ(evals(pipeline::Stage::Distribute), distribute);
+  EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 2);
+  EXPECT_THROW(actions::setInstanceTolerance(d, 0.5), Error);
+  EXPECT_EQ(d.scene().render.instanceTolerance, 0.01);
+  actions::setInstanceTolerance(d, 0.0);
+  ASSERT_TRUE(d.waitIdle());
+  EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 3);
   // View-only edits re-run nothing.
   actions::setBrdf(d, 2.0, 0.1);
   d.update();
   EXPECT_FALSE(d.busy());
-  EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 1);
+  EXPECT_EQ(evals(pipeline::Stage::Mesh), mesh + 3);
   // patch.json reads no time (no skeleton, moult or controls): a new time re-runs nothing ...
   const auto pose = evals(pipeline::Stage::Pose);
   d.setTime(0.25);
