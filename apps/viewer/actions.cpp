@@ -261,8 +261,7 @@ void setRenderLod(Document& d, double f) {
 }
 
 void setInstanceTolerance(Document& d, double f) {
-  if (!(f >= 0 && f <= 0.1))
-    throw Error("instance tolerance must be in [0, 0.1]", "", "render.instance_tolerance");
+  if (!(f >= 0 && f <= 0.1)) throw Error("instance tolerance must be in [0, 0.1]", "", "render.instance_tolerance");
   d.edit("instancing", [&](Scene& s) { s.render.instanceTolerance = f; });
 }
 
