@@ -121,21 +121,31 @@ void CoatMesher::resize(size_t n) {
   lodOrders_.assign(n, {});
   grownOrders_.assign(n, {});
   curvesVersion_.assign(n, 0);
+  matureVersion_.assign(n, 0);
   slices_.assign(n, Slice{});
   rep_.clear();
   repKey_.clear();
 }
 
-// Representatives over the present mature feathers in feather index order (a pure function of their
-// curves), computed again only when those curves or the tolerance changed.
+bool CoatMesher::clustersEveryFeather(const CoatMeshInput& in) {
+  return in.instanceTolerance > 0 && in.packed->packedKeys.keyOffset.empty();
+}
+
+// Representatives in feather index order (a pure function of the curves taken), computed again only
+// when those curves or the tolerance changed. A coat meshed from its interpolated parameters (a draped
+// one) takes every feather's mature curves, present or not, growing or not: they do not change over a
+// moult, so neither does any mature feather's representative (no feather changes shape because another
+// moults). A packed coat's packed curves exist for its present feathers only: it takes the present
+// mature ones, so a feather may change representative when an earlier one moults or is packed again.
 void CoatMesher::updateRepresentatives(const CoatMeshInput& in, const std::vector<uint8_t>& grown) {
   const coat::CoatFeathers& coat = *in.coat;
   const size_t n = coat.size();
   const double tol = in.instanceTolerance > 0 ? in.instanceTolerance : 0;
+  const bool everyFeather = clustersEveryFeather(in);
   std::vector<uint64_t> key(n, 0);
   if (tol > 0)
     for (size_t i = 0; i < n; ++i)
-      if (coat.present[i] && grown[i]) key[i] = curvesVersion_[i];
+      if (everyFeather ? matureValid_[i] != 0 : coat.present[i] && grown[i]) key[i] = matureVersion_[i];
   if (rep_.size() == n && key == repKey_ && std::memcmp(&tol, &tolerance_, sizeof(double)) == 0) return;
   tolerance_ = tol;
   repKey_ = std::move(key);
@@ -153,10 +163,14 @@ void CoatMesher::updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& gro
   const coat::CoatFeathers& packedCoat = *in.packedCoat;
   const coat::PackResult& packed = *in.packed;
   const size_t n = coat.size();
-  std::vector<uint8_t> regenerated(n, 0);
+  std::vector<uint8_t> regenerated(n, 0), matureRegenerated(n, 0);
+  // Instancing a coat meshed from its interpolated parameters chooses representatives among every
+  // feather, present or not (updateRepresentatives): absent feathers get their mature curves too.
+  const bool everyFeather = clustersEveryFeather(in);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i < range.end(); ++i) {
-      if (!coat.present[i]) continue;
+      const bool present = coat.present[i] != 0;
+      if (!present && !everyFeather) continue;
       const double age = coat.age[i];
       const feather::GrowthSchedule& schedule = feather::growthScheduleOf(coat.params[i]);
       // Growing (age < 1), or worn (age > 1 with a schedule that wears): meshed from the feather at its
@@ -185,8 +199,9 @@ void CoatMesher::updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& gro
         matureValid_[i] = 1;
         grownAge_[i] = std::nan("");
         regenerated[i] = 1;
+        matureRegenerated[i] = 1;
       }
-      if (growing) {
+      if (growing && present) {
         const feather::GrowthState st = feather::growthStateAt(age, schedule);
         // Whether a feather is packed as grown depends on its age only, so equal ages mean the same path.
         if (std::memcmp(&grownAge_[i], &age, sizeof(double)) != 0 ||
@@ -206,11 +221,13 @@ void CoatMesher::updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& gro
     }
   });
   regenerated_ = 0;
-  for (size_t i = 0; i < n; ++i)
+  for (size_t i = 0; i < n; ++i) {
     if (regenerated[i]) {
       ++regenerated_;
       ++curvesVersion_[i];
     }
+    if (matureRegenerated[i]) ++matureVersion_[i];
+  }
 }
 
 void CoatMesher::update(const CoatMeshInput& in, TriMesh& out) {
@@ -268,7 +285,8 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     const Slice& sl = slices_[i];
     const bool growing = inputs[k].reference != nullptr;
     const uint32_t r = growing ? i : rep_[i];
-    const bool same = sl.valid && sl.rep == r && sl.version == curvesVersion_[r] && sl.growing == growing &&
+    const uint64_t version = growing ? curvesVersion_[i] : matureVersion_[r];
+    const bool same = sl.valid && sl.rep == r && sl.version == version && sl.growing == growing &&
                       sl.lod == inputs[k].lod && std::memcmp(&sl.shed, &shed[i], sizeof(double)) == 0 &&
                       sl.in > 0;  // empty feathers are re-meshed (nothing to copy; keeps range offsets exact)
     reuse[k] = same ? 1 : 0;
@@ -412,7 +430,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     sl.valid = true;
     sl.growing = inputs[k].reference != nullptr;
     sl.rep = sl.growing ? which[k] : rep_[which[k]];
-    sl.version = curvesVersion_[sl.rep];
+    sl.version = sl.growing ? curvesVersion_[sl.rep] : matureVersion_[sl.rep];
     sl.lod = inputs[k].lod;
     sl.shed = shed[which[k]];
   }

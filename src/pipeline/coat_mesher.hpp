@@ -9,10 +9,12 @@
 // mesh, and placing later applies the same arithmetic (feather::placeFeatherVertices).
 //
 // Instancing (CoatMeshInput::instanceTolerance > 0, feather/instancing.hpp): a mature feather whose
-// curves are within the tolerance of an earlier feather's (in feather index order) is meshed from that
-// feather's curves. Unplaced meshes that come out identical (the same representative at the same level of
-// detail) are kept once: the unplaced store holds one copy per distinct mesh, and every feather is placed
-// from its copy. With the tolerance at 0 every feather is meshed from its own curves, as without.
+// curves are within the tolerance of an earlier feather's mature curves (in feather index order: over
+// every feather of a coat meshed from its interpolated parameters, so representatives hold still through
+// a moult; over the present mature ones of a packed coat) is meshed from that feather's curves. Unplaced meshes that
+// come out identical (the same representative at the same level of detail) are kept once: the unplaced store holds one
+// copy per distinct mesh, and every feather is placed from its copy. With the tolerance at 0 every feather is meshed
+// from its own curves, as without.
 #include <cstdint>
 #include <vector>
 
@@ -80,8 +82,10 @@ class CoatMesher {
   // Of the last update: the feather of each range (layer order, present feathers) and its index ranges.
   const std::vector<uint32_t>& feathers() const { return which_; }
   const std::vector<feather::FeatherMeshRanges>& ranges() const { return ranges_; }
-  size_t regenerated() const { return regenerated_; }  // present feathers whose barb curves were generated
-  size_t reused() const { return reused_; }            // present feathers copied from the last mesh
+  // Feathers whose barb curves were generated (present ones; with instancing of an unpacked coat, absent
+  // ones' mature curves too).
+  size_t regenerated() const { return regenerated_; }
+  size_t reused() const { return reused_; }  // present feathers copied from the last mesh
   const InstancingStats& instancing() const { return stats_; }
 
  private:
@@ -89,7 +93,7 @@ class CoatMesher {
   struct Slice {
     bool valid = false;
     uint32_t rep = 0;      // the feather whose curves it was meshed from (itself without instancing)
-    uint64_t version = 0;  // curvesVersion_ of those curves
+    uint64_t version = 0;  // of those curves: curvesVersion_ while growing, else matureVersion_
     bool growing = false;  // meshed from the grown curves (else the mature ones)
     double lod = 0, shed = 0;
     uint32_t v0 = 0, vn = 0, i0 = 0, in = 0;
@@ -104,6 +108,7 @@ class CoatMesher {
   void updateCurves(const CoatMeshInput& in, std::vector<uint8_t>& grown, std::vector<double>& shed);
   void assemble(const std::vector<feather::FeatherMeshInput>& placed, const std::vector<double>& shed, TriMesh& out);
   void updateRepresentatives(const CoatMeshInput& in, const std::vector<uint8_t>& grown);
+  static bool clustersEveryFeather(const CoatMeshInput& in);
   // Rebuilds the unplaced store: every slice of `next` from the last store (reused[k]) or from `fresh`'s
   // positions, normals and tangents at src[k].v0, identical meshes kept once. Sets next[k].u0 and .hash.
   void storeUnplaced(const std::vector<uint8_t>& reused, const std::vector<Slice>& src, const TriMesh& fresh,
@@ -117,6 +122,7 @@ class CoatMesher {
   std::vector<feather::FeatherCurves> matureCurves_, grownCurves_;
   std::vector<feather::LodOrder> lodOrders_, grownOrders_;
   std::vector<uint64_t> curvesVersion_;  // bumped whenever a feather's curves are regenerated
+  std::vector<uint64_t> matureVersion_;  // bumped whenever its mature curves are
   std::vector<Slice> slices_;
   // The unplaced store: positions, normals and tangents of each distinct unplaced mesh of the last update
   // (Slice::u0). No spare copy of the coat mesh is kept: an update writes changed slices in place when the

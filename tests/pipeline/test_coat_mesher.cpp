@@ -239,3 +239,60 @@ TEST(CoatMesher, InstancedUpdateEqualsFreshInstancedMesh) {
     expectSameResult(incremental, mesh, full, fresh);
   }
 }
+
+// A coat meshed from its interpolated parameters (no packed key barbs, as a draped coat is) chooses
+// representatives among every feather, present or not: feathers that stay present and mature keep their
+// shapes bit for bit while others moult out and grow back, and each frame equals a fresh mesher's.
+TEST(CoatMesher, InstancedShapesHoldStillThroughAMoult) {
+  Coat c = patchCoat();
+  const size_t n = c.feathers.size();
+  // The patch's feathers are copies of one: make them differ smoothly, as interpolated feathers do.
+  for (size_t i = 0; i < n; ++i) {
+    c.feathers.params[i].barbLength *= 1.0 + 0.004 * static_cast<double>(i % 25);
+    c.feathers.params[i].rachisVentralDorsalCurvature += 0.005 * static_cast<double>(i % 25);
+  }
+  coat::PackResult flat;
+  flat.order = c.feathers.layerOrder;
+  flat.elevation.assign(n, 0.0);
+  c.packed = flat;
+  auto at = [&] {
+    CoatMeshInput in = input(c);
+    in.instanceTolerance = 0.02;
+    return in;
+  };
+  // Vertex positions per feather of a mesh.
+  auto byFeather = [&](const TriMesh& m) {
+    std::vector<std::vector<glm::vec3>> out(n);
+    for (size_t v = 0; v < m.positions.size(); ++v) out[m.featherId[v]].push_back(m.positions[v]);
+    return out;
+  };
+  CoatMesher mesher;
+  TriMesh mesh;
+  mesher.update(at(), mesh);
+  const auto before = byFeather(mesh);
+  EXPECT_LT(mesher.instancing().representatives, n / 2);
+  EXPECT_GT(mesher.instancing().representatives, 4u);
+  // Moult out the first feathers in index order (the likeliest representatives) and start some growing.
+  std::vector<uint8_t> changed(n, 0);
+  for (size_t i = 0; i < n; i += 3) {
+    c.feathers.present[i] = 0;
+    changed[i] = 1;
+  }
+  for (size_t i = 1; i < n; i += 7) {
+    c.feathers.age[i] = 0.5;
+    changed[i] = 1;
+  }
+  mesher.update(at(), mesh);
+  const auto during = byFeather(mesh);
+  size_t kept = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (!changed[i]) {
+      EXPECT_EQ(during[i], before[i]) << "feather " << i;
+      ++kept;
+    }
+  EXPECT_GT(kept, n / 2);
+  CoatMesher fresh;
+  TriMesh freshMesh;
+  fresh.update(at(), freshMesh);
+  expectSameResult(mesher, mesh, fresh, freshMesh);
+}
