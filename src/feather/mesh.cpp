@@ -465,6 +465,23 @@ FeatherMeshSize featherMeshSize(const FeatherMeshInput& in, const MeshOptions& o
   return planSize(pl, opt, s);
 }
 
+FeatherMeshLevel featherMeshLevel(const FeatherMeshInput& in, const MeshOptions& opt) {
+  validateMeshOptions(opt);
+  Scratch& s = scratch();
+  const Plan pl = makePlan(in, opt, s);
+  FeatherMeshLevel l;
+  l.keep = pl.keep;
+  l.segs = pl.segs;
+  for (size_t part = 0; part < pl.parts; ++part) {
+    if (opt.shaft) {
+      shaftSelection(pl.c->shafts[part], pl, opt, s.shaftSel);
+      l.shaft.insert(l.shaft.end(), s.shaftSel.begin(), s.shaftSel.end());
+    }
+    l.shaft.push_back(-1);
+  }
+  return l;
+}
+
 void appendFeatherMesh(const FeatherMeshInput& in, const MeshOptions& opt, TriMesh& out, FeatherMeshRanges* ranges) {
   const FeatherMeshSize sz = featherMeshSize(in, opt);
   const Dst d0 = reserveSlice(out, sz.vertices, sz.indices);

@@ -296,7 +296,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
   std::vector<feather::FeatherMeshRanges>& ranges = ranges_;
   ranges.assign(count, feather::FeatherMeshRanges{});
   std::vector<Slice> next(count);
-  if (reused * 10 < count) {
+  if (reused * 10 < count && !(tolerance_ > 0)) {
     // Little to reuse: mesh everything straight into the output.
     clearKeepingCapacity(out);
     feather::appendFeatherMeshes(inputs.data(), count, mo, out, &ranges);
@@ -307,20 +307,53 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
   } else {
     // Mesh the changed feathers into freshMesh_, then copy them into the mesh: in place when the layout is
     // unchanged, else into a new mesh with the reused slices.
-    std::vector<feather::FeatherMeshInput> changed;
-    std::vector<size_t> changedAt;
+    // With instancing, feathers meshed from the same curves at the same level of detail and sheath get
+    // the same unplaced mesh (all but its feather id): each such mesh is made once.
+    std::vector<size_t> changedAt;  // the feathers to mesh
     for (size_t k = 0; k < count; ++k)
-      if (!reuse[k]) {
-        changed.push_back(inputs[k]);
-        changedAt.push_back(k);
+      if (!reuse[k]) changedAt.push_back(k);
+    std::vector<uint32_t> meshedAs(changedAt.size());  // per feather to mesh: its entry in `changed`
+    std::vector<feather::FeatherMeshInput> changed;
+    if (tolerance_ > 0) {
+      std::vector<feather::FeatherMeshLevel> level(changedAt.size());
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, changedAt.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t c = r.begin(); c < r.end(); ++c) level[c] = feather::featherMeshLevel(inputs[changedAt[c]], mo);
+      });
+      auto same = [&](const feather::FeatherMeshInput& a, const feather::FeatherMeshInput& b) {
+        return a.curves == b.curves && a.order == b.order && a.reference == b.reference &&
+               std::memcmp(&a.sheathShed, &b.sheathShed, sizeof(double)) == 0 &&
+               std::memcmp(&a.sheathBand, &b.sheathBand, sizeof(double)) == 0;
+      };
+      std::unordered_multimap<const void*, uint32_t> byCurves;  // curves -> entries of `changed`
+      std::vector<size_t> levelOf;                              // per entry of `changed`: its c
+      for (size_t c = 0; c < changedAt.size(); ++c) {
+        const feather::FeatherMeshInput& fi = inputs[changedAt[c]];
+        meshedAs[c] = static_cast<uint32_t>(changed.size());
+        auto [lo, hi] = byCurves.equal_range(fi.curves);
+        for (auto it = lo; it != hi; ++it)
+          if (same(changed[it->second], fi) && level[levelOf[it->second]] == level[c]) {
+            meshedAs[c] = it->second;
+            break;
+          }
+        if (meshedAs[c] == changed.size()) {
+          byCurves.emplace(fi.curves, meshedAs[c]);
+          levelOf.push_back(c);
+          changed.push_back(fi);
+        }
       }
+    } else {
+      for (size_t c = 0; c < changedAt.size(); ++c) {
+        meshedAs[c] = static_cast<uint32_t>(c);
+        changed.push_back(inputs[changedAt[c]]);
+      }
+    }
     clearKeepingCapacity(freshMesh_);
     std::vector<feather::FeatherMeshRanges> freshRanges;
     feather::appendFeatherMeshes(changed.data(), changed.size(), mo, freshMesh_, &freshRanges);
     // Source slices: in the last mesh (reused) or in freshMesh_.
     std::vector<Slice> src(count);
     const std::vector<Slice> fresh = locate(changed, freshRanges, freshMesh_);
-    for (size_t c = 0; c < changed.size(); ++c) src[changedAt[c]] = fresh[c];
+    for (size_t c = 0; c < changedAt.size(); ++c) src[changedAt[c]] = fresh[meshedAs[c]];
     for (size_t k = 0; k < count; ++k)
       if (reuse[k]) src[k] = slices_[which[k]];
     size_t vTotal = 0, iTotal = 0;
@@ -344,7 +377,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
           old.valid && old.v0 == next[k].v0 && old.vn == next[k].vn && old.i0 == next[k].i0 && old.in == next[k].in;
     }
     if (inPlace) {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, changed.size(), 16),
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, changedAt.size(), 16),
                         [&](const tbb::blocked_range<size_t>& range) {
                           for (size_t c = range.begin(); c < range.end(); ++c) {
                             const size_t k = changedAt[c];
@@ -356,7 +389,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
                             copySlice(freshMesh_.alpha, a.v0, out.alpha, b.v0, a.vn);
                             copySlice(freshMesh_.sheath, a.v0, out.sheath, b.v0, a.vn);
                             copySlice(freshMesh_.barbCount, a.v0, out.barbCount, b.v0, a.vn);
-                            copySlice(freshMesh_.featherId, a.v0, out.featherId, b.v0, a.vn);
+                            std::fill_n(out.featherId.data() + b.v0, a.vn, which[k]);
                             const uint32_t shift = b.v0 - a.v0;
                             const uint32_t* fi = freshMesh_.indices.data() + a.i0;
                             uint32_t* ti = out.indices.data() + b.i0;
@@ -381,7 +414,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
           copySlice(from.alpha, a.v0, next_.alpha, b.v0, a.vn);
           copySlice(from.sheath, a.v0, next_.sheath, b.v0, a.vn);
           copySlice(from.barbCount, a.v0, next_.barbCount, b.v0, a.vn);
-          copySlice(from.featherId, a.v0, next_.featherId, b.v0, a.vn);
+          std::fill_n(next_.featherId.data() + b.v0, a.vn, which[k]);
           const uint32_t shift = b.v0 - a.v0;  // modular: vertex indices move by the slice's shift
           const uint32_t* fi = from.indices.data() + a.i0;
           uint32_t* ti = next_.indices.data() + b.i0;
@@ -392,7 +425,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     }
     // The store: kept as it is when no feather was meshed and none left (a feather that came would have
     // been meshed), else built again from the reused slices' stored meshes and the fresh ones.
-    if (changed.empty() && count == stats_.feathers) {
+    if (changedAt.empty() && count == stats_.feathers) {
       for (size_t k = 0; k < count; ++k) {
         next[k].u0 = src[k].u0;
         next[k].hash = src[k].hash;
@@ -450,7 +483,7 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
   }
 }
 
-void CoatMesher::storeUnplaced(const std::vector<uint8_t>& reused, const std::vector<Slice>& src, const TriMesh& fresh,
+void CoatMesher::storeUnplaced(const std::vector<uint8_t>& reused, const std::vector<Slice>& src, TriMesh& fresh,
                                std::vector<Slice>& next) {
   const size_t count = next.size();
   // Each slice's data and hash (the fresh ones hashed in parallel).
@@ -495,6 +528,15 @@ void CoatMesher::storeUnplaced(const std::vector<uint8_t>& reused, const std::ve
     next[k].hash = hash[k];
   }
   PTERYLA_CHECK(total <= UINT32_MAX, "unplaced store exceeds 32-bit offsets");
+  // Every feather fresh, none shared, in the order meshed: the fresh arrays are the store as they are.
+  bool whole = total == fresh.positions.size();
+  for (size_t k = 0; k < count && whole; ++k) whole = !reused[k] && storedBy[k] == k && src[k].v0 == next[k].u0;
+  if (whole) {
+    std::swap(localPos_, fresh.positions);
+    std::swap(localNrm_, fresh.normals);
+    std::swap(localTan_, fresh.tangents);
+    return;
+  }
   std::vector<glm::vec3> p(total);
   std::vector<PackedDir> nn(total), tt(total);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& range) {

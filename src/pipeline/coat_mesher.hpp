@@ -87,6 +87,9 @@ class CoatMesher {
   size_t regenerated() const { return regenerated_; }
   size_t reused() const { return reused_; }  // present feathers copied from the last mesh
   const InstancingStats& instancing() const { return stats_; }
+  // Per feather of the last update: the feather whose mature curves it is meshed from when mature (itself
+  // without instancing).
+  const std::vector<uint32_t>& representatives() const { return rep_; }
 
  private:
   // Where a feather sits in the mesh and what it was meshed from.
@@ -111,7 +114,8 @@ class CoatMesher {
   static bool clustersEveryFeather(const CoatMeshInput& in);
   // Rebuilds the unplaced store: every slice of `next` from the last store (reused[k]) or from `fresh`'s
   // positions, normals and tangents at src[k].v0, identical meshes kept once. Sets next[k].u0 and .hash.
-  void storeUnplaced(const std::vector<uint8_t>& reused, const std::vector<Slice>& src, const TriMesh& fresh,
+  // When every slice is fresh and distinct, in order, it takes fresh's arrays (swapped, not copied).
+  void storeUnplaced(const std::vector<uint8_t>& reused, const std::vector<Slice>& src, TriMesh& fresh,
                      std::vector<Slice>& next);
 
   // Per feather: the packed parameters the mature curves and LOD order were generated from, and the age

@@ -277,3 +277,33 @@ TEST(FeatherLod, OutlineAtTenthDetailWithinTenPercent) {
   ASSERT_GT(full, 0.5);
   for (double f : {0.5, 0.2, 0.1}) EXPECT_NEAR(outline(f) / full, 1.0, 0.10) << "lod " << f;
 }
+
+// featherMeshLevel is all a level of detail decides: levels that give the same one mesh to the same
+// vertices and indices, and any two different ones mesh differently (the mesher makes one mesh per level
+// for instanced feathers on this).
+TEST(FeatherMeshLevel, EqualLevelsMeshIdenticallyOthersDiffer) {
+  const FeatherCurves c = generateBarbs(geomtest::contour(false));
+  const LodOrder order = computeLodOrder(c);
+  const MeshOptions opt;
+  std::vector<FeatherMeshLevel> levels;
+  std::vector<TriMesh> meshes;
+  size_t sameLevelPairs = 0;
+  for (int k = 1; k <= 200; ++k) {
+    FeatherMeshInput in;
+    in.curves = &c;
+    in.order = &order;
+    in.lod = k / 200.0;
+    const FeatherMeshLevel level = featherMeshLevel(in, opt);
+    TriMesh m;
+    appendFeatherMesh(in, opt, m);
+    for (size_t j = 0; j < levels.size(); ++j) {
+      const bool sameMesh =
+          m.positions == meshes[j].positions && m.indices == meshes[j].indices && m.uvBarb == meshes[j].uvBarb;
+      EXPECT_EQ(level == levels[j], sameMesh) << "lod " << in.lod << " against entry " << j;
+      sameLevelPairs += level == levels[j];
+    }
+    levels.push_back(level);
+    meshes.push_back(std::move(m));
+  }
+  EXPECT_GT(sameLevelPairs, 0u);  // the level is coarser than the lod
+}

@@ -201,6 +201,38 @@ TEST(CoatMesher, InstancedFeathersStayWithinTheTolerance) {
   }
   EXPECT_GT(changed, 0u);
   EXPECT_LE(changed, n - s.representatives);  // a representative is meshed from its own curves
+
+  // The instanced coat is exactly what meshing every feather from its representative's curves, placed
+  // at its own follicle, gives: meshes made once and copied, and stored once, come out as their own.
+  {
+    const std::vector<uint32_t>& rep = shared.representatives();
+    ASSERT_EQ(rep.size(), n);
+    std::vector<feather::FeatherCurves> curves(n);
+    std::vector<feather::LodOrder> orders(n);
+    std::vector<feather::FeatherMeshInput> inputs;
+    for (uint32_t i : c.feathers.layerOrder) {
+      if (!c.feathers.present[i]) continue;
+      const uint32_t r = rep[i];
+      ASSERT_LE(r, i);
+      if (curves[r].barbs.empty()) {
+        feather::FeatherParams p;
+        coat::packedParamsInto(c.feathers, c.packed, r, p);
+        feather::generateBarbs(p, curves[r]);
+        feather::computeLodOrder(curves[r], orders[r]);
+      }
+      feather::FeatherMeshInput fi;
+      fi.curves = &curves[r];
+      fi.order = &orders[r];
+      const coat::FeatherFrame& fr = c.feathers.frames[i];
+      fi.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, c.packed.elevation[i]);
+      fi.featherId = i;
+      fi.lod = in.lod;
+      inputs.push_back(fi);
+    }
+    TriMesh direct;
+    feather::appendFeatherMeshes(inputs.data(), inputs.size(), feather::MeshOptions{}, direct);
+    EXPECT_TRUE(pipeline_test::sameMesh(b, direct));
+  }
 }
 
 // Instancing is a function of the frame's coat alone: after feathers changed (raised, growing, hidden,

@@ -101,6 +101,18 @@ struct FeatherMeshInput {
 struct FeatherMeshSize {
   size_t vertices = 0, indices = 0;
 };
+
+// What a level of detail decides of a feather's mesh: the barbs kept, the barb segments and the shaft
+// points of each part. Meshing depends on FeatherMeshInput::lod through these alone, so two inputs with
+// the same curves, LOD order, reference, sheath and level mesh to the same vertices and indices (but
+// for featherId, and positions where placed differently).
+struct FeatherMeshLevel {
+  uint32_t keep = 0;
+  int segs = 0;
+  std::vector<int> shaft;  // the shaft points kept, part after part, each part's list ended by -1
+  bool operator==(const FeatherMeshLevel& o) const { return keep == o.keep && segs == o.segs && shaft == o.shaft; }
+};
+FeatherMeshLevel featherMeshLevel(const FeatherMeshInput& in, const MeshOptions& opt);
 // Exact size appendFeatherMesh will add.
 FeatherMeshSize featherMeshSize(const FeatherMeshInput& in, const MeshOptions& opt);
 
