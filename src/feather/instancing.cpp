@@ -109,26 +109,42 @@ double curveDistance(const FeatherCurves& a, const FeatherCurves& b, double exte
 std::vector<uint32_t> shareCurves(const std::vector<const FeatherCurves*>& curves, double tolerance) {
   const size_t n = curves.size();
   std::vector<uint32_t> rep(n);
-  std::unordered_map<uint64_t, std::vector<uint32_t>> leaders;  // structure key -> representatives, in order
   for (size_t k = 0; k < n; ++k) rep[k] = static_cast<uint32_t>(k);
   if (!(tolerance > 0)) return rep;
-  const double tol = tolerance;
+  // Per structure key, the representatives sorted by the x of their first shaft's tip: a curve within
+  // `limit` of a representative has its tip x within `limit` of that one's (curveDistance compares the
+  // tips), so only that window is compared, and the lowest-numbered match in it is the first in order.
+  struct Leader {
+    double x;
+    uint32_t k;
+  };
+  auto tipX = [](const FeatherCurves& c) {
+    return c.shafts.empty() || c.shafts[0].points.empty() ? 0.0 : double(c.shafts[0].points.back().x);
+  };
+  std::unordered_map<uint64_t, std::vector<Leader>> leaders;
   for (size_t k = 0; k < n; ++k) {
     const FeatherCurves* c = curves[k];
     if (!c) continue;
     const double extent = curveExtent(*c);
-    const double limit = tol * extent;
+    const double limit = tolerance * extent;
     if (!std::isfinite(limit)) continue;
-    std::vector<uint32_t>& bucket = leaders[structureKey(*c)];
-    for (uint32_t r : bucket) {
-      const FeatherCurves& l = *curves[r];
-      if (!sameSizes(*c, l)) continue;
-      if (curveDistance(*c, l, extent, limit) <= limit && sameCurveStructure(*c, l)) {
-        rep[k] = r;
-        break;
-      }
+    const double x = tipX(*c);
+    std::vector<Leader>& bucket = leaders[structureKey(*c)];
+    auto lo =
+        std::lower_bound(bucket.begin(), bucket.end(), x - limit, [](const Leader& l, double v) { return l.x < v; });
+    uint32_t best = static_cast<uint32_t>(k);
+    for (auto it = lo; it != bucket.end() && it->x <= x + limit; ++it) {
+      if (it->k >= best) continue;
+      const FeatherCurves& l = *curves[it->k];
+      if (sameSizes(*c, l) && curveDistance(*c, l, extent, limit) <= limit && sameCurveStructure(*c, l)) best = it->k;
     }
-    if (rep[k] == k) bucket.push_back(static_cast<uint32_t>(k));
+    rep[k] = best;
+    if (best == k) {
+      const Leader me{x, static_cast<uint32_t>(k)};
+      bucket.insert(std::upper_bound(bucket.begin(), bucket.end(), me,
+                                     [](const Leader& a, const Leader& b) { return a.x < b.x; }),
+                    me);
+    }
   }
   return rep;
 }

@@ -96,3 +96,35 @@ TEST(ShareCurves, AFamilyClustersAroundEarlierLeaders) {
     lastLeaders = leaders;
   }
 }
+
+// The windowed search (representatives sorted by tip) finds what scanning every earlier representative in
+// order finds: the same representative for every feather, over a family with two varying parameters and
+// repeats, at tolerances from tiny to wide.
+TEST(ShareCurves, WindowedSearchEqualsThePlainScan) {
+  std::vector<FeatherCurves> family;
+  for (int k = 0; k < 120; ++k) {
+    FeatherParams p = pteryla::feather::testing::contourParams();
+    p.barbLength *= 1.0 + 0.001 * ((k * 37) % 23);
+    p.rachisVentralDorsalCurvature += 0.002 * ((k * 11) % 17);
+    family.push_back(curvesOf(p));
+  }
+  std::vector<const FeatherCurves*> list;
+  for (const FeatherCurves& c : family) list.push_back(&c);
+  list[5] = nullptr;
+  for (double tol : {1e-6, 0.001, 0.004, 0.01, 0.05}) {
+    std::vector<uint32_t> plain(list.size());
+    std::vector<uint32_t> leaders;
+    for (size_t k = 0; k < list.size(); ++k) {
+      plain[k] = static_cast<uint32_t>(k);
+      if (!list[k]) continue;
+      const double e = curveExtent(*list[k]);
+      for (uint32_t r : leaders)
+        if (sameCurveStructure(*list[k], *list[r]) && curveDistance(*list[k], *list[r], e, tol * e) <= tol * e) {
+          plain[k] = r;
+          break;
+        }
+      if (plain[k] == k) leaders.push_back(static_cast<uint32_t>(k));
+    }
+    EXPECT_EQ(shareCurves(list, tol), plain) << tol;
+  }
+}
