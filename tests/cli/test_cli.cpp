@@ -123,3 +123,22 @@ TEST(Cli, BenchPrintsEveryStageWithRealTimings) {
   EXPECT_GT(j["triangles"].get<double>(), 0.0);
   EXPECT_GT(j["peak_rss_mb"].get<double>(), 0.0);
 }
+
+// bench reports the mesh stage's unplaced store: one mesh per feather without instancing, far fewer with
+// --instance-tolerance; a tolerance out of range is refused, naming the option.
+TEST(Cli, BenchReportsWhatInstancingSaves) {
+  const std::string scene = std::string(PTERYLA_DATA_DIR) + "/scenes/sphere_250.json";
+  auto off = runPteryla("bench " + scene + " --size 64x64 -q");
+  ASSERT_EQ(off.code, 0) << off.err;
+  auto on = runPteryla("bench " + scene + " --size 64x64 --instance-tolerance 0.02 -q");
+  ASSERT_EQ(on.code, 0) << on.err;
+  const auto a = nlohmann::json::parse(off.out), b = nlohmann::json::parse(on.out);
+  EXPECT_EQ(a["representatives"].get<size_t>(), a["feathers"].get<size_t>());
+  EXPECT_LT(b["representatives"].get<size_t>(), b["feathers"].get<size_t>() / 2);
+  EXPECT_GE(b["unplaced_meshes"].get<size_t>(), b["representatives"].get<size_t>());
+  EXPECT_LT(b["unplaced_mb"].get<double>(), 0.5 * b["unplaced_mb_unshared"].get<double>());
+  EXPECT_EQ(a["triangles"], b["triangles"]);
+  auto bad = runPteryla("bench " + scene + " --size 64x64 --instance-tolerance 0.5 -q");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_TRUE(contains(bad.err, "--instance-tolerance")) << bad.err;
+}
