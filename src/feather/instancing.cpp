@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 namespace pteryla::feather {
@@ -78,6 +79,7 @@ bool sameCurveStructure(const FeatherCurves& a, const FeatherCurves& b) {
 }
 
 double curveDistance(const FeatherCurves& a, const FeatherCurves& b, double extent, double limit) {
+  if (!sameSizes(a, b)) return std::numeric_limits<double>::infinity();
   double d = 0;
   auto over = [&](double v) {
     d = std::max(d, v);
@@ -95,9 +97,11 @@ double curveDistance(const FeatherCurves& a, const FeatherCurves& b, double exte
   for (size_t s = 0; s < a.shafts.size(); ++s) {
     const ShaftCurve &x = a.shafts[s], &y = b.shafts[s];
     for (size_t k = 0; k < x.points.size(); ++k)
-      if (over(dist(x.points[k], y.points[k])) || over(0.5 * std::abs(double(x.widths[k]) - double(y.widths[k]))) ||
-          over(extent * std::abs(double(x.rp[k]) - double(y.rp[k]))))
-        return d;
+      if (over(dist(x.points[k], y.points[k]))) return d;
+    for (size_t k = 0; k < x.widths.size(); ++k)
+      if (over(0.5 * std::abs(double(x.widths[k]) - double(y.widths[k])))) return d;
+    for (size_t k = 0; k < x.rp.size(); ++k)
+      if (over(extent * std::abs(double(x.rp[k]) - double(y.rp[k])))) return d;
     for (size_t k = 0; k < x.rachisCvs.size(); ++k)
       if (over(dist(x.rachisCvs[k], y.rachisCvs[k]))) return d;
     for (int k = 0; k < 2; ++k)
@@ -136,7 +140,7 @@ std::vector<uint32_t> shareCurves(const std::vector<const FeatherCurves*>& curve
     for (auto it = lo; it != bucket.end() && it->x <= x + limit; ++it) {
       if (it->k >= best) continue;
       const FeatherCurves& l = *curves[it->k];
-      if (sameSizes(*c, l) && curveDistance(*c, l, extent, limit) <= limit && sameCurveStructure(*c, l)) best = it->k;
+      if (curveDistance(*c, l, extent, limit) <= limit && sameCurveStructure(*c, l)) best = it->k;
     }
     rep[k] = best;
     if (best == k) {

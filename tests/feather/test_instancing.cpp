@@ -62,6 +62,7 @@ TEST(ShareCurves, DifferentBarbCountsNeverShare) {
   const FeatherCurves b = curvesOf(p);
   ASSERT_NE(a.barbs.size(), b.barbs.size());
   EXPECT_FALSE(sameCurveStructure(a, b));
+  EXPECT_EQ(curveDistance(a, b, curveExtent(a), 1.0), std::numeric_limits<double>::infinity());
   EXPECT_EQ(shareCurves({&a, &b}, 0.1), (std::vector<uint32_t>{0, 1}));
   // A null entry stands alone and is never a representative.
   EXPECT_EQ(shareCurves({&a, nullptr, &a}, 0.1), (std::vector<uint32_t>{0, 1, 0}));

@@ -22,7 +22,8 @@ bool sameCurveStructure(const FeatherCurves& a, const FeatherCurves& b);
 // For curves of the same structure: the largest difference between corresponding shaft points and widths,
 // rachis and barb control vertices and barb roots (scene units), and between barb positions along the
 // rachis and the dorsal directions (times `extent`, so both count as a displacement of that feather).
-// Stops early and returns a value above `limit` once any difference exceeds it.
+// Stops early and returns a value above `limit` once any difference exceeds it; curves whose arrays differ
+// in size are infinitely far apart.
 double curveDistance(const FeatherCurves& a, const FeatherCurves& b, double extent, double limit);
 
 // Representatives for feathers in the order given (null entries stand alone: rep[k] = k): every feather

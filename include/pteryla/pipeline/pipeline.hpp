@@ -125,7 +125,8 @@ struct FrameReuse {
   bool moult = false;
   size_t moultChanged = 0;     // lost and growing feathers
   size_t moultRecomputed = 0;  // feathers packed over the mature pack (0: the last one was reused)
-  size_t meshRegenerated = 0;  // present feathers whose barb curves the mesh stage generated
+  size_t meshRegenerated = 0;  // feathers whose barb curves the mesh stage generated (present ones; with
+                               // instancing of a draped coat, absent ones' mature curves too)
   size_t meshReused = 0;       // present feathers whose triangles were copied from the last mesh
   // Instancing (scene render.instance_tolerance): of the meshFeathers present feathers meshed, those meshed
   // from their own curves (the others share an earlier feather's), the distinct unplaced meshes kept, and
