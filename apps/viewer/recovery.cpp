@@ -10,6 +10,7 @@
 #include <system_error>
 
 #include "pteryla/core/error.hpp"
+#include "pteryla/core/hash.hpp"
 #include "pteryla/core/json.hpp"
 #include "pteryla/core/paths.hpp"
 #include "scene_edit.hpp"
@@ -27,14 +28,7 @@ std::string envDir(const char* name) {
   return v && v[0] == '/' ? std::string(v) : std::string();
 }
 
-uint64_t fnv1a(const std::string& s) {
-  uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
+uint64_t fnv1a(const std::string& s) { return fnv1a64(s.data(), s.size()); }
 
 std::string utcNow() {
   const std::time_t t = std::time(nullptr);

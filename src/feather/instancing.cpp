@@ -8,24 +8,16 @@
 #include <limits>
 #include <unordered_map>
 
+#include "pteryla/core/hash.hpp"
+
 namespace pteryla::feather {
 
 namespace {
 
-struct Fnv {
-  uint64_t h = 1469598103934665603ull;
-  void add(uint64_t v) {
-    for (int i = 0; i < 8; ++i) {
-      h ^= (v >> (8 * i)) & 0xffu;
-      h *= 1099511628211ull;
-    }
-  }
-};
-
 // A hash of what sameCurveStructure compares (equal structures hash equal).
 uint64_t structureKey(const FeatherCurves& c) {
-  Fnv f;
-  f.add(c.shafts.size());
+  Fnv1a64 f;
+  f.add(uint64_t(c.shafts.size()));
   for (const ShaftCurve& s : c.shafts) {
     f.add(s.points.size());
     f.add(static_cast<uint64_t>(s.calamusPoints));

@@ -424,15 +424,17 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
       out = std::move(next_);
     }
     // The store: kept as it is when no feather was meshed and none left (a feather that came would have
-    // been meshed), else built again from the reused slices' stored meshes and the fresh ones.
-    if (changedAt.empty() && count == stats_.feathers) {
-      for (size_t k = 0; k < count; ++k) {
+    // been meshed); without instancing, with the layout unchanged and every remeshed feather the only
+    // holder of its stored mesh, those meshes are written over in place (a moult or growth step); else
+    // built again from the reused slices' stored meshes and the fresh ones.
+    for (size_t k = 0; k < count; ++k)
+      if (reuse[k]) {
         next[k].u0 = src[k].u0;
         next[k].hash = src[k].hash;
       }
-    } else {
+    if (!(changedAt.empty() && count == stats_.feathers) &&
+        !(inPlace && !(tolerance_ > 0) && writeStoreInPlace(changedAt, src, next)))
       storeUnplaced(reuse, src, freshMesh_, next);
-    }
     freshMesh_ = TriMesh{};  // the changed feathers' meshes are in `out` now
     for (size_t k = 0; k < count; ++k) ranges[k] = next[k].ranges;
   }
@@ -481,6 +483,34 @@ void CoatMesher::assemble(const std::vector<feather::FeatherMeshInput>& placed, 
     std::sort(starts.begin(), starts.end());
     stats_.meshes = static_cast<size_t>(std::unique(starts.begin(), starts.end()) - starts.begin());
   }
+}
+
+bool CoatMesher::writeStoreInPlace(const std::vector<size_t>& changedAt, const std::vector<Slice>& src,
+                                   std::vector<Slice>& next) {
+  // Stored meshes held by more than one feather (identical meshes) cannot be written over.
+  std::vector<uint32_t> held;
+  held.reserve(next.size());
+  for (const uint32_t i : which_)
+    if (slices_[i].vn) held.push_back(slices_[i].u0);
+  std::sort(held.begin(), held.end());
+  for (size_t k : changedAt) {
+    const Slice& old = slices_[which_[k]];
+    const auto [lo, hi] = std::equal_range(held.begin(), held.end(), old.u0);
+    if (old.vn && hi - lo != 1) return false;
+  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, changedAt.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t c = r.begin(); c < r.end(); ++c) {
+      const size_t k = changedAt[c];
+      const Slice& a = src[k];
+      const uint32_t u0 = slices_[which_[k]].u0;
+      copySlice(freshMesh_.positions, a.v0, localPos_, u0, a.vn);
+      copySlice(freshMesh_.normals, a.v0, localNrm_, u0, a.vn);
+      copySlice(freshMesh_.tangents, a.v0, localTan_, u0, a.vn);
+      next[k].u0 = u0;
+      next[k].hash = unplacedHash(localPos_.data() + u0, localNrm_.data() + u0, localTan_.data() + u0, a.vn);
+    }
+  });
+  return true;
 }
 
 void CoatMesher::storeUnplaced(const std::vector<uint8_t>& reused, const std::vector<Slice>& src, TriMesh& fresh,

@@ -117,6 +117,10 @@ class CoatMesher {
   // When every slice is fresh and distinct, in order, it takes fresh's arrays (swapped, not copied).
   void storeUnplaced(const std::vector<uint8_t>& reused, const std::vector<Slice>& src, TriMesh& fresh,
                      std::vector<Slice>& next);
+  // With the layout unchanged (slices_ is the last update's, as next's vertex ranges are): writes each
+  // remeshed slice (changedAt, from freshMesh_ at src[k].v0) over its stored mesh when it alone holds it,
+  // setting next[k].u0 and .hash; false (nothing written) when any is shared.
+  bool writeStoreInPlace(const std::vector<size_t>& changedAt, const std::vector<Slice>& src, std::vector<Slice>& next);
 
   // Per feather: the packed parameters the mature curves and LOD order were generated from, and the age
   // (NaN = none) and packed grown parameters of the grown (pin feather) curves.

@@ -71,6 +71,36 @@ void expectSameResult(const CoatMesher& a, const TriMesh& ma, const CoatMesher& 
   }
 }
 
+// The present feathers of `c` in layer order, each meshed on its own at `lod` from the packed curves of
+// feather rep[i] and placed at its own follicle (feather::appendFeatherMeshes, no mesher involved).
+TriMesh meshedFrom(const Coat& c, const std::vector<uint32_t>& rep, double lod) {
+  const size_t n = c.feathers.size();
+  std::vector<feather::FeatherCurves> curves(n);
+  std::vector<feather::LodOrder> orders(n);
+  std::vector<feather::FeatherMeshInput> inputs;
+  for (uint32_t i : c.feathers.layerOrder) {
+    if (!c.feathers.present[i]) continue;
+    const uint32_t r = rep[i];
+    if (curves[r].barbs.empty()) {
+      feather::FeatherParams p;
+      coat::packedParamsInto(c.feathers, c.packed, r, p);
+      feather::generateBarbs(p, curves[r]);
+      feather::computeLodOrder(curves[r], orders[r]);
+    }
+    feather::FeatherMeshInput fi;
+    fi.curves = &curves[r];
+    fi.order = &orders[r];
+    const coat::FeatherFrame& fr = c.feathers.frames[i];
+    fi.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, c.packed.elevation[i]);
+    fi.featherId = i;
+    fi.lod = lod;
+    inputs.push_back(fi);
+  }
+  TriMesh direct;
+  feather::appendFeatherMeshes(inputs.data(), inputs.size(), feather::MeshOptions{}, direct);
+  return direct;
+}
+
 }  // namespace
 
 TEST(CoatMesher, IncrementalUpdateEqualsFullMesh) {
@@ -161,29 +191,9 @@ TEST(CoatMesher, InstancedFeathersStayWithinTheTolerance) {
 
   // Without a tolerance the coat is what meshing every feather placed, on its own, gives: identical
   // meshes stored once are placed as their own.
-  {
-    std::vector<feather::FeatherCurves> curves(n);
-    std::vector<feather::LodOrder> orders(n);
-    std::vector<feather::FeatherMeshInput> inputs;
-    for (uint32_t i : c.feathers.layerOrder) {
-      if (!c.feathers.present[i]) continue;
-      feather::FeatherParams p;
-      coat::packedParamsInto(c.feathers, c.packed, i, p);
-      feather::generateBarbs(p, curves[i]);
-      feather::computeLodOrder(curves[i], orders[i]);
-      feather::FeatherMeshInput fi;
-      fi.curves = &curves[i];
-      fi.order = &orders[i];
-      const coat::FeatherFrame& fr = c.feathers.frames[i];
-      fi.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, c.packed.elevation[i]);
-      fi.featherId = i;
-      fi.lod = in.lod;
-      inputs.push_back(fi);
-    }
-    TriMesh direct;
-    feather::appendFeatherMeshes(inputs.data(), inputs.size(), feather::MeshOptions{}, direct);
-    EXPECT_TRUE(pipeline_test::sameMesh(a, direct));
-  }
+  std::vector<uint32_t> itself(n);
+  for (uint32_t i = 0; i < n; ++i) itself[i] = i;
+  EXPECT_TRUE(pipeline_test::sameMesh(a, meshedFrom(c, itself, in.lod)));
 
   ASSERT_EQ(a.positions.size(), b.positions.size());
   ASSERT_EQ(a.indices, b.indices);
@@ -204,35 +214,10 @@ TEST(CoatMesher, InstancedFeathersStayWithinTheTolerance) {
 
   // The instanced coat is exactly what meshing every feather from its representative's curves, placed
   // at its own follicle, gives: meshes made once and copied, and stored once, come out as their own.
-  {
-    const std::vector<uint32_t>& rep = shared.representatives();
-    ASSERT_EQ(rep.size(), n);
-    std::vector<feather::FeatherCurves> curves(n);
-    std::vector<feather::LodOrder> orders(n);
-    std::vector<feather::FeatherMeshInput> inputs;
-    for (uint32_t i : c.feathers.layerOrder) {
-      if (!c.feathers.present[i]) continue;
-      const uint32_t r = rep[i];
-      ASSERT_LE(r, i);
-      if (curves[r].barbs.empty()) {
-        feather::FeatherParams p;
-        coat::packedParamsInto(c.feathers, c.packed, r, p);
-        feather::generateBarbs(p, curves[r]);
-        feather::computeLodOrder(curves[r], orders[r]);
-      }
-      feather::FeatherMeshInput fi;
-      fi.curves = &curves[r];
-      fi.order = &orders[r];
-      const coat::FeatherFrame& fr = c.feathers.frames[i];
-      fi.placement = feather::FeatherPlacement::fromFollicle(fr.origin, fr.tangent, fr.normal, c.packed.elevation[i]);
-      fi.featherId = i;
-      fi.lod = in.lod;
-      inputs.push_back(fi);
-    }
-    TriMesh direct;
-    feather::appendFeatherMeshes(inputs.data(), inputs.size(), feather::MeshOptions{}, direct);
-    EXPECT_TRUE(pipeline_test::sameMesh(b, direct));
-  }
+  const std::vector<uint32_t>& rep = shared.representatives();
+  ASSERT_EQ(rep.size(), n);
+  for (uint32_t i = 0; i < n; ++i) ASSERT_LE(rep[i], i);
+  EXPECT_TRUE(pipeline_test::sameMesh(b, meshedFrom(c, rep, in.lod)));
 }
 
 // Instancing is a function of the frame's coat alone: after feathers changed (raised, growing, hidden,
